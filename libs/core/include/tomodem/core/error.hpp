@@ -1,0 +1,41 @@
+#pragma once
+// Errors that map onto the documented exit codes:
+//   2  bad usage or bad input (InputError: names the file, the field and the value)
+//   1  a failure while running (RuntimeFailure, or any other exception)
+//   3  numerical refusal: a run that became unstable (NumericalError)
+#include <stdexcept>
+#include <string>
+
+namespace tomodem {
+
+class InputError : public std::runtime_error {
+ public:
+  /// file: the file the value came from ("" for the command line), field: the key or
+  /// dataset path, value: the offending value as the user wrote it, why: what is wrong.
+  InputError(std::string file, std::string field, std::string value, const std::string& why);
+  const std::string& file() const { return file_; }
+  const std::string& field() const { return field_; }
+  const std::string& value() const { return value_; }
+
+ private:
+  std::string file_, field_, value_;
+};
+
+class RuntimeFailure : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+class NumericalError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+namespace exit_code {
+inline constexpr int ok = 0;
+inline constexpr int failure = 1;
+inline constexpr int bad_input = 2;
+inline constexpr int numerical = 3;
+}  // namespace exit_code
+
+}  // namespace tomodem

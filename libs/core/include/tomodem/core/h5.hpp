@@ -1,0 +1,54 @@
+#pragma once
+// A thin HDF5 file wrapper that keeps the HDF5 headers out of every other translation unit.
+// Paths are absolute inside the file ("/particles/radius"); parent groups are created on write.
+// Errors while reading name the file and the dataset (InputError); write errors are RuntimeFailure.
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace tomodem::h5 {
+
+class File {
+ public:
+  enum class Mode { read, create };  ///< create truncates an existing file
+  File(const std::string& path, Mode mode);
+  ~File();
+  File(File&&) noexcept;
+  File& operator=(File&&) noexcept;
+  File(const File&) = delete;
+  File& operator=(const File&) = delete;
+
+  const std::string& path() const;
+  bool exists(const std::string& object) const;  ///< a group or dataset
+  std::vector<std::string> children(const std::string& group) const;
+
+  /// Datasets: `dims` gives the shape (row-major); empty dims = 1-D of data.size().
+  /// `units` becomes a string attribute "units" on the dataset when not empty.
+  void write(const std::string& dataset, const std::vector<double>& data, std::vector<std::size_t> dims = {},
+             const std::string& units = "");
+  void write(const std::string& dataset, const std::vector<int32_t>& data, std::vector<std::size_t> dims = {});
+  void write(const std::string& dataset, const std::vector<int64_t>& data, std::vector<std::size_t> dims = {});
+  void write(const std::string& dataset, const std::vector<uint8_t>& data, std::vector<std::size_t> dims = {});
+
+  /// Reads convert from any stored numeric type; `dims` (if given) receives the shape.
+  std::vector<double> read_double(const std::string& dataset, std::vector<std::size_t>* dims = nullptr) const;
+  std::vector<int32_t> read_int32(const std::string& dataset, std::vector<std::size_t>* dims = nullptr) const;
+  std::vector<int64_t> read_int64(const std::string& dataset, std::vector<std::size_t>* dims = nullptr) const;
+  std::vector<uint8_t> read_uint8(const std::string& dataset, std::vector<std::size_t>* dims = nullptr) const;
+
+  /// Attributes on a group or dataset ("/" for the root).
+  void set_attr(const std::string& object, const std::string& name, const std::string& value);
+  void set_attr(const std::string& object, const std::string& name, double value);
+  void set_attr(const std::string& object, const std::string& name, const std::vector<double>& value);
+  bool has_attr(const std::string& object, const std::string& name) const;
+  std::string attr_string(const std::string& object, const std::string& name) const;
+  double attr_double(const std::string& object, const std::string& name) const;
+  std::vector<double> attr_doubles(const std::string& object, const std::string& name) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace tomodem::h5

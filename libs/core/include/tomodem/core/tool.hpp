@@ -1,0 +1,22 @@
+#pragma once
+// Shared main() behaviour of the tomodem executables: exit codes, error messages, --version.
+#include <functional>
+#include <string>
+
+namespace tomodem {
+
+/// "tomodem 0.1.0 (git abc123)".
+std::string version_string();
+
+/// Runs `body` and maps exceptions onto the documented exit codes, printing one clear line:
+///   InputError -> 2 ("tomodem-dem: error: scene.yaml: field 'x': value 'y': why")
+///   NumericalError -> 3, anything else -> 1.
+int run_tool(const std::string& tool_name, const std::function<int()>& body);
+
+/// Messages on stderr; info is silenced by set_quiet(true).
+void set_quiet(bool quiet);
+bool quiet();
+void info(const std::string& message);
+void warn(const std::string& message);
+
+}  // namespace tomodem

@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages tomodem needs to build and test (idempotent; skips apt when
+# everything is already there). Run as root or with sudo available.
+set -euo pipefail
+PKGS=(build-essential cmake ninja-build pkg-config git
+      libhdf5-dev hdf5-tools libeigen3-dev libyaml-cpp-dev nlohmann-json3-dev libcli11-dev
+      libfmt-dev libspdlog-dev libxxhash-dev
+      libgtest-dev libgmock-dev libbenchmark-dev python3)
+missing=()
+for p in "${PKGS[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO=sudo
+  echo "installing: ${missing[*]}" >&2
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${missing[@]}" >/dev/null
+fi
