@@ -1,1 +1,538 @@
-// implemented by the core I/O work
+// The shared data model on disk (layout and rationale: docs/data-model.md).
+#include "tomodem/core/packing_io.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include "tomodem/core/error.hpp"
+#include "tomodem/core/h5.hpp"
+#include "tomodem/core/output.hpp"
+#include "tomodem/core/tool.hpp"
+
+namespace tomodem {
+
+namespace {
+
+constexpr int64_t kFormat = 1;  // bump on any incompatible layout change; readers refuse newer files
+
+std::string num(double v) {
+  std::ostringstream s;
+  s.precision(17);
+  s << v;
+  return s.str();
+}
+
+std::string shape_text(const std::vector<std::size_t>& dims) {
+  std::string s = "shape (";
+  for (std::size_t k = 0; k < dims.size(); ++k) s += (k ? ", " : "") + std::to_string(dims[k]);
+  return s + ")";
+}
+
+std::vector<double> flatten(const std::vector<Vec3>& v) {
+  std::vector<double> out;
+  out.reserve(3 * v.size());
+  for (const auto& p : v) out.insert(out.end(), {p.x, p.y, p.z});
+  return out;
+}
+
+// Group and dataset names taken from user data (results) must be valid single HDF5 link names.
+void check_name(const std::string& file, const std::string& where, const std::string& name) {
+  if (name.empty() || name == "." || name.find('/') != std::string::npos)
+    throw RuntimeFailure(file + ": cannot write " + where + ": invalid name '" + name + "' (empty, '.' or has '/')");
+}
+
+// ---------------------------------------------------------------- writing
+
+struct Writer {
+  h5::File& f;
+
+  [[noreturn]] void refuse(const std::string& dataset, const std::string& value, const std::string& why) const {
+    throw RuntimeFailure(f.path() + ": refusing to write '" + dataset + "'" +
+                         (value.empty() ? "" : " = " + value) + ": " + why);
+  }
+  void same_length(const std::string& dataset, std::size_t got, std::size_t want, const std::string& ref) const {
+    if (got != want)
+      refuse(dataset, "length " + std::to_string(got), "expected " + std::to_string(want) + " (length of " + ref + ")");
+  }
+  void indices(const std::string& dataset, const std::vector<int32_t>& v, std::size_t n) const {
+    for (std::size_t k = 0; k < v.size(); ++k)
+      if (v[k] < 0 || static_cast<std::size_t>(v[k]) >= n)
+        refuse(dataset + "[" + std::to_string(k) + "]", std::to_string(v[k]),
+               "particle index outside [0, " + std::to_string(n) + ")");
+  }
+
+  // Every dataset carries a `units` attribute ("1" = dimensionless or an index).
+  void put(const std::string& path, const std::vector<double>& v, const std::string& units) {
+    f.write(path, v);
+    f.set_attr(path, "units", units);
+  }
+  void put3(const std::string& path, const std::vector<Vec3>& v, const std::string& units) {
+    f.write(path, flatten(v), {v.size(), 3});
+    f.set_attr(path, "units", units);
+  }
+  template <class T>
+  void put_int(const std::string& path, const std::vector<T>& v, const std::string& units) {
+    f.write(path, v);
+    f.set_attr(path, "units", units);
+  }
+
+  void particles(const ParticleTable& t, std::size_t n_materials) {
+    const std::size_t n = t.radius.size();
+    same_length("/particles/position", t.position.size(), n, "/particles/radius");
+    same_length("/particles/phase", t.phase.size(), n, "/particles/radius");
+    if (!t.velocity.empty()) same_length("/particles/velocity", t.velocity.size(), n, "/particles/radius");
+    if (!t.angular_velocity.empty())
+      same_length("/particles/angular_velocity", t.angular_velocity.size(), n, "/particles/radius");
+    for (std::size_t k = 0; k < n; ++k)
+      if (!std::isfinite(t.radius[k]) || t.radius[k] <= 0)
+        refuse("/particles/radius[" + std::to_string(k) + "]", num(t.radius[k]), "radius must be finite and > 0");
+    for (std::size_t k = 0; k < n; ++k)
+      if (t.phase[k] < 0 || (n_materials > 0 && static_cast<std::size_t>(t.phase[k]) >= n_materials))
+        refuse("/particles/phase[" + std::to_string(k) + "]", std::to_string(t.phase[k]),
+               "phase must be >= 0 and < the number of materials (" + std::to_string(n_materials) + ")");
+    // Mandatory columns are written even when N = 0, so an empty packing is still a valid file.
+    put3("/particles/position", t.position, "m");
+    put("/particles/radius", t.radius, "m");
+    put_int("/particles/phase", t.phase, "1");
+    if (!t.velocity.empty()) put3("/particles/velocity", t.velocity, "m/s");
+    if (!t.angular_velocity.empty()) put3("/particles/angular_velocity", t.angular_velocity, "rad/s");
+  }
+
+  void cell(const Cell& c) {
+    f.write("/cell/origin", std::vector<double>{c.origin.x, c.origin.y, c.origin.z}, {}, "m");
+    f.set_attr("/cell/origin", "units", "m");
+    std::vector<double> h(&c.h.a[0][0], &c.h.a[0][0] + 9);  // row-major, columns are the cell vectors
+    f.write("/cell/h", h, {3, 3}, "m");
+    f.set_attr("/cell/h", "units", "m");
+    put_int("/cell/periodic", std::vector<uint8_t>{c.periodic[0], c.periodic[1], c.periodic[2]}, "1");
+  }
+
+  void materials(const std::vector<Material>& ms) {
+    for (std::size_t k = 0; k < ms.size(); ++k) {
+      const std::string g = "/materials/" + std::to_string(k);
+      f.set_attr(g, "name", ms[k].name);
+      f.set_attr(g, "youngs_modulus_Pa", ms[k].youngs_modulus);
+      f.set_attr(g, "poisson_ratio", ms[k].poisson_ratio);
+      f.set_attr(g, "density_kg_per_m3", ms[k].density);
+      f.set_attr(g, "surface_energy_J_per_m2", ms[k].surface_energy);
+      f.set_attr(g, "conductivity_S_per_m", ms[k].conductivity);
+    }
+    if (!ms.empty()) f.set_attr_int("/materials", "count", static_cast<int64_t>(ms.size()));
+  }
+
+  void bonds(const BondTable& b, std::size_t n) {
+    const std::size_t m = b.i.size();
+    if (m == 0 && b.j.empty() && b.radius.empty() && b.rest_length.empty() && b.state.empty() && b.broken_at.empty())
+      return;  // empty optional table: omitted
+    same_length("/bonds/j", b.j.size(), m, "/bonds/i");
+    same_length("/bonds/radius", b.radius.size(), m, "/bonds/i");
+    same_length("/bonds/rest_length", b.rest_length.size(), m, "/bonds/i");
+    same_length("/bonds/state", b.state.size(), m, "/bonds/i");
+    same_length("/bonds/broken_at", b.broken_at.size(), m, "/bonds/i");
+    indices("/bonds/i", b.i, n);
+    indices("/bonds/j", b.j, n);
+    put_int("/bonds/i", b.i, "1");
+    put_int("/bonds/j", b.j, "1");
+    put("/bonds/radius", b.radius, "m");
+    put("/bonds/rest_length", b.rest_length, "m");
+    put_int("/bonds/state", b.state, "1");
+    put("/bonds/broken_at", b.broken_at, "s");
+    f.set_attr("/bonds/state", "legend", "0 intact, 1 broken");
+  }
+
+  void contacts(const ContactTable& c, std::size_t n) {
+    const std::size_t m = c.i.size();
+    if (m == 0 && c.j.empty() && c.overlap.empty() && c.normal_force.empty() && c.tangential_force.empty()) return;
+    same_length("/contacts/j", c.j.size(), m, "/contacts/i");
+    same_length("/contacts/overlap", c.overlap.size(), m, "/contacts/i");
+    same_length("/contacts/normal_force", c.normal_force.size(), m, "/contacts/i");
+    same_length("/contacts/tangential_force", c.tangential_force.size(), m, "/contacts/i");
+    indices("/contacts/i", c.i, n);
+    indices("/contacts/j", c.j, n);
+    put_int("/contacts/i", c.i, "1");
+    put_int("/contacts/j", c.j, "1");
+    put("/contacts/overlap", c.overlap, "m");
+    put3("/contacts/normal_force", c.normal_force, "N");
+    put3("/contacts/tangential_force", c.tangential_force, "N");
+  }
+
+  void results(const Results& r) {
+    auto unit_of = [&](const std::string& key) {
+      const auto it = r.units.find(key);
+      return it == r.units.end() ? std::string() : it->second;
+    };
+    for (const auto& [name, value] : r.scalars) {
+      check_name(f.path(), "/results/scalars", name);
+      put("/results/scalars/" + name, {value}, unit_of(name));
+    }
+    for (const auto& [name, columns] : r.series) {
+      check_name(f.path(), "/results/series", name);
+      const std::string g = "/results/series/" + name;
+      std::size_t len = columns.empty() ? 0 : columns.begin()->second.size();
+      for (const auto& [col, v] : columns) {
+        check_name(f.path(), g, col);
+        same_length(g + "/" + col, v.size(), len, g + "/" + columns.begin()->first);
+        // Column unit: units["series/column"]; "" = undeclared (the column name carries it, e.g. time_s).
+        put(g + "/" + col, v, unit_of(name + "/" + col));
+      }
+      f.set_attr(g, "units", unit_of(name));  // also creates the group of a series without columns
+    }
+  }
+
+  void provenance(const Provenance& p) {
+    f.set_attr_int("/", "tomodem_format", kFormat);
+    f.set_attr("/", "tool", p.tool);
+    f.set_attr("/", "version", p.version.empty() ? version_string() : p.version);
+    f.set_attr("/", "parameters", p.parameters);
+    f.set_attr("/", "created_utc", p.created_utc.empty() ? utc_now() : p.created_utc);
+    f.set_attr("/", "wall_time_s", p.wall_time_s);
+    // Attribute names may hold any character (paths included); one attribute per input file.
+    for (const auto& [path, hash] : p.input_hashes) f.set_attr("/provenance/inputs", path, hash);
+  }
+};
+
+// ---------------------------------------------------------------- reading
+
+struct Reader {
+  const h5::File& f;
+
+  [[noreturn]] void bad(const std::string& dataset, const std::string& value, const std::string& why) const {
+    throw InputError(f.path(), dataset, value, why);
+  }
+  void need(const std::string& dataset) const {
+    if (!f.exists(dataset)) bad(dataset, "", "missing mandatory dataset");
+  }
+  void check_shape(const std::string& dataset, const std::vector<std::size_t>& dims, std::size_t n,
+                   std::size_t width, const std::string& ref) const {
+    const bool ok = width == 0 ? dims.size() == 1 : (dims.size() == 2 && dims[1] == width);
+    if (!ok) bad(dataset, shape_text(dims), width == 0 ? "expected a 1-D dataset" : "expected shape (N, 3)");
+    if (dims[0] != n)
+      bad(dataset, "length " + std::to_string(dims[0]),
+          "expected " + std::to_string(n) + " rows (length of " + ref + ")");
+  }
+  std::vector<double> col(const std::string& dataset, std::size_t n, const std::string& ref) const {
+    need(dataset);
+    std::vector<std::size_t> dims;
+    auto v = f.read_double(dataset, &dims);
+    check_shape(dataset, dims, n, 0, ref);
+    return v;
+  }
+  std::vector<int32_t> col_i32(const std::string& dataset, std::size_t n, const std::string& ref) const {
+    need(dataset);
+    std::vector<std::size_t> dims;
+    auto v = f.read_int32(dataset, &dims);
+    check_shape(dataset, dims, n, 0, ref);
+    return v;
+  }
+  std::vector<uint8_t> col_u8(const std::string& dataset, std::size_t n, const std::string& ref) const {
+    need(dataset);
+    std::vector<std::size_t> dims;
+    auto v = f.read_uint8(dataset, &dims);
+    check_shape(dataset, dims, n, 0, ref);
+    return v;
+  }
+  std::vector<Vec3> col3(const std::string& dataset, std::size_t n, const std::string& ref) const {
+    need(dataset);
+    std::vector<std::size_t> dims;
+    const auto flat = f.read_double(dataset, &dims);
+    check_shape(dataset, dims, n, 3, ref);
+    std::vector<Vec3> out(n);
+    for (std::size_t k = 0; k < n; ++k) out[k] = {flat[3 * k], flat[3 * k + 1], flat[3 * k + 2]};
+    return out;
+  }
+  void indices(const std::string& dataset, const std::vector<int32_t>& v, std::size_t n) const {
+    for (std::size_t k = 0; k < v.size(); ++k)
+      if (v[k] < 0 || static_cast<std::size_t>(v[k]) >= n)
+        bad(dataset + "[" + std::to_string(k) + "]", std::to_string(v[k]),
+            "particle index outside [0, " + std::to_string(n) + ")");
+  }
+
+  void header() const {
+    if (!f.has_attr("/", "tomodem_format")) bad("/@tomodem_format", "", "not a tomodem file (attribute missing)");
+    const int64_t v = f.attr_int("/", "tomodem_format");
+    if (v < 1 || v > kFormat)
+      bad("/@tomodem_format", std::to_string(v),
+          "unsupported format version (this build reads 1 to " + std::to_string(kFormat) + ")");
+  }
+
+  std::vector<Material> materials() const {
+    std::vector<Material> ms;
+    if (!f.exists("/materials")) return ms;
+    const auto names = f.children("/materials");
+    ms.resize(names.size());
+    std::vector<bool> seen(names.size(), false);
+    for (const auto& g : names) {
+      // Groups are named by phase index 0..n-1 (children() sorts by name, so parse, not position).
+      std::size_t k = names.size();
+      for (std::size_t c = 0; c < names.size(); ++c)
+        if (std::to_string(c) == g) k = c;
+      if (k >= names.size() || seen[k])
+        bad("/materials/" + g, g, "material groups must be named 0.." + std::to_string(names.size() - 1));
+      seen[k] = true;
+      const std::string p = "/materials/" + g;
+      auto need_attr = [&](const char* a) {
+        if (!f.has_attr(p, a)) bad(p + "@" + a, "", "missing material attribute");
+        return f.attr_double(p, a);
+      };
+      Material& m = ms[k];
+      if (!f.has_attr(p, "name")) bad(p + "@name", "", "missing material attribute");
+      m.name = f.attr_string(p, "name");
+      m.youngs_modulus = need_attr("youngs_modulus_Pa");
+      m.poisson_ratio = need_attr("poisson_ratio");
+      m.density = need_attr("density_kg_per_m3");
+      m.surface_energy = need_attr("surface_energy_J_per_m2");
+      m.conductivity = need_attr("conductivity_S_per_m");
+    }
+    return ms;
+  }
+
+  ParticleTable particles(std::size_t n_materials) const {
+    ParticleTable t;
+    need("/particles/radius");
+    std::vector<std::size_t> dims;
+    t.radius = f.read_double("/particles/radius", &dims);
+    if (dims.size() != 1) bad("/particles/radius", shape_text(dims), "expected a 1-D dataset");
+    const std::size_t n = t.radius.size();
+    const std::string ref = "/particles/radius";
+    t.position = col3("/particles/position", n, ref);
+    t.phase = col_i32("/particles/phase", n, ref);
+    if (f.exists("/particles/velocity")) t.velocity = col3("/particles/velocity", n, ref);
+    if (f.exists("/particles/angular_velocity")) t.angular_velocity = col3("/particles/angular_velocity", n, ref);
+    for (std::size_t k = 0; k < n; ++k)
+      if (!std::isfinite(t.radius[k]) || t.radius[k] <= 0)
+        bad("/particles/radius[" + std::to_string(k) + "]", num(t.radius[k]), "radius must be finite and > 0");
+    for (std::size_t k = 0; k < n; ++k) {
+      const Vec3& x = t.position[k];
+      if (!std::isfinite(x.x) || !std::isfinite(x.y) || !std::isfinite(x.z))
+        bad("/particles/position[" + std::to_string(k) + "]", num(x.x) + " " + num(x.y) + " " + num(x.z),
+            "position must be finite");
+    }
+    for (std::size_t k = 0; k < n; ++k)
+      if (t.phase[k] < 0 || (n_materials > 0 && static_cast<std::size_t>(t.phase[k]) >= n_materials))
+        bad("/particles/phase[" + std::to_string(k) + "]", std::to_string(t.phase[k]),
+            "phase must be >= 0 and < the number of materials (" + std::to_string(n_materials) + ")");
+    return t;
+  }
+
+  Cell cell() const {
+    Cell c;
+    need("/cell/origin");
+    need("/cell/h");
+    need("/cell/periodic");
+    std::vector<std::size_t> dims;
+    const auto o = f.read_double("/cell/origin", &dims);
+    if (dims != std::vector<std::size_t>{3}) bad("/cell/origin", shape_text(dims), "expected shape (3)");
+    const auto h = f.read_double("/cell/h", &dims);
+    if (dims != std::vector<std::size_t>{3, 3}) bad("/cell/h", shape_text(dims), "expected shape (3, 3)");
+    const auto per = f.read_uint8("/cell/periodic", &dims);
+    if (dims != std::vector<std::size_t>{3}) bad("/cell/periodic", shape_text(dims), "expected shape (3)");
+    for (int k = 0; k < 3; ++k)
+      if (!std::isfinite(o[k])) bad("/cell/origin", num(o[k]), "must be finite");
+    for (int k = 0; k < 9; ++k)
+      if (!std::isfinite(h[k])) bad("/cell/h", num(h[k]), "must be finite");
+    c.origin = {o[0], o[1], o[2]};
+    std::copy(h.begin(), h.end(), &c.h.a[0][0]);
+    for (int k = 0; k < 3; ++k) {
+      if (per[k] > 1) bad("/cell/periodic", std::to_string(per[k]), "flags must be 0 or 1");
+      c.periodic[k] = per[k] != 0;
+    }
+    return c;
+  }
+
+  BondTable bonds(std::size_t n) const {
+    BondTable b;
+    if (!f.exists("/bonds")) return b;
+    need("/bonds/i");
+    const std::size_t m = f.shape("/bonds/i").empty() ? 0 : f.shape("/bonds/i")[0];
+    const std::string ref = "/bonds/i";
+    b.i = col_i32("/bonds/i", m, ref);
+    b.j = col_i32("/bonds/j", m, ref);
+    b.radius = col("/bonds/radius", m, ref);
+    b.rest_length = col("/bonds/rest_length", m, ref);
+    b.state = col_u8("/bonds/state", m, ref);
+    b.broken_at = col("/bonds/broken_at", m, ref);
+    indices("/bonds/i", b.i, n);
+    indices("/bonds/j", b.j, n);
+    for (std::size_t k = 0; k < m; ++k)
+      if (b.state[k] > BondTable::broken)
+        bad("/bonds/state[" + std::to_string(k) + "]", std::to_string(b.state[k]), "must be 0 (intact) or 1 (broken)");
+    return b;
+  }
+
+  ContactTable contacts(std::size_t n) const {
+    ContactTable c;
+    if (!f.exists("/contacts")) return c;
+    need("/contacts/i");
+    const auto s = f.shape("/contacts/i");
+    const std::size_t m = s.empty() ? 0 : s[0];
+    const std::string ref = "/contacts/i";
+    c.i = col_i32("/contacts/i", m, ref);
+    c.j = col_i32("/contacts/j", m, ref);
+    c.overlap = col("/contacts/overlap", m, ref);
+    c.normal_force = col3("/contacts/normal_force", m, ref);
+    c.tangential_force = col3("/contacts/tangential_force", m, ref);
+    indices("/contacts/i", c.i, n);
+    indices("/contacts/j", c.j, n);
+    return c;
+  }
+
+  Results results() const {
+    Results r;
+    auto unit_attr = [&](const std::string& p) {
+      return f.has_attr(p, "units") ? f.attr_string(p, "units") : std::string();
+    };
+    if (f.exists("/results/scalars"))
+      for (const auto& name : f.children("/results/scalars")) {
+        const std::string p = "/results/scalars/" + name;
+        const auto v = f.read_double(p);
+        if (v.size() != 1) bad(p, std::to_string(v.size()) + " values", "a scalar result holds one value");
+        r.scalars[name] = v[0];
+        if (auto u = unit_attr(p); !u.empty()) r.units[name] = u;
+      }
+    if (f.exists("/results/series"))
+      for (const auto& name : f.children("/results/series")) {
+        const std::string g = "/results/series/" + name;
+        auto& s = r.series[name];
+        if (auto u = unit_attr(g); !u.empty()) r.units[name] = u;
+        std::string first;
+        for (const auto& colname : f.children(g)) {
+          const std::string p = g + "/" + colname;
+          std::vector<std::size_t> dims;
+          auto v = f.read_double(p, &dims);
+          if (dims.size() != 1) bad(p, shape_text(dims), "expected a 1-D column");
+          if (first.empty()) first = p;
+          else if (v.size() != s.begin()->second.size())
+            bad(p, "length " + std::to_string(v.size()),
+                "columns of a series must be equally long (" + first + " has " +
+                    std::to_string(s.begin()->second.size()) + ")");
+          if (auto u = unit_attr(p); !u.empty()) r.units[name + "/" + colname] = u;
+          s[colname] = std::move(v);
+        }
+      }
+    return r;
+  }
+
+  Provenance provenance() const {
+    Provenance p;
+    auto str = [&](const char* a) { return f.has_attr("/", a) ? f.attr_string("/", a) : std::string(); };
+    p.tool = str("tool");
+    p.version = str("version");
+    p.parameters = str("parameters");
+    p.created_utc = str("created_utc");
+    if (f.has_attr("/", "wall_time_s")) p.wall_time_s = f.attr_double("/", "wall_time_s");
+    if (f.exists("/provenance/inputs"))
+      for (const auto& a : f.attr_names("/provenance/inputs")) p.input_hashes[a] = f.attr_string("/provenance/inputs", a);
+    return p;
+  }
+};
+
+std::string sidecar_path(const std::string& h5_path) {
+  const auto slash = h5_path.find_last_of('/');
+  const auto dot = h5_path.find_last_of('.');
+  const bool has_ext = dot != std::string::npos && (slash == std::string::npos || dot > slash + 1);
+  return (has_ext ? h5_path.substr(0, dot) : h5_path) + ".xdmf";
+}
+
+std::string xml_escape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      case '\'': out += "&apos;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+void write_packing_groups(h5::File& f, const Packing& p) {
+  Writer w{f};
+  // Root attributes first, so a reader can tell a tomodem file even while other groups are added.
+  w.provenance(p.provenance);
+  w.materials(p.materials);
+  w.particles(p.particles, p.materials.size());
+  w.cell(p.cell);
+  const std::size_t n = p.particles.size();
+  w.bonds(p.bonds, n);
+  w.contacts(p.contacts, n);
+  w.results(p.results);
+}
+
+Packing read_packing_groups(const h5::File& f) {
+  Reader r{f};
+  r.header();
+  Packing p;
+  p.materials = r.materials();
+  p.particles = r.particles(p.materials.size());
+  p.cell = r.cell();
+  p.bonds = r.bonds(p.particles.size());
+  p.contacts = r.contacts(p.particles.size());
+  p.results = r.results();
+  p.provenance = r.provenance();
+  return p;
+}
+
+void write_packing(const std::string& path, const Packing& p) {
+  const std::string tmp = temporary_path(path);
+  try {
+    h5::File f(tmp, h5::File::Mode::create);
+    write_packing_groups(f, p);
+  } catch (...) {
+    std::remove(tmp.c_str());  // a failed write leaves neither the final nor the temporary file
+    throw;
+  }
+  commit_output(path);
+  // The sidecar follows the data: a stale sidecar from an earlier run must not survive a failure.
+  try {
+    write_xdmf_sidecar(path, p.particles.size(), !p.particles.velocity.empty());
+  } catch (...) {
+    std::remove(sidecar_path(path).c_str());
+    std::remove(temporary_path(sidecar_path(path)).c_str());
+    throw;
+  }
+}
+
+Packing read_packing(const std::string& path) {
+  const h5::File f(path, h5::File::Mode::read);
+  return read_packing_groups(f);
+}
+
+void write_xdmf_sidecar(const std::string& h5_path, std::size_t n, bool has_velocity) {
+  // XDMF 2: read by both ParaView XDMF readers. The HDF5 file is named relative to the sidecar,
+  // so the pair can be moved together. Polyvertex without connectivity = one vertex per point.
+  const auto slash = h5_path.find_last_of('/');
+  const std::string h5 = xml_escape(slash == std::string::npos ? h5_path : h5_path.substr(slash + 1));
+  const std::string N = std::to_string(n);
+  std::ostringstream x;
+  x << "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n"
+    << "<Xdmf Version=\"2.0\">\n"
+    << "  <Domain>\n"
+    << "    <Grid Name=\"particles\" GridType=\"Uniform\">\n"
+    << "      <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << N << "\" NodesPerElement=\"1\"/>\n"
+    << "      <Geometry GeometryType=\"XYZ\">\n"
+    << "        <DataItem Dimensions=\"" << N << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5
+    << ":/particles/position</DataItem>\n"
+    << "      </Geometry>\n";
+  auto attribute = [&](const char* name, const char* type, const char* dims, const char* number, int precision) {
+    x << "      <Attribute Name=\"" << name << "\" AttributeType=\"" << type << "\" Center=\"Node\">\n"
+      << "        <DataItem Dimensions=\"" << N << dims << "\" NumberType=\"" << number << "\" Precision=\""
+      << precision << "\" Format=\"HDF\">" << h5 << ":/particles/" << name << "</DataItem>\n"
+      << "      </Attribute>\n";
+  };
+  attribute("radius", "Scalar", "", "Float", 8);
+  attribute("phase", "Scalar", "", "Int", 4);
+  if (has_velocity) attribute("velocity", "Vector", " 3", "Float", 8);
+  x << "    </Grid>\n"
+    << "  </Domain>\n"
+    << "</Xdmf>\n";
+  write_text_atomic(sidecar_path(h5_path), x.str());
+}
+
+}  // namespace tomodem
