@@ -1,0 +1,74 @@
+#pragma once
+// The physics a scene uses, chosen by name per slot (normal, tangential, rolling), each slot
+// with an explicit "none". The force loop is compiled once per combination (src/kernels.cpp),
+// so a scene pays only for the slots it fills.
+#include <string>
+#include <vector>
+
+#include "tomodem/core/packing.hpp"
+
+namespace tomodem::dem {
+
+enum class NormalLaw { linear, hertz, hertz_dmt, hertz_jkr };
+enum class TangentialLaw { none, linear, mindlin };
+enum class RollingLaw { none, elastic_plastic };
+
+/// Parameters of one phase pair (symmetric). Derived fields are filled by ContactModel::finalize.
+struct PairParams {
+  // From the two materials (Hertz family).
+  double E_star = 0;  ///< effective modulus, 1/E* = (1-ν1²)/E1 + (1-ν2²)/E2, Pa
+  double G_star = 0;  ///< effective shear modulus, 1/G* = (2-ν1)/G1 + (2-ν2)/G2, Pa
+  // Linear laws.
+  double k_n = 0;     ///< normal stiffness, N/m
+  double k_t = 0;     ///< tangential stiffness, N/m (default 2/7 k_n)
+  // Damping: restitution e (Hertz: velocity-independent damping calibrated to e; linear: ζ from e).
+  double restitution = 1;
+  double damping_ratio = 0;      ///< ζ of the linear law (derived from e unless given)
+  double hertz_damping = 0;      ///< dimensionless c in η_n = c sqrt(m* S_n), S_n = 2E*a (derived)
+  // Friction, rolling, adhesion.
+  double friction = 0;           ///< Coulomb μ
+  double rolling_friction = 0;   ///< μ_r: |M_r| ≤ μ_r R* F_n
+  double work_of_adhesion = 0;   ///< w = 2γ for like surfaces, J/m²
+};
+
+struct ContactModel {
+  NormalLaw normal = NormalLaw::hertz;
+  TangentialLaw tangential = TangentialLaw::none;
+  RollingLaw rolling = RollingLaw::none;
+  int n_phases = 1;
+  std::vector<Material> materials;  ///< per phase: E, ν, density, surface energy
+  std::vector<PairParams> pairs;    ///< n_phases × n_phases, symmetric
+
+  /// Sizes `pairs` for the materials (keeping what is set) and derives E*, G*, the damping
+  /// constants from the restitution, k_t = 2/7 k_n when unset, and w = 2 sqrt(γ_a γ_b) when unset.
+  void finalize();
+
+  bool needs_rotation() const { return tangential != TangentialLaw::none || rolling != RollingLaw::none; }
+  PairParams& pair(int a, int b) { return pairs[static_cast<std::size_t>(a * n_phases + b)]; }
+  const PairParams& pair(int a, int b) const { return pairs[static_cast<std::size_t>(a * n_phases + b)]; }
+  std::string describe() const;  ///< e.g. "hertz+mindlin+none"
+};
+
+std::string to_string(NormalLaw);
+std::string to_string(TangentialLaw);
+std::string to_string(RollingLaw);
+/// Parsers return false for unknown names (the caller reports file, field and value).
+bool parse(const std::string& s, NormalLaw& out);
+bool parse(const std::string& s, TangentialLaw& out);
+bool parse(const std::string& s, RollingLaw& out);
+
+/// Dimensionless damping c of η_n = c sqrt(m* S_n) that makes a Hertz collision rebound at
+/// restitution e, for every impact speed (the Hertz–Tsuji model is self-similar in the speed).
+/// Found by integrating the dimensionless collision once and solving for c (bisection).
+double hertz_damping_for_restitution(double e);
+/// Restitution of the dimensionless Hertz collision with damping c (the inverse map).
+double hertz_restitution_for_damping(double c);
+/// Linear spring–dashpot: ζ = -ln e / sqrt(π² + ln² e).
+double linear_damping_ratio_for_restitution(double e);
+
+/// JKR helpers (Johnson, Kendall & Roberts 1971): δ(a) = a²/R − sqrt(2π w a/E*).
+double jkr_contact_radius(double delta, double R, double E, double w);  ///< stable branch
+double jkr_force(double a, double R, double E, double w);               ///< 4E a³/(3R) − sqrt(8π w E a³)
+double jkr_break_overlap(double R, double E, double w);                 ///< δ_c < 0
+
+}  // namespace tomodem::dem

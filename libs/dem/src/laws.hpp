@@ -1,0 +1,198 @@
+#pragma once
+// Contact laws as policy structs, one per slot (P1/P2 of docs/architecture.md). Each law is a
+// pure function of the contact geometry and its own history; the loops in kernel.hpp own
+// neighbour lists, threads and tallies. Particle pairs and walls call the same functions.
+#include <cmath>
+
+#include "tomodem/core/vec3.hpp"
+#include "tomodem/dem/model.hpp"
+
+namespace tomodem::dem::law {
+
+/// What the driver knows about one contact before the laws run.
+struct Geometry {
+  Vec3 n;            ///< unit normal from i to j
+  double delta;      ///< overlap, m (> 0 interpenetrating)
+  Vec3 v_rel;        ///< velocity of j relative to i at the contact point, m/s
+  double r_star;     ///< R*, m
+  double m_star;     ///< m*, kg
+  double dt;         ///< s
+  const PairParams* pp;
+};
+
+/// Output of the normal law.
+struct Normal {
+  bool active;       ///< the contact carries force
+  double fn;         ///< total normal force, N, repulsive positive (on j along +n)
+  double fn_rep;     ///< repulsive elastic part that sets the Coulomb limit, N (≥ 0)
+  double stiffness;  ///< tangent normal stiffness S_n, N/m
+  double radius;     ///< contact radius a, m
+  double damping;    ///< η_n, N s/m
+  double energy;     ///< elastic energy of the normal spring, J
+};
+
+// ---------------------------------------------------------------- normal slot
+struct NormalLinear {
+  static constexpr bool kTouchFlag = false;
+  static double reach(const PairParams&, double) { return 0; }
+  static Normal eval(const Geometry& g, unsigned char*) {
+    const PairParams& p = *g.pp;
+    if (g.delta <= 0) return {false, 0, 0, 0, 0, 0, 0};
+    const double eta = 2 * p.damping_ratio * std::sqrt(g.m_star * p.k_n);
+    const double fel = p.k_n * g.delta;
+    // δ̇ = -v_rel·n. No clamping of the damped force, so e = exp(-πζ/sqrt(1-ζ²)) holds exactly.
+    return {true, fel - eta * dot(g.v_rel, g.n), fel, p.k_n, std::sqrt(g.r_star * g.delta), eta,
+            0.5 * fel * g.delta};
+  }
+};
+
+struct NormalHertz {
+  static constexpr bool kTouchFlag = false;
+  static double reach(const PairParams&, double) { return 0; }
+  static Normal eval(const Geometry& g, unsigned char*) {
+    const PairParams& p = *g.pp;
+    if (g.delta <= 0) return {false, 0, 0, 0, 0, 0, 0};
+    const double a = std::sqrt(g.r_star * g.delta);
+    const double fel = (4.0 / 3.0) * p.E_star * a * g.delta;  // (4/3) E* sqrt(R*) δ^{3/2}
+    const double sn = 2 * p.E_star * a;
+    const double eta = p.hertz_damping * std::sqrt(g.m_star * sn);
+    return {true, fel - eta * dot(g.v_rel, g.n), fel, sn, a, eta, 0.4 * fel * g.delta};
+  }
+};
+
+/// Hertz plus a constant Derjaguin attraction 2π w R* while in contact (δ ≥ 0).
+struct NormalDMT {
+  static constexpr bool kTouchFlag = false;
+  static double reach(const PairParams&, double) { return 0; }
+  static Normal eval(const Geometry& g, unsigned char*) {
+    const PairParams& p = *g.pp;
+    if (g.delta < 0) return {false, 0, 0, 0, 0, 0, 0};
+    const double a = std::sqrt(g.r_star * g.delta);
+    const double fh = (4.0 / 3.0) * p.E_star * a * g.delta;
+    const double fadh = 2 * M_PI * p.work_of_adhesion * g.r_star;
+    const double sn = 2 * p.E_star * a;
+    const double eta = p.hertz_damping * std::sqrt(g.m_star * sn);
+    return {true, fh - fadh - eta * dot(g.v_rel, g.n), fh, sn, a, eta, 0.4 * fh * g.delta - fadh * g.delta};
+  }
+};
+
+/// JKR with hysteresis: a contact forms at δ = 0 on approach and persists in tension until
+/// δ_c = -(3/4)(π² w² R*/E*²)^{1/3}; the flag per contact remembers which branch applies.
+struct NormalJKR {
+  static constexpr bool kTouchFlag = true;
+  static double reach(const PairParams& p, double r_star) {
+    return p.work_of_adhesion > 0 ? -jkr_break_overlap(r_star, p.E_star, p.work_of_adhesion) : 0;
+  }
+  static Normal eval(const Geometry& g, unsigned char* touching) {
+    const PairParams& p = *g.pp;
+    const double w = p.work_of_adhesion, E = p.E_star, R = g.r_star;
+    if (!*touching) {
+      if (g.delta < 0) return {false, 0, 0, 0, 0, 0, 0};
+      *touching = 1;
+    } else if (g.delta < jkr_break_overlap(R, E, w)) {
+      *touching = 0;
+      return {false, 0, 0, 0, 0, 0, 0};
+    }
+    const double a = jkr_contact_radius(g.delta, R, E, w);
+    const double fj = jkr_force(a, R, E, w);
+    const double sn = 2 * E * a;
+    const double eta = p.hertz_damping * std::sqrt(g.m_star * sn);
+    // U(a) = ∫F dδ = 8E a⁵/(15R²) - (4/3) sqrt(2πwE) a^{7/2}/R + π w a², zero at a = 0.
+    const double energy = 8 * E * std::pow(a, 5) / (15 * R * R) -
+                          (4.0 / 3.0) * std::sqrt(2 * M_PI * w * E) * std::pow(a, 3.5) / R + M_PI * w * a * a;
+    return {true, fj - eta * dot(g.v_rel, g.n), 4 * E * a * a * a / (3 * R), sn, a, eta, energy};
+  }
+};
+
+// ---------------------------------------------------------------- tangential slot
+/// Output of the tangential and rolling laws, on particle i (j gets the opposite).
+struct Tangential {
+  Vec3 force;        ///< N
+  double energy;     ///< J, elastic
+  double dissipation;  ///< J, this step (only meaningful when tallying)
+};
+
+struct TangentialNone {
+  static constexpr int kHistory = 0;
+  static constexpr bool kRotation = false;
+  static Tangential eval(const Geometry&, const Normal&, double*) { return {{0, 0, 0}, 0, 0}; }
+  static void reset(double*) {}
+};
+
+/// Incremental spring with Coulomb limit. The stored force is rotated into the current tangent
+/// plane each step (normal component removed, magnitude kept); a dashpot η_t = η_n sqrt(k_t/S_n)
+/// acts alongside; when |F_spring + F_dash| exceeds μ F_n^rep the total is scaled onto the cone
+/// and the spring takes the remainder (as in LAMMPS's granular styles).
+template <bool kMindlin>
+struct TangentialSpring {
+  static constexpr int kHistory = 3;
+  static constexpr bool kRotation = true;
+  static void reset(double* h) { h[0] = h[1] = h[2] = 0; }
+  static Tangential eval(const Geometry& g, const Normal& nr, double* h) {
+    const PairParams& p = *g.pp;
+    const double kt = kMindlin ? 8 * p.G_star * nr.radius : p.k_t;
+    Vec3 fs{h[0], h[1], h[2]};
+    const double mag0 = norm2(fs);
+    if (mag0 > 0) {
+      fs -= dot(fs, g.n) * g.n;
+      const double mag1 = norm2(fs);
+      if (mag1 > 0) fs *= std::sqrt(mag0 / mag1);
+    }
+    const Vec3 vt = g.v_rel - dot(g.v_rel, g.n) * g.n;
+    const double e_before = kt > 0 ? 0.5 * norm2(fs) / kt : 0;
+    fs += (kt * g.dt) * vt;
+    const double eta_t = nr.stiffness > 0 ? nr.damping * std::sqrt(kt / nr.stiffness) : 0;
+    Vec3 ft = fs + eta_t * vt;
+    const double limit = p.friction * nr.fn_rep;
+    const double ft2 = norm2(ft);
+    if (ft2 > limit * limit) {
+      const double s = ft2 > 0 ? limit / std::sqrt(ft2) : 0;
+      ft *= s;
+      fs = ft - eta_t * vt;
+    }
+    h[0] = fs.x; h[1] = fs.y; h[2] = fs.z;
+    const double e_after = kt > 0 ? 0.5 * norm2(fs) / kt : 0;
+    // Work put into the contact this step minus the change of stored energy.
+    return {ft, e_after, dot(ft, vt) * g.dt - (e_after - e_before)};
+  }
+};
+using TangentialLinear = TangentialSpring<false>;
+using TangentialMindlin = TangentialSpring<true>;
+
+// ---------------------------------------------------------------- rolling slot
+struct RollingNone {
+  static constexpr int kHistory = 0;
+  static constexpr bool kRotation = false;
+  static void reset(double*) {}
+  static Tangential eval(const Geometry&, const Normal&, const Vec3&, double*) { return {{0, 0, 0}, 0, 0}; }
+};
+
+/// Elastic–plastic spring (Ai, Chen, Rotter & Ooi 2011, model C without its dashpot):
+/// ΔM = -k_r Δθ_r with k_r = 2.25 S_n μ_r² R*², |M| ≤ μ_r R* F_n^rep. `w_rel` = ω_i - ω_j.
+struct RollingElasticPlastic {
+  static constexpr int kHistory = 3;
+  static constexpr bool kRotation = true;
+  static void reset(double* h) { h[0] = h[1] = h[2] = 0; }
+  static Tangential eval(const Geometry& g, const Normal& nr, const Vec3& w_rel, double* h) {
+    const PairParams& p = *g.pp;
+    const double kr = 2.25 * nr.stiffness * p.rolling_friction * p.rolling_friction * g.r_star * g.r_star;
+    Vec3 m{h[0], h[1], h[2]};
+    const double mag0 = norm2(m);
+    if (mag0 > 0) {
+      m -= dot(m, g.n) * g.n;
+      const double mag1 = norm2(m);
+      if (mag1 > 0) m *= std::sqrt(mag0 / mag1);
+    }
+    const Vec3 wr = w_rel - dot(w_rel, g.n) * g.n;
+    const double e_before = kr > 0 ? 0.5 * norm2(m) / kr : 0;
+    m -= (kr * g.dt) * wr;
+    const double limit = p.rolling_friction * g.r_star * nr.fn_rep;
+    const double m2 = norm2(m);
+    if (m2 > limit * limit) m *= m2 > 0 ? limit / std::sqrt(m2) : 0;
+    h[0] = m.x; h[1] = m.y; h[2] = m.z;
+    const double e_after = kr > 0 ? 0.5 * norm2(m) / kr : 0;
+    return {m, e_after, -dot(m, wr) * g.dt - (e_after - e_before)};
+  }
+};
+
+}  // namespace tomodem::dem::law

@@ -1,0 +1,855 @@
+#include "tomodem/dem/simulation.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "kernel.hpp"
+#include "tomodem/core/error.hpp"
+#include "tomodem/core/tool.hpp"
+
+namespace tomodem::dem {
+
+bool CellControl::active() const {
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b)
+      if (stress_controlled[a][b] || velocity_gradient(a, b) != 0) return true;
+  return false;
+}
+
+namespace {
+constexpr int kCentreImage = 13;  // image code of (0, 0, 0)
+
+Vec3 image_vector(int code) { return {double(code / 9 - 1), double((code / 3) % 3 - 1), double(code % 3 - 1)}; }
+
+/// Frobenius norm, used to bound how far periodic images moved since the last build.
+double frobenius(const Mat3& m) {
+  double s = 0;
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) s += m(a, b) * m(a, b);
+  return std::sqrt(s);
+}
+}  // namespace
+
+struct Simulation::Impl {
+  Particles p;
+  Cell cell;
+  ContactModel model;
+  Settings set;
+  std::vector<Wall> walls;
+  CellControl control;
+  BodyForces body;
+  KernelSet kern;
+  int stride = 0;  // history doubles per contact
+
+  // Half neighbour list (CSR) with per-pair history that survives rebuilds.
+  std::vector<int32_t> start, nj;
+  std::vector<uint8_t> img, touch;
+  std::vector<double> hist;
+  std::vector<Vec3> x_build;
+  Mat3 h_build;
+  std::vector<Vec3> wall_point_build;
+  bool need_build = true;
+  long builds = 0;
+  double skin = 0, reach_max = 0;
+  Vec3 shift[27], vshift[27];
+
+  struct WallData {
+    std::vector<int32_t> candidates;
+    std::vector<double> hist;
+    std::vector<uint8_t> touch;
+  };
+  std::vector<WallData> wall_data;
+
+  std::vector<Vec3> u;  // absolute velocities when the cell deforms
+  int threads = 1;
+  std::vector<std::vector<Vec3>> fbuf, tbuf;
+  std::vector<std::vector<double>> sbuf;
+  std::vector<int> split;
+
+  double dt = 0, t = 0;
+  long nstep = 0;
+  bool forces_valid = false;
+  Tally last;  // tally of the last tally pass
+  std::vector<double> stiffness;
+  double dissipated = 0, ext_work = 0, e0 = std::numeric_limits<double>::quiet_NaN();
+
+  Impl(Particles particles, Cell c, ContactModel m, Settings s)
+      : p(std::move(particles)), cell(c), model(std::move(m)), set(s) {
+    kern = select_kernels(model);
+    stride = kern.tangential_history + kern.rolling_history;
+    if (model.needs_rotation()) p.enable_rotation();
+    if (p.size() == 0) throw InputError("", "particles", "0", "a scene needs at least one particle");
+    double dsum = 0;
+    for (double r : p.r) dsum += 2 * r;
+    skin = set.skin > 0 ? set.skin : 0.1 * dsum / double(p.size());
+    threads = std::max(1, set.threads);
+    // Largest extra range of an adhesive law (JKR keeps contacts in tension).
+    double rmax = *std::max_element(p.r.begin(), p.r.end());
+    for (const auto& pp : model.pairs) reach_max = std::max(reach_max, kern.reach(pp, rmax));
+  }
+
+  bool deforming() const { return control.active(); }
+
+  // ------------------------------------------------------------ neighbour search
+  void wrap_positions() {
+    if (!(cell.periodic[0] || cell.periodic[1] || cell.periodic[2])) return;
+    const Mat3 hinv = cell.h.inverse();
+    for (auto& x : p.x) {
+      Vec3 s = hinv * (x - cell.origin);
+      bool moved = false;
+      for (int k = 0; k < 3; ++k)
+        if (cell.periodic[k]) {
+          const double fl = std::floor(s[k]);
+          if (fl != 0) {
+            s[k] -= fl;
+            moved = true;
+          }
+        }
+      if (moved) x = cell.origin + cell.h * s;
+    }
+  }
+
+  void update_image_tables() {
+    const Mat3 lh = control.velocity_gradient * cell.h;
+    for (int c = 0; c < 27; ++c) {
+      const Vec3 n = image_vector(c);
+      shift[c] = cell.h * n;
+      vshift[c] = lh * n;
+    }
+  }
+
+  void build_neighbors() {
+    wrap_positions();
+    const std::size_t n = p.size();
+    const double rmax = *std::max_element(p.r.begin(), p.r.end());
+    const double bin = 2 * rmax + skin + reach_max;
+    const Mat3 hinv = cell.h.inverse();
+    std::vector<Vec3> s(n);
+    for (std::size_t i = 0; i < n; ++i) s[i] = hinv * (p.x[i] - cell.origin);
+    // Bins in fractional coordinates; the perpendicular width of the cell along k is V/|a×b|.
+    int nb[3];
+    double lo[3], span[3];
+    const double vol = cell.volume();
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 a = cell.h.col((k + 1) % 3), b = cell.h.col((k + 2) % 3);
+      const double width = vol / norm(cross(a, b));
+      if (cell.periodic[k]) {
+        lo[k] = 0;
+        span[k] = 1;
+      } else {
+        double smin = s[0][k], smax = s[0][k];
+        for (const auto& si : s) smin = std::min(smin, si[k]), smax = std::max(smax, si[k]);
+        lo[k] = smin;
+        span[k] = std::max(smax - smin, 1e-12);
+      }
+      nb[k] = std::max(1, int(std::floor(span[k] * width / bin)));
+      // Cap the bin count so a sparse open scene cannot ask for huge memory.
+      nb[k] = std::min(nb[k], std::max(1, int(4 * std::cbrt(double(n))) + 1));
+    }
+    const std::size_t nbins = std::size_t(nb[0]) * nb[1] * nb[2];
+    std::vector<int32_t> bin_of(n), bin_start(nbins + 1, 0), bin_items(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      int c[3];
+      for (int k = 0; k < 3; ++k) {
+        c[k] = int(std::floor((s[i][k] - lo[k]) / span[k] * nb[k]));
+        c[k] = std::clamp(c[k], 0, nb[k] - 1);
+      }
+      bin_of[i] = (c[0] * nb[1] + c[1]) * nb[2] + c[2];
+      ++bin_start[bin_of[i] + 1];
+    }
+    for (std::size_t b = 0; b < nbins; ++b) bin_start[b + 1] += bin_start[b];
+    {
+      std::vector<int32_t> fill(bin_start.begin(), bin_start.end() - 1);
+      for (std::size_t i = 0; i < n; ++i) bin_items[fill[bin_of[i]]++] = int32_t(i);
+    }
+    update_image_tables();
+
+    std::vector<int32_t> new_start(n + 1, 0), new_j;
+    std::vector<uint8_t> new_img;
+    new_j.reserve(nj.size() + n);
+    new_img.reserve(nj.size() + n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const int b = bin_of[i];
+      const int c0 = b / (nb[1] * nb[2]), c1 = (b / nb[2]) % nb[1], c2 = b % nb[2];
+      const int c[3] = {c0, c1, c2};
+      for (int o = 0; o < 27; ++o) {
+        const int off[3] = {o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1};
+        int cb[3], im[3];
+        bool skip = false;
+        for (int k = 0; k < 3 && !skip; ++k) {
+          cb[k] = c[k] + off[k];
+          im[k] = 0;
+          if (cb[k] < 0 || cb[k] >= nb[k]) {
+            if (!cell.periodic[k]) skip = true;
+            else if (cb[k] < 0) cb[k] += nb[k], im[k] = -1;
+            else cb[k] -= nb[k], im[k] = 1;
+          }
+        }
+        if (skip) continue;
+        const int code = (im[0] + 1) * 9 + (im[1] + 1) * 3 + (im[2] + 1);
+        const int nbin = (cb[0] * nb[1] + cb[1]) * nb[2] + cb[2];
+        for (int q = bin_start[nbin]; q < bin_start[nbin + 1]; ++q) {
+          const int j = bin_items[q];
+          // Each pair once: i < j for any image, and i == j only for the positive half of images.
+          if (j < int(i) || (j == int(i) && code <= kCentreImage)) continue;
+          const Vec3 d = p.x[j] + shift[code] - p.x[i];
+          const double rc = p.r[i] + p.r[j] + skin + reach_max;
+          if (dot(d, d) < rc * rc) {
+            new_j.push_back(j);
+            new_img.push_back(uint8_t(code));
+          }
+        }
+      }
+      new_start[i + 1] = int32_t(new_j.size());
+    }
+    // Carry the history of pairs that stay in the list (small per-particle lists: linear search).
+    std::vector<double> new_hist(new_j.size() * stride, 0.0);
+    std::vector<uint8_t> new_touch(kern.touch_flag ? new_j.size() : 0, 0);
+    if (!start.empty() && (stride > 0 || kern.touch_flag)) {
+      for (std::size_t i = 0; i < n; ++i)
+        for (int k = new_start[i]; k < new_start[i + 1]; ++k)
+          for (int q = start[i]; q < start[i + 1]; ++q)
+            if (nj[q] == new_j[k] && img[q] == new_img[k]) {
+              std::copy_n(&hist[std::size_t(q) * stride], stride, &new_hist[std::size_t(k) * stride]);
+              if (kern.touch_flag) new_touch[k] = touch[q];
+              break;
+            }
+    }
+    start.swap(new_start);
+    nj.swap(new_j);
+    img.swap(new_img);
+    hist.swap(new_hist);
+    touch.swap(new_touch);
+
+    // Wall candidates: particles within reach of each wall.
+    wall_data.resize(walls.size());
+    wall_point_build.resize(walls.size());
+    for (std::size_t w = 0; w < walls.size(); ++w) {
+      auto& wd = wall_data[w];
+      wd.hist.resize(n * stride, 0.0);
+      if (kern.touch_flag) wd.touch.resize(n, 0);
+      wd.candidates.clear();
+      for (std::size_t i = 0; i < n; ++i)
+        if (dot(p.x[i] - walls[w].point, walls[w].normal) < p.r[i] + skin + reach_max) wd.candidates.push_back(int32_t(i));
+        else {
+          std::fill_n(wd.hist.begin() + std::ptrdiff_t(i) * stride, stride, 0.0);
+          if (kern.touch_flag) wd.touch[i] = 0;
+        }
+      wall_point_build[w] = walls[w].point;
+    }
+
+    partition_threads();
+    x_build = p.x;
+    h_build = cell.h;
+    need_build = false;
+    ++builds;
+  }
+
+  /// Splits the particles among threads by pair count (deterministic for a thread count).
+  void partition_threads() {
+    const std::size_t n = p.size();
+    split.assign(threads + 1, int(n));
+    split[0] = 0;
+    const double per = double(nj.size()) / threads;
+    int t = 1;
+    for (std::size_t i = 0; i < n && t < threads; ++i)
+      if (start[i + 1] >= per * t) split[t++] = int(i + 1);
+  }
+
+  bool rebuild_due() const {
+    if (need_build) return true;
+    double dmax2 = 0;
+    for (std::size_t i = 0; i < p.size(); ++i) dmax2 = std::max(dmax2, norm2(p.x[i] - x_build[i]));
+    const double dmax = std::sqrt(dmax2);
+    Mat3 dh = cell.h;
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) dh(a, b) -= h_build(a, b);
+    if (2 * dmax + std::sqrt(3.0) * frobenius(dh) > skin) return true;
+    for (std::size_t w = 0; w < walls.size(); ++w)
+      if (dmax + norm(walls[w].point - wall_point_build[w]) > skin) return true;
+    return false;
+  }
+
+  // ------------------------------------------------------------ forces
+  ForceJob job() {
+    ForceJob jb;
+    jb.x = p.x.data();
+    if (deforming()) {
+      u.resize(p.size());
+      const Mat3& L = control.velocity_gradient;
+      for (std::size_t i = 0; i < p.size(); ++i) u[i] = p.v[i] + L * (p.x[i] - cell.origin);
+      jb.u = u.data();
+    } else {
+      jb.u = p.v.data();
+    }
+    jb.omega = p.has_rotation() ? p.omega.data() : nullptr;
+    jb.r = p.r.data();
+    jb.m = p.m.data();
+    jb.phase = p.phase.data();
+    jb.start = start.data();
+    jb.j = nj.data();
+    jb.img = img.data();
+    jb.hist = hist.data();
+    jb.touch = touch.empty() ? nullptr : touch.data();
+    jb.hist_stride = stride;
+    jb.shift = shift;
+    jb.vshift = vshift;
+    jb.pairs = model.pairs.data();
+    jb.n_phases = model.n_phases;
+    jb.dt = dt;
+    return jb;
+  }
+
+  /// Computes all forces and torques at the current state. With `tally`, also the virial,
+  /// energies and per-particle stiffness (into `last`).
+  void compute_forces(bool tally) {
+    if (rebuild_due()) build_neighbors();
+    update_image_tables();
+    const std::size_t n = p.size();
+    const bool rot = p.has_rotation();
+    std::fill(p.f.begin(), p.f.end(), Vec3{});
+    if (rot) std::fill(p.torque.begin(), p.torque.end(), Vec3{});
+    const ForceJob jb = job();
+    std::vector<Tally> tallies(threads);
+    if (tally) stiffness.assign(n, 0.0);
+    if (int(fbuf.size()) < threads) {
+      fbuf.resize(threads);
+      tbuf.resize(threads);
+      sbuf.resize(threads);
+    }
+#pragma omp parallel num_threads(threads) if (threads > 1)
+    {
+      const int tid = omp_get_thread_num();
+      Vec3* f = p.f.data();
+      Vec3* tq = rot ? p.torque.data() : nullptr;
+      double* st = tally ? stiffness.data() : nullptr;
+      if (tid > 0) {
+        fbuf[tid].assign(n, Vec3{});
+        f = fbuf[tid].data();
+        if (rot) {
+          tbuf[tid].assign(n, Vec3{});
+          tq = tbuf[tid].data();
+        }
+        if (tally) {
+          sbuf[tid].assign(n, 0.0);
+          st = sbuf[tid].data();
+        }
+      }
+      kern.pair[tally](jb, split[tid], split[tid + 1], f, tq, &tallies[tid], st);
+#pragma omp barrier
+      // Reduce the per-thread buffers in a fixed order: the result depends on the thread count
+      // only through round-off, and not at all on scheduling.
+#pragma omp for schedule(static)
+      for (long i = 0; i < long(n); ++i)
+        for (int q = 1; q < threads; ++q) {
+          p.f[i] += fbuf[q][i];
+          if (rot) p.torque[i] += tbuf[q][i];
+          if (tally) stiffness[i] += sbuf[q][i];
+        }
+    }
+    Tally total;
+    for (const auto& tt : tallies) total.add(tt);
+    // Walls (few candidates each): serial, through the same law functions.
+    for (std::size_t w = 0; w < walls.size(); ++w) {
+      WallJob wj{walls[w].point, walls[w].normal, walls[w].velocity, walls[w].phase,
+                 wall_data[w].candidates.data(), int(wall_data[w].candidates.size()), wall_data[w].hist.data(),
+                 wall_data[w].touch.empty() ? nullptr : wall_data[w].touch.data()};
+      Tally wt;
+      kern.wall[tally](jb, wj, p.f.data(), rot ? p.torque.data() : nullptr, &wt, tally ? stiffness.data() : nullptr);
+      // The wall force is needed by force-controlled walls every step; recompute it cheaply
+      // from the tally pass or, without tally, from the particles' change of force.
+      walls[w].force = wt.wall_force;
+      total.add(wt);
+    }
+    apply_body_forces(tally ? &total : nullptr);
+    if (tally) last = total;
+    forces_valid = true;
+  }
+
+  void apply_body_forces(Tally* tally) {
+    const std::size_t n = p.size();
+    const Vec3 g = body.gravity;
+    if (g.x != 0 || g.y != 0 || g.z != 0)
+      for (std::size_t i = 0; i < n; ++i) p.f[i] += p.m[i] * g;
+    if (body.fluid_viscosity > 0) {
+      const double c = 6 * M_PI * body.fluid_viscosity;
+      for (std::size_t i = 0; i < n; ++i) {
+        p.f[i] -= (c * p.r[i]) * p.v[i];
+        if (tally) tally->dissipated += c * p.r[i] * norm2(p.v[i]) * dt;
+      }
+    }
+    if (body.local_damping > 0) {
+      const double lam = body.local_damping;
+      for (std::size_t i = 0; i < n; ++i) {
+        Vec3& f = p.f[i];
+        const Vec3& v = p.v[i];
+        for (int k = 0; k < 3; ++k) {
+          const double d = -lam * std::abs(f[k]) * (v[k] > 0 ? 1 : (v[k] < 0 ? -1 : 0));
+          if (tally) tally->dissipated -= d * v[k] * dt;
+          f[k] += d;
+        }
+        if (p.has_rotation()) {
+          Vec3& tq = p.torque[i];
+          const Vec3& w = p.omega[i];
+          for (int k = 0; k < 3; ++k) {
+            const double d = -lam * std::abs(tq[k]) * (w[k] > 0 ? 1 : (w[k] < 0 ? -1 : 0));
+            if (tally) tally->dissipated -= d * w[k] * dt;
+            tq[k] += d;
+          }
+        }
+      }
+    }
+  }
+
+  // ------------------------------------------------------------ integration
+  void kick(double h) {
+    const std::size_t n = p.size();
+#pragma omp parallel for num_threads(threads) if (threads > 1) schedule(static)
+    for (long i = 0; i < long(n); ++i) p.v[i] += (h * p.inv_m[i]) * p.f[i];
+    if (p.has_rotation()) {
+#pragma omp parallel for num_threads(threads) if (threads > 1) schedule(static)
+      for (long i = 0; i < long(n); ++i) p.omega[i] += (h * p.inv_I[i]) * p.torque[i];
+    }
+  }
+
+  void drift() {
+    const std::size_t n = p.size();
+    if (deforming()) {
+      const Mat3 L = control.velocity_gradient;
+      const Vec3 o = cell.origin;
+#pragma omp parallel for num_threads(threads) if (threads > 1) schedule(static)
+      for (long i = 0; i < long(n); ++i) p.x[i] += dt * (p.v[i] + L * (p.x[i] - o));
+      Mat3 dh = L * cell.h;
+      dh *= dt;
+      cell.h += dh;
+    } else {
+#pragma omp parallel for num_threads(threads) if (threads > 1) schedule(static)
+      for (long i = 0; i < long(n); ++i) p.x[i] += dt * p.v[i];
+    }
+    for (auto& w : walls) w.point += dt * w.velocity;
+  }
+
+  bool tally_every_step() const {
+    if (set.track_energy || deforming()) return true;
+    for (const auto& w : walls)
+      if (w.force_controlled) return true;
+    return false;
+  }
+
+  void step() {
+    if (dt <= 0) throw InputError("", "timestep", std::to_string(dt), "the time step must be set and positive");
+    const bool tally_all = tally_every_step();
+    if (!forces_valid) compute_forces(tally_all);
+    if (set.track_energy && std::isnan(e0)) e0 = total_energy();
+    kick(0.5 * dt);
+    if (set.track_energy) accumulate_external_work();
+    drift();
+    t += dt;
+    ++nstep;
+    const bool check = set.check_interval > 0 && nstep % set.check_interval == 0;
+    compute_forces(tally_all || check);
+    if (tally_all || check) {
+      if (set.track_energy) dissipated += last.dissipated;
+    }
+    kick(0.5 * dt);
+    if (deforming()) servo_cell();
+    servo_walls();
+    if (check) check_stability();
+  }
+
+  /// Work of gravity, moving walls and the deforming cell over this step (midpoint velocities).
+  void accumulate_external_work() {
+    const Vec3 g = body.gravity;
+    if (g.x != 0 || g.y != 0 || g.z != 0)
+      for (std::size_t i = 0; i < p.size(); ++i) ext_work += p.m[i] * dot(g, p.v[i]) * dt;
+    for (const auto& w : walls) ext_work += -dot(w.force, w.velocity) * dt;
+    if (deforming()) {
+      const double vol = cell.volume();
+      const Mat3& L = control.velocity_gradient;
+      // Power of the boundary on the contact network: -Σ F_ij ⊗ l_ij : L = V σ_c : L.
+      double pw = 0;
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) pw -= last.virial(a, b) * L(a, b);
+      ext_work += pw * dt;
+      (void)vol;
+    }
+  }
+
+  void servo_cell() {
+    // Mixed control: each stress-controlled component gets the strain rate that removes a
+    // fraction of its stress error per step, using the network's stiffness Σ S_n l²/(9V).
+    const double vol = cell.volume();
+    Mat3 sigma = last.virial;
+    sigma *= -1.0 / vol;
+    double ksum = 0;
+    for (std::size_t i = 0; i < p.size(); ++i) ksum += stiffness.empty() ? 0 : stiffness[i];
+    double lmean = 0;
+    for (double r : p.r) lmean += 2 * r;
+    lmean /= double(p.size());
+    const double modulus = 0.5 * ksum * lmean * lmean / (9 * vol);  // Σ over contacts (stiffness counted twice)
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) {
+        if (!control.stress_controlled[a][b]) continue;
+        const double err = sigma(a, b) - control.target_stress(a, b);
+        double rate;
+        if (modulus > 0) rate = -control.servo_fraction * err / (modulus * dt);
+        else rate = err > 0 ? -control.max_strain_rate : control.max_strain_rate;
+        if (control.max_strain_rate > 0) rate = std::clamp(rate, -control.max_strain_rate, control.max_strain_rate);
+        control.velocity_gradient(a, b) = rate;
+      }
+  }
+
+  void servo_walls() {
+    double rmin = *std::min_element(p.r.begin(), p.r.end());
+    for (std::size_t w = 0; w < walls.size(); ++w) {
+      Wall& wl = walls[w];
+      if (!wl.force_controlled) continue;
+      const double f_now = -dot(wl.force, wl.normal);  // compressive force from the particles
+      const double vmax = 1e-3 * rmin / dt;
+      double gain = wl.servo_gain;
+      if (gain <= 0) {
+        // Move the wall by a fraction of the force error over the wall contacts' stiffness.
+        const double kw = wall_stiffness(w);
+        gain = kw > 0 ? 0.05 / (kw * dt) : 0;
+      }
+      double vn = gain > 0 ? gain * (wl.target_force - f_now) : (f_now < wl.target_force ? vmax : -vmax);
+      vn = std::clamp(vn, -vmax, vmax);
+      wl.velocity = vn * wl.normal;
+    }
+  }
+
+  /// Sum of the normal stiffness of a wall's contacts, from the overlap (Hertz or linear).
+  double wall_stiffness(std::size_t w) const {
+    double k = 0;
+    const Wall& wl = walls[w];
+    for (int i : wall_data[w].candidates) {
+      const double delta = p.r[i] - dot(p.x[i] - wl.point, wl.normal);
+      if (delta <= 0) continue;
+      const PairParams& pp = model.pair(p.phase[i], wl.phase);
+      k += model.normal == NormalLaw::linear ? pp.k_n : 2 * pp.E_star * std::sqrt(p.r[i] * delta);
+    }
+    return k;
+  }
+
+  double kinetic_energy() const {
+    double e = 0;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      if (p.motion[i] != Motion::free) continue;
+      e += 0.5 * p.m[i] * norm2(p.v[i]);
+      if (p.has_rotation()) e += 0.5 * p.inertia(i) * norm2(p.omega[i]);
+    }
+    return e;
+  }
+
+  double total_energy() {
+    // Elastic energy needs a tally pass; the state is restored afterwards.
+    Measurements m = measure_now();
+    return m.kinetic_energy + m.elastic_energy;
+  }
+
+  // ------------------------------------------------------------ stability
+  void check_stability() {
+    std::vector<std::size_t> bad;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      const Vec3& x = p.x[i];
+      const Vec3& v = p.v[i];
+      if (!std::isfinite(x.x + x.y + x.z + v.x + v.y + v.z) || norm(v) * dt > 0.5 * p.r[i]) bad.push_back(i);
+    }
+    if (!bad.empty()) {
+      std::ostringstream s;
+      s << "unstable at step " << nstep << " (t = " << t << " s): particle";
+      s << (bad.size() > 1 ? "s " : " ");
+      for (std::size_t k = 0; k < std::min<std::size_t>(bad.size(), 5); ++k) s << (k ? ", " : "") << p.id[bad[k]];
+      if (bad.size() > 5) s << " and " << bad.size() - 5 << " more";
+      s << " moved more than half a radius in one step or became non-finite. Likely cause: the time step "
+        << dt << " s is too large for the contact stiffness (critical estimate "
+        << network_critical_step() << " s from the current contacts), or an input velocity is too high.";
+      throw NumericalError(s.str());
+    }
+    if (last.max_overlap_ratio > 0.5) {
+      std::ostringstream s;
+      s << "unstable at step " << nstep << " (t = " << t << " s): a contact overlaps by "
+        << last.max_overlap_ratio << " of the smaller radius (limit 0.5). Likely cause: a time step of " << dt
+        << " s against a critical estimate of " << network_critical_step()
+        << " s, or loads far above what the stiffness can carry.";
+      throw NumericalError(s.str());
+    }
+  }
+
+  /// Gershgorin bound of the highest frequency from the per-particle stiffness sums:
+  /// ω_max² ≤ max_i 2 Σ_c S_c / m_i, so Δt_crit ≥ sqrt(2 m_i / Σ_c S_c) (Verlet: 2/ω).
+  double network_critical_step() const {
+    double best = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < stiffness.size(); ++i)
+      if (stiffness[i] > 0) best = std::min(best, std::sqrt(2 * p.m[i] / stiffness[i]));
+    return best;
+  }
+
+  // ------------------------------------------------------------ measurement
+  Measurements measure_now() {
+    // A tally pass on the current state. History (incremental springs, JKR flags) is saved
+    // and restored, so measuring never changes the trajectory.
+    const std::vector<double> h = hist;
+    const std::vector<uint8_t> tf = touch;
+    std::vector<WallData> wd = wall_data;
+    std::vector<Vec3> wall_force;
+    for (auto& w : walls) wall_force.push_back(w.force);
+    const std::vector<Vec3> f = p.f, tq = p.torque;
+    compute_forces(true);
+    const Tally tl = last;
+    Measurements m;
+    m.step = nstep;
+    m.time = t;
+    m.volume = measurement_volume();
+    Mat3 sc = tl.virial;
+    sc *= -1.0 / m.volume;
+    m.stress_contact = sc;
+    Mat3 kin;
+    for (std::size_t i = 0; i < p.size(); ++i)
+      if (p.motion[i] == Motion::free) kin += outer(p.m[i] * p.v[i], p.v[i]);
+    kin *= -1.0 / m.volume;
+    m.stress = sc;
+    m.stress += kin;
+    m.pressure = -m.stress.trace() / 3;
+    m.kinetic_energy = kinetic_energy();
+    m.elastic_energy = tl.elastic;
+    m.dissipated_energy = dissipated;
+    m.external_work = ext_work;
+    if (set.track_energy && !std::isnan(e0))
+      m.energy_balance_error = m.kinetic_energy + m.elastic_energy + dissipated - (e0 + ext_work);
+    m.contacts = tl.contacts;
+    m.wall_contacts = tl.wall_contacts;
+    m.coordination = 2.0 * double(tl.contacts) / double(p.size());
+    double fres = 0;
+    long nfree = 0;
+    for (std::size_t i = 0; i < p.size(); ++i)
+      if (p.motion[i] == Motion::free) fres += norm(p.f[i]), ++nfree;
+    const long nc = tl.contacts + tl.wall_contacts;
+    m.unbalanced_force_ratio = (nc > 0 && nfree > 0) ? (fres / nfree) / (tl.sum_contact_force / nc) : 0;
+    if (deforming() && m.pressure > 0) {
+      double rate = 0, dsum = 0, mass = 0, vs = 0;
+      for (int a = 0; a < 3; ++a) rate = std::max(rate, std::abs(control.velocity_gradient(a, a)));
+      for (std::size_t i = 0; i < p.size(); ++i) {
+        dsum += 2 * p.r[i];
+        mass += p.m[i];
+        vs += 4.0 / 3.0 * M_PI * p.r[i] * p.r[i] * p.r[i];
+      }
+      m.inertial_number = rate * (dsum / p.size()) * std::sqrt(mass / vs / m.pressure);
+    }
+    m.max_overlap_ratio = tl.max_overlap_ratio;
+    for (auto& w : walls) m.wall_forces.push_back(w.force);
+    m.neighbor_rebuilds = builds;
+    // Restore.
+    hist = h;
+    touch = tf;
+    wall_data = wd;
+    for (std::size_t w = 0; w < walls.size(); ++w) walls[w].force = wall_force[w];
+    p.f = f;
+    p.torque = tq;
+    return m;
+  }
+
+  /// The periodic cell's volume; with walls, the box between opposite walls along their normals
+  /// (falling back to the cell volume for open directions).
+  double measurement_volume() const {
+    if (walls.empty()) return cell.volume();
+    Vec3 ext{cell.h(0, 0), cell.h(1, 1), cell.h(2, 2)};
+    for (int k = 0; k < 3; ++k) {
+      double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+      int count = 0;
+      for (const auto& w : walls) {
+        if (std::abs(std::abs(w.normal[k]) - 1) > 1e-12) continue;
+        const double c = w.point[k];
+        if (w.normal[k] > 0) lo = std::min(lo, c);
+        else hi = std::max(hi, c);
+        ++count;
+      }
+      if (count >= 2 && hi > lo) ext[k] = hi - lo;
+    }
+    return ext.x * ext.y * ext.z;
+  }
+};
+
+// ---------------------------------------------------------------- public interface
+Simulation::Simulation(Particles particles, Cell cell, ContactModel model, Settings settings)
+    : impl_(std::make_unique<Impl>(std::move(particles), cell, std::move(model), settings)) {}
+Simulation::~Simulation() = default;
+Simulation::Simulation(Simulation&&) noexcept = default;
+Simulation& Simulation::operator=(Simulation&&) noexcept = default;
+
+Particles& Simulation::particles() { return impl_->p; }
+const Particles& Simulation::particles() const { return impl_->p; }
+const Cell& Simulation::cell() const { return impl_->cell; }
+const ContactModel& Simulation::model() const { return impl_->model; }
+const Settings& Simulation::settings() const { return impl_->set; }
+std::vector<Wall>& Simulation::walls() { return impl_->walls; }
+CellControl& Simulation::cell_control() { return impl_->control; }
+BodyForces& Simulation::body_forces() { return impl_->body; }
+void Simulation::add_wall(const Wall& w) {
+  Wall c = w;
+  c.normal = (1.0 / norm(w.normal)) * w.normal;
+  impl_->walls.push_back(c);
+  impl_->need_build = true;
+  impl_->forces_valid = false;
+}
+
+double Simulation::critical_time_step() const {
+  const Impl& s = *impl_;
+  double best = std::numeric_limits<double>::infinity();
+  if (s.model.normal == NormalLaw::linear) {
+    // Two-particle Verlet limit of a damped linear spring: Δt < 2(sqrt(1+ζ²) - ζ)/ω, ω² = k/m*.
+    double mmin = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < s.p.size(); ++i)
+      if (s.p.motion[i] == Motion::free) mmin = std::min(mmin, s.p.m[i]);
+    for (const auto& pp : s.model.pairs) {
+      if (pp.k_n <= 0) continue;
+      const double z = pp.damping_ratio;
+      // m* of the two lightest particles (a wall contact has m* = m, twice as large: not limiting).
+      best = std::min(best, 2 * (std::sqrt(1 + z * z) - z) * std::sqrt(0.5 * mmin / pp.k_n));
+    }
+  } else {
+    // Rayleigh time of each particle: π R sqrt(ρ/G)/(0.1631ν + 0.8766), G and ν of its phase.
+    for (std::size_t i = 0; i < s.p.size(); ++i) {
+      const int ph = s.p.phase[i];
+      if (ph >= int(s.model.materials.size())) continue;
+      const Material& mat = s.model.materials[ph];
+      const double nu = mat.poisson_ratio;
+      const double G = mat.youngs_modulus / (2 * (1 + nu));
+      const double rho = s.p.m[i] / (4.0 / 3.0 * M_PI * std::pow(s.p.r[i], 3));
+      if (G > 0) best = std::min(best, M_PI * s.p.r[i] * std::sqrt(rho / G) / (0.1631 * nu + 0.8766));
+    }
+  }
+  return best;
+}
+
+void Simulation::set_time_step(double dt) {
+  const double crit = critical_time_step();
+  if (!(dt > 0) || !std::isfinite(dt))
+    throw InputError("", "timestep", std::to_string(dt), "the time step must be a positive number");
+  if (dt > crit) {
+    std::ostringstream s;
+    s << "above the stable limit " << crit << " s ("
+      << (impl_->model.normal == NormalLaw::linear ? "two-particle Verlet limit" : "Rayleigh time")
+      << "); use 'auto' or a smaller value";
+    throw InputError("", "timestep", std::to_string(dt), s.str());
+  }
+  // Forces stay valid: recomputing them would apply the incremental springs twice.
+  impl_->dt = dt;
+}
+double Simulation::time_step() const { return impl_->dt; }
+double Simulation::time() const { return impl_->t; }
+long Simulation::step_count() const { return impl_->nstep; }
+void Simulation::step() { impl_->step(); }
+void Simulation::run(long steps) {
+  for (long k = 0; k < steps; ++k) impl_->step();
+}
+Measurements Simulation::measure() { return impl_->measure_now(); }
+void Simulation::invalidate_neighbors() {
+  impl_->need_build = true;
+  impl_->forces_valid = false;
+}
+
+std::string Simulation::describe() const {
+  const Impl& s = *impl_;
+  std::ostringstream o;
+  o << "laws " << s.model.describe() << "; allocated:";
+  o << (s.p.has_rotation() ? " rotation" : "");
+  o << (s.kern.tangential_history ? " tangential-history" : "");
+  o << (s.kern.rolling_history ? " rolling-history" : "");
+  o << (s.kern.touch_flag ? " contact-flags" : "");
+  o << (s.walls.empty() ? "" : " walls");
+  o << (s.control.active() ? " deforming-cell" : "");
+  o << (s.set.track_energy ? " energy-tally" : "");
+  if (!s.p.has_rotation() && !s.kern.tangential_history && s.walls.empty()) o << " (positions and forces only)";
+  return o.str();
+}
+
+ContactTable Simulation::contacts() {
+  Impl& s = *impl_;
+  if (s.need_build) s.build_neighbors();
+  ContactTable ct;
+  for (std::size_t i = 0; i < s.p.size(); ++i)
+    for (int k = s.start[i]; k < s.start[i + 1]; ++k) {
+      const int j = s.nj[k];
+      const Vec3 d = s.p.x[j] + s.shift[s.img[k]] - s.p.x[i];
+      const double delta = s.p.r[i] + s.p.r[j] - norm(d);
+      const bool touching = s.kern.touch_flag ? s.touch[k] != 0 : delta > 0;
+      if (!touching) continue;
+      ct.i.push_back(int32_t(i));
+      ct.j.push_back(j);
+      ct.overlap.push_back(delta);
+      // Forces are not stored per contact; the snapshot gives the geometry (forces: measure()).
+      ct.normal_force.push_back({0, 0, 0});
+      ct.tangential_force.push_back({0, 0, 0});
+    }
+  return ct;
+}
+
+Simulation::EngineState Simulation::engine_state() const {
+  const Impl& s = *impl_;
+  EngineState e;
+  e.start = s.start;
+  e.j = s.nj;
+  e.image = s.img;
+  e.touching = s.touch;
+  e.history = s.hist;
+  e.x_at_build = s.x_build;
+  e.h_at_build = s.h_build;
+  for (const auto& wd : s.wall_data) {
+    e.wall_candidates.push_back(wd.candidates);
+    e.wall_history.push_back(wd.hist);
+    e.wall_touching.push_back(wd.touch);
+  }
+  e.wall_point_at_build = s.wall_point_build;
+  e.force = s.p.f;
+  e.torque = s.p.torque;
+  e.forces_valid = s.forces_valid && !s.need_build;
+  e.dt = s.dt;
+  e.time = s.t;
+  e.step = s.nstep;
+  e.builds = s.builds;
+  e.dissipated = s.dissipated;
+  e.external_work = s.ext_work;
+  e.initial_energy = s.e0;
+  return e;
+}
+
+void Simulation::restore(const EngineState& e) {
+  Impl& s = *impl_;
+  const std::size_t n = s.p.size();
+  if (e.start.size() != n + 1 || e.x_at_build.size() != n || e.force.size() != n ||
+      e.history.size() != e.j.size() * std::size_t(s.stride) || e.wall_candidates.size() != s.walls.size())
+    throw InputError("", "engine state", "", "does not match the scene (particle count, laws or walls differ)");
+  s.start = e.start;
+  s.nj = e.j;
+  s.img = e.image;
+  s.touch = e.touching;
+  s.hist = e.history;
+  s.x_build = e.x_at_build;
+  s.h_build = e.h_at_build;
+  s.wall_data.resize(s.walls.size());
+  for (std::size_t w = 0; w < s.walls.size(); ++w) {
+    s.wall_data[w].candidates = e.wall_candidates[w];
+    s.wall_data[w].hist = e.wall_history[w];
+    s.wall_data[w].touch = e.wall_touching[w];
+  }
+  s.wall_point_build = e.wall_point_at_build;
+  s.p.f = e.force;
+  if (s.p.has_rotation()) s.p.torque = e.torque;
+  s.forces_valid = e.forces_valid;
+  s.need_build = false;
+  s.dt = e.dt;
+  s.t = e.time;
+  s.nstep = e.step;
+  s.builds = e.builds;
+  s.dissipated = e.dissipated;
+  s.ext_work = e.external_work;
+  s.e0 = e.initial_energy;
+  s.partition_threads();
+}
+
+}  // namespace tomodem::dem
