@@ -89,6 +89,11 @@ struct Writer {
       if (!std::isfinite(t.radius[k]) || t.radius[k] <= 0)
         refuse("/particles/radius[" + std::to_string(k) + "]", num(t.radius[k]), "radius must be finite and > 0");
     for (std::size_t k = 0; k < n; ++k)
+      if (!std::isfinite(t.position[k].x) || !std::isfinite(t.position[k].y) || !std::isfinite(t.position[k].z))
+        refuse("/particles/position[" + std::to_string(k) + "]",
+               num(t.position[k].x) + " " + num(t.position[k].y) + " " + num(t.position[k].z),
+               "position must be finite");
+    for (std::size_t k = 0; k < n; ++k)
       if (t.phase[k] < 0 || (n_materials > 0 && static_cast<std::size_t>(t.phase[k]) >= n_materials))
         refuse("/particles/phase[" + std::to_string(k) + "]", std::to_string(t.phase[k]),
                "phase must be >= 0 and < the number of materials (" + std::to_string(n_materials) + ")");
@@ -101,6 +106,10 @@ struct Writer {
   }
 
   void cell(const Cell& c) {
+    for (int k = 0; k < 3; ++k)
+      if (!std::isfinite(c.origin[k])) refuse("/cell/origin", num(c.origin[k]), "must be finite");
+    for (int k = 0; k < 9; ++k)
+      if (!std::isfinite((&c.h.a[0][0])[k])) refuse("/cell/h", num((&c.h.a[0][0])[k]), "must be finite");
     f.write("/cell/origin", std::vector<double>{c.origin.x, c.origin.y, c.origin.z}, {}, "m");
     f.set_attr("/cell/origin", "units", "m");
     std::vector<double> h(&c.h.a[0][0], &c.h.a[0][0] + 9);  // row-major, columns are the cell vectors
@@ -133,6 +142,9 @@ struct Writer {
     same_length("/bonds/broken_at", b.broken_at.size(), m, "/bonds/i");
     indices("/bonds/i", b.i, n);
     indices("/bonds/j", b.j, n);
+    for (std::size_t k = 0; k < m; ++k)
+      if (b.state[k] > BondTable::broken)
+        refuse("/bonds/state[" + std::to_string(k) + "]", std::to_string(b.state[k]), "must be 0 (intact) or 1 (broken)");
     put_int("/bonds/i", b.i, "1");
     put_int("/bonds/j", b.j, "1");
     put("/bonds/radius", b.radius, "m");
@@ -454,6 +466,9 @@ std::string xml_escape(const std::string& s) {
 
 void write_packing_groups(h5::File& f, const Packing& p) {
   Writer w{f};
+  // Rewriting a file in place (checkpoints) must not leave tables of the previous packing behind.
+  for (const char* g : {"/particles", "/cell", "/bonds", "/contacts", "/materials", "/results", "/provenance"})
+    f.remove(g);
   // Root attributes first, so a reader can tell a tomodem file even while other groups are added.
   w.provenance(p.provenance);
   w.materials(p.materials);

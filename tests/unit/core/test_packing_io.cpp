@@ -246,6 +246,23 @@ TEST_F(PackingIo, GroupsCoexistWithCheckpointData) {
   expect_equal(full_packing(), read_packing_groups(f));
 }
 
+TEST_F(PackingIo, RewritingGroupsInPlaceDropsOldTables) {
+  File f(file("re.h5"), File::Mode::create);
+  write_packing_groups(f, full_packing());
+  Packing smaller;
+  smaller.particles.resize(1);
+  smaller.particles.radius[0] = 1.0;
+  write_packing_groups(f, smaller);
+  const Packing q = read_packing_groups(f);
+  EXPECT_EQ(q.particles.size(), 1u);
+  EXPECT_TRUE(q.particles.velocity.empty());
+  EXPECT_EQ(q.bonds.size(), 0u);
+  EXPECT_EQ(q.contacts.size(), 0u);
+  EXPECT_TRUE(q.materials.empty());
+  EXPECT_TRUE(q.results.series.empty());
+  EXPECT_TRUE(q.provenance.input_hashes.empty());
+}
+
 TEST_F(PackingIo, MissingFile) {
   expect_input_error([&] { read_packing(file("nope.h5")); }, file("nope.h5"), "");
 }
@@ -282,6 +299,8 @@ TEST_F(PackingIo, LengthMismatchNamesDatasetAndLength) {
 TEST_F(PackingIo, WrongShapeRefused) {
   auto path = corrupted([](File& f) { f.write("/particles/position", std::vector<double>(20, 0.0), {5, 4}); });
   expect_input_error([&] { read_packing(path); }, path, "/particles/position", "shape (5, 4)");
+  path = corrupted([](File& f) { f.write("/particles/position", std::vector<double>(15, kNaN), {5, 3}); });
+  expect_input_error([&] { read_packing(path); }, path, "/particles/position[0]", "nan");
   path = corrupted([](File& f) { f.write("/cell/h", std::vector<double>(9, 1.0)); });
   expect_input_error([&] { read_packing(path); }, path, "/cell/h", "shape (9)");
 }
@@ -363,7 +382,11 @@ TEST_F(PackingIo, WriterRefusesBadTables) {
   refuses([](Packing& p) { p.particles.velocity.pop_back(); });
   refuses([](Packing& p) { p.particles.radius[0] = kNaN; });
   refuses([](Packing& p) { p.particles.phase[0] = 2; });
+  refuses([](Packing& p) { p.particles.position[1].y = kNaN; });
+  refuses([](Packing& p) { p.cell.h(2, 0) = kNaN; });
   refuses([](Packing& p) { p.bonds.i[0] = 99; });
+  refuses([](Packing& p) { p.bonds.state[2] = 2; });
+  refuses([](Packing& p) { p.contacts.j[1] = -1; });
   refuses([](Packing& p) { p.bonds.state.clear(); });
   refuses([](Packing& p) { p.results.scalars["a/b"] = 1; });
   refuses([](Packing& p) { p.results.series["thermo"]["time_s"].push_back(1); });
