@@ -175,10 +175,9 @@ struct File::Impl {
     silence();
     const std::string a = absolute(dataset);
     if (!exists(a)) read_error(a, "", "missing dataset");
-    if (H5Oexists_by_name(file, a.c_str(), H5P_DEFAULT) > 0) {
-      H5O_info_t info;
-      if (H5Oget_info_by_name(file, a.c_str(), &info, H5P_DEFAULT) >= 0 && info.type != H5O_TYPE_DATASET)
-        read_error(a, "", "is a group, not a dataset");
+    {  // H5Iget_type rather than H5Oget_info_by_name, whose signature changed in HDF5 1.12
+      Handle obj(H5Oopen(file, a.c_str(), H5P_DEFAULT), H5Oclose);
+      if (obj.ok() && H5Iget_type(obj) != H5I_DATASET) read_error(a, "", "is a group, not a dataset");
     }
     Handle ds(H5Dopen2(file, a.c_str(), H5P_DEFAULT), H5Dclose);
     if (!ds.ok()) read_error(a, "", "cannot open dataset: " + last_error());
