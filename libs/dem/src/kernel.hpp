@@ -29,6 +29,7 @@ struct ForceJob {
   const PairParams* pairs;
   int n_phases;
   double dt;
+  Vec3* pair_force = nullptr;  ///< tally passes only: force on j from i per list entry, if not null
 };
 
 /// One wall's view for the wall pass.
@@ -183,6 +184,7 @@ void pair_kernel(const ForceJob& job, int i_begin, int i_end, Vec3* f, Vec3* tor
         torque[jj] += tj;
       }
       if constexpr (kTally) {
+        if (job.pair_force) job.pair_force[k] = -fi;
         tally->virial += outer(-fi, d);
         ++tally->contacts;
         if (stiffness) {

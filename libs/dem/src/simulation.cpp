@@ -306,14 +306,15 @@ struct Simulation::Impl {
 
   /// Computes all forces and torques at the current state. With `tally`, also the virial,
   /// energies and per-particle stiffness (into `last`).
-  void compute_forces(bool tally) {
+  void compute_forces(bool tally, Vec3* pair_force = nullptr) {
     if (rebuild_due()) build_neighbors();
     update_image_tables();
     const std::size_t n = p.size();
     const bool rot = p.has_rotation();
     std::fill(p.f.begin(), p.f.end(), Vec3{});
     if (rot) std::fill(p.torque.begin(), p.torque.end(), Vec3{});
-    const ForceJob jb = job();
+    ForceJob jb = job();
+    jb.pair_force = pair_force;
     std::vector<Tally> tallies(threads);
     if (tally) stiffness.assign(n, 0.0);
     if (int(fbuf.size()) < threads) {
@@ -590,16 +591,21 @@ struct Simulation::Impl {
   }
 
   // ------------------------------------------------------------ measurement
-  Measurements measure_now() {
+  Measurements measure_now(std::vector<Vec3>* pair_force = nullptr) {
     // A tally pass on the current state. History (incremental springs, JKR flags) is saved
     // and restored, so measuring never changes the trajectory.
+    if (pair_force) {
+      if (rebuild_due()) build_neighbors();
+      pair_force->assign(nj.size(), Vec3{});
+    }
     const std::vector<double> h = hist;
     const std::vector<uint8_t> tf = touch;
     std::vector<WallData> wd = wall_data;
     std::vector<Vec3> wall_force;
     for (auto& w : walls) wall_force.push_back(w.force);
     const std::vector<Vec3> f = p.f, tq = p.torque;
-    compute_forces(true);
+    const bool valid = forces_valid;
+    compute_forces(true, pair_force ? pair_force->data() : nullptr);
     const Tally tl = last;
     Measurements m;
     m.step = nstep;
@@ -650,6 +656,7 @@ struct Simulation::Impl {
     for (std::size_t w = 0; w < walls.size(); ++w) walls[w].force = wall_force[w];
     p.f = f;
     p.torque = tq;
+    forces_valid = valid;
     return m;
   }
 
@@ -684,10 +691,13 @@ Simulation& Simulation::operator=(Simulation&&) noexcept = default;
 Particles& Simulation::particles() { return impl_->p; }
 const Particles& Simulation::particles() const { return impl_->p; }
 const Cell& Simulation::cell() const { return impl_->cell; }
+Cell& Simulation::cell() { return impl_->cell; }
 const ContactModel& Simulation::model() const { return impl_->model; }
 const Settings& Simulation::settings() const { return impl_->set; }
 std::vector<Wall>& Simulation::walls() { return impl_->walls; }
 CellControl& Simulation::cell_control() { return impl_->control; }
+const CellControl& Simulation::cell_control() const { return impl_->control; }
+const std::vector<Wall>& Simulation::walls() const { return impl_->walls; }
 BodyForces& Simulation::body_forces() { return impl_->body; }
 void Simulation::add_wall(const Wall& w) {
   Wall c = w;
@@ -770,7 +780,8 @@ std::string Simulation::describe() const {
 
 ContactTable Simulation::contacts() {
   Impl& s = *impl_;
-  if (s.need_build) s.build_neighbors();
+  std::vector<Vec3> force;
+  s.measure_now(&force);  // per-pair forces of the current state (trajectory unchanged)
   ContactTable ct;
   for (std::size_t i = 0; i < s.p.size(); ++i)
     for (int k = s.start[i]; k < s.start[i + 1]; ++k) {
@@ -782,9 +793,10 @@ ContactTable Simulation::contacts() {
       ct.i.push_back(int32_t(i));
       ct.j.push_back(j);
       ct.overlap.push_back(delta);
-      // Forces are not stored per contact; the snapshot gives the geometry (forces: measure()).
-      ct.normal_force.push_back({0, 0, 0});
-      ct.tangential_force.push_back({0, 0, 0});
+      const Vec3 n = (1.0 / norm(d)) * d;
+      const Vec3 fn = dot(force[k], n) * n;
+      ct.normal_force.push_back(fn);
+      ct.tangential_force.push_back(force[k] - fn);
     }
   return ct;
 }

@@ -89,10 +89,13 @@ class Simulation {
   Particles& particles();
   const Particles& particles() const;
   const Cell& cell() const;
+  Cell& cell();  ///< the cell may be replaced between steps (e.g. on restart)
   const ContactModel& model() const;
   const Settings& settings() const;
   std::vector<Wall>& walls();
+  const std::vector<Wall>& walls() const;
   CellControl& cell_control();
+  const CellControl& cell_control() const;
   BodyForces& body_forces();
   void add_wall(const Wall& w);
 

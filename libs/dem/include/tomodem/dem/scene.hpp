@@ -1,0 +1,76 @@
+#pragma once
+// A tomodem-dem scene: particles (from a packing file or generated), materials, physics,
+// boundaries, a protocol and outputs, read from YAML (format: docs/dem.md).
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "tomodem/core/packing.hpp"
+#include "tomodem/dem/simulation.hpp"
+
+namespace tomodem::dem {
+
+struct Protocol {
+  bool auto_timestep = true;
+  double timestep = 0;            ///< s, when not automatic
+  double timestep_fraction = 0.2; ///< of the critical step, when automatic
+  long steps = 0;                 ///< total steps (from duration when given)
+  long output_interval = 0;       ///< steps between time-series rows (0: 100 rows)
+  double stop_unbalanced_force = 0;  ///< stop when the unbalanced-force ratio falls below (0: off)
+  double stop_kinetic_energy = 0;    ///< stop when the kinetic energy falls below, J (0: off)
+  long checkpoint_interval = 0;   ///< steps between checkpoints (0: only at the end, if asked)
+};
+
+struct SceneOutputs {
+  std::string packing;     ///< final packing (.h5 + .xdmf), relative to the output folder
+  std::string series;      ///< CSV time series
+  std::string checkpoint;  ///< HDF5 checkpoint
+};
+
+struct Scene {
+  std::string file;        ///< the scene file, for messages
+  std::string text;        ///< the scene as read, stored as provenance
+  std::vector<Material> materials;
+  std::unique_ptr<Simulation> sim;
+  Protocol protocol;
+  SceneOutputs outputs;
+  std::vector<std::string> inputs;  ///< files the scene read (hashed into provenance)
+};
+
+/// Reads and validates a scene. Every problem is an InputError naming the file, the field
+/// (with its line) and the value. `threads` > 0 overrides the scene's setting.
+Scene load_scene(const std::string& path, int threads = 0);
+
+/// Lattice and random generators used by scenes and tests.
+/// Simple cubic (1 site), BCC (2) or FCC (4 sites per cubic cell), n cells per side, spacing a.
+std::vector<Vec3> lattice_sites(const std::string& kind, int n, double a);
+/// Random sequential insertion of `count` non-overlapping spheres of radius r in a box.
+std::vector<Vec3> random_sites(int count, double r, const Vec3& lo, const Vec3& hi, bool periodic, unsigned seed);
+
+/// One row of the time series.
+struct SeriesRow {
+  Measurements m;
+};
+
+struct RunReport {
+  long steps = 0;                ///< steps done in this run
+  double wall_time_s = 0;
+  double particle_steps_per_second = 0;
+  Measurements final;
+  std::vector<Measurements> series;
+  std::string stop_reason;       ///< "steps", "unbalanced_force", "kinetic_energy"
+};
+
+/// Runs the protocol from the current step to protocol.steps; measurements every
+/// output_interval steps; checkpoints if asked (`checkpoint_path`, written atomically).
+RunReport run_protocol(Scene& scene, const std::string& checkpoint_path, bool progress);
+
+/// Checkpoint: particles, cell, walls, cell control and the engine state, bit-exact.
+void write_checkpoint(const std::string& path, const Simulation& sim, const std::string& scene_text);
+/// Restores a checkpoint into a simulation built from the same scene.
+void read_checkpoint(const std::string& path, Simulation& sim);
+
+/// The shared data model of the final state (particles, cell, contacts, materials, results).
+Packing to_packing(Simulation& sim, const std::vector<Material>& materials);
+
+}  // namespace tomodem::dem

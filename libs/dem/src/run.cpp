@@ -1,0 +1,60 @@
+// Running a scene's protocol: measurements, stop criteria, progress, checkpoints.
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+#include "tomodem/core/tool.hpp"
+#include "tomodem/dem/scene.hpp"
+
+namespace tomodem::dem {
+
+RunReport run_protocol(Scene& scene, const std::string& checkpoint_path, bool progress) {
+  Simulation& sim = *scene.sim;
+  const Protocol& p = scene.protocol;
+  RunReport rep;
+  rep.stop_reason = "steps";
+  const bool tty = progress && ::isatty(STDERR_FILENO);
+  const long first = sim.step_count();
+  rep.series.push_back(sim.measure());
+  const auto t0 = std::chrono::steady_clock::now();
+  auto last_print = t0;
+  while (sim.step_count() < p.steps) {
+    // Advance to the next output row (or checkpoint), whichever comes first.
+    long next = std::min(p.steps, (sim.step_count() / p.output_interval + 1) * p.output_interval);
+    if (p.checkpoint_interval > 0)
+      next = std::min(next, (sim.step_count() / p.checkpoint_interval + 1) * p.checkpoint_interval);
+    sim.run(next - sim.step_count());
+    if (sim.step_count() % p.output_interval == 0 || sim.step_count() == p.steps) {
+      const Measurements m = sim.measure();
+      rep.series.push_back(m);
+      if (p.stop_unbalanced_force > 0 && m.contacts > 0 && m.unbalanced_force_ratio < p.stop_unbalanced_force) {
+        rep.stop_reason = "unbalanced_force";
+        break;
+      }
+      if (p.stop_kinetic_energy > 0 && m.kinetic_energy < p.stop_kinetic_energy) {
+        rep.stop_reason = "kinetic_energy";
+        break;
+      }
+    }
+    if (p.checkpoint_interval > 0 && !checkpoint_path.empty() && sim.step_count() % p.checkpoint_interval == 0)
+      write_checkpoint(checkpoint_path, sim, scene.text);
+    const auto now = std::chrono::steady_clock::now();
+    if (progress && std::chrono::duration<double>(now - last_print).count() > (tty ? 0.5 : 10.0)) {
+      const Measurements& m = rep.series.back();
+      std::fprintf(stderr, "%sstep %ld/%ld  t=%.4g s  KE=%.3g J  p=%.4g Pa  Z=%.3f%s", tty ? "\r" : "",
+                   sim.step_count(), p.steps, sim.time(), m.kinetic_energy, m.pressure, m.coordination, tty ? "" : "\n");
+      last_print = now;
+    }
+  }
+  if (progress && tty) std::fprintf(stderr, "\n");
+  rep.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  rep.steps = sim.step_count() - first;
+  rep.particle_steps_per_second = rep.wall_time_s > 0 ? double(rep.steps) * sim.particles().size() / rep.wall_time_s : 0;
+  if (rep.series.back().step != sim.step_count()) rep.series.push_back(sim.measure());
+  rep.final = rep.series.back();
+  return rep;
+}
+
+}  // namespace tomodem::dem
