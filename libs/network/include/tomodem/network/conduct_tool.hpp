@@ -1,0 +1,32 @@
+#pragma once
+// What `tomodem-conduct` does, as a library call (the executable only parses its command line).
+#include <string>
+#include <vector>
+
+namespace tomodem::network {
+
+struct ConductConfig {
+  std::string input;                 ///< packing (.h5)
+  std::string output;                ///< potentials and currents (.h5 + .xdmf); empty = none
+  std::string json;                  ///< summary file; empty = stdout
+  std::vector<std::string> phases;   ///< conducting phases; empty = all
+  std::string bc = "electrodes";     ///< "electrodes" | "periodic"
+  std::string axes = "x";            ///< electrode axes: any of "xyz", or "all"
+  std::string contact_radius = "geometric";
+  double gap_tolerance = 1e-3, min_contact_ratio = 0.01, electrode_tolerance = 0.05, voltage = 1.0;
+  bool bonds = true, contacts = true;
+  double tolerance = 1e-10;
+  int max_iterations = 0;
+  std::string preconditioner = "ic";
+  // Composite electrode (enabled when both lists are given).
+  std::vector<std::string> electronic, ionic;
+  double charge_transfer = 0;        ///< S/m per metre of TPB
+  // Voxel cross-check: resolutions (voxels along the longest edge), e.g. {16, 32, 64}.
+  std::vector<int> voxel;
+};
+
+/// Runs the computation and writes the outputs (atomically). Returns the JSON summary text.
+/// Throws InputError for bad input (exit 2).
+std::string run_conduct(const ConductConfig& config);
+
+}  // namespace tomodem::network

@@ -1,0 +1,75 @@
+#pragma once
+// The resistor network of a packing: nodes are the particles of the conducting phases, edges are
+// intact bonds (radius a_b) and contacts (contact radius a) with the Holm constriction
+// conductance (PHYSICS.md, "Resistor networks"):
+//   R_ij = 1/(4 σ_i a) + 1/(4 σ_j a)      (one half-space constriction per side, in series)
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "tomodem/core/packing.hpp"
+#include "tomodem/network/graph.hpp"
+
+namespace tomodem::network {
+
+enum class ContactRadius {
+  geometric,  ///< radius of the circle where the two spheres intersect
+  hertz,      ///< a = sqrt(R* δ) (Hertz, PHYSICS.md): √2 smaller than geometric for small δ
+};
+ContactRadius parse_contact_radius(const std::string& name);  ///< "geometric" | "hertz"
+
+struct NetworkOptions {
+  std::vector<std::string> phases;  ///< conducting phases by material name; empty = every phase
+  bool use_bonds = true;            ///< intact bonds are edges with a = a_b
+  bool use_contacts = true;         ///< detected contacts are edges (pairs with a bond use the bond)
+  double gap_tolerance = 1e-3;      ///< a pair is in contact when gap < gap_tolerance · R*
+  ContactRadius contact_radius = ContactRadius::geometric;
+  /// Floor of the contact radius, as a fraction of R*: touching pairs (overlap ≤ 0 within the
+  /// gap tolerance) would otherwise have a = 0 and no conductance.
+  double min_contact_ratio = 0.01;
+  std::string source = "";          ///< file name for error messages
+};
+
+enum class EdgeKind : uint8_t { bond = 0, contact = 1 };
+
+struct Network {
+  // Nodes
+  std::vector<int32_t> particle;  ///< packing index of each node
+  std::vector<Vec3> position;     ///< m (as in the packing, not wrapped)
+  std::vector<double> radius;     ///< m
+  std::vector<int32_t> phase;     ///< material index
+  std::vector<double> node_conductivity;  ///< S/m, of the node's phase
+  // Edges (graph.i/j index nodes; graph.g = conductance, S)
+  Graph graph;
+  std::vector<double> contact_radius;       ///< a, m
+  std::vector<std::array<int8_t, 3>> image;  ///< j is taken in the periodic image x_j + h·image
+  std::vector<EdgeKind> kind;
+  // Geometry
+  Cell cell;
+  std::vector<std::string> phase_names;  ///< all materials, by index
+  std::vector<uint8_t> conducting;       ///< per material
+  std::size_t n_nodes() const { return particle.size(); }
+  std::size_t n_edges() const { return graph.n_edges(); }
+  /// Branch vector from node i to node j of edge e, m.
+  Vec3 branch(std::size_t e) const;
+};
+
+/// Pairs of spheres closer than the gap tolerance, found with a cell list (O(N)); periodic
+/// images are searched along periodic cell directions. Returned with i < j and the image of j.
+struct ContactPairs {
+  std::vector<int32_t> i, j;
+  std::vector<std::array<int8_t, 3>> image;
+};
+ContactPairs find_contacts(const std::vector<Vec3>& position, const std::vector<double>& radius, const Cell& cell,
+                           double gap_tolerance);
+
+/// Holm conductance of a contact of radius a between phases of conductivity s1 and s2, S.
+inline double holm_conductance(double a, double s1, double s2) { return 4.0 * a * s1 * s2 / (s1 + s2); }
+
+/// Builds the network; bad input (unknown phase names, a conducting phase with a non-positive
+/// or non-finite conductivity, no particles, a bond index out of range) is an InputError naming
+/// options.source, the field and the value.
+Network build_network(const Packing& packing, const NetworkOptions& options);
+
+}  // namespace tomodem::network

@@ -1,0 +1,66 @@
+// tomodem-conduct: effective conductivity of a particle network (resistor network), with
+// percolation analysis, composite electrodes and a voxel cross-check. See docs/conduct.md.
+#include <CLI/CLI.hpp>
+#include <iostream>
+#include <omp.h>
+
+#include "tomodem/core/error.hpp"
+#include "tomodem/core/tool.hpp"
+#include "tomodem/network/conduct_tool.hpp"
+
+int main(int argc, char** argv) {
+  return tomodem::run_tool("tomodem-conduct", [&]() -> int {
+    tomodem::network::ConductConfig c;
+    CLI::App app{"Effective conductivity of a packing as a resistor network (docs/conduct.md)", "tomodem-conduct"};
+    app.add_option("input", c.input, "packing (.h5, shared data model)")->required();
+    app.add_option("-o,--output", c.output, "potentials and currents per particle and edge (.h5 + .xdmf)");
+    app.add_option("--json", c.json, "write the JSON summary to FILE (default: stdout)");
+    app.add_option("--phases", c.phases, "conducting phases by material name (default: all)")->delimiter(',');
+    app.add_option("--bc", c.bc, "boundary conditions: electrodes | periodic")->capture_default_str();
+    app.add_option("--axis", c.axes, "electrode axes: x, y, z, any combination (xz) or all")->capture_default_str();
+    app.add_option("--contact-radius", c.contact_radius, "geometric | hertz")->capture_default_str();
+    app.add_option("--gap-tolerance", c.gap_tolerance, "contact when gap < tol * R* (-)")->capture_default_str();
+    app.add_option("--min-contact-ratio", c.min_contact_ratio, "floor of a/R* for touching contacts (-)")
+        ->capture_default_str();
+    app.add_option("--electrode-tolerance", c.electrode_tolerance,
+                   "a particle touches a face when its surface is within tol * r of it (-)")
+        ->capture_default_str();
+    app.add_option("--voltage", c.voltage, "potential difference between the faces (V)")->capture_default_str();
+    bool no_bonds = false, no_contacts = false, quiet = false;
+    app.add_flag("--no-bonds", no_bonds, "ignore /bonds");
+    app.add_flag("--no-contacts", no_contacts, "ignore contacts (bonds only)");
+    app.add_option("--tolerance", c.tolerance, "relative residual of the CG solve")->capture_default_str();
+    app.add_option("--max-iterations", c.max_iterations, "CG iteration cap (0: automatic)")->capture_default_str();
+    app.add_option("--preconditioner", c.preconditioner, "ic | jacobi")->capture_default_str();
+    app.add_option("--electronic", c.electronic, "composite electrode: electronic phases")->delimiter(',');
+    app.add_option("--ionic", c.ionic, "composite electrode: ionic phases")->delimiter(',');
+    app.add_option("--charge-transfer", c.charge_transfer,
+                   "composite electrode: charge-transfer conductance per TPB length (S/m)");
+    app.add_option("--voxel", c.voxel, "voxel cross-check at these resolutions (voxels along the longest edge)")
+        ->delimiter(',');
+    int threads = 0;
+    app.add_option("--threads", threads, "threads (default: OMP_NUM_THREADS or all cores)");
+    app.add_flag("-q,--quiet", quiet, "no progress messages");
+    app.add_flag_callback("--version", [] {
+      std::cout << "tomodem-conduct " << tomodem::version_string() << "\n";
+      throw CLI::Success();
+    }, "print the version and exit");
+    try {
+      app.parse(argc, argv);
+    } catch (const CLI::Success& e) {
+      return app.exit(e);
+    } catch (const CLI::ParseError& e) {
+      app.exit(e);
+      return tomodem::exit_code::bad_input;
+    }
+    c.bonds = !no_bonds;
+    c.contacts = !no_contacts;
+    tomodem::set_quiet(quiet);
+    if (threads < 0) throw tomodem::InputError("", "--threads", std::to_string(threads), "must be >= 0");
+    if (threads > 0) omp_set_num_threads(threads);
+    tomodem::info("reading " + c.input);
+    const std::string summary = tomodem::network::run_conduct(c);
+    if (c.json.empty() || c.json == "-") std::cout << summary;
+    return tomodem::exit_code::ok;
+  });
+}
