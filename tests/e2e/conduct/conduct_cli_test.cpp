@@ -1,0 +1,174 @@
+// tomodem-conduct from the command line: outputs, summary keys, exit codes, no partial output.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "../../validation/network/lattice.hpp"
+#include "tomodem/core/h5.hpp"
+#include "tomodem/core/packing_io.hpp"
+
+namespace fs = std::filesystem;
+using namespace tomodem;
+
+namespace {
+const std::string kTool = std::string(TOMODEM_BIN_DIR) + "/tomodem-conduct";
+
+struct CliResult {
+  int code;
+  std::string err;
+};
+
+class ConductCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("tomodem-conduct-e2e-" + std::to_string(::getpid()) + "-" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  CliResult run(const std::string& args) const {
+    const std::string err = path("stderr.txt");
+    const int st = std::system((kTool + " " + args + " > " + path("stdout.txt") + " 2> " + err).c_str());
+    std::ifstream in(err);
+    std::stringstream s;
+    s << in.rdbuf();
+    return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, s.str()};
+  }
+  nlohmann::json summary(const std::string& file) const {
+    std::ifstream in(file);
+    return nlohmann::json::parse(in);
+  }
+  // Lattice 5×4×4 of spheres R = 5 µm, bonds a = 1 µm, σ = 1e4 S/m: σ_eff = 2σa/(2R) = 2000 S/m.
+  std::string lattice(bool periodic = false, double sigma_b = 1.0) const {
+    Packing p = network::test::sc_lattice(5, 4, 4, 5e-6, 1e-6, periodic);
+    p.materials[0].name = "LSM";
+    p.materials[0].conductivity = 1e4;
+    p.materials[1].name = "YSZ";
+    p.materials[1].conductivity = sigma_b;
+    const std::string f = path(periodic ? "periodic.h5" : "lattice.h5");
+    write_packing(f, p);
+    return f;
+  }
+  fs::path dir_;
+};
+}  // namespace
+
+TEST_F(ConductCli, HelpAndVersion) {
+  EXPECT_EQ(run("--help").code, 0);
+  EXPECT_EQ(run("--version").code, 0);
+  std::ifstream in(path("stdout.txt"));
+  std::string line;
+  std::getline(in, line);
+  EXPECT_NE(line.find("tomodem"), std::string::npos);
+  EXPECT_EQ(run("--no-such-flag").code, 2);
+}
+
+TEST_F(ConductCli, LatticeAllAxesWritesSummaryAndFields) {
+  const std::string in = lattice();
+  const CliResult r = run(in + " --axis all --phases LSM -o " + path("fields.h5") + " --json " + path("s.json") +
+                    " --quiet --threads 1");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto s = summary(path("s.json"));
+  for (const char* ax : {"x", "y", "z"}) {
+    // Same 1e-6 criterion as the library test; the default tolerance is 1e-10.
+    EXPECT_NEAR(s["sigma_eff"][ax].get<double>(), 2000.0, 2000.0 * 1e-6) << ax;
+    EXPECT_NEAR(s["percolating_fraction"][ax].get<double>(), 1.0, 1e-12);
+  }
+  EXPECT_LT(s["residual"].get<double>(), 1e-9);
+  EXPECT_GT(s["wall_time_s"].get<double>(), 0.0);
+  EXPECT_TRUE(s.contains("sigma_eff_error"));
+  EXPECT_EQ(s["network"]["nodes"].get<int>(), 80);
+  EXPECT_TRUE(fs::exists(path("fields.xdmf")));
+  h5::File f(path("fields.h5"), h5::File::Mode::read);
+  EXPECT_EQ(f.read_double("/fields/x/potential").size(), 80u);
+  EXPECT_EQ(f.read_double("/fields/z/current").size(), s["network"]["edges"].get<std::size_t>());
+  for (const auto& e : fs::directory_iterator(dir_))
+    EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos) << "temporary left: " << e.path();
+}
+
+TEST_F(ConductCli, PeriodicTensor) {
+  const std::string in = lattice(true);
+  const CliResult r = run(in + " --bc periodic --json " + path("s.json") + " --quiet");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto s = summary(path("s.json"));
+  // Two phases with σ 1e4 and 1: every site is LSM (phase 0), so the tensor is 2000·I.
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      EXPECT_NEAR(s["sigma_tensor"][i][j].get<double>(), i == j ? 2000.0 : 0.0, 2000.0 * 1e-6);
+}
+
+TEST_F(ConductCli, CompositeAndVoxelSections) {
+  const std::string in = lattice();
+  const CliResult r = run(in + " --electronic LSM --ionic YSZ --charge-transfer 1e3 --voxel 10,20,40 --json " +
+                    path("s.json") + " --quiet");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto s = summary(path("s.json"));
+  // No YSZ particle: the composite electrode has no path, reported, not an error.
+  EXPECT_FALSE(s["composite"]["percolates"].get<bool>());
+  EXPECT_EQ(s["voxel"]["runs"].size(), 3u);
+  EXPECT_TRUE(s["voxel"].contains("extrapolated_sigma_eff"));
+}
+
+TEST_F(ConductCli, UnknownPhaseExitsTwoWithoutOutput) {
+  const std::string in = lattice();
+  const CliResult r = run(in + " --phases LSM,Nickel -o " + path("f.h5") + " --json " + path("s.json"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--phases"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("Nickel"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("f.h5")));
+  EXPECT_FALSE(fs::exists(path("s.json")));
+}
+
+TEST_F(ConductCli, NonPositiveConductivityNamesFileFieldValue) {
+  const std::string in = lattice(false, -2.0);
+  const CliResult r = run(in + " -o " + path("f.h5") + " --json " + path("s.json"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find(in), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("conductivity"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("-2"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("f.h5")));
+  EXPECT_FALSE(fs::exists(path("s.json")));
+}
+
+TEST_F(ConductCli, MissingOrEmptyNetworkExitsTwo) {
+  EXPECT_EQ(run(path("missing.h5")).code, 2);
+  Packing p = network::test::sc_lattice(3, 1, 1, 1.0, 0.1, false);
+  p.bonds = BondTable{};
+  for (auto& r : p.particles.radius) r = 0.5;  // far apart: no contact, no bond
+  write_packing(path("sparse.h5"), p);
+  const CliResult r = run(path("sparse.h5") + " --json " + path("s.json"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("empty network"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("s.json")));
+}
+
+TEST_F(ConductCli, NoPathIsReportedWithExitZero) {
+  Packing p = network::test::sc_lattice(4, 2, 2, 1.0, 0.1, false);
+  BondTable kept;
+  for (std::size_t b = 0; b < p.bonds.size(); ++b) {
+    const double xi = p.particles.position[p.bonds.i[b]].x, xj = p.particles.position[p.bonds.j[b]].x;
+    if ((xi - 4) * (xj - 4) < 0) continue;
+    kept.i.push_back(p.bonds.i[b]);
+    kept.j.push_back(p.bonds.j[b]);
+    kept.radius.push_back(0.1);
+    kept.rest_length.push_back(2.0);
+    kept.state.push_back(0);
+    kept.broken_at.push_back(0.0);
+  }
+  p.bonds = kept;
+  write_packing(path("cut.h5"), p);
+  const CliResult r = run(path("cut.h5") + " --no-contacts --json " + path("s.json"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto s = summary(path("s.json"));
+  EXPECT_EQ(s["sigma_eff"]["x"].get<double>(), 0.0);
+  EXPECT_FALSE(s["percolates"].get<bool>());
+  EXPECT_NE(r.err.find("no conducting path"), std::string::npos);
+}
