@@ -488,14 +488,14 @@ Scene load_scene(const std::string& path, int threads) {
   // ---- boundary (periodic cell control)
   if (root.has("boundary")) {
     const Map bm = root.map("boundary");
-    bm.allow({"strain_rate", "stress", "max_strain_rate", "servo_fraction"});
+    bm.allow({"strain_rate", "stress", "max_strain_rate", "servo_gain"});
     if (!(cell.periodic[0] && cell.periodic[1] && cell.periodic[2]))
       throw bm.error("", "", "cell deformation and stress control need a triply periodic cell");
     CellControl& cc = sim.cell_control();
     if (bm.has("strain_rate")) cc.velocity_gradient = read_tensor(bm.map("strain_rate"));
     if (bm.has("stress")) cc.target_stress = read_tensor(bm.map("stress"), cc.stress_controlled);
     cc.max_strain_rate = bm.positive("max_strain_rate", 0);
-    cc.servo_fraction = bm.positive("servo_fraction", cc.servo_fraction);
+    cc.servo_gain = bm.positive("servo_gain", cc.servo_gain);
     if (bm.has("stress") && cc.max_strain_rate <= 0)
       throw bm.error("max_strain_rate", "", "stress control needs max_strain_rate (1/s) to bound the servo");
   }

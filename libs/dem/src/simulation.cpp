@@ -444,7 +444,15 @@ struct Simulation::Impl {
   void step() {
     if (dt <= 0) throw InputError("", "timestep", std::to_string(dt), "the time step must be set and positive");
     const bool tally_all = tally_every_step();
-    if (!forces_valid) compute_forces(tally_all);
+    if (!forces_valid) {
+      // Forces at the current state, before any time has passed: the incremental springs
+      // (tangential, rolling) must not advance by v_rel·Δt here, or every contact present at the
+      // start (or after invalidate_neighbors) gets one step of displacement that never happened.
+      const double h = dt;
+      dt = 0;
+      compute_forces(tally_all);
+      dt = h;
+    }
     if (set.track_energy && std::isnan(e0)) e0 = total_energy();
     kick(0.5 * dt);
     if (set.track_energy) accumulate_external_work();
@@ -481,23 +489,30 @@ struct Simulation::Impl {
   }
 
   void servo_cell() {
-    // Mixed control: each stress-controlled component gets the strain rate that removes a
-    // fraction of its stress error per step, using the network's stiffness Σ S_n l²/(9V).
+    // Mixed control: each stress-controlled component gets the strain rate that closes its
+    // error over a relaxation time of the cell's elastic-wave transit L/c (a faster servo
+    // outruns the packing and oscillates). The modulus is the affine estimate
+    // C = Σ_c S_n l²/(5V) (isotropic average of n_a⁴), c = sqrt(C/ρ_bulk).
     const double vol = cell.volume();
     Mat3 sigma = last.virial;
     sigma *= -1.0 / vol;
-    double ksum = 0;
-    for (std::size_t i = 0; i < p.size(); ++i) ksum += stiffness.empty() ? 0 : stiffness[i];
-    double lmean = 0;
-    for (double r : p.r) lmean += 2 * r;
-    lmean /= double(p.size());
-    const double modulus = 0.5 * ksum * lmean * lmean / (9 * vol);  // Σ over contacts (stiffness counted twice)
+    double ksum = 0, mass = 0, dmean = 0;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      if (!stiffness.empty()) ksum += stiffness[i];
+      mass += p.m[i];
+      dmean += 2 * p.r[i];
+    }
+    dmean /= double(p.size());
+    const double modulus = 0.5 * ksum * dmean * dmean / (5 * vol);  // stiffness sums count each contact twice
+    double width = 0;
+    for (int k = 0; k < 3; ++k) width = std::max(width, norm(cell.h.col(k)));
+    const double transit = modulus > 0 ? width / std::sqrt(modulus / (mass / vol)) : 0;
     for (int a = 0; a < 3; ++a)
       for (int b = 0; b < 3; ++b) {
         if (!control.stress_controlled[a][b]) continue;
         const double err = sigma(a, b) - control.target_stress(a, b);
         double rate;
-        if (modulus > 0) rate = -control.servo_fraction * err / (modulus * dt);
+        if (modulus > 0) rate = -control.servo_gain * err / (modulus * std::max(transit, dt));
         else rate = err > 0 ? -control.max_strain_rate : control.max_strain_rate;
         if (control.max_strain_rate > 0) rate = std::clamp(rate, -control.max_strain_rate, control.max_strain_rate);
         control.velocity_gradient(a, b) = rate;
@@ -594,10 +609,10 @@ struct Simulation::Impl {
   Measurements measure_now(std::vector<Vec3>* pair_force = nullptr) {
     // A tally pass on the current state. History (incremental springs, JKR flags) is saved
     // and restored, so measuring never changes the trajectory.
-    if (pair_force) {
-      if (rebuild_due()) build_neighbors();
-      pair_force->assign(nj.size(), Vec3{});
-    }
+    // Rebuild first when due: a rebuild inside the tally pass would resize the history, and
+    // restoring the saved copy afterwards would leave it shorter than the neighbour list.
+    if (rebuild_due()) build_neighbors();
+    if (pair_force) pair_force->assign(nj.size(), Vec3{});
     const std::vector<double> h = hist;
     const std::vector<uint8_t> tf = touch;
     std::vector<WallData> wd = wall_data;

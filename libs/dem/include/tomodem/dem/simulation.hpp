@@ -37,7 +37,7 @@ struct CellControl {
   bool stress_controlled[3][3] = {};      ///< component (a,b) servo-controlled
   Mat3 target_stress;                     ///< Pa, tension positive
   double max_strain_rate = 0;             ///< cap of the servo's strain rate, 1/s (0 = none)
-  double servo_fraction = 0.05;           ///< fraction of the stress error corrected per step
+  double servo_gain = 0.5;                ///< stress error closed per elastic-wave transit time of the cell
   bool active() const;
 };
 
