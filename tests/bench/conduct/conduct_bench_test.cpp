@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <ctime>
 #include <cstdio>
 #include <fstream>
 #include <random>
@@ -18,6 +19,17 @@ using namespace tomodem::network;
 namespace {
 double seconds(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+double cpu_seconds() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return t.tv_sec + 1e-9 * t.tv_nsec;
+}
+double load_average() {
+  std::ifstream in("/proc/loadavg");
+  double l = 0;
+  in >> l;
+  return l;
 }
 long peak_rss_kb() {
   std::ifstream in("/proc/self/status");
@@ -53,8 +65,11 @@ double bench(Preconditioner pc) {
   o.solver.preconditioner = pc;
   o.keep_fields = false;
   const auto t0 = std::chrono::steady_clock::now();
+  const double c0 = cpu_seconds();
   const AxisResult r = solve_electrodes(net, 0, o);
-  const double wall = seconds(t0);
+  const double wall = seconds(t0), cpu = cpu_seconds() - c0;
+  // On a shared machine the wall time depends on the load: print both (and the load average).
+  std::printf("load average %.1f, process CPU time of the axis %.2f s (wall %.2f s)\n", load_average(), cpu, wall);
   const SolverReport& s = r.solver;
   std::printf("%s: unknowns %zu, nnz %zu, iterations %d, residual %.2e, assemble %.2f s, set-up %.2f s, "
               "CG %.2f s, solver total %.2f s, whole axis (percolation + solve) %.2f s, solver memory %.0f MB, "
