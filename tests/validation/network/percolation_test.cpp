@@ -65,7 +65,7 @@ TEST(Percolation, BondDilutedCubicThresholdFromConductivityVanishing) {
 // path) fitted as log σ = log A + t log(p − p_c) with p_c = 0.2488, for p in [0.28, 0.34]: there
 // the correlation length (≈ |p − p_c|^−0.88 ≲ 20) stays below L and the window is close enough to
 // p_c for the power law. Finite size and corrections to scaling make the effective exponent of
-// such a window fall below the asymptotic 2.0 (we measure ≈ 1.85); we accept 1.6 < t < 2.3.
+// such a window fall below the asymptotic 2.0 (we measure 1.82); we accept 1.6 < t < 2.3.
 TEST(Percolation, BondDilutedCubicConductivityExponent) {
   const int L = 32, replicas = 3;
   const double pc = 0.2488;
