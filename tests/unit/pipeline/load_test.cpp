@@ -1,0 +1,259 @@
+// Loading pipeline files: sweeps, references, includes, overrides, and the bad inputs that
+// must be refused (with file, line and name) before anything runs.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+#include "scratch.hpp"
+#include "tomodem/core/error.hpp"
+#include "tomodem/pipeline/pipeline.hpp"
+
+using tomodem::InputError;
+using tomodem::test::Scratch;
+namespace tp = tomodem::pipeline;
+
+namespace {
+const tp::Instance& by_id(const tp::Pipeline& p, const std::string& id) {
+  for (const auto& in : p.instances)
+    if (in.id == id) return in;
+  throw std::runtime_error("no instance " + id);
+}
+
+std::vector<std::string> ids(const tp::Pipeline& p) {
+  std::vector<std::string> v;
+  for (const auto& in : p.instances) v.push_back(in.id);
+  return v;
+}
+
+// The message of the InputError that loading `text` gives ("" when it loads).
+std::string load_error(const Scratch& s, const std::string& text, tp::LoadOptions o = {}) {
+  const std::string file = s.write("p.yaml", text);
+  try {
+    tp::load(file, o);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+const char* kSweep = R"(vars:
+  densities: [0.5, 0.7]
+steps:
+  prep:
+    cmd: cp in.txt ${outs.0}
+    deps: [in.txt]
+    outs: [out/prep.txt]
+  pack:
+    matrix: {density: "${vars.densities}"}
+    cell: d${matrix.density}
+    params: {density: "${matrix.density}"}
+    cmd: cp ${deps.src} ${outs.packing}
+    deps: {src: "${steps.prep.outs.0}"}
+    outs: {packing: "out/${cell}/packing.h5"}
+  young:
+    matrix: {density: "${vars.densities}"}
+    replicas: 3
+    seed: 100
+    cell: d${matrix.density}-r${replica}
+    cmd: young --seed ${seed} ${steps.pack.outs.packing} > ${outs.res}
+    outs: {res: "out/${cell}/young.json"}
+  gather:
+    cmd: cat ${steps.young.outs.res} > ${outs.0}
+    outs: [out/table.csv]
+)";
+}  // namespace
+
+TEST(PipelineLoad, MatrixExpandsIntoNamedCellsWithTemplatedPaths) {
+  Scratch s;
+  s.write("in.txt", "x");
+  const auto p = tp::load(s.write("p.yaml", kSweep));
+  // 1 prep + 2 pack + 2x3 young + 1 gather, upstream first.
+  ASSERT_EQ(p.instances.size(), 10u);
+  EXPECT_EQ(p.instances.front().id, "prep");
+  EXPECT_EQ(p.instances.back().id, "gather");
+  const auto& pack = by_id(p, "pack[d0.7]");
+  EXPECT_EQ(pack.outs.at(0).second, "out/d0.7/packing.h5");
+  EXPECT_EQ(pack.params.at("density"), "0.7");
+  EXPECT_EQ(pack.command, "cp out/prep.txt out/d0.7/packing.h5");
+}
+
+TEST(PipelineLoad, SharedUpstreamCellIsOneInstanceReadByEveryReplica) {
+  Scratch s;
+  s.write("in.txt", "x");
+  const auto p = tp::load(s.write("p.yaml", kSweep));
+  const auto v = ids(p);
+  EXPECT_EQ(std::count_if(v.begin(), v.end(), [](const std::string& x) { return x.rfind("pack[", 0) == 0; }), 2);
+  const auto pack = std::find(v.begin(), v.end(), "pack[d0.5]") - v.begin();
+  for (int r = 0; r < 3; ++r) {
+    const auto& y = by_id(p, "young[d0.5-r" + std::to_string(r) + "]");
+    ASSERT_EQ(y.upstream.size(), 1u) << y.id;
+    EXPECT_EQ(static_cast<long>(y.upstream[0]), pack) << y.id;
+    EXPECT_EQ(y.deps.at(0).second, "out/d0.5/packing.h5");
+  }
+}
+
+TEST(PipelineLoad, ReplicasGetConsecutiveSeedsFromTheBase) {
+  Scratch s;
+  s.write("in.txt", "x");
+  const auto p = tp::load(s.write("p.yaml", kSweep));
+  EXPECT_NE(by_id(p, "young[d0.7-r0]").command.find("--seed 100 "), std::string::npos);
+  EXPECT_NE(by_id(p, "young[d0.7-r2]").command.find("--seed 102 "), std::string::npos);
+  EXPECT_EQ(by_id(p, "young[d0.7-r2]").matrix.at("replica"), "2");
+}
+
+TEST(PipelineLoad, GatherReferenceListsEveryCell) {
+  Scratch s;
+  s.write("in.txt", "x");
+  const auto p = tp::load(s.write("p.yaml", kSweep));
+  const auto& g = by_id(p, "gather");
+  EXPECT_EQ(g.upstream.size(), 6u);
+  EXPECT_EQ(g.deps.size(), 6u);
+  EXPECT_EQ(g.command.rfind("cat out/d0.5-r0/young.json out/d0.5-r1/young.json", 0), 0u) << g.command;
+}
+
+TEST(PipelineLoad, CasesAddExplicitCellsAndDefaultNamesJoinKeyValues) {
+  Scratch s;
+  const auto p = tp::load(s.write("p.yaml", R"(steps:
+  pack:
+    cases:
+      - {family: pores, density: 0.6}
+      - {family: aggregates, density: 0.8}
+    cmd: pack ${matrix.family} ${matrix.density} > ${outs.0}
+    outs: ['out/${cell}.h5']
+)"));
+  ASSERT_EQ(p.instances.size(), 2u);
+  EXPECT_EQ(p.instances[0].id, "pack[family-pores_density-0.6]");
+  EXPECT_EQ(p.instances[1].outs[0].second, "out/family-aggregates_density-0.8.h5");
+}
+
+TEST(PipelineLoad, IncludedStepsComeFirstAndTheIncludingFileOverridesVars) {
+  Scratch s;
+  s.write("parts/common.yaml", R"(vars: {n: 10, tag: common}
+steps:
+  make:
+    cmd: echo ${vars.n} ${vars.tag} > ${outs.0}
+    outs: [a.txt]
+)");
+  const auto p = tp::load(s.write("p.yaml", R"(include: [parts/common.yaml]
+vars: {n: 20}
+steps:
+  use:
+    cmd: cat ${steps.make.outs.0} > ${outs.0}
+    outs: [b.txt]
+)"));
+  ASSERT_EQ(ids(p), (std::vector<std::string>{"make", "use"}));
+  EXPECT_EQ(p.instances[0].command, "echo 20 common > a.txt");
+}
+
+TEST(PipelineLoad, SetOverridesVariablesListsAndStepParams) {
+  Scratch s;
+  s.write("in.txt", "x");
+  tp::LoadOptions o;
+  o.overrides = {"densities=[0.6]", "steps.pack.params.density=0.9"};
+  const auto p = tp::load(s.write("p.yaml", kSweep), o);
+  EXPECT_EQ(p.instances.size(), 1u + 1u + 3u + 1u);
+  EXPECT_EQ(by_id(p, "pack[d0.6]").params.at("density"), "0.9");
+}
+
+TEST(PipelineLoad, LiteralDollarBraceIsEscapedForTheShell) {
+  Scratch s;
+  const auto p = tp::load(s.write("p.yaml", "steps:\n  a:\n    cmd: echo $${HOME} > ${outs.0}\n    outs: [a.txt]\n"));
+  EXPECT_EQ(p.instances[0].command, "echo ${HOME} > a.txt");
+}
+
+// ---- bad input: each names the file, the line and the offending name ----------------------
+
+TEST(PipelineBadInput, CycleNamesTheStepsInIt) {
+  Scratch s;
+  const auto m = load_error(s, R"(steps:
+  a:
+    cmd: cp ${steps.b.outs.0} ${outs.0}
+    outs: [a.txt]
+  b:
+    cmd: cp ${steps.a.outs.0} ${outs.0}
+    outs: [b.txt]
+)");
+  EXPECT_NE(m.find("p.yaml:"), std::string::npos) << m;
+  EXPECT_NE(m.find("cycle"), std::string::npos) << m;
+  EXPECT_TRUE(m.find("a -> b -> a") != std::string::npos || m.find("b -> a -> b") != std::string::npos) << m;
+}
+
+TEST(PipelineBadInput, UnknownStepReference) {
+  Scratch s;
+  const auto m = load_error(s, "steps:\n  a:\n    cmd: echo > ${outs.0}\n    outs: [a.txt]\n  b:\n"
+                               "    cmd: cat ${steps.pak.outs.0}\n");
+  EXPECT_NE(m.find("p.yaml:6"), std::string::npos) << m;
+  EXPECT_NE(m.find("unknown step 'pak'"), std::string::npos) << m;
+}
+
+TEST(PipelineBadInput, UnknownOutputName) {
+  Scratch s;
+  const auto m = load_error(s, "steps:\n  a:\n    cmd: echo > ${outs.x}\n    outs: {x: a.txt}\n  b:\n"
+                               "    deps: ['${steps.a.outs.y}']\n    cmd: true\n");
+  EXPECT_NE(m.find("p.yaml:6"), std::string::npos) << m;
+  EXPECT_NE(m.find("no output 'y'"), std::string::npos) << m;
+}
+
+TEST(PipelineBadInput, TwoStepsWritingOneOutput) {
+  Scratch s;
+  const auto m = load_error(s, "steps:\n  a:\n    cmd: true\n    outs: [same.txt]\n  b:\n    cmd: true\n"
+                               "    outs: [./same.txt]\n");
+  EXPECT_NE(m.find("p.yaml:7"), std::string::npos) << m;
+  EXPECT_NE(m.find("same.txt"), std::string::npos) << m;
+  EXPECT_NE(m.find("also written by 'a'"), std::string::npos) << m;
+}
+
+TEST(PipelineBadInput, MissingInputFile) {
+  Scratch s;
+  const auto m = load_error(s, "steps:\n  a:\n    cmd: true\n    deps:\n      - data/nothere.tif\n");
+  EXPECT_NE(m.find("p.yaml:5"), std::string::npos) << m;
+  EXPECT_NE(m.find("data/nothere.tif"), std::string::npos) << m;
+  EXPECT_NE(m.find("missing input"), std::string::npos) << m;
+}
+
+TEST(PipelineBadInput, UnknownTool) {
+  Scratch s;
+  const auto m = load_error(s, "steps:\n  a:\n    tool: nosuchverb\n");
+  EXPECT_NE(m.find("p.yaml:3"), std::string::npos) << m;
+  EXPECT_NE(m.find("tomodem-nosuchverb"), std::string::npos) << m;
+}
+
+TEST(PipelineBadInput, UnknownStepKey) {
+  Scratch s;
+  const auto m = load_error(s, "steps:\n  a:\n    cmd: true\n    output: [a.txt]\n");
+  EXPECT_NE(m.find("p.yaml:4"), std::string::npos) << m;
+  EXPECT_NE(m.find("steps.a.output"), std::string::npos) << m;
+  EXPECT_NE(m.find("unknown key"), std::string::npos) << m;
+}
+
+TEST(PipelineBadInput, UnknownReferenceSuggestsTheEscape) {
+  Scratch s;
+  const auto m = load_error(s, "steps:\n  a:\n    cmd: echo ${HOME}\n");
+  EXPECT_NE(m.find("p.yaml:3"), std::string::npos) << m;
+  EXPECT_NE(m.find("$${"), std::string::npos) << m;
+}
+
+TEST(PipelineBadInput, UnknownSetKeyAndParam) {
+  Scratch s;
+  s.write("in.txt", "x");
+  tp::LoadOptions o;
+  o.overrides = {"densitys=0.5"};
+  EXPECT_NE(load_error(s, kSweep, o).find("densitys"), std::string::npos);
+  o.overrides = {"steps.pack.params.dens=0.5"};
+  EXPECT_NE(load_error(s, kSweep, o).find("dens"), std::string::npos);
+}
+
+TEST(PipelineBadInput, DuplicateCellNames) {
+  Scratch s;
+  const auto m = load_error(s, "steps:\n  a:\n    matrix: {x: [1, 2]}\n    cell: same\n    cmd: true\n");
+  EXPECT_NE(m.find("p.yaml:4"), std::string::npos) << m;
+  EXPECT_NE(m.find("same"), std::string::npos) << m;
+}
+
+TEST(PipelineBadInput, YamlSyntaxErrorHasItsLine) {
+  Scratch s;
+  const auto m = load_error(s, "steps:\n  a:\n    cmd: true\n    outs: [out/${cell}.h5]\n");
+  EXPECT_NE(m.find("p.yaml:"), std::string::npos) << m;
+  EXPECT_NE(m.find("YAML"), std::string::npos) << m;
+  EXPECT_NE(m.find("quote values that use ${...}"), std::string::npos) << m;
+}

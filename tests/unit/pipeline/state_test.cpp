@@ -1,0 +1,81 @@
+// Content hashes and the stat cache that spares re-reading unchanged files.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <ctime>
+
+#include "scratch.hpp"
+#include "tomodem/core/output.hpp"
+#include "tomodem/pipeline/run.hpp"
+
+using tomodem::test::Scratch;
+namespace tp = tomodem::pipeline;
+
+namespace {
+// Sets the modification time `age_s` seconds in the past (older than the racy-stat window).
+void age(const std::string& path, int age_s) {
+  struct timespec t[2];
+  ::clock_gettime(CLOCK_REALTIME, &t[0]);
+  t[0].tv_sec -= age_s;
+  t[1] = t[0];
+  ASSERT_EQ(::utimensat(AT_FDCWD, path.c_str(), t, 0), 0);
+}
+}  // namespace
+
+TEST(HashCache, MatchesCoreFileHash) {
+  Scratch s;
+  const auto f = s.write("a.txt", "some content");
+  tp::HashCache c;
+  c.root = s.dir;
+  EXPECT_EQ(c.hash("a.txt"), tomodem::file_hash(f));
+  EXPECT_EQ(c.hash("missing.txt"), "");
+}
+
+TEST(HashCache, UnchangedStatIsNotReadAgain) {
+  Scratch s;
+  const auto f = s.write("a.txt", "aaaa");
+  age(f, 100);
+  tp::HashCache c;
+  c.root = s.dir;
+  const std::string h1 = c.hash("a.txt");
+  EXPECT_EQ(c.hash("a.txt"), h1);
+  EXPECT_EQ(c.files_hashed(), 1);
+  // Same size and the same timestamp: the cache trusts the stat and does not read the file,
+  // which this test proves by changing the bytes behind its back.
+  struct stat st {};
+  ASSERT_EQ(::stat(f.c_str(), &st), 0);
+  s.write("a.txt", "bbbb");
+  struct timespec t[2] = {st.st_atim, st.st_mtim};
+  ASSERT_EQ(::utimensat(AT_FDCWD, f.c_str(), t, 0), 0);
+  EXPECT_EQ(c.hash("a.txt"), h1);
+  EXPECT_EQ(c.files_hashed(), 1);
+  // A new timestamp makes it read the file again.
+  age(f, 50);
+  EXPECT_NE(c.hash("a.txt"), h1);
+  EXPECT_EQ(c.files_hashed(), 2);
+}
+
+TEST(HashCache, FreshlyWrittenFilesAreNotTrustedYet) {
+  // A file written in the last 2 s may change again within one timestamp tick (racy stat).
+  Scratch s;
+  s.write("a.txt", "aaaa");
+  tp::HashCache c;
+  c.root = s.dir;
+  c.hash("a.txt");
+  c.hash("a.txt");
+  EXPECT_EQ(c.files_hashed(), 2);
+  EXPECT_EQ(c.entries.count("a.txt"), 0u);
+}
+
+TEST(HashCache, FolderHashFollowsItsFiles) {
+  Scratch s;
+  s.write("d/x.txt", "1");
+  s.write("d/sub/y.txt", "2");
+  tp::HashCache c;
+  c.root = s.dir;
+  const std::string h1 = c.hash("d");
+  EXPECT_EQ(tp::HashCache{}.hash(s.dir + "/d"), h1);  // absolute paths work too
+  s.write("d/sub/y.txt", "3");
+  EXPECT_NE(c.hash("d"), h1);
+}

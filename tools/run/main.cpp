@@ -1,0 +1,106 @@
+// tomodem-run (also `tomodem run`): brings a pipeline file up to date, Make-style.
+// The work is in libs/pipeline; this file parses the command line and reports.
+#include <CLI/CLI.hpp>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <thread>
+
+#include "tomodem/core/error.hpp"
+#include "tomodem/core/output.hpp"
+#include "tomodem/core/tool.hpp"
+#include "tomodem/pipeline/run.hpp"
+
+namespace {
+// --jobs default: the Slurm allocation, else every core.
+int default_jobs() {
+  if (const char* s = std::getenv("SLURM_CPUS_PER_TASK"); s && std::atoi(s) > 0) return std::atoi(s);
+  return std::max(1u, std::thread::hardware_concurrency());
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  namespace tp = tomodem::pipeline;
+  CLI::App app{"tomodem-run: run a pipeline file, re-running only the steps whose inputs, params, command or\n"
+               "tool version changed (see docs/pipelines.md). Without a subcommand it runs the pipeline."};
+  app.set_version_flag("--version", tomodem::version_string());
+  std::string file, json_file, step, shard;
+  bool quiet = false;
+  tp::LoadOptions lo;
+  tp::RunOptions ro;
+  tp::SlurmOptions so;
+  ro.jobs = default_jobs();
+  app.add_option("pipeline", file, "pipeline file (YAML)");
+  app.add_option("-j,--jobs", ro.jobs, "parallel slots; a step takes `threads` of them (default: all cores)")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--force", ro.force, "run STEP (or STEP[cell]) even if it is up to date")->allow_extra_args(false);
+  app.add_flag("-B,--force-all", ro.force_all, "run every step");
+  app.add_flag("-n,--dry-run", ro.dry_run, "say what would run and why; run nothing");
+  app.add_flag("-k,--keep-going", ro.keep_going, "after a failure, run the steps that do not depend on it");
+  app.add_option("--shard", shard, "run slice K of N of the sweep (0/N: the shared upstream steps)");
+  app.add_option("--set", lo.overrides, "override a variable (NAME=VALUE) or steps.S.params.K=VALUE")
+      ->allow_extra_args(false);
+  app.add_option("--json", json_file, "write the JSON summary to FILE ('-' for stdout)");
+  app.add_flag("-q,--quiet", quiet, "no progress lines");
+  CLI::App* st = app.add_subcommand("status", "list each step as up to date or would run, and why");
+  CLI::App* ex = app.add_subcommand("explain", "every reason a step (or STEP[cell]) would run, with its files");
+  CLI::App* dt = app.add_subcommand("dot", "print the graph of step instances (Graphviz DOT; stale ones orange)");
+  CLI::App* exp = app.add_subcommand("export", "write scripts for a cluster");
+  CLI::App* sl = exp->add_subcommand("slurm", "write <stem>.array.sbatch and <stem>.submit.sh next to the pipeline");
+  for (CLI::App* sub : {st, ex, dt, sl}) {
+    sub->add_option("pipeline", file, "pipeline file (YAML)")->required();
+    sub->fallthrough();
+  }
+  exp->fallthrough();
+  exp->require_subcommand(1);
+  ex->add_option("step", step, "step name or instance id")->required();
+  sl->add_option("--shards", so.shards, "array size (default: one per sweep leaf)");
+  sl->add_option("--limit", so.limit, "array tasks running at once (the % in --array)")->capture_default_str();
+  sl->add_option("--cpus", so.cpus, "cpus per task (default: the largest step `threads`)");
+  sl->add_option("--time", so.time, "time limit per task")->capture_default_str();
+  sl->add_option("--partition", so.partition, "Slurm partition");
+  sl->add_option("--runner", so.runner, "command that runs tomodem-run on the nodes")->capture_default_str();
+  app.require_subcommand(0, 1);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : tomodem::exit_code::bad_input;
+  }
+  return tomodem::run_tool("tomodem-run", [&] {
+    tomodem::set_quiet(quiet);
+    ro.quiet = quiet;
+    if (file.empty()) throw tomodem::InputError("", "pipeline", "", "no pipeline file given (see --help)");
+    if (!shard.empty()) std::tie(ro.shard, ro.shards) = tp::parse_shard(shard);
+    lo.check_inputs = !(dt->parsed() || sl->parsed());  // nothing runs, so inputs may come later
+    const tp::Pipeline p = tp::load(file, lo);
+    if (sl->parsed()) {
+      const tp::SlurmFiles f = tp::slurm_scripts(p, so);
+      tomodem::write_text_atomic(f.array_path, f.array_script);
+      tomodem::write_text_atomic(f.submit_path, f.submit_script);
+      std::filesystem::permissions(f.submit_path, std::filesystem::perms::owner_exec | std::filesystem::perms::group_exec,
+                                   std::filesystem::perm_options::add);
+      tomodem::info("wrote " + f.array_path + " and " + f.submit_path + " (run the latter to submit)");
+      return 0;
+    }
+    if (dt->parsed()) {
+      std::cout << tp::dot(p);
+      return 0;
+    }
+    if (ex->parsed()) {
+      std::cout << tp::explain(p, step);
+      return 0;
+    }
+    const tp::RunSummary s = st->parsed() ? tp::status(p, ro) : tp::run(p, ro, std::cerr);
+    if (st->parsed())
+      for (const auto& r : s.steps)
+        std::cout << (r.state == "would-run" ? "would run   " : r.state == "up-to-date" ? "up to date  " : "other shard ")
+                  << r.id << (r.reason.empty() ? "" : ": " + r.reason) << '\n';
+    if (json_file == "-")
+      std::cout << tp::summary_json(p, s);
+    else if (!json_file.empty())
+      tomodem::write_text_atomic(json_file, tp::summary_json(p, s));
+    if (!quiet || s.exit_code()) std::cerr << "tomodem-run: " << tp::summary_text(s);
+    return s.exit_code();
+  });
+}
