@@ -288,7 +288,7 @@ RunSummary execute(const Pipeline& p, const RunOptions& o, std::ostream* progres
         if (!blocked.empty() || stop) {
           again = true;
           st[i] = St::skipped;
-          res.state = "skipped";
+          res.state = selected[i] ? "skipped" : "not-in-shard";
           res.reason = blocked.empty() ? "not started: the run stopped after " + stop_after : blocked;
           if (selected[i]) {
             ++sum.skipped;
