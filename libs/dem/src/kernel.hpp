@@ -91,7 +91,7 @@ inline void contact(const law::Geometry& g, double* hist, unsigned char* touch, 
   sn = nr.stiffness;
   fi = (-nr.fn) * g.n;  // on i
   if constexpr (T::kHistory > 0) {
-    const law::Tangential tr = T::eval(g, nr, hist);
+    const law::Tangential tr = T::template eval<kTally>(g, nr, hist);
     fi += tr.force;
     // Torques of the tangential force about each centre (lever arms R_i n and -R_j n).
     const Vec3 c = cross(g.n, tr.force);
@@ -103,7 +103,7 @@ inline void contact(const law::Geometry& g, double* hist, unsigned char* touch, 
     }
   }
   if constexpr (R::kHistory > 0) {
-    const law::Tangential rr = R::eval(g, nr, *wi - *wj, hist + T::kHistory);
+    const law::Tangential rr = R::template eval<kTally>(g, nr, *wi - *wj, hist + T::kHistory);
     ti += rr.force;
     tj -= rr.force;
     if constexpr (kTally) {

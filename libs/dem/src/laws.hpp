@@ -115,6 +115,7 @@ struct Tangential {
 struct TangentialNone {
   static constexpr int kHistory = 0;
   static constexpr bool kRotation = false;
+  template <bool kTally>
   static Tangential eval(const Geometry&, const Normal&, double*) { return {{0, 0, 0}, 0, 0}; }
   static void reset(double*) {}
 };
@@ -128,6 +129,7 @@ struct TangentialSpring {
   static constexpr int kHistory = 3;
   static constexpr bool kRotation = true;
   static void reset(double* h) { h[0] = h[1] = h[2] = 0; }
+  template <bool kTally>
   static Tangential eval(const Geometry& g, const Normal& nr, double* h) {
     const PairParams& p = *g.pp;
     const double kt = kMindlin ? 8 * p.G_star * nr.radius : p.k_t;
@@ -139,10 +141,12 @@ struct TangentialSpring {
       if (mag1 > 0) fs *= std::sqrt(mag0 / mag1);
     }
     const Vec3 vt = g.v_rel - dot(g.v_rel, g.n) * g.n;
-    const double e_before = kt > 0 ? 0.5 * norm2(fs) / kt : 0;
     const Vec3 fs_before = fs;
     fs += (kt * g.dt) * vt;
-    const double eta_t = nr.stiffness > 0 ? nr.damping * std::sqrt(kt / nr.stiffness) : 0;
+    // sqrt(k_t/S_n) is a constant of the pair when both laws are of one family (finalize()).
+    const double ratio = p.tangential_damping_ratio > 0 ? p.tangential_damping_ratio
+                                                        : (nr.stiffness > 0 ? std::sqrt(kt / nr.stiffness) : 0);
+    const double eta_t = nr.damping * ratio;
     Vec3 ft = fs + eta_t * vt;
     const double limit = p.friction * nr.fn_rep;
     const double ft2 = norm2(ft);
@@ -152,6 +156,8 @@ struct TangentialSpring {
       fs = ft - eta_t * vt;
     }
     h[0] = fs.x; h[1] = fs.y; h[2] = fs.z;
+    if constexpr (!kTally) return {ft, 0, 0};
+    const double e_before = kt > 0 ? 0.5 * norm2(fs_before) / kt : 0;
     const double e_after = kt > 0 ? 0.5 * norm2(fs) / kt : 0;
     // Work put into the contact this step minus the change of stored energy. The spring's work
     // uses its mean force over the step (trapezoid): exact for a sticking linear spring, so a
@@ -169,6 +175,7 @@ struct RollingNone {
   static constexpr int kHistory = 0;
   static constexpr bool kRotation = false;
   static void reset(double*) {}
+  template <bool kTally>
   static Tangential eval(const Geometry&, const Normal&, const Vec3&, double*) { return {{0, 0, 0}, 0, 0}; }
 };
 
@@ -178,6 +185,7 @@ struct RollingElasticPlastic {
   static constexpr int kHistory = 3;
   static constexpr bool kRotation = true;
   static void reset(double* h) { h[0] = h[1] = h[2] = 0; }
+  template <bool kTally>
   static Tangential eval(const Geometry& g, const Normal& nr, const Vec3& w_rel, double* h) {
     const PairParams& p = *g.pp;
     const double kr = 2.25 * nr.stiffness * p.rolling_friction * p.rolling_friction * g.r_star * g.r_star;
@@ -189,13 +197,14 @@ struct RollingElasticPlastic {
       if (mag1 > 0) m *= std::sqrt(mag0 / mag1);
     }
     const Vec3 wr = w_rel - dot(w_rel, g.n) * g.n;
-    const double e_before = kr > 0 ? 0.5 * norm2(m) / kr : 0;
     const Vec3 m_before = m;
     m -= (kr * g.dt) * wr;
     const double limit = p.rolling_friction * g.r_star * nr.fn_rep;
     const double m2 = norm2(m);
     if (m2 > limit * limit) m *= m2 > 0 ? limit / std::sqrt(m2) : 0;
     h[0] = m.x; h[1] = m.y; h[2] = m.z;
+    if constexpr (!kTally) return {m, 0, 0};
+    const double e_before = kr > 0 ? 0.5 * norm2(m_before) / kr : 0;
     const double e_after = kr > 0 ? 0.5 * norm2(m) / kr : 0;
     // Mean moment over the step (trapezoid), as for the tangential spring.
     return {m, e_after, -dot(0.5 * (m_before + m), wr) * g.dt - (e_after - e_before)};

@@ -76,6 +76,11 @@ void ContactModel::finalize() {
       } else {
         pp.hertz_damping = hertz_damping_for_restitution(pp.restitution);
       }
+      pp.tangential_damping_ratio = 0;
+      if (normal != NormalLaw::linear && tangential == TangentialLaw::mindlin && pp.E_star > 0)
+        pp.tangential_damping_ratio = std::sqrt(4 * pp.G_star / pp.E_star);  // 8G*a / 2E*a
+      if (normal == NormalLaw::linear && tangential == TangentialLaw::linear && pp.k_n > 0)
+        pp.tangential_damping_ratio = std::sqrt(pp.k_t / pp.k_n);
     }
 }
 

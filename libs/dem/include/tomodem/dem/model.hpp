@@ -25,6 +25,9 @@ struct PairParams {
   double restitution = 1;
   double damping_ratio = 0;      ///< ζ of the linear law (derived from e unless given)
   double hertz_damping = 0;      ///< dimensionless c in η_n = c sqrt(m* S_n), S_n = 2E*a (derived)
+  /// sqrt(k_t/S_n) of the tangential dashpot η_t = η_n sqrt(k_t/S_n) when it is constant
+  /// (Hertz family + Mindlin: sqrt(4G*/E*); linear + linear: sqrt(k_t/k_n)); 0: per contact.
+  double tangential_damping_ratio = 0;
   // Friction, rolling, adhesion.
   double friction = 0;           ///< Coulomb μ
   double rolling_friction = 0;   ///< μ_r: |M_r| ≤ μ_r R* F_n
