@@ -15,13 +15,14 @@ namespace {
 constexpr double kFormat = 1;
 
 std::vector<double> flat(const std::vector<Vec3>& v) {
-  std::vector<double> out(v.size() * 3);
-  if (!v.empty()) std::memcpy(out.data(), v.data(), out.size() * sizeof(double));
+  std::vector<double> out;
+  out.reserve(v.size() * 3);
+  for (const Vec3& x : v) out.insert(out.end(), {x.x, x.y, x.z});
   return out;
 }
 std::vector<Vec3> vecs(const std::vector<double>& d) {
   std::vector<Vec3> out(d.size() / 3);
-  if (!d.empty()) std::memcpy(out.data(), d.data(), d.size() * sizeof(double));
+  for (std::size_t i = 0; i < out.size(); ++i) out[i] = {d[3 * i], d[3 * i + 1], d[3 * i + 2]};
   return out;
 }
 std::vector<double> mat(const Mat3& m) { return std::vector<double>(&m.a[0][0], &m.a[0][0] + 9); }
