@@ -95,10 +95,16 @@ struct Simulation::Impl {
   bool deforming() const { return control.active(); }
 
   // ------------------------------------------------------------ neighbour search
+  /// Cell vectors (integer, per particle) subtracted by the last wrap: a pair seen through image
+  /// n before the wrap is seen through n + w_j − w_i after it (its history must follow).
+  std::vector<Vec3> wrapped;
+
   void wrap_positions() {
+    wrapped.assign(p.size(), Vec3{});
     if (!(cell.periodic[0] || cell.periodic[1] || cell.periodic[2])) return;
     const Mat3 hinv = cell.h.inverse();
-    for (auto& x : p.x) {
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      Vec3& x = p.x[i];
       Vec3 s = hinv * (x - cell.origin);
       bool moved = false;
       for (int k = 0; k < 3; ++k)
@@ -106,11 +112,23 @@ struct Simulation::Impl {
           const double fl = std::floor(s[k]);
           if (fl != 0) {
             s[k] -= fl;
+            wrapped[i][k] = fl;
             moved = true;
           }
         }
       if (moved) x = cell.origin + cell.h * s;
     }
+  }
+
+  /// Image code of pair (i, j) after the wrap, from its code before; -1 when out of range.
+  int image_after_wrap(std::size_t i, int j, int code) const {
+    const Vec3 n = image_vector(code) + wrapped[std::size_t(j)] - wrapped[i];
+    int c = 0;
+    for (int k = 0; k < 3; ++k) {
+      if (n[k] < -1 || n[k] > 1) return -1;
+      c = 3 * c + int(n[k]) + 1;
+    }
+    return c;
   }
 
   void update_image_tables() {
@@ -206,14 +224,16 @@ struct Simulation::Impl {
       }
       new_start[i + 1] = int32_t(new_j.size());
     }
-    // Carry the history of pairs that stay in the list (small per-particle lists: linear search).
+    // Carry the history of pairs that stay in the list (small per-particle lists: linear search),
+    // matching images across the wrap (a pair whose particle crossed a periodic face keeps its
+    // tangential spring and JKR flag).
     std::vector<double> new_hist(new_j.size() * stride, 0.0);
     std::vector<uint8_t> new_touch(kern.touch_flag ? new_j.size() : 0, 0);
     if (!start.empty() && (stride > 0 || kern.touch_flag)) {
       for (std::size_t i = 0; i < n; ++i)
         for (int k = new_start[i]; k < new_start[i + 1]; ++k)
           for (int q = start[i]; q < start[i + 1]; ++q)
-            if (nj[q] == new_j[k] && img[q] == new_img[k]) {
+            if (nj[q] == new_j[k] && image_after_wrap(i, nj[q], img[q]) == new_img[k]) {
               std::copy_n(&hist[std::size_t(q) * stride], stride, &new_hist[std::size_t(k) * stride]);
               if (kern.touch_flag) new_touch[k] = touch[q];
               break;
