@@ -84,6 +84,7 @@ inline void contact(const law::Geometry& g, double* hist, unsigned char* touch, 
   const law::Normal nr = N::eval(g, touch);
   active = nr.active;
   if (!nr.active) {
+    if constexpr (kTally) tally->dissipated += T::released(*g.pp, hist);
     T::reset(hist);
     R::reset(hist + T::kHistory);
     return;
@@ -145,6 +146,7 @@ void pair_kernel(const ForceJob& job, int i_begin, int i_end, Vec3* f, Vec3* tor
       const double r_star = ri * rj / rsum;
       if constexpr (!N::kTouchFlag) {
         if (dist2 >= rsum * rsum) {  // apart: forget the history
+          if constexpr (kTally) tally->dissipated += T::released(*pp, h);
           T::reset(h);
           R::reset(h + T::kHistory);
           continue;
@@ -154,6 +156,7 @@ void pair_kernel(const ForceJob& job, int i_begin, int i_end, Vec3* f, Vec3* tor
         if (!*tf && dist2 >= rsum * rsum) continue;
         if (dist2 >= reach * reach) {
           *tf = 0;
+          if constexpr (kTally) tally->dissipated += T::released(*pp, h);
           T::reset(h);
           R::reset(h + T::kHistory);
           continue;
@@ -214,6 +217,7 @@ void wall_kernel(const ForceJob& job, const WallJob& w, Vec3* f, Vec3* torque, T
     g.delta = ri - gap;
     if (g.delta < -N::reach(*pp, ri) || (!N::kTouchFlag && g.delta <= 0)) {
       if constexpr (N::kTouchFlag) *tf = 0;
+      if constexpr (kTally) tally->dissipated += T::released(*pp, h);
       T::reset(h);
       R::reset(h + T::kHistory);
       continue;

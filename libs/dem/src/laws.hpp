@@ -118,6 +118,7 @@ struct TangentialNone {
   template <bool kTally>
   static Tangential eval(const Geometry&, const Normal&, double*) { return {{0, 0, 0}, 0, 0}; }
   static void reset(double*) {}
+  static double released(const PairParams&, const double*) { return 0; }
 };
 
 /// Incremental spring with Coulomb limit. The stored force is rotated into the current tangent
@@ -129,6 +130,15 @@ struct TangentialSpring {
   static constexpr int kHistory = 3;
   static constexpr bool kRotation = true;
   static void reset(double* h) { h[0] = h[1] = h[2] = 0; }
+  /// Energy still stored in the spring when the contact opens; the reset discards it and the
+  /// budget books it as dissipated (in the continuum limit the cone μF_n → 0 slips it away).
+  /// The spring can hold a large remainder when the dashpot alone exceeds the cone
+  /// (F_s = F_t − η_t v_t), so this is O(1) per contact, not O(Δt). Known for the linear law
+  /// (constant k_t); the Mindlin k_t of the last contact step is not kept, so not booked there.
+  static double released(const PairParams& p, const double* h) {
+    if constexpr (kMindlin) return 0;
+    else return p.k_t > 0 ? 0.5 * (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]) / p.k_t : 0;
+  }
   template <bool kTally>
   static Tangential eval(const Geometry& g, const Normal& nr, double* h) {
     const PairParams& p = *g.pp;
