@@ -7,6 +7,7 @@
 #include <limits>
 #include <sstream>
 
+#include "hgrid.hpp"
 #include "kernel.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/tool.hpp"
@@ -140,8 +141,8 @@ struct Simulation::Impl {
     }
   }
 
-  void build_neighbors() {
-    wrap_positions();
+  /// Single-level linked cells (bins sized by the largest sphere) into the CSR half list.
+  void linked_cells(std::vector<int32_t>& new_start, std::vector<int32_t>& new_j, std::vector<uint8_t>& new_img) {
     const std::size_t n = p.size();
     const double rmax = *std::max_element(p.r.begin(), p.r.end());
     const double bin = 2 * rmax + skin + reach_max;
@@ -186,8 +187,7 @@ struct Simulation::Impl {
     }
     update_image_tables();
 
-    std::vector<int32_t> new_start(n + 1, 0), new_j;
-    std::vector<uint8_t> new_img;
+    new_start.assign(n + 1, 0);
     new_j.reserve(nj.size() + n);
     new_img.reserve(nj.size() + n);
     for (std::size_t i = 0; i < n; ++i) {
@@ -223,6 +223,19 @@ struct Simulation::Impl {
         }
       }
       new_start[i + 1] = int32_t(new_j.size());
+    }
+  }
+
+  void build_neighbors() {
+    wrap_positions();
+    const std::size_t n = p.size();
+    std::vector<int32_t> new_start, new_j;
+    std::vector<uint8_t> new_img;
+    if (use_hgrid(p.r)) {  // wide size distributions: hierarchical grid (hgrid.hpp)
+      update_image_tables();
+      hgrid_half_list(p.x, p.r, cell, shift, skin, reach_max, new_start, new_j, new_img);
+    } else {
+      linked_cells(new_start, new_j, new_img);
     }
     // Carry the history of pairs that stay in the list (small per-particle lists: linear search),
     // matching images across the wrap (a pair whose particle crossed a periodic face keeps its
