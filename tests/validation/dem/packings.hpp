@@ -3,7 +3,9 @@
 // velocities (deterministic: a fixed seed of std::mt19937_64), and energy helpers.
 #include <cmath>
 #include <cstdint>
+#include <iostream>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "scenes.hpp"
@@ -51,6 +53,11 @@ inline Cell lattice_cell(const LatticeSpec& s) {
 
 inline Simulation lattice(const ContactModel& m, const LatticeSpec& s, Settings set = {}) {
   return Simulation(lattice_particles(s), lattice_cell(s), m, set);
+}
+
+/// Prints a measured number next to the assertions (the report of each test's error).
+inline void report(const std::string& what, double value) {
+  std::cout << "  measured: " << what << " = " << value << std::endl;
 }
 
 /// Kinetic plus elastic energy (one measurement pass).

@@ -10,7 +10,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "scenes.hpp"
+#include "packings.hpp"
 
 using namespace tomodem;
 using namespace tomodem::dem;
@@ -83,6 +83,8 @@ TEST(AdhesionJKR, PullOffForceAndBreakDistanceMatchJohnsonKendallRoberts) {
   const double f_pull = 1.5 * M_PI * w * r_star;
   const Curve c = press_and_pull(NormalLaw::hertz_jkr, 0.5 * std::abs(delta_c), 3 * std::abs(delta_c),
                                  1.5 * std::abs(delta_c), std::abs(delta_c) / 20000);
+  report("JKR pull-off / (1.5 pi w R*) - 1", -c.min_force_retract / f_pull - 1);
+  report("JKR break overlap / delta_c - 1", c.last_overlap_retract / delta_c - 1);
   EXPECT_NEAR(-c.min_force_retract / f_pull, 1.0, 0.01) << "JKR pull-off 1.5 pi w R*";
   EXPECT_NEAR(c.last_overlap_retract / delta_c, 1.0, 0.01) << "JKR break overlap";
   // Hysteresis: no force before contact on approach; contact forms at δ = 0 (within a step).
@@ -109,6 +111,7 @@ TEST(AdhesionDMT, PullOffForceIsTwoPiWR) {
   const double f_pull = 2 * M_PI * w * r_star;
   const double scale = 0.75 * std::cbrt(M_PI * M_PI * w * w * r_star / std::pow(E / (2 * (1 - nu * nu)), 2));
   const Curve c = press_and_pull(NormalLaw::hertz_dmt, 0.5 * scale, 3 * scale, 0.5 * scale, scale / 20000);
+  report("DMT pull-off / (2 pi w R*) - 1", -c.min_force_retract / f_pull - 1);
   EXPECT_NEAR(-c.min_force_retract / f_pull, 1.0, 0.01) << "DMT pull-off 2 pi w R*";
   // DMT contacts end at δ = 0: no force once the surfaces separate, on approach or retraction.
   EXPECT_EQ(c.min_force_approach, 0.0);

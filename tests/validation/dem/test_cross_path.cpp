@@ -6,7 +6,7 @@
 
 #include <cmath>
 
-#include "scenes.hpp"
+#include "packings.hpp"
 
 using namespace tomodem;
 using namespace tomodem::dem;
@@ -65,6 +65,9 @@ Impact impact(bool use_wall) {
 TEST(CrossPath, WallContactEqualsContactWithHugeFixedSphere) {
   const Impact w = impact(true), s = impact(false);
   const double vscale = 0.5, wscale = 0.5 / R;
+  report("max force wall/sphere - 1", w.max_force / s.max_force - 1);
+  report("max |dv| / v_in", norm(w.v - s.v) / vscale);
+  report("max |d omega| R / v_in", norm(w.omega - s.omega) / wscale);
   EXPECT_NEAR(w.max_force / s.max_force, 1.0, 1e-4);
   for (int k = 0; k < 3; ++k) {
     EXPECT_NEAR(w.v[k], s.v[k], 1e-4 * vscale) << "velocity component " << k;

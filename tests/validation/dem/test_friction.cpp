@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "scenes.hpp"
+#include "packings.hpp"
 
 using namespace tomodem;
 using namespace tomodem::dem;
@@ -57,6 +57,9 @@ TEST(TangentialMindlin, SpringFollowsMindlinStiffnessThenSlipsAtCoulombLimit) {
       worst_slip = std::max(worst_slip, std::abs(-f.x / (mu * fn) - 1));
     }
   }
+  report("max |F_n/Hertz - 1|", worst_normal);
+  report("max |F_t/(8 G* a u) - 1| (stick)", worst_stick);
+  report("max |F_t/(mu F_n) - 1| (slip)", worst_slip);
   EXPECT_LT(worst_normal, 1e-9) << "normal force against Hertz";
   EXPECT_LT(worst_stick, 1e-9) << "stick: F_t against 8 G* a u";
   EXPECT_LT(worst_slip, 1e-9) << "slip: |F_t| against mu F_n";
@@ -106,11 +109,13 @@ TEST(TangentialMindlin, StickBelowCoulombLimitSlipAbove) {
     EXPECT_NEAR(q.omega[0].y, 0.0, 1e-9) << "the symmetric load must not roll the sphere";
     if (load < 1) {
       const double u_el = load * f_limit / (2 * kt);
+      report("stick: u/(F/2k_t) - 1", q.x[0].x / u_el - 1);
       EXPECT_NEAR(q.x[0].x / u_el, 1.0, 0.01) << "stick: elastic displacement F/(2 k_t)";
       EXPECT_NEAR(q.v[0].x * period / u_el, 0.0, 0.01) << "stick: at rest";
     } else {
       const double acc = (q.v[0].x - v0) / (sim.time() - t0);
       const double expected = (load - 1) * f_limit / mass;
+      report("slip: a/((F - 2 mu F_n)/m) - 1", acc / expected - 1);
       EXPECT_NEAR(acc / expected, 1.0, 0.01) << "slip: (F - 2 mu F_n)/m";
     }
   }

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <vector>
 
-#include "scenes.hpp"
+#include "packings.hpp"
 
 using namespace tomodem;
 using namespace tomodem::dem;
@@ -74,6 +74,8 @@ TEST(Incline, RollsWithoutSlipBelowSevenHalvesMu) {
     const double theta = std::atan(ratio * 3.5 * mu);
     const Fit f = run_incline(theta);
     const double expected = 5.0 / 7.0 * g * std::sin(theta);
+    report("rolling tan/(7mu/2) = " + std::to_string(ratio) + ": a/(5/7 g sin) - 1", f.acceleration / expected - 1);
+    report("  slip velocity / speed", f.slip_velocity / f.speed);
     EXPECT_NEAR(f.acceleration / expected, 1.0, 0.01) << "tan(theta) = " << std::tan(theta);
     // No slip: the contact point is at rest relative to the wall (to 1% of the sphere's speed).
     EXPECT_NEAR(f.slip_velocity / f.speed, 0.0, 0.01) << "tan(theta) = " << std::tan(theta);
@@ -86,6 +88,7 @@ TEST(Incline, SlidesAboveSevenHalvesMu) {
     const double theta = std::atan(ratio * 3.5 * mu);
     const Fit f = run_incline(theta);
     const double expected = g * (std::sin(theta) - mu * std::cos(theta));
+    report("sliding tan/(7mu/2) = " + std::to_string(ratio) + ": a/(g(sin - mu cos)) - 1", f.acceleration / expected - 1);
     EXPECT_NEAR(f.acceleration / expected, 1.0, 0.01) << "tan(theta) = " << std::tan(theta);
     EXPECT_GT(f.slip_velocity / f.speed, 0.05) << "tan(theta) = " << std::tan(theta);
   }
