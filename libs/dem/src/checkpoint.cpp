@@ -80,6 +80,25 @@ void write_checkpoint(const std::string& path, const Simulation& sim, const std:
     write3(f, "/engine/wall_point_at_build", e.wall_point_at_build, "m");
     write3(f, "/engine/force", e.force, "N");
     write3(f, "/engine/torque", e.torque, "N m");
+    const BondSet& B = e.bonds;
+    if (B.size()) {
+      f.write("/bonds/i", B.i);
+      f.write("/bonds/j", B.j);
+      write3(f, "/bonds/image", B.image, "1");
+      f.write("/bonds/radius", B.radius, {}, "m");
+      f.write("/bonds/rest_length", B.rest_length, {}, "m");
+      f.write("/bonds/state", B.state);
+      f.write("/bonds/mode", B.mode);
+      f.write("/bonds/broken_at", B.broken_at, {}, "s");
+      write3(f, "/bonds/shear_force", B.shear_force, "N");
+      f.write("/bonds/twist", B.twist, {}, "N m");
+      write3(f, "/bonds/bend", B.bend, "N m");
+      std::vector<double> et, eb, em;
+      for (const auto& ev : e.bond_events) et.push_back(ev.time), eb.push_back(ev.bond), em.push_back(ev.mode);
+      f.write("/bonds/events/time", et, {}, "s");
+      f.write("/bonds/events/bond", eb);
+      f.write("/bonds/events/mode", em);
+    }
     f.write("/engine/scalars",
             std::vector<double>{double(e.forces_valid), e.dt, e.time, double(e.step), double(e.builds), e.dissipated,
                                 e.external_work, e.initial_energy});
@@ -129,6 +148,22 @@ void read_checkpoint(const std::string& path, Simulation& sim) {
   e.wall_point_at_build = vecs(f.read_double("/engine/wall_point_at_build"));
   e.force = vecs(f.read_double("/engine/force"));
   e.torque = vecs(f.read_double("/engine/torque"));
+  e.bonds = sim.bonds();  // the scene's bonds; their state comes from the checkpoint
+  if (e.bonds.size()) {
+    BondSet& B = e.bonds;
+    if (!f.exists("/bonds/i") || f.read_int32("/bonds/i").size() != B.size())
+      throw InputError(path, "/bonds/i", "", "bond count differs from the scene's");
+    B.image = vecs(f.read_double("/bonds/image"));
+    B.state = f.read_uint8("/bonds/state");
+    B.mode = f.read_uint8("/bonds/mode");
+    B.broken_at = f.read_double("/bonds/broken_at");
+    B.shear_force = vecs(f.read_double("/bonds/shear_force"));
+    B.twist = f.read_double("/bonds/twist");
+    B.bend = vecs(f.read_double("/bonds/bend"));
+    const auto et = f.read_double("/bonds/events/time"), eb = f.read_double("/bonds/events/bond"),
+               em = f.read_double("/bonds/events/mode");
+    for (std::size_t k = 0; k < et.size(); ++k) e.bond_events.push_back({et[k], int32_t(eb[k]), uint8_t(em[k])});
+  }
   const auto s = f.read_double("/engine/scalars");
   if (s.size() != 8) throw InputError(path, "/engine/scalars", std::to_string(s.size()), "expected 8 values");
   e.forces_valid = s[0] != 0;

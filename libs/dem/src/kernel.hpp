@@ -46,7 +46,7 @@ struct WallJob {
 struct Tally {
   Mat3 virial;               ///< Σ F_ij ⊗ l_ij (force on j from i, branch i→j)
   double elastic = 0, dissipated = 0, sum_contact_force = 0, max_overlap_ratio = 0;
-  long contacts = 0, wall_contacts = 0;
+  long contacts = 0, wall_contacts = 0, bonds = 0;
   Vec3 wall_force;           ///< force on the wall (wall pass)
   void add(const Tally& o) {
     virial += o.virial;
@@ -56,6 +56,7 @@ struct Tally {
     max_overlap_ratio = std::max(max_overlap_ratio, o.max_overlap_ratio);
     contacts += o.contacts;
     wall_contacts += o.wall_contacts;
+    bonds += o.bonds;
     wall_force += o.wall_force;
   }
 };

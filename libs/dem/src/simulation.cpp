@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "hgrid.hpp"
+#include "bond_kernel.hpp"
 #include "kernel.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/tool.hpp"
@@ -70,6 +71,15 @@ struct Simulation::Impl {
   std::vector<std::vector<Vec3>> fbuf, tbuf;
   std::vector<std::vector<double>> sbuf;
   std::vector<int> split;
+
+  // Bonds (empty unless the scene has them): per-particle partners for the contact exclusion.
+  BondSet bonds;
+  std::vector<BondLaw> bond_laws;
+  BondFailure bond_failure = BondFailure::none;
+  BondKernel bond_kernel[2] = {nullptr, nullptr};
+  std::vector<BondEvent> bond_events;
+  std::vector<std::vector<BondEvent>> event_buf;
+  std::vector<std::size_t> bond_split;
 
   double dt = 0, t = 0;
   long nstep = 0;
@@ -228,6 +238,7 @@ struct Simulation::Impl {
 
   void build_neighbors() {
     wrap_positions();
+    for (std::size_t b = 0; b < bonds.size(); ++b) bonds.image[b] += wrapped[bonds.j[b]] - wrapped[bonds.i[b]];
     const std::size_t n = p.size();
     std::vector<int32_t> new_start, new_j;
     std::vector<uint8_t> new_img;
@@ -237,6 +248,7 @@ struct Simulation::Impl {
     } else {
       linked_cells(new_start, new_j, new_img);
     }
+    if (!bonds.i.empty()) exclude_bonded(new_start, new_j, new_img);
     // Carry the history of pairs that stay in the list (small per-particle lists: linear search),
     // matching images across the wrap (a pair whose particle crossed a periodic face keeps its
     // tangential spring and JKR flag).
@@ -282,8 +294,40 @@ struct Simulation::Impl {
     ++builds;
   }
 
+  /// Removes pairs joined by an intact bond from a new half list: the bond carries them, and
+  /// the contact law takes over only when the bond breaks (which triggers a rebuild).
+  void exclude_bonded(std::vector<int32_t>& st, std::vector<int32_t>& jj, std::vector<uint8_t>& im) const {
+    const std::size_t n = p.size();
+    std::vector<std::vector<std::pair<int32_t, int>>> partners(n);
+    for (std::size_t b = 0; b < bonds.size(); ++b) {
+      if (bonds.state[b] != BondSet::intact) continue;
+      const Vec3& v = bonds.image[b];
+      const int code = (int(std::lround(v.x)) + 1) * 9 + (int(std::lround(v.y)) + 1) * 3 + int(std::lround(v.z)) + 1;
+      partners[bonds.i[b]].push_back({bonds.j[b], code});
+    }
+    std::size_t out = 0;
+    int32_t begin = st[0];
+    for (std::size_t i = 0; i < n; ++i) {
+      const int32_t end = st[i + 1];
+      for (int32_t k = begin; k < end; ++k) {
+        bool bonded = false;
+        for (const auto& pc : partners[i]) bonded = bonded || (pc.first == jj[k] && pc.second == im[k]);
+        if (bonded) continue;
+        jj[out] = jj[k];
+        im[out] = im[k];
+        ++out;
+      }
+      begin = end;
+      st[i + 1] = int32_t(out);
+    }
+    jj.resize(out);
+    im.resize(out);
+  }
+
   /// Splits the particles among threads by pair count (deterministic for a thread count).
   void partition_threads() {
+    bond_split.assign(threads + 1, bonds.size());
+    for (int t = 0; t < threads; ++t) bond_split[t] = bonds.size() * std::size_t(t) / std::size_t(threads);
     const std::size_t n = p.size();
     split.assign(threads + 1, int(n));
     split[0] = 0;
@@ -348,6 +392,13 @@ struct Simulation::Impl {
     if (rot) std::fill(p.torque.begin(), p.torque.end(), Vec3{});
     ForceJob jb = job();
     jb.pair_force = pair_force;
+    BondJob bj{};
+    const bool have_bonds = !bonds.i.empty();
+    if (have_bonds) {
+      bj = BondJob{p.x.data(), jb.u, p.omega.data(), p.r.data(), p.m.data(), p.phase.data(), &bonds,
+                   bond_laws.data(), model.n_phases, cell.h, control.velocity_gradient * cell.h, dt, t};
+      event_buf.assign(threads, {});
+    }
     std::vector<Tally> tallies(threads);
     if (tally) stiffness.assign(n, 0.0);
     if (int(fbuf.size()) < threads) {
@@ -374,6 +425,8 @@ struct Simulation::Impl {
         }
       }
       kern.pair[tally](jb, split[tid], split[tid + 1], f, tq, &tallies[tid], st);
+      if (have_bonds)
+        bond_kernel[tally](bj, bond_split[tid], bond_split[tid + 1], f, tq, &tallies[tid], st, &event_buf[tid]);
 #pragma omp barrier
       // Reduce the per-thread buffers in a fixed order: the result depends on the thread count
       // only through round-off, and not at all on scheduling.
@@ -387,6 +440,12 @@ struct Simulation::Impl {
     }
     Tally total;
     for (const auto& tt : tallies) total.add(tt);
+    if (have_bonds)
+      for (const auto& ev : event_buf)
+        if (!ev.empty()) {
+          bond_events.insert(bond_events.end(), ev.begin(), ev.end());
+          need_build = true;  // the broken pairs join the contact list
+        }
     // Walls (few candidates each): serial, through the same law functions.
     for (std::size_t w = 0; w < walls.size(); ++w) {
       WallJob wj{walls[w].point, walls[w].normal, walls[w].velocity, walls[w].phase,
@@ -653,6 +712,9 @@ struct Simulation::Impl {
     for (auto& w : walls) wall_force.push_back(w.force);
     const std::vector<Vec3> f = p.f, tq = p.torque;
     const bool valid = forces_valid;
+    const BondSet bond_state = bonds;
+    const std::size_t n_events = bond_events.size();
+    const bool build_flag = need_build;
     compute_forces(true, pair_force ? pair_force->data() : nullptr);
     const Tally tl = last;
     Measurements m;
@@ -705,6 +767,10 @@ struct Simulation::Impl {
     p.f = f;
     p.torque = tq;
     forces_valid = valid;
+    bonds = bond_state;
+    bond_events.resize(n_events);
+    need_build = build_flag;
+    m.bonds = long(bonds.intact_count());
     return m;
   }
 
@@ -781,6 +847,20 @@ double Simulation::critical_time_step() const {
       if (G > 0) best = std::min(best, M_PI * s.p.r[i] * std::sqrt(rho / G) / (0.1631 * nu + 0.8766));
     }
   }
+  // Bonds: the two-particle limit of the normal spring, and of the rotation about the centres
+  // under the bending spring plus the shear spring's lever (k_bend + 2 k_t R²).
+  for (std::size_t b = 0; b < s.bonds.size(); ++b) {
+    const int i = s.bonds.i[b], j = s.bonds.j[b];
+    const BondLaw& law = s.bond_laws[s.p.phase[i] * s.model.n_phases + s.p.phase[j]];
+    const BondStiffness k = bond_stiffness(law, s.bonds.radius[b], s.p.r[i], s.p.r[j]);
+    const double ms = s.p.m[i] * s.p.m[j] / (s.p.m[i] + s.p.m[j]);
+    const double Ii = s.p.inertia(i), Ij = s.p.inertia(j), is = Ii * Ij / (Ii + Ij);
+    const double rmax = std::max(s.p.r[i], s.p.r[j]);
+    const double z = law.damping_ratio, damp = std::sqrt(1 + z * z) - z;
+    best = std::min(best, 2 * damp * std::sqrt(ms / k.kn));
+    best = std::min(best, 2 * damp * std::sqrt(is / (k.kbend + 2 * k.kt * rmax * rmax)));
+    best = std::min(best, 2 * damp * std::sqrt(is / k.ktwist));
+  }
   return best;
 }
 
@@ -822,6 +902,7 @@ std::string Simulation::describe() const {
   o << (s.walls.empty() ? "" : " walls");
   o << (s.control.active() ? " deforming-cell" : "");
   o << (s.set.track_energy ? " energy-tally" : "");
+  o << (s.bonds.size() ? " bonds" : "");
   if (!s.p.has_rotation() && !s.kern.tangential_history && s.walls.empty()) o << " (positions and forces only)";
   return o.str();
 }
@@ -875,6 +956,8 @@ Simulation::EngineState Simulation::engine_state() const {
   e.dissipated = s.dissipated;
   e.external_work = s.ext_work;
   e.initial_energy = s.e0;
+  e.bonds = s.bonds;
+  e.bond_events = s.bond_events;
   return e;
 }
 
@@ -909,7 +992,39 @@ void Simulation::restore(const EngineState& e) {
   s.dissipated = e.dissipated;
   s.ext_work = e.external_work;
   s.e0 = e.initial_energy;
+  if (e.bonds.size() != s.bonds.size())
+    throw InputError("", "engine state", "", "bond count differs from the scene's");
+  s.bonds = e.bonds;
+  s.bond_events = e.bond_events;
   s.partition_threads();
 }
+
+void Simulation::set_bonds(BondSet bonds, std::vector<BondLaw> laws, BondFailure failure) {
+  Impl& s = *impl_;
+  const std::size_t np = std::size_t(s.model.n_phases) * s.model.n_phases;
+  if (laws.size() == 1 && np > 1) laws.assign(np, laws[0]);
+  if (laws.size() != np)
+    throw InputError("", "bonds", std::to_string(laws.size()), "one bond law per phase pair is needed");
+  for (std::size_t b = 0; b < bonds.size(); ++b)
+    if (bonds.i[b] < 0 || bonds.j[b] >= int32_t(s.p.size()) || bonds.i[b] >= bonds.j[b] || !(bonds.radius[b] > 0))
+      throw InputError("", "bonds[" + std::to_string(b) + "]", "", "needs 0 <= i < j < N and a positive radius");
+  s.bonds = std::move(bonds);
+  s.bond_laws = std::move(laws);
+  s.bond_failure = failure;
+  s.bond_kernel[0] = select_bond_kernel(failure, false);
+  s.bond_kernel[1] = select_bond_kernel(failure, true);
+  s.p.enable_rotation();  // bonds carry moments
+  s.need_build = true;
+  s.forces_valid = false;
+}
+const BondSet& Simulation::bonds() const { return impl_->bonds; }
+const std::vector<BondLaw>& Simulation::bond_laws() const { return impl_->bond_laws; }
+void Simulation::set_bond_laws(std::vector<BondLaw> laws) {
+  const std::size_t np = std::size_t(impl_->model.n_phases) * impl_->model.n_phases;
+  if (laws.size() == 1 && np > 1) laws.assign(np, laws[0]);
+  if (laws.size() != np) throw InputError("", "bonds", std::to_string(laws.size()), "one bond law per phase pair is needed");
+  impl_->bond_laws = std::move(laws);
+}
+const std::vector<BondEvent>& Simulation::bond_events() const { return impl_->bond_events; }
 
 }  // namespace tomodem::dem

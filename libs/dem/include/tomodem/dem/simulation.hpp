@@ -10,6 +10,7 @@
 
 #include "tomodem/core/packing.hpp"
 #include "tomodem/core/vec3.hpp"
+#include "tomodem/dem/bonds.hpp"
 #include "tomodem/dem/model.hpp"
 #include "tomodem/dem/particles.hpp"
 
@@ -69,6 +70,7 @@ struct Measurements {
   double external_work = 0;        ///< gravity, walls, cell deformation (tracked runs), J
   double energy_balance_error = 0; ///< (E_kin+E_el+E_diss) - (E_0+W_ext), J
   long contacts = 0;               ///< particle–particle contacts carrying force
+  long bonds = 0;                  ///< intact bonds
   long wall_contacts = 0;
   double coordination = 0;         ///< 2 contacts / N (walls not counted)
   double unbalanced_force_ratio = 0;  ///< mean |ΣF_i| / mean |F_contact|
@@ -117,6 +119,14 @@ class Simulation {
   /// Names the allocated optional stages ("rotation", "tangential history", ...).
   std::string describe() const;
 
+  /// Bonded-particle model: bonds (i < j) with one law per phase pair (or one for all) and a
+  /// failure criterion. Bonded pairs leave the contact list until their bond breaks.
+  void set_bonds(BondSet bonds, std::vector<BondLaw> laws, BondFailure failure = BondFailure::none);
+  const BondSet& bonds() const;
+  const std::vector<BondLaw>& bond_laws() const;
+  void set_bond_laws(std::vector<BondLaw> laws);
+  const std::vector<BondEvent>& bond_events() const;
+
   /// Contact network snapshot (i < j, overlap, forces on j from i).
   ContactTable contacts();
   /// Everything beyond particles, cell and walls that the next step depends on: the neighbour
@@ -137,6 +147,8 @@ class Simulation {
     double dt = 0, time = 0;
     long step = 0, builds = 0;
     double dissipated = 0, external_work = 0, initial_energy = 0;
+    BondSet bonds;
+    std::vector<BondEvent> bond_events;
   };
   EngineState engine_state() const;
   /// Restores a state saved from a simulation with the same particles, model and walls.

@@ -1,0 +1,144 @@
+#pragma once
+// The bond loop, compiled per failure criterion and tally flag (bonds.cpp selects).
+#include <cmath>
+#include <vector>
+
+#include "kernel.hpp"
+#include "tomodem/dem/bonds.hpp"
+
+namespace tomodem::dem {
+
+struct BondJob {
+  const Vec3* x;
+  const Vec3* u;       ///< absolute velocities
+  const Vec3* omega;
+  const double* r;
+  const double* m;
+  const int32_t* phase;
+  BondSet* bonds;
+  const BondLaw* laws;  ///< n_phases × n_phases
+  int n_phases;
+  Mat3 h;               ///< cell matrix (image shifts H·n)
+  Mat3 lh;              ///< L·H (image velocities)
+  double dt, time;
+};
+
+using BondKernel = void (*)(const BondJob&, std::size_t begin, std::size_t end, Vec3* f, Vec3* torque, Tally* tally,
+                            double* stiffness, std::vector<BondEvent>* events);
+BondKernel select_bond_kernel(BondFailure failure, bool tally);
+
+/// Stiffnesses of one bond (PHYSICS.md, bonded-particle model).
+struct BondStiffness {
+  double kn, kt, ktwist, kbend, gn, gt;
+};
+inline BondStiffness bond_stiffness(const BondLaw& law, double a, double ri, double rj) {
+  const double rb = 2 * ri * rj / (ri + rj);
+  const double s = (a / rb) * (a / rb);
+  BondStiffness k;
+  k.gn = 1 + law.g_n_coefficient * s;
+  k.gt = 1 + law.g_t_coefficient * s;
+  k.kn = 2 * law.E_star * a * k.gn;
+  k.kt = 8 * law.G_star * a * k.gt;
+  k.ktwist = 0.5 * k.kt * a * a;
+  k.kbend = 0.25 * k.kn * a * a;
+  return k;
+}
+
+namespace detail {
+
+template <BondFailure kFail, bool kTally>
+void bond_kernel(const BondJob& job, std::size_t begin, std::size_t end, Vec3* f, Vec3* torque, Tally* tally,
+                 double* stiffness, std::vector<BondEvent>* events) {
+  BondSet& B = *job.bonds;
+  for (std::size_t b = begin; b < end; ++b) {
+    if (B.state[b] != BondSet::intact) continue;
+    const int i = B.i[b], j = B.j[b];
+    const Vec3 d = job.x[j] + job.h * B.image[b] - job.x[i];
+    const double dist = std::sqrt(dot(d, d));
+    const Vec3 n = (1.0 / dist) * d;
+    const double ri = job.r[i], rj = job.r[j], a = B.radius[b];
+    const BondLaw& law = job.laws[job.phase[i] * job.n_phases + job.phase[j]];
+    const BondStiffness k = bond_stiffness(law, a, ri, rj);
+    const double mstar = job.m[i] * job.m[j] / (job.m[i] + job.m[j]);
+    const Vec3 vrel = job.u[j] + job.lh * B.image[b] - job.u[i] - cross(job.omega[j], rj * n) -
+                      cross(job.omega[i], ri * n);
+    const double vn = dot(vrel, n);
+    const Vec3 vt = vrel - vn * n;
+    const double eta_n = 2 * law.damping_ratio * std::sqrt(mstar * k.kn);
+    const double eta_t = 2 * law.damping_ratio * std::sqrt(mstar * k.kt);
+    // Normal: total form from the rest length (repulsive positive; tension pulls together).
+    const double fn_el = -k.kn * (dist - B.rest_length[b]);
+    const double fn = fn_el - eta_n * vn;
+    // Tangential force and bending moment: incremental, rotated into the current tangent plane.
+    auto rotate = [&n](Vec3& v) {
+      const double m0 = norm2(v);
+      if (m0 == 0) return;
+      v -= dot(v, n) * n;
+      const double m1 = norm2(v);
+      if (m1 > 0) v *= std::sqrt(m0 / m1);
+    };
+    Vec3 fs = B.shear_force[b];
+    rotate(fs);
+    fs += (k.kt * job.dt) * vt;
+    const Vec3 wrel = job.omega[i] - job.omega[j];
+    const double wn = dot(wrel, n);
+    double tw = B.twist[b] - k.ktwist * wn * job.dt;
+    Vec3 mb = B.bend[b];
+    rotate(mb);
+    mb -= (k.kbend * job.dt) * (wrel - wn * n);
+    if constexpr (kFail != BondFailure::none) {
+      // σ: tension plus bending; τ: shear plus twist (Potyondy & Cundall 2004).
+      const double area = M_PI * a * a;
+      const double sigma = std::max(-fn_el, 0.0) / area + 4 * norm(mb) / (area * a);
+      const double tau = norm(fs) / area + 2 * std::abs(tw) / (area * a);
+      double sc, tc;
+      if constexpr (kFail == BondFailure::stress) {
+        sc = law.tensile_strength;
+        tc = law.shear_strength;
+      } else {
+        // LEFM (Jauffrès et al. 2012): critical stresses of a circular ligament from the
+        // energy release rate of the bond stiffnesses; smaller necks are stronger.
+        sc = 2 * std::sqrt(2 * law.E_star * law.fracture_energy * k.gn / (M_PI * a));
+        tc = 2 * std::sqrt(8 * law.G_star * law.fracture_energy * k.gt / (M_PI * a));
+      }
+      const bool t_fail = sigma > sc, s_fail = tau > tc;
+      if (t_fail || s_fail) {
+        B.state[b] = BondSet::broken;
+        B.mode[b] = (t_fail && sigma / sc >= tau / tc) ? BondSet::tension : BondSet::shear;
+        B.broken_at[b] = job.time;
+        B.shear_force[b] = {0, 0, 0};
+        B.twist[b] = 0;
+        B.bend[b] = {0, 0, 0};
+        events->push_back({job.time, int32_t(b), B.mode[b]});
+        continue;
+      }
+    }
+    B.shear_force[b] = fs;
+    B.twist[b] = tw;
+    B.bend[b] = mb;
+    const Vec3 ft = fs + eta_t * vt;
+    const Vec3 fi = (-fn) * n + ft;
+    f[i] += fi;
+    f[j] -= fi;
+    const Vec3 c = cross(n, ft);
+    const Vec3 mt = tw * n;
+    torque[i] += ri * c + mt + mb;
+    torque[j] += rj * c - mt - mb;
+    if constexpr (kTally) {
+      tally->virial += outer(-fi, d);
+      const double un = dist - B.rest_length[b];
+      tally->elastic += 0.5 * k.kn * un * un + 0.5 * norm2(fs) / k.kt + 0.5 * tw * tw / k.ktwist +
+                        0.5 * norm2(mb) / k.kbend;
+      tally->dissipated += (eta_n * vn * vn + eta_t * norm2(vt)) * job.dt;
+      tally->sum_contact_force += norm(fi);
+      ++tally->bonds;
+      if (stiffness) {
+        stiffness[i] += k.kn;
+        stiffness[j] += k.kn;
+      }
+    }
+  }
+}
+
+}  // namespace detail
+}  // namespace tomodem::dem
