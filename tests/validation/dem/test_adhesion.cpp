@@ -74,15 +74,15 @@ Curve press_and_pull(NormalLaw law, double gap0, double dmax, double gap1, doubl
 }  // namespace
 
 // The force is a function of the overlap alone here (no damping: e = 1), sampled every
-// |δ_c|/20000: the minimum of a smooth curve is found to O(step²) ~ 1e-9 and the break point to
-// one step (5e-5 relative). 1% is the tolerance; the closed forms are exact.
+// |δ_c|/5000: the minimum of a smooth curve is found to O(step²) ~ 1e-8 and the break point to
+// one step (2e-4 relative). 1% is the tolerance; the closed forms are exact.
 TEST(AdhesionJKR, PullOffForceAndBreakDistanceMatchJohnsonKendallRoberts) {
   const double e_star = E / (2 * (1 - nu * nu));
   const double r_star = R / 2;
   const double delta_c = -0.75 * std::cbrt(M_PI * M_PI * w * w * r_star / (e_star * e_star));
   const double f_pull = 1.5 * M_PI * w * r_star;
   const Curve c = press_and_pull(NormalLaw::hertz_jkr, 0.5 * std::abs(delta_c), 3 * std::abs(delta_c),
-                                 1.5 * std::abs(delta_c), std::abs(delta_c) / 20000);
+                                 1.5 * std::abs(delta_c), std::abs(delta_c) / 5000);
   report("JKR pull-off / (1.5 pi w R*) - 1", -c.min_force_retract / f_pull - 1);
   report("JKR break overlap / delta_c - 1", c.last_overlap_retract / delta_c - 1);
   EXPECT_NEAR(-c.min_force_retract / f_pull, 1.0, 0.01) << "JKR pull-off 1.5 pi w R*";
@@ -105,12 +105,12 @@ TEST(AdhesionJKR, PullOffForceAndBreakDistanceMatchJohnsonKendallRoberts) {
 
 // DMT: the attraction 2πwR* acts while the surfaces overlap, so the most tensile force is
 // reached at δ → 0⁺ where the Hertz part (4/3)E*sqrt(R*)δ^{3/2} vanishes; one sampling step of
-// |δ_c|/20000 leaves a Hertz part of ~1e-7 of the pull-off. 1% is the tolerance.
+// |δ_c|/5000 leaves a Hertz part of ~1e-6 of the pull-off. 1% is the tolerance.
 TEST(AdhesionDMT, PullOffForceIsTwoPiWR) {
   const double r_star = R / 2;
   const double f_pull = 2 * M_PI * w * r_star;
   const double scale = 0.75 * std::cbrt(M_PI * M_PI * w * w * r_star / std::pow(E / (2 * (1 - nu * nu)), 2));
-  const Curve c = press_and_pull(NormalLaw::hertz_dmt, 0.5 * scale, 3 * scale, 0.5 * scale, scale / 20000);
+  const Curve c = press_and_pull(NormalLaw::hertz_dmt, 0.5 * scale, 3 * scale, 0.5 * scale, scale / 5000);
   report("DMT pull-off / (2 pi w R*) - 1", -c.min_force_retract / f_pull - 1);
   EXPECT_NEAR(-c.min_force_retract / f_pull, 1.0, 0.01) << "DMT pull-off 2 pi w R*";
   // DMT contacts end at δ = 0: no force once the surfaces separate, on approach or retraction.
