@@ -10,6 +10,10 @@
 #        BUILD=<build dir with bin/tomodem-bench-sceneA> (default <repo>/build-bench, built if missing)
 #        PEERS=<peers folder> (default <repo>/../shared/peers)   PIN="taskset -c 0" (optional)
 #        DOC=<markdown to update> (default <repo>/docs/benchmarks.md)   KEEP=1 keeps the temp folder
+#        COMMIT=<label of the tomodem build> (default: the repository HEAD)
+#        REPEATS_LARGE=<repeats for N >= 50000> (default REPEATS)   TMO=<seconds per single run, default 900>
+#        CONFIGS="lammps-granular lammps-hertzhist liggghts tomodem-1t tomodem-2t tomodem-linear-frictionless-1t"
+#        (default all; e.g. leave out tomodem-2t on a machine whose load exceeds its cores)
 # Every cell is run REPEATS times, one after the other, codes interleaved; the table gives medians.
 # Gas variant: N must be 4n³, so N=8000 → 8788 (n=13) and N=64000 → 62500 (n=25), as the peers.
 set -u
@@ -17,6 +21,10 @@ REPO=$(cd "$(dirname "$0")/../.." && pwd)
 NS=${NS:-"8000 64000"}
 VARIANTS=${VARIANTS:-"scene gas"}
 REPEATS=${REPEATS:-3}
+REPEATS_LARGE=${REPEATS_LARGE:-$REPEATS}
+TMO=${TMO:-900}
+CONFIGS=${CONFIGS:-"lammps-granular lammps-hertzhist liggghts tomodem-1t tomodem-2t tomodem-linear-frictionless-1t"}
+want() { [[ " $CONFIGS " == *" $1 "* ]]; }
 WARM=${WARM:-500}
 STEPS=${STEPS:-2000}
 BUILD=${BUILD:-$REPO/build-bench}
@@ -58,7 +66,7 @@ echo "load average before: $LOAD0"
 run_peer() {  # exe input variant N tag config log-prefix
   local exe=$1 dir=$2 variant=$3 N=$4 tag=$5 config=$6 rep=$7 extra=$8
   local log=$P/logs/${tag}_${config}_N${N}_r$rep
-  ( cd "$P/$dir" && $PIN /usr/bin/time -v -o "$log.time" $exe -in in.sceneA -var N "$N" -var TAG "$tag" $extra \
+  ( cd "$P/$dir" && timeout "$TMO" $PIN /usr/bin/time -v -o "$log.time" $exe -in in.sceneA -var N "$N" -var TAG "$tag" $extra \
       -var WARM "$WARM" -var STEPS "$STEPS" -log "$log.log" -screen none ) || { echo "  $config failed" >&2; return; }
   local loop last ke z pr nb rss pps
   loop=$(grep 'Loop time' "$log.log" | tail -1 | awk '{print $4}')
@@ -74,7 +82,7 @@ run_tomodem() {  # variant N tag config rep threads law
   local variant=$1 N=$2 tag=$3 config=$4 rep=$5 threads=$6 law=$7
   local log=$P/logs/${tag}_${config}_N${N}_r$rep.txt pin=$PIN
   [ "$threads" -gt 1 ] && pin=""
-  $pin "$BENCH" "$P/common/${tag}_n$N.txt" --threads "$threads" --law "$law" --warm "$WARM" --steps "$STEPS" > "$log" ||
+  timeout "$TMO" $pin "$BENCH" "$P/common/${tag}_n$N.txt" --threads "$threads" --law "$law" --warm "$WARM" --steps "$STEPS" > "$log" ||
     { echo "  $config failed" >&2; return; }
   g() { awk -v k="$1" '$1==k{print $2}' "$log"; }
   echo "$variant,$N,tomodem,$config,$rep,$(g loop_wall_s),$(g particle_steps_per_second),$(g peak_rss_MB),$(g pressure_Pa),$(g coordination),$(g kinetic_energy_J),$(g neighbor_rebuilds)" | tee -a "$CSV"
@@ -89,14 +97,16 @@ for variant in $VARIANTS; do
       n=$(python3 -c "print(round(($N0/4)**(1/3)))"); N=$((4 * n * n * n)); tag=gas
       [ -f "$P/common/gas_n$N.txt" ] || /usr/bin/python3 "$P/common/gen_fcc_gas.py" $n "$P/common" > /dev/null
     fi
-    for rep in $(seq 1 "$REPEATS"); do
+    reps=$REPEATS; [ "$N" -ge 50000 ] && reps=$REPEATS_LARGE
+    for rep in $(seq 1 "$reps"); do
       echo "== $variant N=$N repeat $rep (load $(cut -d' ' -f1 /proc/loadavg))"
-      run_peer lmp lammps "$variant" $N $tag lammps-granular $rep "-var STYLE granular"
-      run_peer lmp lammps "$variant" $N $tag lammps-hertzhist $rep "-var STYLE hertzhist"
-      run_peer liggghts liggghts "$variant" $N $tag liggghts $rep ""
-      run_tomodem "$variant" $N $tag tomodem-1t $rep 1 hertz-mindlin
-      run_tomodem "$variant" $N $tag tomodem-2t $rep 2 hertz-mindlin
-      run_tomodem "$variant" $N $tag tomodem-linear-frictionless-1t $rep 1 linear-frictionless
+      want lammps-granular && run_peer lmp lammps "$variant" $N $tag lammps-granular $rep "-var STYLE granular"
+      want lammps-hertzhist && run_peer lmp lammps "$variant" $N $tag lammps-hertzhist $rep "-var STYLE hertzhist"
+      want liggghts && run_peer liggghts liggghts "$variant" $N $tag liggghts $rep ""
+      want tomodem-1t && run_tomodem "$variant" $N $tag tomodem-1t $rep 1 hertz-mindlin
+      want tomodem-2t && run_tomodem "$variant" $N $tag tomodem-2t $rep 2 hertz-mindlin
+      want tomodem-linear-frictionless-1t &&
+        run_tomodem "$variant" $N $tag tomodem-linear-frictionless-1t $rep 1 linear-frictionless
     done
   done
 done
@@ -107,5 +117,5 @@ cp "$CSV" "$REPO/tests/bench/dem/last_run.csv"
 python3 "$REPO/tests/bench/dem/summarize.py" "$CSV" "$DOC" \
   --meta "date=$START" "cpu=$(lscpu | awk -F: '/Model name/{gsub(/^ +/,"",$2);print $2; exit}')" \
   "cores=$(nproc)" "kernel=$(uname -r)" "debian=$(cat /etc/debian_version)" "lammps=$LV" "liggghts=$GV" \
-  "compiler=$(c++ --version | head -1)" "load_before=$LOAD0" "load_after=$LOAD1" "repeats=$REPEATS" \
-  "warm=$WARM" "steps=$STEPS" "commit=$(git -C "$REPO" rev-parse --short HEAD)" "pin=${PIN:-none}"
+  "compiler=$(c++ --version | head -1)" "load_before=$LOAD0" "load_after=$LOAD1" "repeats=$REPEATS (N >= 50000: $REPEATS_LARGE)" \
+  "warm=$WARM" "steps=$STEPS" "commit=${COMMIT:-$(git -C "$REPO" rev-parse --short HEAD)}" "pin=${PIN:-none}"
