@@ -27,23 +27,6 @@ using BondKernel = void (*)(const BondJob&, std::size_t begin, std::size_t end, 
                             double* stiffness, std::vector<BondEvent>* events);
 BondKernel select_bond_kernel(BondFailure failure, bool tally);
 
-/// Stiffnesses of one bond (PHYSICS.md, bonded-particle model).
-struct BondStiffness {
-  double kn, kt, ktwist, kbend, gn, gt;
-};
-inline BondStiffness bond_stiffness(const BondLaw& law, double a, double ri, double rj) {
-  const double rb = 2 * ri * rj / (ri + rj);
-  const double s = (a / rb) * (a / rb);
-  BondStiffness k;
-  k.gn = 1 + law.g_n_coefficient * s;
-  k.gt = 1 + law.g_t_coefficient * s;
-  k.kn = 2 * law.E_star * a * k.gn;
-  k.kt = 8 * law.G_star * a * k.gt;
-  k.ktwist = 0.5 * k.kt * a * a;
-  k.kbend = 0.25 * k.kn * a * a;
-  return k;
-}
-
 namespace detail {
 
 template <BondFailure kFail, bool kTally>

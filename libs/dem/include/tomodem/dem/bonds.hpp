@@ -4,6 +4,7 @@
 // force, a twisting and a bending moment from the relative motion since bonding; its radius
 // does not change. Broken bonds leave the pair to the scene's contact law. Scenes without
 // bonds allocate and run nothing of this.
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -27,6 +28,24 @@ struct BondLaw {
   double shear_strength = 0;          ///< Pa, stress criterion
   double fracture_energy = 0;         ///< Γ = 2γ_s, J/m², LEFM criterion
 };
+
+/// Stiffnesses of one bond (PHYSICS.md, bonded-particle model); shared by the DEM bond loop and
+/// the stiffness matrix of libs/mechanics, so both use one formula.
+struct BondStiffness {
+  double kn, kt, ktwist, kbend, gn, gt;
+};
+inline BondStiffness bond_stiffness(const BondLaw& law, double a, double ri, double rj) {
+  const double rb = 2 * ri * rj / (ri + rj);
+  const double s = (a / rb) * (a / rb);
+  BondStiffness k;
+  k.gn = 1 + law.g_n_coefficient * s;
+  k.gt = 1 + law.g_t_coefficient * s;
+  k.kn = 2 * law.E_star * a * k.gn;
+  k.kt = 8 * law.G_star * a * k.gt;
+  k.ktwist = 0.5 * k.kt * a * a;
+  k.kbend = 0.25 * k.kn * a * a;
+  return k;
+}
 
 /// Bonds as structure of arrays, i < j; `image` is the periodic image of j seen from i
 /// (integer cell vectors) and follows the particles when they are wrapped into the cell.
