@@ -1,0 +1,79 @@
+#pragma once
+// Elastic properties of a bonded network on the periodic cell, two ways (docs/young.md):
+// implicit (assemble the stiffness matrix, solve) and explicit (quasi-static DEM test).
+#include <array>
+#include <string>
+#include <vector>
+
+#include "tomodem/mechanics/network.hpp"
+
+namespace tomodem::mechanics {
+
+using Matrix6 = std::array<std::array<double, 6>, 6>;
+
+/// Young's modulus and Poisson's ratio along `axis` under uniaxial stress with the shear strains
+/// held at zero (what the explicit test imposes): from the normal 3×3 block of C.
+/// nu = mean of the two lateral ratios.
+void uniaxial_from_tensor(const Matrix6& C, int axis, double& E, double& nu);
+
+struct ImplicitOptions {
+  std::string solver = "auto";  ///< ldlt (SimplicialLDLT), cg (ConjugateGradient), auto (ldlt below 20 000 particles)
+  double tolerance = 1e-10;     ///< relative residual of the CG solve
+  int max_iterations = 0;       ///< CG cap (0: 20 × DOFs^(1/3) × 100)
+  bool full_tensor = true;      ///< six strain cases; false: the three normal ones (E, ν only)
+  int axis = 2;
+};
+
+struct ImplicitResult {
+  Matrix6 C{};                  ///< Pa, Voigt (xx, yy, zz, yz, xz, xy), engineering shear strains
+  bool full_tensor = true;
+  double E = 0, nu = 0;         ///< along `axis`
+  std::array<double, 3> E_axes{}, nu_axes{};
+  double E_error = 0;           ///< relative, estimated from the residuals (energy norm)
+  double residual = 0;          ///< largest relative residual |K q − f| / |f| over the cases
+  long iterations = 0;          ///< CG iterations, all cases
+  std::string solver;
+  long dofs = 0, particles_used = 0, bonds_used = 0;
+  long particles_removed = 0, bonds_removed = 0;  ///< outside the load-bearing cluster
+  double assembly_s = 0, solve_s = 0, wall_time_s = 0;
+  double prestress_bonds = 0;   ///< bonds whose length differs from the rest length (geometric terms)
+};
+
+/// Linearises every intact bond about the current state (six DOF per particle: translations and
+/// rotations; forces and moments of the DEM bond loop, with the lever terms R n × F_t and the
+/// geometric stiffness of a prestressed bond), keeps the load-bearing cluster only and imposes the
+/// macroscopic strain through the bond vectors (affine part ε·d plus periodic fluctuations).
+/// Throws InputError (exit 2) without intact bonds or when no cluster spans the cell.
+ImplicitResult solve_implicit(const Packing& p, const std::vector<Image>& image, const BondStiffnesses& k,
+                              const ImplicitOptions& o, const std::string& file = "");
+
+struct ExplicitOptions {
+  std::string loading = "stress";    ///< stress: uniaxial stress (lateral servo at 0); strain: uniaxial strain
+  std::string protocol = "rate";     ///< rate: constant slow rate, slopes; increments: relaxed increments
+  int axis = 2;
+  double strain = 1e-4;              ///< total axial strain (tension)
+  double transits = 50;              ///< loading time in elastic-wave transits of the cell (rate = strain / time)
+  int points = 6;                    ///< measurements (rate) or increments (increments)
+  double damping_ratio = 0.3;        ///< ζ of the bond dashpots
+  double local_damping = 0;          ///< Cundall's λ on the fluctuating motion (0: none)
+  double relax_ratio = 1e-4;         ///< increments: relax until the unbalanced-force ratio is below this
+  double timestep_fraction = 0.2;    ///< of the critical step
+  long max_steps = 50'000'000;
+  int threads = 1;
+  bool quiet = true;
+};
+
+struct ExplicitResult {
+  double E = 0, nu = 0, E_error = 0, nu_error = 0;
+  double strain_rate = 0, time_step = 0, transit_time = 0;
+  double inertial_number = 0, unbalanced_force_ratio = 0;
+  double lateral_stress_ratio = 0;   ///< |σ_lateral| / |σ_axial| at the end (stress loading)
+  long steps = 0, broken_bonds = 0;
+  double wall_time_s = 0;
+  std::vector<double> strain, stress, lateral_strain;  ///< measured points (axial ε, σ in Pa, lateral ε)
+};
+
+ExplicitResult run_explicit(const Packing& p, const std::vector<Image>& image, const std::vector<dem::BondLaw>& laws,
+                            const ExplicitOptions& o, const std::string& file = "");
+
+}  // namespace tomodem::mechanics

@@ -1,0 +1,64 @@
+#pragma once
+// A bonded-particle network as the mechanics tools see it: the shared packing plus the periodic
+// image of j seen from i for every bond (dataset /bonds/image, docs/data-model.md), the bond
+// laws from the materials, and the load-bearing part of the network.
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "tomodem/core/packing.hpp"
+#include "tomodem/dem/bonds.hpp"
+
+namespace tomodem::mechanics {
+
+using Image = std::array<int32_t, 3>;
+
+struct Network {
+  Packing packing;
+  std::vector<Image> image;  ///< per bond: x_j + H·image − x_i is the bond vector
+};
+
+/// Reads a packing and its bond images (/bonds/image; when absent, the minimum image of each
+/// bond, which is exact while bonds are shorter than half the cell).
+Network read_network(const std::string& path);
+/// Writes the packing and /bonds/image atomically (temporary name, renamed at the end).
+void write_network(const std::string& path, const Network& net);
+/// Minimum-image convention for every bond of `p`.
+std::vector<Image> minimum_images(const Packing& p);
+/// Bond vector x_j + H·image − x_i of bond b.
+Vec3 bond_vector(const Packing& p, const Image& image, std::size_t b);
+
+/// Options that turn materials into bond laws.
+struct LawOptions {
+  double g_n_coefficient = 4.0;  ///< g_n = 1 + c (a/R)² (dem::BondLaw default)
+  double g_t_coefficient = 1.2;
+  bool shear = true;             ///< false: normal bonds (G* = 0: no shear force, no twist)
+  double damping_ratio = 0;      ///< ζ of the bond dashpots (explicit runs)
+};
+/// One law per phase pair (n×n): 1/E* = Σ(1−ν²)/E, 1/G* = Σ(2−ν)/G (PHYSICS.md). Materials must
+/// be present with E > 0, −1 < ν < 0.5 and, when `need_density`, density > 0: InputError
+/// naming the file, the material and the value otherwise.
+std::vector<dem::BondLaw> bond_laws(const Packing& p, const std::string& file, const LawOptions& o,
+                                    bool need_density);
+
+/// Per-bond stiffnesses (dem::bond_stiffness, the formula of the DEM bond loop).
+struct BondStiffnesses {
+  std::vector<double> kn, kt, ktwist, kbend;  ///< N/m, N/m, N m, N m
+};
+BondStiffnesses bond_stiffnesses(const Packing& p, const std::vector<dem::BondLaw>& laws);
+
+/// Connected components of the intact bonds. A cluster "wraps" the periodic cell along the
+/// lattice vectors its closed loops pick up; wrap_rank = 3 means it spans the cell in 3-D.
+struct Clusters {
+  std::vector<int32_t> label;   ///< per particle, cluster index (isolated particles have their own)
+  std::vector<int64_t> size;    ///< particles per cluster
+  std::vector<int> wrap_rank;   ///< 0..3 per cluster
+  int main = -1;                ///< largest cluster with wrap_rank 3, else the largest cluster
+  long isolated = 0;            ///< particles without intact bonds (rattlers, floating particles)
+  long spanning_clusters = 0;   ///< clusters with wrap_rank 3
+  long outside_main = 0;        ///< particles not in the main cluster
+};
+Clusters find_clusters(const Packing& p, const std::vector<Image>& image);
+
+}  // namespace tomodem::mechanics

@@ -1,0 +1,33 @@
+#pragma once
+// The bodies of tomodem-bond and tomodem-young (main.cpp only parses the command line).
+#include <string>
+#include <vector>
+
+#include "tomodem/mechanics/bonding.hpp"
+#include "tomodem/mechanics/elastic.hpp"
+
+namespace tomodem::mechanics {
+
+struct BondConfig {
+  std::string input, output, json;
+  std::string rule = "overlap";             ///< ratio | overlap | density
+  double gap_tolerance = 0, neck_ratio = 0.1, min_neck_ratio = 0.01, target_density = 0;
+  std::vector<std::string> exclude;         ///< "A:B" phase pairs (names or indices) without bonds
+  std::vector<std::string> pair_ratio;      ///< "A:B=0.2" per-pair neck ratios (rule ratio)
+  bool allow_disconnected = true;           ///< false: exit 2 when no cluster spans the cell
+};
+/// Returns the JSON summary (also written to `json` when set).
+std::string run_bond(const BondConfig& c);
+
+struct YoungConfig {
+  std::string input, json, output_csv;
+  std::string method = "implicit";          ///< implicit | explicit | both
+  std::string axis = "z";
+  LawOptions law;
+  ImplicitOptions implicit;
+  ExplicitOptions explicit_;
+  double youngs_modulus = 0, poisson_ratio = -2, density = 0;  ///< overrides for every phase (unset: file)
+};
+std::string run_young(const YoungConfig& c);
+
+}  // namespace tomodem::mechanics

@@ -1,0 +1,184 @@
+// The explicit route: a quasi-static test on the periodic cell with the DEM engine (uniaxial
+// stress with the lateral stresses servo-held at zero, or uniaxial strain). E and ν are slopes of
+// the measured response, so the constant viscous stress of a constant loading rate cancels.
+#include <chrono>
+#include <cmath>
+
+#include "tomodem/core/error.hpp"
+#include "tomodem/core/tool.hpp"
+#include "tomodem/dem/simulation.hpp"
+#include "tomodem/mechanics/elastic.hpp"
+
+namespace tomodem::mechanics {
+
+namespace {
+struct Fit {
+  double slope = 0, spread = 0;  ///< least-squares slope; largest relative deviation of segment slopes
+};
+Fit fit(const std::vector<double>& x, const std::vector<double>& y, std::size_t from) {
+  Fit f;
+  const std::size_t n = x.size() - from;
+  if (n < 2) return f;
+  double mx = 0, my = 0;
+  for (std::size_t k = from; k < x.size(); ++k) mx += x[k], my += y[k];
+  mx /= double(n);
+  my /= double(n);
+  double sxy = 0, sxx = 0;
+  for (std::size_t k = from; k < x.size(); ++k) sxy += (x[k] - mx) * (y[k] - my), sxx += (x[k] - mx) * (x[k] - mx);
+  f.slope = sxy / sxx;
+  for (std::size_t k = from + 1; k < x.size(); ++k) {
+    const double s = (y[k] - y[k - 1]) / (x[k] - x[k - 1]);
+    f.spread = std::max(f.spread, std::abs(s - f.slope) / std::max(std::abs(f.slope), 1e-300));
+  }
+  return f;
+}
+}  // namespace
+
+ExplicitResult run_explicit(const Packing& p, const std::vector<Image>& image, const std::vector<dem::BondLaw>& laws,
+                            const ExplicitOptions& o, const std::string& file) {
+  const auto t0 = std::chrono::steady_clock::now();
+  ExplicitResult res;
+  if (!(p.cell.periodic[0] && p.cell.periodic[1] && p.cell.periodic[2]))
+    throw InputError(file, "/cell/periodic", "not periodic in x, y and z", "the explicit test runs on a periodic cell");
+  if (o.loading != "stress" && o.loading != "strain")
+    throw InputError("", "--loading", o.loading, "expected 'stress' or 'strain'");
+  if (o.protocol != "rate" && o.protocol != "increments")
+    throw InputError("", "--protocol", o.protocol, "expected 'rate' or 'increments'");
+  if (o.points < 2) throw InputError("", "--points", std::to_string(o.points), "at least 2 measurements are needed");
+  const Clusters cl = find_clusters(p, image);
+  if (p.bonds.size() == 0 || cl.main < 0 || cl.wrap_rank[cl.main] < 3)
+    throw InputError(file, "/bonds", std::to_string(p.bonds.size()) + " bonds",
+                     "no bonded cluster spans the periodic cell in three directions");
+
+  dem::Particles parts;
+  for (std::size_t i = 0; i < p.particles.size(); ++i)
+    parts.add(p.particles.position[i], p.particles.radius[i], p.materials[p.particles.phase[i]].density,
+              p.particles.phase[i]);
+  dem::ContactModel model;
+  model.normal = dem::NormalLaw::hertz;  // unbonded pairs: frictionless elastic contacts
+  model.n_phases = int(p.materials.size());
+  model.materials = p.materials;
+  model.finalize();
+  dem::Settings settings;
+  settings.threads = std::max(1, o.threads);
+  dem::Simulation sim(std::move(parts), p.cell, model, settings);
+  dem::BondSet bonds;
+  for (std::size_t b = 0; b < p.bonds.size(); ++b) {
+    bonds.add(p.bonds.i[b], p.bonds.j[b], Vec3{double(image[b][0]), double(image[b][1]), double(image[b][2])},
+              p.bonds.radius[b], p.bonds.rest_length[b]);
+    if (p.bonds.state[b] != BondTable::intact) bonds.state[b] = dem::BondSet::broken;
+  }
+  std::vector<dem::BondLaw> l = laws;
+  for (auto& law : l) law.damping_ratio = o.damping_ratio;
+  sim.set_bonds(std::move(bonds), l, dem::BondFailure::none);
+  if (o.local_damping > 0) sim.body_forces().local_damping = o.local_damping;
+  sim.set_time_step(o.timestep_fraction * sim.critical_time_step());
+  res.time_step = sim.time_step();
+
+  // Elastic-wave transit time of the cell along the axis: c = l sqrt(k_n/m), with the mean bond
+  // length, normal stiffness and particle mass.
+  const BondStiffnesses k = bond_stiffnesses(p, laws);
+  double kn = 0, len = 0, mass = 0;
+  long nb = 0;
+  for (std::size_t b = 0; b < p.bonds.size(); ++b)
+    if (p.bonds.state[b] == BondTable::intact) kn += k.kn[b], len += p.bonds.rest_length[b], ++nb;
+  for (double m : sim.particles().m) mass += m;
+  kn /= double(nb);
+  len /= double(nb);
+  mass /= double(sim.particles().size());
+  const int ax = o.axis, b1 = (ax + 1) % 3, b2 = (ax + 2) % 3;
+  const double Lc = norm(p.cell.h.col(ax));
+  res.transit_time = Lc / (len * std::sqrt(kn / mass));
+  const double T = o.transits * res.transit_time;
+  res.strain_rate = o.strain / T;
+
+  dem::CellControl& cc = sim.cell_control();
+  if (o.loading == "stress") {
+    cc.stress_controlled[b1][b1] = cc.stress_controlled[b2][b2] = true;
+    cc.max_strain_rate = 1.0 / res.transit_time;
+  }
+  const Mat3 h0 = sim.cell().h;
+  auto record = [&](const dem::Measurements& m) {
+    const Mat3& h = sim.cell().h;
+    res.strain.push_back(std::log(h(ax, ax) / h0(ax, ax)));
+    res.lateral_strain.push_back(0.5 * (std::log(h(b1, b1) / h0(b1, b1)) + std::log(h(b2, b2) / h0(b2, b2))));
+    res.stress.push_back(m.stress(ax, ax));
+    res.lateral_stress_ratio = 0.5 * std::abs(m.stress(b1, b1) + m.stress(b2, b2)) / std::max(std::abs(m.stress(ax, ax)), 1e-300);
+    res.inertial_number = m.inertial_number;
+    res.unbalanced_force_ratio = m.unbalanced_force_ratio;
+  };
+  std::vector<double> lateral_stress;
+  const long seg_steps = std::max(1L, long(T / o.points / res.time_step));
+  std::size_t from = 0;
+  if (o.protocol == "rate") {
+    // Segment 0 builds up the viscous stress and the servo response; slopes from segment 1 on.
+    cc.velocity_gradient(ax, ax) = res.strain_rate;
+    for (int s = 0; s <= o.points; ++s) {
+      if (res.steps + seg_steps > o.max_steps) throw RuntimeFailure("explicit test: --max-steps reached");
+      sim.run(seg_steps);
+      res.steps += seg_steps;
+      const dem::Measurements m = sim.measure();
+      record(m);
+      lateral_stress.push_back(0.5 * (m.stress(b1, b1) + m.stress(b2, b2)));
+      info("  explicit: step " + std::to_string(res.steps) + ", strain " + std::to_string(res.strain.back()) +
+           ", stress " + std::to_string(res.stress.back()) + " Pa");
+    }
+    from = 1;
+  } else {
+    // Increments: load for one segment, then hold the cell (the servo keeps working) until the
+    // unbalanced-force ratio falls below relax_ratio.
+    const long chunk = std::max(1L, long(res.transit_time / res.time_step));
+    auto relax = [&]() {
+      cc.velocity_gradient(ax, ax) = 0;
+      for (;;) {
+        const dem::Measurements m = sim.measure();
+        if (m.unbalanced_force_ratio < o.relax_ratio || res.steps + chunk > o.max_steps) {
+          if (m.unbalanced_force_ratio >= o.relax_ratio)
+            warn("explicit test: relaxation stopped at --max-steps with unbalanced-force ratio " +
+                 std::to_string(m.unbalanced_force_ratio));
+          return m;
+        }
+        sim.run(chunk);
+        res.steps += chunk;
+      }
+    };
+    {
+      const dem::Measurements m = relax();
+      record(m);
+      lateral_stress.push_back(0.5 * (m.stress(b1, b1) + m.stress(b2, b2)));
+    }
+    for (int s = 0; s < o.points; ++s) {
+      cc.velocity_gradient(ax, ax) = res.strain_rate;
+      sim.run(seg_steps);
+      res.steps += seg_steps;
+      const dem::Measurements m = relax();
+      record(m);
+      lateral_stress.push_back(0.5 * (m.stress(b1, b1) + m.stress(b2, b2)));
+      info("  explicit: increment " + std::to_string(s + 1) + ", strain " + std::to_string(res.strain.back()) +
+           ", stress " + std::to_string(res.stress.back()) + " Pa, unbalanced-force ratio " +
+           std::to_string(m.unbalanced_force_ratio));
+    }
+  }
+  res.broken_bonds = long(sim.bond_events().size());
+  const Fit fs = fit(res.strain, res.stress, from);
+  if (o.loading == "stress") {
+    const Fit fl = fit(res.strain, res.lateral_strain, from);
+    res.E = fs.slope;
+    res.nu = -fl.slope;
+    res.E_error = fs.spread;
+    res.nu_error = fl.spread * std::abs(fl.slope);
+  } else {
+    // Uniaxial strain gives the constrained modulus M and K0 = dσ_lat/dσ_axial; E and ν follow
+    // for an isotropic network: ν = K0/(1+K0), E = M (1+ν)(1−2ν)/(1−ν).
+    const Fit fk = fit(res.stress, lateral_stress, from);
+    const double K0 = fk.slope;
+    res.nu = K0 / (1 + K0);
+    res.E = fs.slope * (1 + res.nu) * (1 - 2 * res.nu) / (1 - res.nu);
+    res.E_error = fs.spread + fk.spread;
+    res.nu_error = fk.spread * std::abs(res.nu);
+  }
+  res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return res;
+}
+
+}  // namespace tomodem::mechanics

@@ -1,0 +1,295 @@
+// tomodem-bond and tomodem-young: read, check, compute, write atomically, summarise in JSON.
+#include "tomodem/mechanics/tools.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "tomodem/core/error.hpp"
+#include "tomodem/core/output.hpp"
+#include "tomodem/core/tool.hpp"
+
+namespace tomodem::mechanics {
+
+using json = nlohmann::json;
+
+namespace {
+json finite(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+
+int phase_index(const Packing& p, const std::string& s, const std::string& field, const std::string& value) {
+  for (std::size_t k = 0; k < p.materials.size(); ++k)
+    if (p.materials[k].name == s) return int(k);
+  try {
+    std::size_t used = 0;
+    const int k = std::stoi(s, &used);
+    const int n = p.materials.empty() ? 1 + (p.particles.size() ? *std::max_element(p.particles.phase.begin(),
+                                                                                     p.particles.phase.end())
+                                                                : 0)
+                                      : int(p.materials.size());
+    if (used == s.size() && k >= 0 && k < n) return k;
+  } catch (const std::exception&) {
+  }
+  throw InputError("", field, value, "unknown phase '" + s + "' (a material name or a phase index)");
+}
+
+std::pair<int, int> phase_pair(const Packing& p, const std::string& text, const std::string& field) {
+  const auto colon = text.find(':');
+  if (colon == std::string::npos) throw InputError("", field, text, "expected PHASE_A:PHASE_B");
+  return {phase_index(p, text.substr(0, colon), field, text), phase_index(p, text.substr(colon + 1), field, text)};
+}
+
+double quantile(std::vector<double> v, double q) {
+  if (v.empty()) return std::nan("");
+  std::sort(v.begin(), v.end());
+  return v[std::size_t(std::lround(q * double(v.size() - 1)))];
+}
+
+std::string parameters_text(const json& j) { return j.dump(); }
+}  // namespace
+
+std::string run_bond(const BondConfig& c) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (c.output.empty()) throw InputError("", "--output", "", "an output packing is needed");
+  BondingOptions o;
+  if (c.rule == "ratio")
+    o.rule = NeckRule::ratio;
+  else if (c.rule == "overlap")
+    o.rule = NeckRule::overlap;
+  else if (c.rule == "density")
+    o.rule = NeckRule::density;
+  else
+    throw InputError("", "--rule", c.rule, "expected ratio, overlap or density");
+  if (!(c.gap_tolerance >= 0)) throw InputError("", "--gap-tolerance", std::to_string(c.gap_tolerance), "must be >= 0");
+  if (!(c.neck_ratio > 0 && c.neck_ratio <= 1))
+    throw InputError("", "--neck-ratio", std::to_string(c.neck_ratio), "must lie in (0, 1]");
+  if (!(c.min_neck_ratio > 0 && c.min_neck_ratio <= 1))
+    throw InputError("", "--min-neck-ratio", std::to_string(c.min_neck_ratio), "must lie in (0, 1]");
+  if (o.rule == NeckRule::density && !(c.target_density > 0 && c.target_density < 1))
+    throw InputError("", "--target-density", std::to_string(c.target_density), "must lie in (0, 1) for --rule density");
+  o.gap_tolerance = c.gap_tolerance;
+  o.neck_ratio = c.neck_ratio;
+  o.min_neck_ratio = c.min_neck_ratio;
+  o.target_density = c.target_density;
+
+  Network net = read_network(c.input);
+  Packing& p = net.packing;
+  if (p.particles.size() < 2) throw InputError(c.input, "/particles/radius", std::to_string(p.particles.size()), "needs at least two particles");
+  for (const std::string& e : c.exclude) o.excluded.push_back(phase_pair(p, e, "--exclude"));
+  for (const std::string& e : c.pair_ratio) {
+    const auto eq = e.find('=');
+    if (eq == std::string::npos) throw InputError("", "--pair-ratio", e, "expected PHASE_A:PHASE_B=RATIO");
+    double r = 0;
+    try {
+      r = std::stod(e.substr(eq + 1));
+    } catch (const std::exception&) {
+      throw InputError("", "--pair-ratio", e, "the ratio is not a number");
+    }
+    if (!(r > 0 && r <= 1)) throw InputError("", "--pair-ratio", e, "the ratio must lie in (0, 1]");
+    o.pair_ratio.push_back({phase_pair(p, e.substr(0, eq), "--pair-ratio"), r});
+  }
+  if (p.bonds.size()) warn("replacing the " + std::to_string(p.bonds.size()) + " bonds of " + c.input);
+  const BondingReport rep = bond_network(net, o);
+  if (rep.n_bonds == 0)
+    throw InputError(c.input, "/particles", std::to_string(p.particles.size()) + " particles",
+                     "no pair is in contact or within the gap tolerance: no bond made (raise --gap-tolerance?)");
+  const Clusters& cl = rep.clusters;
+  const bool spans = cl.main >= 0 && cl.wrap_rank[cl.main] == 3;
+  if (!c.allow_disconnected && !spans)
+    throw InputError(c.input, "/bonds", "largest cluster wraps along " + std::to_string(cl.wrap_rank[cl.main]) + " directions",
+                     "no bonded cluster spans the periodic cell (--require-spanning)");
+
+  json params = {{"rule", c.rule},          {"gap_tolerance", c.gap_tolerance}, {"neck_ratio", c.neck_ratio},
+                 {"min_neck_ratio", c.min_neck_ratio}, {"target_density", c.target_density},
+                 {"exclude", c.exclude},    {"pair_ratio", c.pair_ratio}};
+  std::vector<double> hist(10, 0);
+  double amin = 1e300, amax = 0, amean = 0;
+  for (double a : rep.neck_ratio) {
+    amin = std::min(amin, a);
+    amax = std::max(amax, a);
+    amean += a;
+  }
+  amean /= double(rep.neck_ratio.size());
+  const double width = (amax - amin) / 10;
+  for (double a : rep.neck_ratio)
+    hist[std::min<std::size_t>(9, width > 0 ? std::size_t((a - amin) / width) : 0)] += 1;
+  long other_clusters = 0;
+  for (std::size_t k = 0; k < cl.size.size(); ++k)
+    if (int(k) != cl.main && cl.size[k] > 1) ++other_clusters;
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  p.results = Results{};
+  p.results.scalars = {{"n_bonds", double(rep.n_bonds)},
+                       {"bonds_per_particle", rep.bonds_per_particle},
+                       {"relative_density", rep.relative_density},
+                       {"particles_outside_main_cluster", double(cl.outside_main)}};
+  for (const auto& [k, v] : p.results.scalars) p.results.units[k] = "1";
+  p.provenance.tool = "tomodem-bond";
+  p.provenance.version = version_string();
+  p.provenance.parameters = parameters_text(params);
+  p.provenance.input_hashes = {{c.input, file_hash(c.input)}};
+  p.provenance.created_utc = utc_now();
+  p.provenance.wall_time_s = wall;
+  write_network(c.output, net);
+
+  json out = {{"tool", "tomodem-bond"},
+              {"version", version_string()},
+              {"input", c.input},
+              {"output", c.output},
+              {"parameters", params},
+              {"n_particles", p.particles.size()},
+              {"n_bonds", rep.n_bonds},
+              {"bonds_per_particle", rep.bonds_per_particle},
+              {"relative_density", rep.relative_density},
+              {"initial_relative_density", rep.initial_relative_density},
+              {"densification_scale", rep.scale},
+              {"neck_ratio",
+               {{"definition", "a_b / R, R = 2 R_i R_j / (R_i + R_j)"},
+                {"min", amin},
+                {"mean", amean},
+                {"max", amax},
+                {"p10", quantile(rep.neck_ratio, 0.1)},
+                {"p50", quantile(rep.neck_ratio, 0.5)},
+                {"p90", quantile(rep.neck_ratio, 0.9)},
+                {"histogram", {{"lower", amin}, {"upper", amax}, {"counts", hist}}}}},
+              {"clusters",
+               {{"count", cl.size.size()},
+                {"main_size", cl.main >= 0 ? cl.size[cl.main] : 0},
+                {"main_spans_cell", spans},
+                {"main_wrap_rank", cl.main >= 0 ? cl.wrap_rank[cl.main] : 0},
+                {"spanning_clusters", cl.spanning_clusters},
+                {"other_clusters", other_clusters},
+                {"isolated_particles", cl.isolated},
+                {"particles_outside_main", cl.outside_main}}},
+              {"wall_time_s", wall}};
+  const std::string text = out.dump(2) + "\n";
+  if (!c.json.empty() && c.json != "-") write_text_atomic(c.json, text);
+  return text;
+}
+
+namespace {
+json tensor_json(const Matrix6& C, bool full) {
+  json rows = json::array();
+  for (int a = 0; a < 6; ++a) {
+    json r = json::array();
+    for (int b = 0; b < 6; ++b) r.push_back(full || b < 3 ? finite(C[a][b]) : json(nullptr));
+    rows.push_back(r);
+  }
+  return rows;
+}
+}  // namespace
+
+std::string run_young(const YoungConfig& c) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (c.method != "implicit" && c.method != "explicit" && c.method != "both")
+    throw InputError("", "--method", c.method, "expected implicit, explicit or both");
+  if (c.axis.size() != 1 || c.axis[0] < 'x' || c.axis[0] > 'z') throw InputError("", "--axis", c.axis, "expected x, y or z");
+  const int axis = c.axis[0] - 'x';
+  if (c.implicit.solver != "auto" && c.implicit.solver != "ldlt" && c.implicit.solver != "cg" && c.implicit.solver != "cg-ic")
+    throw InputError("", "--solver", c.implicit.solver, "expected auto, ldlt, cg or cg-ic");
+  if (!(c.implicit.tolerance > 0 && c.implicit.tolerance < 1))
+    throw InputError("", "--tolerance", std::to_string(c.implicit.tolerance), "must lie in (0, 1)");
+  if (!(c.explicit_.strain > 0 && c.explicit_.strain < 0.05))
+    throw InputError("", "--strain", std::to_string(c.explicit_.strain), "must lie in (0, 0.05): a small-strain test");
+  if (!(c.explicit_.transits > 0)) throw InputError("", "--transits", std::to_string(c.explicit_.transits), "must be > 0");
+  if (!(c.explicit_.damping_ratio >= 0)) throw InputError("", "--damping-ratio", std::to_string(c.explicit_.damping_ratio), "must be >= 0");
+  if (!(c.explicit_.local_damping >= 0 && c.explicit_.local_damping < 1))
+    throw InputError("", "--local-damping", std::to_string(c.explicit_.local_damping), "must lie in [0, 1)");
+
+  Network net = read_network(c.input);
+  Packing& p = net.packing;
+  if (p.bonds.size() == 0)
+    throw InputError(c.input, "/bonds", "missing", "a packing without bonds: make the network with tomodem-bond first");
+  // Material overrides (every phase).
+  if (c.youngs_modulus != 0 || c.poisson_ratio > -2 || c.density != 0) {
+    if (p.materials.empty()) {
+      const int n = 1 + *std::max_element(p.particles.phase.begin(), p.particles.phase.end());
+      for (int k = 0; k < n; ++k) p.materials.push_back(Material{"phase" + std::to_string(k)});
+    }
+    for (Material& m : p.materials) {
+      if (c.youngs_modulus != 0) m.youngs_modulus = c.youngs_modulus;
+      if (c.poisson_ratio > -2) m.poisson_ratio = c.poisson_ratio;
+      if (c.density != 0) m.density = c.density;
+    }
+  }
+  const bool want_explicit = c.method != "implicit", want_implicit = c.method != "explicit";
+  const std::vector<dem::BondLaw> laws = bond_laws(p, c.input, c.law, want_explicit);
+  json out = {{"tool", "tomodem-young"}, {"version", version_string()}, {"input", c.input},
+              {"method", c.method},      {"axis", c.axis},                {"n_particles", p.particles.size()},
+              {"n_bonds", p.bonds.size()}};
+  ImplicitResult ir;
+  ExplicitResult er;
+  if (want_implicit) {
+    ImplicitOptions io = c.implicit;
+    io.axis = axis;
+    info("implicit: assembling and solving (" + io.solver + ")");
+    ir = solve_implicit(p, net.image, bond_stiffnesses(p, laws), io, c.input);
+    out["implicit"] = {{"E", ir.E},
+                       {"nu", ir.nu},
+                       {"E_axes", ir.E_axes},
+                       {"nu_axes", ir.nu_axes},
+                       {"E_error", ir.E_error},
+                       {"C", tensor_json(ir.C, ir.full_tensor)},
+                       {"residual", ir.residual},
+                       {"solver", ir.solver},
+                       {"tolerance", c.implicit.tolerance},
+                       {"iterations", ir.iterations},
+                       {"dofs", ir.dofs},
+                       {"particles_used", ir.particles_used},
+                       {"particles_removed", ir.particles_removed},
+                       {"bonds_used", ir.bonds_used},
+                       {"bonds_removed", ir.bonds_removed},
+                       {"prestressed_bonds", ir.prestress_bonds},
+                       {"assembly_s", ir.assembly_s},
+                       {"solve_s", ir.solve_s},
+                       {"wall_time_s", ir.wall_time_s}};
+  }
+  if (want_explicit) {
+    ExplicitOptions eo = c.explicit_;
+    eo.axis = axis;
+    info("explicit: quasi-static " + eo.loading + " test (" + eo.protocol + ")");
+    er = run_explicit(p, net.image, laws, eo, c.input);
+    out["explicit"] = {{"E", er.E},
+                       {"nu", er.nu},
+                       {"E_error", er.E_error},
+                       {"nu_error", er.nu_error},
+                       {"loading", eo.loading},
+                       {"protocol", eo.protocol},
+                       {"strain", eo.strain},
+                       {"strain_rate", er.strain_rate},
+                       {"transits", eo.transits},
+                       {"transit_time_s", er.transit_time},
+                       {"time_step_s", er.time_step},
+                       {"steps", er.steps},
+                       {"inertial_number", er.inertial_number},
+                       {"unbalanced_force_ratio", er.unbalanced_force_ratio},
+                       {"lateral_stress_ratio", er.lateral_stress_ratio},
+                       {"broken_bonds", er.broken_bonds},
+                       {"curve", {{"strain", er.strain}, {"stress_Pa", er.stress}, {"lateral_strain", er.lateral_strain}}},
+                       {"wall_time_s", er.wall_time_s}};
+    if (!c.output_csv.empty()) {
+      std::vector<std::vector<double>> rows;
+      for (std::size_t k = 0; k < er.strain.size(); ++k) rows.push_back({er.strain[k], er.lateral_strain[k], er.stress[k]});
+      write_text_atomic(c.output_csv, csv_table({"axial_strain", "lateral_strain", "axial_stress_Pa"}, rows));
+    }
+  }
+  if (want_implicit) {
+    out["E"] = ir.E;
+    out["nu"] = ir.nu;
+    out["E_error"] = ir.E_error;
+    out["C"] = tensor_json(ir.C, ir.full_tensor);
+  } else {
+    out["E"] = er.E;
+    out["nu"] = er.nu;
+    out["E_error"] = er.E_error;
+    out["C"] = nullptr;
+  }
+  if (want_implicit && want_explicit) out["explicit_vs_implicit"] = (er.E - ir.E) / ir.E;
+  out["units"] = {{"E", "Pa"}, {"C", "Pa (Voigt xx, yy, zz, yz, xz, xy; engineering shear strains)"}};
+  out["wall_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const std::string text = out.dump(2) + "\n";
+  if (!c.json.empty() && c.json != "-") write_text_atomic(c.json, text);
+  return text;
+}
+
+}  // namespace tomodem::mechanics

@@ -1,0 +1,130 @@
+// tomodem-bond and tomodem-young from the command line: summary keys, exit codes, no partial output.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "../../validation/mechanics/networks.hpp"
+#include "tomodem/core/packing_io.hpp"
+
+namespace fs = std::filesystem;
+using namespace tomodem;
+
+namespace {
+const std::string kBin = std::string(TOMODEM_BIN_DIR);
+
+class YoungCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("tomodem-young-e2e-" + std::to_string(::getpid()) + "-" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string path(const std::string& n) const { return (dir_ / n).string(); }
+  std::pair<int, std::string> run(const std::string& tool, const std::string& args) const {
+    const std::string err = path("stderr.txt");
+    const int st = std::system((kBin + "/" + tool + " " + args + " > " + path("stdout.txt") + " 2> " + err).c_str());
+    std::ifstream in(err);
+    std::stringstream s;
+    s << in.rdbuf();
+    return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, s.str()};
+  }
+  nlohmann::json read_json(const std::string& f) const {
+    std::ifstream in(f);
+    return nlohmann::json::parse(in);
+  }
+  // SC lattice 6³, R = 0.5 mm, touching.
+  std::string lattice(double E = 1e9, double nu = 0.25) const {
+    Packing p = mechanics::test::lattice("simple_cubic", 6, 1e-3, 0.5e-3, mechanics::test::ceramic(E, nu));
+    write_packing(path("lattice.h5"), p);
+    return path("lattice.h5");
+  }
+  fs::path dir_;
+};
+}  // namespace
+
+TEST_F(YoungCli, BondThenYoungImplicitGivesKnOver2R) {
+  auto [code, err] = run("tomodem-bond", lattice() + " -o " + path("bonded.h5") + " --rule ratio --neck-ratio 0.1 " +
+                                             "--gap-tolerance 1e-6 --json " + path("bond.json"));
+  ASSERT_EQ(code, 0) << err;
+  const auto b = read_json(path("bond.json"));
+  EXPECT_EQ(b["n_bonds"], 3 * 216);
+  EXPECT_NEAR(b["bonds_per_particle"].get<double>(), 6.0, 1e-12);
+  EXPECT_NEAR(b["relative_density"].get<double>(), M_PI / 6, 1e-9);
+  EXPECT_TRUE(fs::exists(path("bonded.xdmf")));
+  std::tie(code, err) = run("tomodem-young", path("bonded.h5") + " --method implicit --json " + path("young.json"));
+  ASSERT_EQ(code, 0) << err;
+  const auto y = read_json(path("young.json"));
+  // k_n = 2E* a g_n, E* = E/(2(1−ν²)), g_n = 1 + 4 (a/R)²; E_net = k_n/(2R). Tolerance 0.5%.
+  const double Es = 1e9 / (2 * (1 - 0.0625)), a = 0.05e-3, kn = 2 * Es * a * (1 + 4 * 0.01);
+  EXPECT_NEAR(y["E"].get<double>() / (kn / 1e-3), 1.0, 0.005);
+  EXPECT_NEAR(y["nu"].get<double>(), 0.0, 0.005);
+  EXPECT_EQ(y["method"], "implicit");
+  EXPECT_EQ(y["C"].size(), 6u);
+  EXPECT_TRUE(y.contains("E_error") && y.contains("wall_time_s"));
+}
+
+TEST_F(YoungCli, PackingWithoutBondsExits2WithoutOutput) {
+  auto [code, err] = run("tomodem-young", lattice() + " --json " + path("y.json"));
+  EXPECT_EQ(code, 2);
+  EXPECT_NE(err.find("/bonds"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(path("y.json")));
+}
+
+TEST_F(YoungCli, NonSpanningNetworkExits2) {
+  // Only the bonds of one x–y plane: nothing spans z.
+  mechanics::Network net;
+  net.packing = mechanics::test::lattice("simple_cubic", 4, 1e-3, 0.5e-3);
+  mechanics::test::bond_ratio(net, 0.1);
+  for (std::size_t b = 0; b < net.packing.bonds.size(); ++b)
+    if (std::abs(mechanics::bond_vector(net.packing, net.image[b], b).z) > 1e-4) net.packing.bonds.state[b] = 1;
+  mechanics::write_network(path("slab.h5"), net);
+  auto [code, err] = run("tomodem-young", path("slab.h5") + " --json " + path("y.json"));
+  EXPECT_EQ(code, 2);
+  EXPECT_NE(err.find("spans"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(path("y.json")));
+}
+
+TEST_F(YoungCli, InconsistentMaterialsExit2) {
+  ASSERT_EQ(run("tomodem-bond", lattice(1e9, 0.7) + " -o " + path("b.h5") + " --rule ratio --gap-tolerance 1e-6").first, 0);
+  auto [code, err] = run("tomodem-young", path("b.h5") + " --json " + path("y.json"));
+  EXPECT_EQ(code, 2);
+  EXPECT_NE(err.find("poisson_ratio"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(path("y.json")));
+  // Explicit needs a density.
+  ASSERT_EQ(run("tomodem-bond", lattice() + " -o " + path("c.h5") + " --rule ratio --gap-tolerance 1e-6").first, 0);
+  std::tie(code, err) = run("tomodem-young", path("c.h5") + " --method explicit --density -1 --json " + path("y.json"));
+  EXPECT_EQ(code, 2);
+}
+
+TEST_F(YoungCli, BondWithoutPairsExits2AndLeavesNoOutput) {
+  Packing p = mechanics::test::lattice("simple_cubic", 4, 1.5e-3, 0.5e-3);
+  write_packing(path("loose.h5"), p);
+  auto [code, err] = run("tomodem-bond", path("loose.h5") + " -o " + path("out.h5"));
+  EXPECT_EQ(code, 2) << err;
+  EXPECT_FALSE(fs::exists(path("out.h5")));
+  std::tie(code, err) = run("tomodem-bond", path("loose.h5") + " -o " + path("out.h5") + " --rule bogus");
+  EXPECT_EQ(code, 2);
+  std::tie(code, err) = run("tomodem-bond", "--version");
+  EXPECT_EQ(code, 0);
+}
+
+TEST_F(YoungCli, BothMethodsReportAgreement) {
+  ASSERT_EQ(run("tomodem-bond", lattice() + " -o " + path("b.h5") + " --rule ratio --gap-tolerance 1e-6").first, 0);
+  auto [code, err] = run("tomodem-young", path("b.h5") + " --method both --transits 30 --points 3 --json " +
+                                              path("y.json") + " --curve " + path("curve.csv"));
+  ASSERT_EQ(code, 0) << err;
+  const auto y = read_json(path("y.json"));
+  // Explicit vs implicit on the lattice: 1% (30 transits: dynamic error of a few 1e-3).
+  EXPECT_NEAR(y["explicit_vs_implicit"].get<double>(), 0.0, 0.01);
+  EXPECT_TRUE(y["explicit"].contains("inertial_number"));
+  EXPECT_TRUE(y["explicit"].contains("unbalanced_force_ratio"));
+  EXPECT_TRUE(fs::exists(path("curve.csv")));
+}

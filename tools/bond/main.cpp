@@ -1,0 +1,50 @@
+// tomodem-bond: a packing -> a bonded-particle network (docs/bond.md).
+#include <CLI/CLI.hpp>
+#include <iostream>
+#include <omp.h>
+
+#include "tomodem/core/error.hpp"
+#include "tomodem/core/tool.hpp"
+#include "tomodem/mechanics/tools.hpp"
+
+int main(int argc, char** argv) {
+  return tomodem::run_tool("tomodem-bond", [&]() -> int {
+    tomodem::mechanics::BondConfig c;
+    CLI::App app{"Bond a packing: necks between touching (or nearly touching) particles (docs/bond.md)", "tomodem-bond"};
+    app.add_option("input", c.input, "packing (.h5, shared data model)")->required();
+    app.add_option("-o,--output", c.output, "bonded packing (.h5 + .xdmf), with /bonds and /bonds/image")->required();
+    app.add_option("--json", c.json, "write the JSON summary to FILE (default: stdout)");
+    app.add_option("--rule", c.rule, "neck radius: ratio | overlap | density")->capture_default_str();
+    app.add_option("--neck-ratio", c.neck_ratio, "rule ratio: a_b/R, R = 2R_iR_j/(R_i+R_j)")->capture_default_str();
+    app.add_option("--min-neck-ratio", c.min_neck_ratio, "rules overlap/density: smallest a_b/R")->capture_default_str();
+    app.add_option("--target-density", c.target_density, "rule density: relative density after densification");
+    app.add_option("--gap-tolerance", c.gap_tolerance, "bond when the gap is below tol * R (-)")->capture_default_str();
+    app.add_option("--exclude", c.exclude, "no bonds between these phases: A:B (names or indices), repeatable");
+    app.add_option("--pair-ratio", c.pair_ratio, "rule ratio per phase pair: A:B=RATIO, repeatable");
+    bool require = false, quiet = false;
+    app.add_flag("--require-spanning", require, "exit 2 when no bonded cluster spans the periodic cell");
+    int threads = 0;
+    app.add_option("--threads", threads, "threads (default: OMP_NUM_THREADS or all cores)");
+    app.add_flag("-q,--quiet", quiet, "no progress messages");
+    app.add_flag_callback("--version", [] {
+      std::cout << "tomodem-bond " << tomodem::version_string() << "\n";
+      throw CLI::Success();
+    }, "print the version and exit");
+    try {
+      app.parse(argc, argv);
+    } catch (const CLI::Success& e) {
+      return app.exit(e);
+    } catch (const CLI::ParseError& e) {
+      app.exit(e);
+      return tomodem::exit_code::bad_input;
+    }
+    c.allow_disconnected = !require;
+    tomodem::set_quiet(quiet);
+    if (threads < 0) throw tomodem::InputError("", "--threads", std::to_string(threads), "must be >= 0");
+    if (threads > 0) omp_set_num_threads(threads);
+    tomodem::info("reading " + c.input);
+    const std::string summary = tomodem::mechanics::run_bond(c);
+    if (c.json.empty() || c.json == "-") std::cout << summary;
+    return tomodem::exit_code::ok;
+  });
+}

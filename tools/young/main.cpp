@@ -1,0 +1,76 @@
+// tomodem-young: E, ν and the elastic tensor of a bonded network, by a direct solve of its
+// stiffness matrix (implicit) or a quasi-static DEM test (explicit). See docs/young.md.
+#include <CLI/CLI.hpp>
+#include <iostream>
+#include <omp.h>
+
+#include "tomodem/core/error.hpp"
+#include "tomodem/core/tool.hpp"
+#include "tomodem/mechanics/tools.hpp"
+
+int main(int argc, char** argv) {
+  return tomodem::run_tool("tomodem-young", [&]() -> int {
+    tomodem::mechanics::YoungConfig c;
+    auto& im = c.implicit;
+    auto& ex = c.explicit_;
+    CLI::App app{"Young's modulus, Poisson's ratio and elastic tensor of a bonded network (docs/young.md)",
+                 "tomodem-young"};
+    app.add_option("input", c.input, "bonded packing (.h5, from tomodem-bond)")->required();
+    app.add_option("--json", c.json, "write the JSON summary to FILE (default: stdout)");
+    app.add_option("--method", c.method, "implicit | explicit | both")->capture_default_str();
+    app.add_option("--axis", c.axis, "loading axis of E and nu: x, y or z")->capture_default_str();
+    app.add_option("--youngs-modulus", c.youngs_modulus, "override E of every phase (Pa)");
+    app.add_option("--poisson-ratio", c.poisson_ratio, "override nu of every phase");
+    app.add_option("--density", c.density, "override the density of every phase (kg/m^3)");
+    app.add_option("--gn-coefficient", c.law.g_n_coefficient, "g_n = 1 + c (a/R)^2")->capture_default_str();
+    app.add_option("--gt-coefficient", c.law.g_t_coefficient, "g_t = 1 + c (a/R)^2")->capture_default_str();
+    bool normal_only = false, normal_cases = false, quiet = false;
+    app.add_flag("--normal-bonds", normal_only, "bonds without shear force and twist (G* = 0)");
+    app.add_option("--solver", im.solver, "implicit: auto | ldlt | cg | cg-ic")->capture_default_str();
+    app.add_option("--tolerance", im.tolerance, "implicit: relative residual of CG")->capture_default_str();
+    app.add_option("--max-iterations", im.max_iterations, "implicit: CG iteration cap (0: automatic)");
+    app.add_flag("--no-tensor", normal_cases, "implicit: only the three normal strain cases (E, nu; no shear moduli)");
+    app.add_option("--loading", ex.loading, "explicit: stress (uniaxial stress) | strain (uniaxial strain)")
+        ->capture_default_str();
+    app.add_option("--protocol", ex.protocol, "explicit: rate (constant rate, slopes) | increments (relaxed)")
+        ->capture_default_str();
+    app.add_option("--strain", ex.strain, "explicit: total axial strain")->capture_default_str();
+    app.add_option("--transits", ex.transits, "explicit: loading time in elastic-wave transits of the cell")
+        ->capture_default_str();
+    app.add_option("--points", ex.points, "explicit: measurements (rate) or increments")->capture_default_str();
+    app.add_option("--damping-ratio", ex.damping_ratio, "explicit: bond dashpot ratio zeta")->capture_default_str();
+    app.add_option("--local-damping", ex.local_damping, "explicit: Cundall local damping (0 = off)")->capture_default_str();
+    app.add_option("--relax-ratio", ex.relax_ratio, "explicit increments: unbalanced-force ratio of equilibrium")
+        ->capture_default_str();
+    app.add_option("--timestep-fraction", ex.timestep_fraction, "explicit: fraction of the critical step")
+        ->capture_default_str();
+    app.add_option("--max-steps", ex.max_steps, "explicit: step cap")->capture_default_str();
+    app.add_option("--curve", c.output_csv, "explicit: write the stress-strain points as CSV");
+    int threads = 0;
+    app.add_option("--threads", threads, "threads (default: OMP_NUM_THREADS or all cores)");
+    app.add_flag("-q,--quiet", quiet, "no progress messages");
+    app.add_flag_callback("--version", [] {
+      std::cout << "tomodem-young " << tomodem::version_string() << "\n";
+      throw CLI::Success();
+    }, "print the version and exit");
+    try {
+      app.parse(argc, argv);
+    } catch (const CLI::Success& e) {
+      return app.exit(e);
+    } catch (const CLI::ParseError& e) {
+      app.exit(e);
+      return tomodem::exit_code::bad_input;
+    }
+    c.law.shear = !normal_only;
+    im.full_tensor = !normal_cases;
+    tomodem::set_quiet(quiet);
+    if (threads < 0) throw tomodem::InputError("", "--threads", std::to_string(threads), "must be >= 0");
+    if (threads > 0) omp_set_num_threads(threads);
+    ex.threads = threads > 0 ? threads : omp_get_max_threads();
+    ex.quiet = quiet;
+    tomodem::info("reading " + c.input);
+    const std::string summary = tomodem::mechanics::run_young(c);
+    if (c.json.empty() || c.json == "-") std::cout << summary;
+    return tomodem::exit_code::ok;
+  });
+}
