@@ -168,7 +168,7 @@ void pair_kernel(const ForceJob& job, int i_begin, int i_end, Vec3* f, Vec3* tor
       g.n = (1.0 / dist) * d;
       g.delta = rsum - dist;
       Vec3 vrel = job.u[jj] + job.vshift[im] - job.u[i];
-      if constexpr (kRot) vrel -= cross(job.omega[jj], rj * g.n) + cross(job.omega[i], ri * g.n);
+      if constexpr (kRot) vrel -= cross(ri * job.omega[i] + rj * job.omega[jj], g.n);  // ω_i×R_i n + ω_j×R_j n
       g.v_rel = vrel;
       g.r_star = r_star;
       const double mj = job.m[jj];
