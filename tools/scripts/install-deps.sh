@@ -6,7 +6,9 @@ PKGS=(build-essential cmake ninja-build pkg-config git
       libhdf5-dev hdf5-tools libeigen3-dev libyaml-cpp-dev nlohmann-json3-dev libcli11-dev
       libfmt-dev libspdlog-dev libxxhash-dev
       libgtest-dev libgmock-dev libbenchmark-dev python3
-      libcgal-dev libgmp-dev libmpfr-dev)
+      libcgal-dev libgmp-dev libmpfr-dev
+      libinsighttoolkit5-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
+      libopenvdb-dev libboost-iostreams-dev libtbb-dev libblosc-dev)
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
