@@ -1,0 +1,115 @@
+#pragma once
+// Homogeneous packings (docs/pack.md): phases with size distributions, random insertion or a
+// lattice, DEM densification by isotropic compression of a periodic cell to a target solid
+// fraction or pressure, mechanical equilibrium, and the structure of the result.
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "tomodem/core/packing.hpp"
+#include "tomodem/dem/model.hpp"
+#include "tomodem/geometry/psd.hpp"
+
+namespace tomodem::geometry {
+
+struct PhaseSpec {
+  std::string name;
+  Material material;             ///< E, ν, density, surface energy of the phase
+  SizeDistribution psd;
+  double volume_fraction = 1;    ///< of the solid (pore formers included), sums to 1 over phases
+  bool pore_former = false;      ///< sacrificial: removed after packing, leaving macropores
+  int aggregate_size = 1;        ///< > 1: particles come in pre-clustered groups of this size
+};
+
+enum class Target { pressure, solid_fraction };
+
+struct PackSpec {
+  std::vector<PhaseSpec> phases;
+  std::size_t n_particles = 1000;      ///< total count (approximate: phases are rounded)
+  std::string arrangement = "random";  ///< random, simple_cubic, bcc, fcc
+  double initial_solid_fraction = 0.25;  ///< random insertion density
+  // Contact physics of the densification.
+  dem::NormalLaw normal = dem::NormalLaw::hertz;
+  double normal_stiffness = 0;         ///< N/m, linear law (0: E d_mean)
+  double friction = 0;                 ///< Coulomb μ (Mindlin for Hertz family, linear otherwise)
+  double restitution = 0.3;
+  double work_of_adhesion = 0;         ///< J/m² (dmt/jkr); 0: from the surface energies
+  double aggregate_adhesion = 0;       ///< J/m² within aggregate phases (0: 100 × the largest w, min 1)
+  // Protocol.
+  Target target = Target::pressure;
+  double target_pressure = 0;          ///< Pa
+  double target_solid_fraction = 0;
+  double strain_rate = 0;              ///< 1/s, compression cap (0: 2e-5 per critical time step)
+  double final_strain_rate = 0;        ///< 1/s, near the target (0: strain_rate / 20)
+  double local_damping = 0.7;          ///< Cundall λ during densification
+  double timestep_fraction = 0.2;
+  double unbalanced_force_ratio = 1e-4;  ///< equilibrium criterion
+  long max_steps = 2000000;
+  uint64_t seed = 1;
+  int threads = 1;
+  bool tessellate = true;              ///< Laguerre cells and local solid fractions
+  std::string source = "";             ///< config file (messages)
+};
+
+/// What a pack run measured; the tool turns it into the JSON summary.
+struct PhaseReport {
+  std::string name;
+  double requested_fraction = 0, realised_fraction = 0;  ///< volume fractions of the solid
+  double psd_max_cdf_deviation = 0;                      ///< realised vs requested (KS)
+  std::size_t count = 0;
+  bool pore_former = false;
+};
+
+struct PackReport {
+  std::size_t n_particles = 0;          ///< in the output (pore formers removed)
+  std::size_t n_inserted = 0;
+  double solid_fraction = 0;            ///< of the output packing
+  double solid_fraction_with_pore_formers = 0;
+  double coordination = 0, coordination_no_rattlers = 0, rattler_fraction = 0;
+  std::vector<std::vector<double>> z_ij;  ///< contacts per particle of phase i with phase j
+  double pressure = 0;                  ///< Pa, at the end of densification
+  double unbalanced_force_ratio = 0;
+  double inertial_number = 0;           ///< largest during the final (slow) compression
+  long steps = 0;
+  double time_step = 0;
+  double wall_time_s = 0, densify_time_s = 0, tessellation_time_s = 0;
+  bool equilibrium = false;
+  std::vector<PhaseReport> phases;
+  std::size_t pore_formers_removed = 0;
+  std::size_t aggregates = 0;
+  // Laguerre tessellation.
+  bool tessellated = false;
+  double laguerre_volume_error = 0;     ///< |Σ V_cell − V_box| / V_box
+  double local_solid_fraction_mean = 0, local_solid_fraction_std = 0;
+  std::vector<double> local_solid_fraction_histogram;  ///< 20 bins over [0, 1]
+  std::string neighbor_search;          ///< "hgrid" or "linked cells"
+};
+
+struct PackOutput {
+  Packing packing;     ///< particles, cell, contacts, materials, results (local structure)
+  PackReport report;
+};
+
+/// Checks a spec (fractions add to 1, positive sizes, reachable target...). InputError on failure.
+void validate(const PackSpec& spec);
+/// Generates and densifies. `progress` gets one line per stage (may be empty).
+PackOutput make_packing(const PackSpec& spec, const std::function<void(const std::string&)>& progress = {});
+
+/// Random insertion of non-overlapping spheres (largest first, hierarchical bins) into a
+/// periodic box; clusters (groups of indices) are inserted rigidly. Returns the positions.
+std::vector<Vec3> insert_random(const std::vector<double>& radius, const std::vector<std::vector<int>>& clusters,
+                                const std::vector<Vec3>& cluster_offsets, const Cell& cell, uint64_t seed);
+
+/// Contact structure of a packing: Z with and without rattlers and per phase pair.
+struct ContactStructure {
+  double coordination = 0, coordination_no_rattlers = 0, rattler_fraction = 0;
+  std::vector<std::vector<double>> z_ij;
+  std::vector<uint8_t> rattler;
+};
+/// Rattlers: particles with fewer than `min_contacts` force-bearing contacts, removed
+/// recursively (frictionless: d + 1 = 4; frictional: 2).
+ContactStructure contact_structure(std::size_t n, const std::vector<int32_t>& phase, int n_phases,
+                                   const ContactTable& contacts, int min_contacts);
+
+}  // namespace tomodem::geometry

@@ -1,0 +1,444 @@
+// make_packing: phases → particles → insertion (or lattice) → DEM densification of a periodic
+// cell → equilibrium → structure, pore-former removal, Laguerre cells.
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+#include <random>
+#include <sstream>
+
+#include "../../dem/src/hgrid.hpp"
+#include "tomodem/core/error.hpp"
+#include "tomodem/dem/scene.hpp"
+#include "tomodem/dem/simulation.hpp"
+#include "tomodem/geometry/laguerre.hpp"
+#include "tomodem/geometry/pack.hpp"
+
+namespace tomodem::geometry {
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+std::string num(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+double sphere_volume(double r) { return 4 * kPi / 3 * r * r * r; }
+
+/// Densest packing a lattice arrangement allows (spheres touching).
+double lattice_max_fraction(const std::string& a) {
+  if (a == "simple_cubic") return kPi / 6;
+  if (a == "bcc") return kPi * std::sqrt(3.0) / 8;
+  return kPi / (3 * std::sqrt(2.0));  // fcc
+}
+int lattice_basis(const std::string& a) { return a == "simple_cubic" ? 1 : (a == "bcc" ? 2 : 4); }
+
+/// Compact random cluster of `m` spheres (radii r): each new sphere touches a random earlier one
+/// without overlapping the others (diffusion-limited-like growth). Offsets from the centroid.
+std::vector<Vec3> cluster_offsets(const std::vector<double>& r, std::mt19937_64& rng) {
+  std::normal_distribution<double> G(0, 1);
+  std::vector<Vec3> p{{0, 0, 0}};
+  std::uniform_int_distribution<std::size_t> pick;
+  for (std::size_t k = 1; k < r.size(); ++k) {
+    for (int tries = 0; tries < 10000; ++tries) {
+      const std::size_t a = pick(rng) % k;
+      Vec3 d{G(rng), G(rng), G(rng)};
+      d *= 1 / norm(d);
+      const Vec3 c = p[a] + (r[a] + r[k]) * (1 + 1e-9) * d;
+      bool ok = true;
+      for (std::size_t b = 0; b < k && ok; ++b) ok = norm(c - p[b]) >= r[b] + r[k];
+      if (ok) {
+        p.push_back(c);
+        break;
+      }
+    }
+    if (p.size() != k + 1) p.push_back(p.back() + Vec3{2 * (r[k] + r[k - 1]), 0, 0});  // chain end (never in practice)
+  }
+  Vec3 g;
+  for (const auto& q : p) g += q;
+  g *= 1.0 / double(p.size());
+  for (auto& q : p) q -= g;
+  return p;
+}
+}  // namespace
+
+void validate(const PackSpec& s) {
+  const std::string& f = s.source;
+  if (s.phases.empty()) throw InputError(f, "phases", "", "at least one phase is needed");
+  double sum = 0;
+  for (std::size_t p = 0; p < s.phases.size(); ++p) {
+    const auto& ph = s.phases[p];
+    const std::string field = "phases[" + std::to_string(p) + "]";
+    if (!(ph.volume_fraction >= 0 && ph.volume_fraction <= 1))
+      throw InputError(f, field + ".volume_fraction", num(ph.volume_fraction), "must lie in [0, 1]");
+    sum += ph.volume_fraction;
+    ph.psd.validate(f, field + ".size_distribution");
+    if (!(ph.material.density > 0)) throw InputError(f, field + ".material.density", num(ph.material.density), "must be > 0 (kg/m^3)");
+    if (s.normal != dem::NormalLaw::linear && !(ph.material.youngs_modulus > 0))
+      throw InputError(f, field + ".material.youngs_modulus", num(ph.material.youngs_modulus),
+                       "must be > 0 for the Hertz family of normal laws");
+    if (ph.aggregate_size < 1) throw InputError(f, field + ".aggregate_size", std::to_string(ph.aggregate_size), "must be >= 1");
+    if (ph.aggregate_size > 1 && s.normal != dem::NormalLaw::hertz_dmt && s.normal != dem::NormalLaw::hertz_jkr)
+      throw InputError(f, field + ".aggregate_size", std::to_string(ph.aggregate_size),
+                       "aggregates are held by adhesion during packing: use contact.normal dmt or jkr");
+  }
+  if (std::abs(sum - 1) > 1e-6)
+    throw InputError(f, "phases[*].volume_fraction", num(sum), "volume fractions must add up to 1");
+  if (s.n_particles < 1) throw InputError(f, "particles", std::to_string(s.n_particles), "must be >= 1");
+  if (!(s.initial_solid_fraction > 0 && s.initial_solid_fraction < 0.4))
+    throw InputError(f, "initial_solid_fraction", num(s.initial_solid_fraction),
+                     "must lie in (0, 0.4): random sequential insertion jams near 0.38");
+  if (s.arrangement != "random" && s.arrangement != "simple_cubic" && s.arrangement != "bcc" && s.arrangement != "fcc")
+    throw InputError(f, "arrangement", s.arrangement, "expected random, simple_cubic, bcc or fcc");
+  if (s.target == Target::pressure && !(s.target_pressure > 0) && s.arrangement == "random")
+    throw InputError(f, "target.pressure", num(s.target_pressure), "must be > 0 (Pa)");
+  if (s.target == Target::solid_fraction) {
+    const double phi = s.target_solid_fraction;
+    if (!(phi > 0 && phi < 1)) throw InputError(f, "target.solid_fraction", num(phi), "must lie in (0, 1)");
+    // Bounds no packing of the distribution can pass: a single size cannot exceed the FCC
+    // (Kepler) density; a lattice cannot exceed its touching density.
+    bool mono = s.phases.size() == 1 && s.phases[0].psd.kind == PsdKind::monodisperse;
+    if (s.arrangement != "random") {
+      if (phi > lattice_max_fraction(s.arrangement) + 1e-12)
+        throw InputError(f, "target.solid_fraction", num(phi),
+                         "above the touching density " + num(lattice_max_fraction(s.arrangement)) + " of a " + s.arrangement + " lattice");
+    } else if (mono && phi > kPi / (3 * std::sqrt(2.0))) {
+      throw InputError(f, "target.solid_fraction", num(phi), "above the densest packing of equal spheres (0.7405, FCC)");
+    } else if (phi <= s.initial_solid_fraction) {
+      throw InputError(f, "target.solid_fraction", num(phi),
+                       "must exceed initial_solid_fraction " + num(s.initial_solid_fraction) + " (compression only)");
+    }
+  }
+  if (s.arrangement != "random" && (s.phases.size() != 1 || s.phases[0].psd.kind != PsdKind::monodisperse))
+    throw InputError(f, "arrangement", s.arrangement, "lattices need one monodisperse phase");
+  if (!(s.friction >= 0)) throw InputError(f, "contact.friction", num(s.friction), "must be >= 0");
+  if (s.normal == dem::NormalLaw::linear && s.friction > 0 && false) {}
+}
+
+PackOutput make_packing(const PackSpec& spec, const std::function<void(const std::string&)>& progress) {
+  const auto t_start = std::chrono::steady_clock::now();
+  const auto say = [&](const std::string& m) {
+    if (progress) progress(m);
+  };
+  validate(spec);
+  const int np = int(spec.phases.size());
+  std::mt19937_64 rng(spec.seed);
+
+  // ---- particles per phase: N_p ∝ f_p / <v>_p
+  std::vector<SizeDistribution> psd;
+  for (const auto& ph : spec.phases) {
+    psd.push_back(ph.psd);
+    psd.back().prepare();
+  }
+  std::vector<double> radius;
+  std::vector<int32_t> phase;
+  std::vector<std::vector<int>> clusters;
+  std::vector<Vec3> offsets;
+  PackOutput out;
+  PackReport& rep = out.report;
+  Cell cell;
+  std::vector<Vec3> pos;
+  if (spec.arrangement == "random") {
+    double wsum = 0;
+    for (int p = 0; p < np; ++p) wsum += spec.phases[std::size_t(p)].volume_fraction / psd[std::size_t(p)].mean_volume();
+    for (int p = 0; p < np; ++p) {
+      const auto& ph = spec.phases[std::size_t(p)];
+      const double share = ph.volume_fraction / psd[std::size_t(p)].mean_volume() / wsum;
+      std::size_t cnt = std::size_t(std::llround(share * double(spec.n_particles)));
+      if (ph.volume_fraction > 0) cnt = std::max<std::size_t>(cnt, 1);
+      const auto d = psd[std::size_t(p)].sample(cnt, spec.seed * 7919 + uint64_t(p));
+      const std::size_t first = radius.size();
+      for (double di : d) radius.push_back(0.5 * di), phase.push_back(p);
+      if (ph.aggregate_size > 1)
+        for (std::size_t a = first; a + std::size_t(ph.aggregate_size) <= radius.size(); a += std::size_t(ph.aggregate_size)) {
+          std::vector<int> members;
+          std::vector<double> rr;
+          for (int k = 0; k < ph.aggregate_size; ++k) members.push_back(int(a) + k), rr.push_back(radius[a + std::size_t(k)]);
+          clusters.push_back(members);
+        }
+    }
+    if (!clusters.empty()) {
+      offsets.assign(radius.size(), Vec3{});
+      for (const auto& c : clusters) {
+        std::vector<double> rr;
+        for (int i : c) rr.push_back(radius[std::size_t(i)]);
+        const auto off = cluster_offsets(rr, rng);
+        for (std::size_t k = 0; k < c.size(); ++k) offsets[std::size_t(c[k])] = off[k];
+      }
+    }
+    double vs = 0;
+    for (double r : radius) vs += sphere_volume(r);
+    const double L = std::cbrt(vs / spec.initial_solid_fraction);
+    cell = Cell::box({0, 0, 0}, {L, L, L}, true);
+    say("inserting " + std::to_string(radius.size()) + " particles at solid fraction " + num(spec.initial_solid_fraction));
+    pos = insert_random(radius, clusters, offsets, cell, spec.seed);
+  } else {
+    const int basis = lattice_basis(spec.arrangement);
+    const int nc = std::max(1, int(std::lround(std::cbrt(double(spec.n_particles) / basis))));
+    const double d = spec.phases[0].psd.diameter;
+    const double phi = spec.target == Target::solid_fraction ? spec.target_solid_fraction : lattice_max_fraction(spec.arrangement);
+    const double a = d * std::cbrt(lattice_max_fraction(spec.arrangement) / phi) *
+                     (spec.arrangement == "simple_cubic" ? 1.0 : (spec.arrangement == "bcc" ? 2 / std::sqrt(3.0) : std::sqrt(2.0)));
+    pos = dem::lattice_sites(spec.arrangement, nc, a);
+    radius.assign(pos.size(), 0.5 * d);
+    phase.assign(pos.size(), 0);
+    cell = Cell::box({0, 0, 0}, {nc * a, nc * a, nc * a}, true);
+  }
+  const std::size_t n = radius.size();
+  rep.n_inserted = n;
+  rep.aggregates = clusters.size();
+
+  // ---- contact model
+  dem::ContactModel model;
+  model.normal = spec.normal;
+  const bool hertz_family = spec.normal != dem::NormalLaw::linear;
+  model.tangential = spec.friction > 0 ? (hertz_family ? dem::TangentialLaw::mindlin : dem::TangentialLaw::linear)
+                                       : dem::TangentialLaw::none;
+  for (const auto& ph : spec.phases) model.materials.push_back(ph.material);
+  model.n_phases = np;
+  model.finalize();
+  double dmean = 0;
+  for (double r : radius) dmean += 2 * r;
+  dmean /= double(n);
+  double wmax = spec.work_of_adhesion;
+  for (int a = 0; a < np; ++a)
+    for (int b = 0; b < np; ++b) {
+      auto& pp = model.pair(a, b);
+      pp.restitution = spec.restitution;
+      pp.friction = spec.friction;
+      if (spec.normal == dem::NormalLaw::linear) {
+        const double E = std::max(spec.phases[std::size_t(a)].material.youngs_modulus, 0.0);
+        pp.k_n = spec.normal_stiffness > 0 ? spec.normal_stiffness : E * dmean;
+        if (!(pp.k_n > 0))
+          throw InputError(spec.source, "contact.normal_stiffness", num(spec.normal_stiffness),
+                           "the linear law needs normal_stiffness or the phases' youngs_modulus");
+      }
+      if (spec.work_of_adhesion > 0) pp.work_of_adhesion = spec.work_of_adhesion;
+    }
+  model.finalize();
+  for (const auto& pp : model.pairs) wmax = std::max(wmax, pp.work_of_adhesion);
+  for (int a = 0; a < np; ++a)
+    if (spec.phases[std::size_t(a)].aggregate_size > 1)
+      model.pair(a, a).work_of_adhesion = spec.aggregate_adhesion > 0 ? spec.aggregate_adhesion : std::max(1.0, 100 * wmax);
+  model.finalize();
+
+  dem::Particles parts;
+  for (std::size_t i = 0; i < n; ++i)
+    parts.add(pos[i], radius[i], spec.phases[std::size_t(phase[i])].material.density, phase[i]);
+  dem::Settings set;
+  set.threads = std::max(1, spec.threads);
+  dem::Simulation sim(std::move(parts), cell, model, set);
+  const double dtc = sim.critical_time_step();
+  sim.set_time_step(spec.timestep_fraction * dtc);
+  const double dt = sim.time_step();
+  rep.time_step = dt;
+  rep.neighbor_search = dem::use_hgrid(radius) ? "hgrid" : "linked cells";
+  sim.body_forces().local_damping = spec.local_damping;
+
+  double vsolid = 0;
+  for (double r : radius) vsolid += sphere_volume(r);
+  const auto phi_now = [&] { return vsolid / sim.cell().volume(); };
+  const double rate_fast = spec.strain_rate > 0 ? spec.strain_rate : 1e-4 / dtc;
+  const double rate_slow = spec.final_strain_rate > 0 ? spec.final_strain_rate : rate_fast / 20;
+  auto& ctl = sim.cell_control();
+  const auto set_rate = [&](double rate) {
+    for (int a = 0; a < 3; ++a) {
+      ctl.stress_controlled[a][a] = false;
+      ctl.velocity_gradient(a, a) = -rate;
+    }
+  };
+  const auto t_dem = std::chrono::steady_clock::now();
+  long steps = 0;
+  const int chunk = 50;
+  dem::Measurements m;
+  const auto run = [&](long k) {
+    sim.run(k);
+    steps += k;
+  };
+  const bool lattice = spec.arrangement != "random";
+  const auto refuse_overlap = [&](const dem::Measurements& mm) {
+    if (mm.max_overlap_ratio > 0.1)
+      throw InputError(spec.source, "target.solid_fraction", num(spec.target_solid_fraction),
+                       "not reachable for this size distribution: the packing jammed and particles overlap by " +
+                           num(100 * mm.max_overlap_ratio) + "% of a radius at solid fraction " + num(phi_now()));
+  };
+  if (!lattice && spec.target == Target::pressure) {
+    // 1. fast isotropic compression until the contact pressure reaches a fraction of the target
+    say("compressing at strain rate " + num(rate_fast) + " 1/s to pressure " + num(spec.target_pressure) + " Pa");
+    set_rate(rate_fast);
+    int above = 0;  // consecutive measurements above the target: a jammed network, not a collision
+    while (steps < spec.max_steps) {
+      run(chunk);
+      m = sim.measure();
+      above = -m.stress_contact.trace() / 3 > 0.2 * spec.target_pressure ? above + 1 : 0;
+      if (above >= 3) break;
+      if (steps % 5000 == 0) say("step " + std::to_string(steps) + ": phi " + num(phi_now()) + ", p " + num(m.pressure) + " Pa");
+    }
+    // 2. stress servo (all three normal components) at a slow rate cap to the target pressure,
+    //    until the pressure is within 5 % and the unbalanced-force ratio below 10× the criterion.
+    say("servo to " + num(spec.target_pressure) + " Pa from solid fraction " + num(phi_now()));
+    for (int a = 0; a < 3; ++a) {
+      ctl.velocity_gradient(a, a) = 0;
+      ctl.stress_controlled[a][a] = true;
+      ctl.target_stress(a, a) = -spec.target_pressure;
+    }
+    ctl.max_strain_rate = rate_slow;
+    long settled = 0;
+    while (steps < spec.max_steps) {
+      run(chunk);
+      m = sim.measure();
+      rep.inertial_number = std::max(rep.inertial_number, m.inertial_number);
+      if (steps % 5000 == 0)
+        say("step " + std::to_string(steps) + ": phi " + num(phi_now()) + ", p " + num(m.pressure) + " Pa, Z " +
+            num(m.coordination) + ", unbalanced " + num(m.unbalanced_force_ratio));
+      const bool close = std::abs(m.pressure / spec.target_pressure - 1) < 0.05;
+      settled = close && m.unbalanced_force_ratio < 10 * spec.unbalanced_force_ratio ? settled + 1 : 0;
+      if (settled >= 4) break;
+    }
+  } else if (!lattice) {
+    const double target_v = vsolid / spec.target_solid_fraction;
+    say("compressing to solid fraction " + num(spec.target_solid_fraction));
+    // Fast to within 0.02 of the target fraction, then slow; the last chunk lands on it.
+    for (int stage = 0; stage < 2; ++stage) {
+      const double rate = stage == 0 ? rate_fast : rate_slow;
+      const double phi_stage = stage == 0 ? std::max(spec.target_solid_fraction - 0.02, phi_now()) : spec.target_solid_fraction;
+      set_rate(rate);
+      while (steps < spec.max_steps && phi_now() < phi_stage * (1 - 1e-12)) {
+        const double vstage = vsolid / phi_stage;
+        const long need = long(std::ceil(std::log(sim.cell().volume() / vstage) / (3 * rate * dt)));
+        if (need <= 0) break;
+        run(std::min<long>(chunk, need));
+        if (stage == 1) {
+          m = sim.measure();
+          rep.inertial_number = std::max(rep.inertial_number, m.inertial_number);
+          refuse_overlap(m);
+        }
+      }
+    }
+    set_rate(0);
+    // Land exactly on the target volume (a scaling of well under one step's strain).
+    const double s = std::cbrt(target_v / sim.cell().volume());
+    auto& c = sim.cell();
+    auto& x = sim.particles().x;
+    for (auto& xi : x) xi = c.origin + s * (xi - c.origin);
+    c.h *= s;
+    sim.invalidate_neighbors();
+  }
+  // 3. relaxation at fixed cell to mechanical equilibrium
+  set_rate(0);
+  say("relaxing to unbalanced-force ratio " + num(spec.unbalanced_force_ratio));
+  while (steps < spec.max_steps) {
+    m = sim.measure();
+    if (spec.target == Target::solid_fraction) refuse_overlap(m);
+    if (steps % 5000 == 0)
+      say("relax step " + std::to_string(steps) + ": phi " + num(phi_now()) + ", p " + num(m.pressure) + " Pa, unbalanced " + num(m.unbalanced_force_ratio));
+    if (m.contacts == 0 || m.unbalanced_force_ratio < spec.unbalanced_force_ratio) {
+      rep.equilibrium = true;
+      break;
+    }
+    run(chunk);
+  }
+  rep.steps = steps;
+  rep.pressure = m.pressure;
+  rep.unbalanced_force_ratio = m.unbalanced_force_ratio;
+  rep.densify_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_dem).count();
+
+  // ---- structure (with pore formers, which carry load during packing)
+  const ContactTable contacts = sim.contacts();
+  const auto& P = sim.particles();
+  const Cell final_cell = sim.cell();
+  rep.solid_fraction_with_pore_formers = phi_now();
+  // Requested vs realised phases and size distributions (over all inserted particles).
+  {
+    std::vector<double> vol(std::size_t(np), 0.0);
+    std::vector<std::vector<double>> dia{std::size_t(np)};
+    for (std::size_t i = 0; i < n; ++i) {
+      vol[std::size_t(P.phase[i])] += sphere_volume(P.r[i]);
+      dia[std::size_t(P.phase[i])].push_back(2 * P.r[i]);
+    }
+    for (int p = 0; p < np; ++p) {
+      PhaseReport pr;
+      pr.name = spec.phases[std::size_t(p)].name;
+      pr.requested_fraction = spec.phases[std::size_t(p)].volume_fraction;
+      pr.realised_fraction = vol[std::size_t(p)] / vsolid;
+      pr.count = dia[std::size_t(p)].size();
+      pr.pore_former = spec.phases[std::size_t(p)].pore_former;
+      pr.psd_max_cdf_deviation = lattice ? 0.0 : max_cdf_deviation(psd[std::size_t(p)], dia[std::size_t(p)]);
+      rep.phases.push_back(pr);
+    }
+  }
+  // Keep the particles that are not pore formers; contacts among them.
+  std::vector<int32_t> new_index(n, -1);
+  Packing& pk = out.packing;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (spec.phases[std::size_t(P.phase[i])].pore_former) {
+      ++rep.pore_formers_removed;
+      continue;
+    }
+    new_index[i] = int32_t(pk.particles.size());
+    pk.particles.position.push_back(P.x[i]);
+    pk.particles.radius.push_back(P.r[i]);
+    pk.particles.phase.push_back(P.phase[i]);
+  }
+  for (std::size_t k = 0; k < contacts.size(); ++k) {
+    const int32_t a = new_index[std::size_t(contacts.i[k])], b = new_index[std::size_t(contacts.j[k])];
+    if (a < 0 || b < 0) continue;
+    pk.contacts.i.push_back(a);
+    pk.contacts.j.push_back(b);
+    pk.contacts.overlap.push_back(contacts.overlap[k]);
+    pk.contacts.normal_force.push_back(contacts.normal_force[k]);
+    pk.contacts.tangential_force.push_back(contacts.tangential_force[k]);
+  }
+  pk.cell = final_cell;
+  for (const auto& ph : spec.phases) pk.materials.push_back(ph.material);
+  for (std::size_t p = 0; p < pk.materials.size(); ++p) pk.materials[p].name = spec.phases[p].name;
+  rep.n_particles = pk.particles.size();
+  double vkeep = 0;
+  for (double r : pk.particles.radius) vkeep += sphere_volume(r);
+  rep.solid_fraction = vkeep / final_cell.volume();
+  // Coordination of the packing as it was densified (pore formers included: they carried load).
+  const ContactStructure cs = contact_structure(n, P.phase, np, contacts, spec.friction > 0 ? 2 : 4);
+  rep.coordination = cs.coordination;
+  rep.coordination_no_rattlers = cs.coordination_no_rattlers;
+  rep.rattler_fraction = cs.rattler_fraction;
+  rep.z_ij = cs.z_ij;
+
+  // ---- Laguerre cells of the output packing
+  if (spec.tessellate && rep.n_particles > 0) {
+    say("Laguerre tessellation of " + std::to_string(rep.n_particles) + " particles");
+    const auto t0 = std::chrono::steady_clock::now();
+    const Tessellation t = laguerre(pk.particles.position, pk.particles.radius, final_cell);
+    rep.tessellation_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    rep.tessellated = true;
+    rep.laguerre_volume_error = std::abs(t.total_volume - t.box_volume) / t.box_volume;
+    const auto& phi = t.local_solid_fraction;
+    double s1 = 0, s2 = 0;
+    rep.local_solid_fraction_histogram.assign(20, 0.0);
+    for (double v : phi) {
+      s1 += v, s2 += v * v;
+      rep.local_solid_fraction_histogram[std::size_t(std::clamp(int(v * 20), 0, 19))] += 1.0 / double(phi.size());
+    }
+    rep.local_solid_fraction_mean = s1 / double(phi.size());
+    rep.local_solid_fraction_std = std::sqrt(std::max(0.0, s2 / double(phi.size()) - rep.local_solid_fraction_mean * rep.local_solid_fraction_mean));
+    pk.results.series["laguerre"]["cell_volume_m3"] = t.cell_volume;
+    pk.results.series["laguerre"]["local_solid_fraction"] = t.local_solid_fraction;
+    pk.results.units["laguerre"] = "per particle (output order)";
+    pk.results.units["laguerre/cell_volume_m3"] = "m^3";
+    pk.results.units["laguerre/local_solid_fraction"] = "1";
+  }
+  auto& sc = pk.results.scalars;
+  auto& un = pk.results.units;
+  sc["solid_fraction"] = rep.solid_fraction, un["solid_fraction"] = "1";
+  sc["coordination"] = rep.coordination, un["coordination"] = "1";
+  sc["coordination_no_rattlers"] = rep.coordination_no_rattlers, un["coordination_no_rattlers"] = "1";
+  sc["rattler_fraction"] = rep.rattler_fraction, un["rattler_fraction"] = "1";
+  sc["pressure"] = rep.pressure, un["pressure"] = "Pa";
+  sc["unbalanced_force_ratio"] = rep.unbalanced_force_ratio, un["unbalanced_force_ratio"] = "1";
+  sc["inertial_number"] = rep.inertial_number, un["inertial_number"] = "1";
+  rep.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  return out;
+}
+
+}  // namespace tomodem::geometry
