@@ -2,6 +2,7 @@
 // The force loops, compiled once per law combination (kernels.cpp). Nothing here tests a flag
 // for physics the scene does not use: absent slots are empty policies whose calls vanish.
 #include <cstdint>
+#include <type_traits>
 #include <vector>
 
 #include "laws.hpp"
@@ -71,29 +72,42 @@ struct KernelSet {
   WallKernel wall[2];
   double (*reach)(const PairParams&, double r_star);  ///< extra range of adhesive laws, m
   bool touch_flag;
-  int tangential_history, rolling_history;
+  int normal_history, tangential_history, rolling_history;  ///< per-contact doubles, laid out in this order
 };
 
 KernelSet select_kernels(const ContactModel& model);
 
 namespace detail {
 
+/// History of one contact: [normal | tangential | rolling], each as wide as its law declares.
+template <class N, class T, class R>
+inline void reset_history(double* hist) {
+  if constexpr (N::kHistory > 0) N::reset(hist);
+  T::reset(hist + N::kHistory);
+  R::reset(hist + N::kHistory + T::kHistory);
+}
+
+template <class N>
+inline law::Normal eval_normal(const law::Geometry& g, unsigned char* touch, double* hist) {
+  if constexpr (N::kHistory > 0) return N::eval(g, touch, hist);
+  else return N::eval(g, touch);
+}
+
 template <class N, class T, class R, bool kTally>
 inline void contact(const law::Geometry& g, double* hist, unsigned char* touch, double ri, double rj,
                     const Vec3* wi, const Vec3* wj, Vec3& fi, Vec3& ti, Vec3& tj, Tally* tally, double dist,
                     bool& active, double& sn) {
-  const law::Normal nr = N::eval(g, touch);
+  const law::Normal nr = eval_normal<N>(g, touch, hist);
   active = nr.active;
   if (!nr.active) {
-    if constexpr (kTally) tally->dissipated += T::released(*g.pp, hist);
-    T::reset(hist);
-    R::reset(hist + T::kHistory);
+    if constexpr (kTally) tally->dissipated += T::released(*g.pp, hist + N::kHistory);
+    reset_history<N, T, R>(hist);
     return;
   }
   sn = nr.stiffness;
   fi = (-nr.fn) * g.n;  // on i
-  if constexpr (T::kHistory > 0) {
-    const law::Tangential tr = T::template eval<kTally>(g, nr, hist);
+  if constexpr (!std::is_same_v<T, law::TangentialNone>) {  // history-free laws (viscous) run too
+    const law::Tangential tr = T::template eval<kTally>(g, nr, hist + N::kHistory);
     fi += tr.force;
     // Torques of the tangential force about each centre (lever arms R_i n and -R_j n).
     const Vec3 c = cross(g.n, tr.force);
@@ -105,7 +119,7 @@ inline void contact(const law::Geometry& g, double* hist, unsigned char* touch, 
     }
   }
   if constexpr (R::kHistory > 0) {
-    const law::Tangential rr = R::template eval<kTally>(g, nr, *wi - *wj, hist + T::kHistory);
+    const law::Tangential rr = R::template eval<kTally>(g, nr, *wi - *wj, hist + N::kHistory + T::kHistory);
     ti += rr.force;
     tj -= rr.force;
     if constexpr (kTally) {
@@ -147,9 +161,8 @@ void pair_kernel(const ForceJob& job, int i_begin, int i_end, Vec3* f, Vec3* tor
       const double r_star = ri * rj / rsum;
       if constexpr (!N::kTouchFlag) {
         if (dist2 >= rsum * rsum) {  // apart: forget the history
-          if constexpr (kTally) tally->dissipated += T::released(*pp, h);
-          T::reset(h);
-          R::reset(h + T::kHistory);
+          if constexpr (kTally) tally->dissipated += T::released(*pp, h + N::kHistory);
+          reset_history<N, T, R>(h);
           continue;
         }
       } else {
@@ -157,9 +170,8 @@ void pair_kernel(const ForceJob& job, int i_begin, int i_end, Vec3* f, Vec3* tor
         if (!*tf && dist2 >= rsum * rsum) continue;
         if (dist2 >= reach * reach) {
           *tf = 0;
-          if constexpr (kTally) tally->dissipated += T::released(*pp, h);
-          T::reset(h);
-          R::reset(h + T::kHistory);
+          if constexpr (kTally) tally->dissipated += T::released(*pp, h + N::kHistory);
+          reset_history<N, T, R>(h);
           continue;
         }
       }
@@ -218,9 +230,8 @@ void wall_kernel(const ForceJob& job, const WallJob& w, Vec3* f, Vec3* torque, T
     g.delta = ri - gap;
     if (g.delta < -N::reach(*pp, ri) || (!N::kTouchFlag && g.delta <= 0)) {
       if constexpr (N::kTouchFlag) *tf = 0;
-      if constexpr (kTally) tally->dissipated += T::released(*pp, h);
-      T::reset(h);
-      R::reset(h + T::kHistory);
+      if constexpr (kTally) tally->dissipated += T::released(*pp, h + N::kHistory);
+      reset_history<N, T, R>(h);
       continue;
     }
     g.n = n;

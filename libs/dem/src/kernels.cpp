@@ -1,6 +1,8 @@
 // The compiled law combinations: every normal × tangential × rolling choice, with and without
 // tallies, selected once when a Simulation is built.
 #include "kernel.hpp"
+#include "sinter_law.hpp"
+#include "tomodem/core/error.hpp"
 
 namespace tomodem::dem {
 
@@ -14,6 +16,7 @@ KernelSet make() {
   k.wall[1] = &detail::wall_kernel<N, T, R, true>;
   k.reach = &N::reach;
   k.touch_flag = N::kTouchFlag;
+  k.normal_history = N::kHistory;
   k.tangential_history = T::kHistory;
   k.rolling_history = R::kHistory;
   return k;
@@ -30,17 +33,27 @@ KernelSet pick_tangential(const ContactModel& m) {
     case TangentialLaw::none: return pick_rolling<N, law::TangentialNone>(m.rolling);
     case TangentialLaw::linear: return pick_rolling<N, law::TangentialLinear>(m.rolling);
     case TangentialLaw::mindlin: return pick_rolling<N, law::TangentialMindlin>(m.rolling);
+    case TangentialLaw::viscous: break;  // refused below (incompatibility())
   }
   return pick_rolling<N, law::TangentialNone>(m.rolling);
+}
+/// The sintering law pairs only with the tangential laws it can drive (none, viscous).
+KernelSet pick_sintering(const ContactModel& m) {
+  using N = law::NormalSintering;
+  return m.tangential == TangentialLaw::viscous ? pick_rolling<N, law::TangentialViscous>(m.rolling)
+                                                : pick_rolling<N, law::TangentialNone>(m.rolling);
 }
 }  // namespace
 
 KernelSet select_kernels(const ContactModel& m) {
+  if (const std::string why = m.incompatibility(); !why.empty())
+    throw InputError("", "physics", m.describe(), why);
   switch (m.normal) {
     case NormalLaw::linear: return pick_tangential<law::NormalLinear>(m);
     case NormalLaw::hertz: return pick_tangential<law::NormalHertz>(m);
     case NormalLaw::hertz_dmt: return pick_tangential<law::NormalDMT>(m);
     case NormalLaw::hertz_jkr: return pick_tangential<law::NormalJKR>(m);
+    case NormalLaw::sintering: return pick_sintering(m);
   }
   return pick_tangential<law::NormalHertz>(m);
 }

@@ -33,6 +33,7 @@ struct Normal {
 
 // ---------------------------------------------------------------- normal slot
 struct NormalLinear {
+  static constexpr int kHistory = 0;  ///< per-contact doubles (normal laws with state declare them)
   static constexpr bool kTouchFlag = false;
   static double reach(const PairParams&, double) { return 0; }
   static Normal eval(const Geometry& g, unsigned char*) {
@@ -47,6 +48,7 @@ struct NormalLinear {
 };
 
 struct NormalHertz {
+  static constexpr int kHistory = 0;
   static constexpr bool kTouchFlag = false;
   static double reach(const PairParams&, double) { return 0; }
   static Normal eval(const Geometry& g, unsigned char*) {
@@ -62,6 +64,7 @@ struct NormalHertz {
 
 /// Hertz plus a constant Derjaguin attraction 2π w R* while in contact (δ ≥ 0).
 struct NormalDMT {
+  static constexpr int kHistory = 0;
   static constexpr bool kTouchFlag = false;
   static double reach(const PairParams&, double) { return 0; }
   static Normal eval(const Geometry& g, unsigned char*) {
@@ -79,6 +82,7 @@ struct NormalDMT {
 /// JKR with hysteresis: a contact forms at δ = 0 on approach and persists in tension until
 /// δ_c = -(3/4)(π² w² R*/E*²)^{1/3}; the flag per contact remembers which branch applies.
 struct NormalJKR {
+  static constexpr int kHistory = 0;
   static constexpr bool kTouchFlag = true;
   static double reach(const PairParams& p, double r_star) {
     return p.work_of_adhesion > 0 ? -jkr_break_overlap(r_star, p.E_star, p.work_of_adhesion) : 0;

@@ -13,6 +13,7 @@ std::string to_string(NormalLaw l) {
     case NormalLaw::hertz: return "hertz";
     case NormalLaw::hertz_dmt: return "dmt";
     case NormalLaw::hertz_jkr: return "jkr";
+    case NormalLaw::sintering: return "sintering";
   }
   return "?";
 }
@@ -21,6 +22,7 @@ std::string to_string(TangentialLaw l) {
     case TangentialLaw::none: return "none";
     case TangentialLaw::linear: return "linear";
     case TangentialLaw::mindlin: return "mindlin";
+    case TangentialLaw::viscous: return "viscous";
   }
   return "?";
 }
@@ -30,7 +32,8 @@ bool parse(const std::string& s, NormalLaw& out) {
   static const std::map<std::string, NormalLaw> names{{"linear", NormalLaw::linear},
                                                       {"hertz", NormalLaw::hertz},
                                                       {"dmt", NormalLaw::hertz_dmt},
-                                                      {"jkr", NormalLaw::hertz_jkr}};
+                                                      {"jkr", NormalLaw::hertz_jkr},
+                                                      {"sintering", NormalLaw::sintering}};
   auto it = names.find(s);
   if (it == names.end()) return false;
   out = it->second;
@@ -38,7 +41,8 @@ bool parse(const std::string& s, NormalLaw& out) {
 }
 bool parse(const std::string& s, TangentialLaw& out) {
   static const std::map<std::string, TangentialLaw> names{
-      {"none", TangentialLaw::none}, {"linear", TangentialLaw::linear}, {"mindlin", TangentialLaw::mindlin}};
+      {"none", TangentialLaw::none}, {"linear", TangentialLaw::linear}, {"mindlin", TangentialLaw::mindlin},
+      {"viscous", TangentialLaw::viscous}};
   auto it = names.find(s);
   if (it == names.end()) return false;
   out = it->second;
@@ -82,6 +86,15 @@ void ContactModel::finalize() {
       if (normal == NormalLaw::linear && tangential == TangentialLaw::linear && pp.k_n > 0)
         pp.tangential_damping_ratio = std::sqrt(pp.k_t / pp.k_n);
     }
+}
+
+std::string ContactModel::incompatibility() const {
+  if (tangential == TangentialLaw::viscous && normal != NormalLaw::sintering)
+    return "the viscous tangential law acts on sintering necks: it needs normal: sintering";
+  if (normal == NormalLaw::sintering && (tangential == TangentialLaw::linear || tangential == TangentialLaw::mindlin))
+    return "the sintering law has no elastic spring for a tangential " + to_string(tangential) +
+           " law: use tangential: viscous or none";
+  return "";
 }
 
 std::string ContactModel::describe() const {

@@ -177,10 +177,12 @@ ContactModel read_physics(const Map& ph, const std::vector<Material>& mats) {
   ContactModel model;
   const std::string n = ph.string("normal", "hertz"), t = ph.string("tangential", "none"),
                     r = ph.string("rolling", "none");
-  if (!parse(n, model.normal)) throw ph.error("normal", n, "unknown normal law; expected linear, hertz, dmt or jkr");
+  if (!parse(n, model.normal))
+    throw ph.error("normal", n, "unknown normal law; expected linear, hertz, dmt, jkr or sintering");
   if (!parse(t, model.tangential))
-    throw ph.error("tangential", t, "unknown tangential law; expected none, linear or mindlin");
+    throw ph.error("tangential", t, "unknown tangential law; expected none, linear, mindlin or viscous");
   if (!parse(r, model.rolling)) throw ph.error("rolling", r, "unknown rolling law; expected none or elastic_plastic");
+  if (const std::string why = model.incompatibility(); !why.empty()) throw ph.error("tangential", t, why);
   model.materials = mats;
   model.finalize();
   PairParams defaults;
@@ -319,7 +321,9 @@ Scene load_scene(const std::string& path, int threads) {
   if (!doc || !doc.IsMap()) throw InputError(path, "", "", "the scene must be a YAML mapping");
   const std::string& file = scene.file;
   const Map root(doc, "", file);
-  root.allow({"particles", "materials", "physics", "cell", "walls", "boundary", "protocol", "settings", "output"});
+  // `sintering` is read by the sintering driver (tomodem-sinter, docs/sintering.md) from scene.text.
+  root.allow({"particles", "materials", "physics", "cell", "walls", "boundary", "protocol", "settings", "output",
+              "sintering"});
 
   // ---- materials and particles
   scene.materials = read_materials(root);
@@ -526,7 +530,7 @@ Scene load_scene(const std::string& path, int threads) {
   } else {
     p.steps = pr.integer("steps", 0);
   }
-  if (p.steps <= 0) throw pr.error("steps", Map::text(pr.raw("steps")), "the protocol needs steps or duration > 0");
+  if (p.steps <= 0 && !root.has("sintering")) throw pr.error("steps", Map::text(pr.raw("steps")), "the protocol needs steps or duration > 0");
   p.output_interval = pr.integer("output_interval", std::max(1L, p.steps / 100));
   if (p.output_interval == 0) p.output_interval = std::max(1L, p.steps / 100);
   const Map stop = pr.map("stop");

@@ -10,6 +10,7 @@
 #include "hgrid.hpp"
 #include "bond_kernel.hpp"
 #include "kernel.hpp"
+#include "sinter_law.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/tool.hpp"
 
@@ -91,7 +92,7 @@ struct Simulation::Impl {
   Impl(Particles particles, Cell c, ContactModel m, Settings s)
       : p(std::move(particles)), cell(c), model(std::move(m)), set(s) {
     kern = select_kernels(model);
-    stride = kern.tangential_history + kern.rolling_history;
+    stride = kern.normal_history + kern.tangential_history + kern.rolling_history;
     if (model.needs_rotation()) p.enable_rotation();
     if (p.size() == 0) throw InputError("", "particles", "0", "a scene needs at least one particle");
     double dsum = 0;
@@ -678,7 +679,8 @@ struct Simulation::Impl {
         << network_critical_step() << " s from the current contacts), or an input velocity is too high.";
       throw NumericalError(s.str());
     }
-    if (last.max_overlap_ratio > 0.5) {
+    // Sintering necks interpenetrate by design (Coble's a² = 2Rh): the overlap limit is elastic.
+    if (model.normal != NormalLaw::sintering && last.max_overlap_ratio > 0.5) {
       std::ostringstream s;
       s << "unstable at step " << nstep << " (t = " << t << " s): a contact overlaps by "
         << last.max_overlap_ratio << " of the smaller radius (limit 0.5). Likely cause: a time step of " << dt
@@ -807,6 +809,39 @@ const Particles& Simulation::particles() const { return impl_->p; }
 const Cell& Simulation::cell() const { return impl_->cell; }
 Cell& Simulation::cell() { return impl_->cell; }
 const ContactModel& Simulation::model() const { return impl_->model; }
+ContactModel& Simulation::model() { return impl_->model; }
+Mat3 Simulation::contact_stress() const {
+  Mat3 s = impl_->last.virial;
+  s *= -1.0 / impl_->cell.volume();
+  return s;
+}
+
+double Simulation::viscous_sums(std::vector<double>& sum) const {
+  const Impl& s = *impl_;
+  sum.assign(s.p.size(), 0.0);
+  if (s.model.normal != NormalLaw::sintering || s.start.size() != s.p.size() + 1) return 0;
+  using law::NormalSintering;
+  const bool tangential = s.model.tangential == TangentialLaw::viscous;
+  const Mat3& H = s.cell.h;
+  double modulus = 0;
+  for (std::size_t i = 0; i < s.p.size(); ++i)
+    for (int k = s.start[i]; k < s.start[i + 1]; ++k) {
+      const int j = s.nj[k];
+      const Vec3 d = s.p.x[j] + H * image_vector(s.img[k]) - s.p.x[i];
+      const double l = norm(d), delta = s.p.r[i] + s.p.r[j] - l;
+      const PairParams& pp = s.model.pair(s.p.phase[i], s.p.phase[j]);
+      if (delta <= 0 || !(pp.sinter_delta_b > 0)) continue;
+      const double R = 2 * s.p.r[i] * s.p.r[j] / (s.p.r[i] + s.p.r[j]);
+      double a = s.hist[std::size_t(k) * s.stride];
+      if (a <= 0) a = NormalSintering::initial_neck(pp, R, delta);
+      const double en = NormalSintering::viscosity(pp, a);
+      const double c = en + (tangential ? 5 * NormalSintering::tangential_viscosity(pp, a, R) : 0);
+      sum[i] += c;
+      sum[std::size_t(j)] += c;
+      modulus += en * l * l;
+    }
+  return modulus;
+}
 const Settings& Simulation::settings() const { return impl_->set; }
 std::vector<Wall>& Simulation::walls() { return impl_->walls; }
 CellControl& Simulation::cell_control() { return impl_->control; }
@@ -836,10 +871,21 @@ double Simulation::critical_time_step() const {
       best = std::min(best, 2 * (std::sqrt(1 + z * z) - z) * std::sqrt(0.5 * mmin / pp.k_n));
     }
   } else {
+    if (s.model.normal == NormalLaw::sintering) {
+      // Explicit limit of the viscous necks (Gershgorin on M⁻¹C with the rotations): m_i/Σ(η_n + 5η_t).
+      std::vector<double> visc;
+      viscous_sums(visc);
+      for (std::size_t i = 0; i < visc.size(); ++i)
+        if (visc[i] > 0 && s.p.motion[i] == Motion::free) best = std::min(best, s.p.m[i] / visc[i]);
+    }
     // Rayleigh time of each particle: π R sqrt(ρ/G)/(0.1631ν + 0.8766), G and ν of its phase.
+    // Under the sintering law only phases with a non-sintering (Hertz) pair have a spring.
+    std::vector<char> elastic(s.model.materials.size(), s.model.normal != NormalLaw::sintering);
+    for (int a = 0; a < int(elastic.size()); ++a)
+      for (int b = 0; b < s.model.n_phases; ++b) elastic[a] = elastic[a] || !(s.model.pair(a, b).sinter_delta_b > 0);
     for (std::size_t i = 0; i < s.p.size(); ++i) {
       const int ph = s.p.phase[i];
-      if (ph >= int(s.model.materials.size())) continue;
+      if (ph >= int(s.model.materials.size()) || !elastic[ph]) continue;
       const Material& mat = s.model.materials[ph];
       const double nu = mat.poisson_ratio;
       const double G = mat.youngs_modulus / (2 * (1 + nu));
@@ -896,6 +942,7 @@ std::string Simulation::describe() const {
   std::ostringstream o;
   o << "laws " << s.model.describe() << "; allocated:";
   o << (s.p.has_rotation() ? " rotation" : "");
+  o << (s.kern.normal_history ? " normal-history" : "");
   o << (s.kern.tangential_history ? " tangential-history" : "");
   o << (s.kern.rolling_history ? " rolling-history" : "");
   o << (s.kern.touch_flag ? " contact-flags" : "");

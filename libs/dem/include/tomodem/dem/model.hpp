@@ -9,8 +9,8 @@
 
 namespace tomodem::dem {
 
-enum class NormalLaw { linear, hertz, hertz_dmt, hertz_jkr };
-enum class TangentialLaw { none, linear, mindlin };
+enum class NormalLaw { linear, hertz, hertz_dmt, hertz_jkr, sintering };
+enum class TangentialLaw { none, linear, mindlin, viscous };
 enum class RollingLaw { none, elastic_plastic };
 
 /// Parameters of one phase pair (symmetric). Derived fields are filled by ContactModel::finalize.
@@ -32,6 +32,12 @@ struct PairParams {
   double friction = 0;           ///< Coulomb μ
   double rolling_friction = 0;   ///< μ_r: |M_r| ≤ μ_r R* F_n
   double work_of_adhesion = 0;   ///< w = 2γ for like surfaces, J/m²
+  // Sintering (docs/sintering.md); set by the sintering driver for the current temperature.
+  double sinter_delta_b = 0;      ///< Δ_b = Ω δ_b D_b/(kT), m⁵/(N s); 0: the pair does not sinter (Hertz)
+  double sinter_gamma = 0;        ///< surface energy γ_s, J/m²
+  double sinter_dihedral = 0;     ///< dihedral angle ψ, rad
+  double sinter_eta = 0;          ///< tangential viscosity parameter η (dimensionless)
+  double sinter_initial_neck = 0; ///< a_min/R of a neck when its contact forms
 };
 
 struct ContactModel {
@@ -47,6 +53,8 @@ struct ContactModel {
   void finalize();
 
   bool needs_rotation() const { return tangential != TangentialLaw::none || rolling != RollingLaw::none; }
+  /// Empty when the slots fit together, else why not (e.g. the viscous tangential law needs sintering).
+  std::string incompatibility() const;
   PairParams& pair(int a, int b) { return pairs[static_cast<std::size_t>(a * n_phases + b)]; }
   const PairParams& pair(int a, int b) const { return pairs[static_cast<std::size_t>(a * n_phases + b)]; }
   std::string describe() const;  ///< e.g. "hertz+mindlin+none"

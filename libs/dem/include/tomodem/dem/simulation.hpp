@@ -93,6 +93,8 @@ class Simulation {
   const Cell& cell() const;
   Cell& cell();  ///< the cell may be replaced between steps (e.g. on restart)
   const ContactModel& model() const;
+  /// Pair parameters may change between steps (temperature-dependent sintering, docs/sintering.md).
+  ContactModel& model();
   const Settings& settings() const;
   std::vector<Wall>& walls();
   const std::vector<Wall>& walls() const;
@@ -104,6 +106,12 @@ class Simulation {
   /// Largest step the current state allows: Rayleigh time of the smallest particle for the
   /// Hertz family, the two-particle Verlet limit 2 sqrt(m*/k)(sqrt(1+ζ²)-ζ) for linear laws.
   double critical_time_step() const;
+  /// Viscous laws (sintering): fills Σ_c (η_n + 5 η_t) per particle over its current contacts, N s/m
+  /// (the explicit limit is Δt < m_i / that sum) and returns Σ_c η_n l_c² (N s m, l the branch
+  /// length), from which the cell's viscous modulus Σ η l²/(5V) follows. Zero for elastic laws.
+  double viscous_sums(std::vector<double>& per_particle) const;
+  /// Contact stress of the last tally pass (every step while the cell deforms), Pa, tension positive.
+  Mat3 contact_stress() const;
   /// Sets Δt; throws InputError when it exceeds critical_time_step().
   void set_time_step(double dt);
   double time_step() const;
