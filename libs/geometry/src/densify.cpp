@@ -114,7 +114,6 @@ void validate(const PackSpec& s) {
   if (s.arrangement != "random" && (s.phases.size() != 1 || s.phases[0].psd.kind != PsdKind::monodisperse))
     throw InputError(f, "arrangement", s.arrangement, "lattices need one monodisperse phase");
   if (!(s.friction >= 0)) throw InputError(f, "contact.friction", num(s.friction), "must be >= 0");
-  if (s.normal == dem::NormalLaw::linear && s.friction > 0 && false) {}
 }
 
 PackOutput make_packing(const PackSpec& spec, const std::function<void(const std::string&)>& progress) {

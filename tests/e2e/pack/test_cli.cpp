@@ -1,0 +1,76 @@
+// tomodem-pack from the command line: bad input exits 2, names file/field/value, and leaves no
+// output; a small valid run writes the packing and the summary keys of issue 3.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace fs = std::filesystem;
+
+namespace {
+const std::string kTool = std::string(TOMODEM_BIN_DIR) + "/tomodem-pack";
+
+struct CliRun {
+  int code;
+  std::string out;
+};
+CliRun run(const std::string& args) {
+  const std::string log = ::testing::TempDir() + "pack_cli.log";
+  const int rc = std::system((kTool + " " + args + " > " + log + " 2>&1").c_str());
+  std::ifstream in(log);
+  std::stringstream s;
+  s << in.rdbuf();
+  return {WEXITSTATUS(rc), s.str()};
+}
+std::string config(const std::string& name, const std::string& phases, const std::string& rest) {
+  const std::string p = ::testing::TempDir() + name;
+  std::ofstream(p) << "particles: 300\nphases:\n" << phases << rest;
+  return p;
+}
+const std::string kOne =
+    "  - {name: a, material: {density: 1000, youngs_modulus: 1.0e8}, size_distribution: {kind: monodisperse, diameter: 1.0e-3}}\n";
+}  // namespace
+
+TEST(PackCli, BadInputExits2NamingFieldAndLeavesNoOutput) {
+  const std::string out = ::testing::TempDir() + "bad.h5";
+  fs::remove(out);
+  struct Case {
+    std::string phases, rest, needle;
+  };
+  const Case cases[] = {
+      {"  - {name: a, volume_fraction: 0.6, material: {density: 1000, youngs_modulus: 1e8}, size_distribution: {diameter: 1e-3}}\n"
+       "  - {name: b, volume_fraction: 0.6, material: {density: 1000, youngs_modulus: 1e8}, size_distribution: {diameter: 1e-3}}\n",
+       "target: {pressure: 100}\n", "add up to 1"},
+      {"  - {name: a, material: {density: 1000, youngs_modulus: 1e8}, size_distribution: {diameter: -1e-3}}\n",
+       "target: {pressure: 100}\n", "diameter"},
+      {kOne, "target: {solid_fraction: 0.8}\n", "0.8"},
+      {"  - {name: a, material: {density: 1000, youngs_modulus: 1e8}, size_distribution: {kind: tabulated, file: /nonexistent.csv}}\n",
+       "target: {pressure: 100}\n", "/nonexistent.csv"},
+      {kOne, "target: {pressure: 100}\nbogus: 1\n", "bogus"},
+  };
+  int k = 0;
+  for (const auto& c : cases) {
+    const auto cfg = config("bad" + std::to_string(k++) + ".yaml", c.phases, c.rest);
+    const CliRun r = run(cfg + " -q -o " + out);
+    EXPECT_EQ(r.code, 2) << r.out;
+    EXPECT_NE(r.out.find(c.needle), std::string::npos) << r.out;
+    EXPECT_FALSE(fs::exists(out));
+  }
+}
+
+TEST(PackCli, SmallRunWritesPackingAndSummaryKeys) {
+  const std::string out = ::testing::TempDir() + "ok.h5", js = ::testing::TempDir() + "ok.json";
+  const auto cfg = config("ok.yaml", kOne, "target: {solid_fraction: 0.35}\n");
+  const CliRun r = run(cfg + " -q -o " + out + " --json " + js);
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_TRUE(fs::exists(out));
+  EXPECT_TRUE(fs::exists(fs::path(out).replace_extension(".xdmf")));
+  for (const char* key : {"\"n_particles\"", "\"solid_fraction\"", "\"coordination\"", "\"coordination_no_rattlers\"",
+                          "\"rattler_fraction\"", "\"wall_time_s\"", "\"z_ij\"", "\"psd_max_cdf_deviation\"",
+                          "\"inertial_number\"", "\"unbalanced_force_ratio\""})
+    EXPECT_NE(r.out.find(key), std::string::npos) << key;
+  EXPECT_EQ(run("--help").code, 0);
+  EXPECT_EQ(run("--version").code, 0);
+}
