@@ -1,0 +1,30 @@
+#pragma once
+// Outputs of tomodem-segment (all atomic: temporary name, then rename). Plain types only.
+#include <string>
+#include <vector>
+
+#include "tomodem/core/vec3.hpp"
+#include "tomodem/image/volume.hpp"
+
+namespace tomodem::image {
+
+/// Phase labels as written: 0 solid, 1 fine pore, 2 macropore, 3 second solid phase (multi-Otsu 3).
+inline constexpr const char* kLegend = "0:solid,1:fine_pore,2:macropore,3:solid_phase_2";
+
+/// HDF5: /labels (z,y,x uint8), /macropores (int32 ids, 0 = none), /grains (int32, when given);
+/// each with attributes spacing and origin (m, x y z) and /labels@legend.
+void write_labels_h5(const std::string& path, const Mask& phases, const Labels& macropores, const Labels* grains);
+
+/// The set m != 0 as an OpenVDB narrow-band signed-distance level set (FloatGrid "macropores",
+/// negative inside) in MILLIMETRES (world and values; metadata units = "mm", metres_per_unit):
+/// OpenVDB refuses transforms whose determinant is below 3e-15, i.e. voxels under 14 um in m; from the 0.5 iso-surface of the mask smoothed by a Gaussian of
+/// sigma 1 voxel (sub-voxel surface instead of the voxel staircase), rebuilt by OpenVDB.
+void write_level_set(const std::string& path, const Mask& m, double half_width_vox = 3.0);
+/// Trilinear samples of the level set at world points given in m, returned in m.
+std::vector<double> sample_level_set(const std::string& path, const std::vector<Vec3>& world_points);
+
+/// Mid-plane overlays <prefix>_xy.png, _xz.png, _yz.png (OpenCV): grey between the 0.5 and 99.5
+/// percentiles; fine pores blue, macropores red, a second solid phase green. Returns the paths.
+std::vector<std::string> write_overlays(const std::string& prefix, const Volume& grey, const Mask& phases);
+
+}  // namespace tomodem::image

@@ -1,0 +1,48 @@
+#pragma once
+// Synthetic volumes with ground truth (docs/segment.md, "Phantoms").
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "tomodem/core/packing.hpp"
+#include "tomodem/image/volume.hpp"
+
+namespace tomodem::image {
+
+struct PhantomOptions {
+  std::string kind = "pores";     ///< pores | lamellae | packing | sphere
+  std::size_t n = 96;             ///< cubic size (voxels)
+  double voxel = 1e-5;            ///< m
+  double snr = 5;                 ///< contrast / noise sigma (0 = no noise)
+  double blur = 1.0;              ///< Gaussian PSF sigma (voxels), 0 = none
+  double rings = 0;               ///< ring artefact amplitude (fraction of the contrast)
+  double cupping = 0;             ///< beam-hardening cupping amplitude (fraction of the contrast)
+  uint64_t seed = 1;
+  // pores: macropores (spheres and ellipsoids) and fine pores in a solid matrix
+  int n_macropores = 6;
+  double macro_radius_min = 9, macro_radius_max = 14;  ///< voxels
+  double fine_porosity = 0.02;    ///< target volume fraction of fine pores
+  double fine_radius = 3.0;       ///< voxels
+  // packing: polydisperse touching spheres
+  double grain_radius_min = 7, grain_radius_max = 11;  ///< voxels
+  int n_grains = 60;
+  // sphere: one spherical macropore of this radius (voxels) at the centre (+ sub-voxel offset)
+  double sphere_radius = 15.3;
+  // intensities (before blur and noise)
+  double pore_value = 10000, solid_value = 30000;
+};
+
+/// Truth labels: 0 solid, 1 fine pore, 2 macropore (pores, lamellae, sphere); for packing:
+/// 0 void, k = grain k (1-based index into `packing`).
+struct Phantom {
+  Volume grey;
+  Labels truth;
+  std::vector<std::size_t> macropore_voxels;   ///< per macropore k = truth id k+1 in `macropore_ids`
+  Labels macropore_ids;                        ///< 0 none, k macropore k (pores kind)
+  std::vector<Vec3> macropore_centres;         ///< m
+  Packing packing;                             ///< packing kind: the true spheres (m)
+};
+
+Phantom make_phantom(const PhantomOptions& o);
+
+}  // namespace tomodem::image

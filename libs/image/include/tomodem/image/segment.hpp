@@ -1,0 +1,86 @@
+#pragma once
+// Segmentation building blocks as free functions over tomodem::image grids (STYLE.md P7).
+// Lengths are in voxels unless a name says otherwise; all filters are 3-D and use OpenMP/ITK threads.
+#include <string>
+#include <vector>
+
+#include "tomodem/core/vec3.hpp"
+#include "tomodem/image/volume.hpp"
+
+namespace tomodem::image {
+
+// ---- filtering (filters_itk.cpp, binary.cpp) ----
+/// Median over a (2r+1)^3 box; processed slab by slab (exact, own code, OpenMP).
+Volume median(const Volume& v, int radius);
+/// Gaussian smoothing, sigma in voxels (ITK SmoothingRecursiveGaussianImageFilter).
+Volume gaussian(const Volume& v, double sigma_vox);
+/// Curvature anisotropic diffusion (ITK); time step 0.0625 is the 3-D stability limit.
+Volume anisotropic_diffusion(const Volume& v, int iterations, double conductance, double time_step = 0.0625);
+/// Non-local means (ITK PatchBasedDenoisingImageFilter, Gaussian noise model).
+Volume nlm(const Volume& v, int patch_radius, int iterations);
+
+/// Caps OpenMP and ITK threads together (0: leave the defaults).
+void set_threads(int n);
+
+// ---- thresholds (binary.cpp) ----
+/// Histogram of `bins` bins between the volume's min and max; thresholds in grey values.
+double otsu_threshold(const Volume& v, int bins = 256);
+/// Multi-Otsu with n classes (2 or 3): n-1 thresholds, ascending (exhaustive search).
+std::vector<double> multi_otsu_thresholds(const Volume& v, int classes, int bins = 256);
+/// Ridler–Calvard intermeans: t = (mean below t + mean above t) / 2, iterated from `start`
+/// (Otsu). Unlike Otsu it does not drift toward the larger class when one phase is a few percent
+/// of the volume, so blurred edges are cut at their 50 % level.
+double intermeans_threshold(const Volume& v, double start);
+/// Midpoint of the two phase peaks (histogram modes on either side of `start`, e.g. Otsu):
+/// the 50 % partial-volume level of blurred edges, unbiased by the class sizes.
+double peaks_threshold(const Volume& v, double start);
+/// value >= t  (or < t with `below`) as 0/1.
+Mask threshold(const Volume& v, double t, bool below = false);
+/// Hysteresis: voxels above `low` connected (26-n) to a voxel above `high`; built from ITK's
+/// ReconstructionByDilationImageFilter (marker = above high, mask = above low).
+Mask hysteresis(const Volume& v, double low, double high);
+
+// ---- binary morphology and labelling (binary.cpp) ----
+/// Squared Euclidean distance (in voxels²) of every voxel to the nearest voxel where m == 0
+/// (for m != 0 voxels; 0 elsewhere). Felzenszwalb–Huttenlocher, exact, separable.
+std::vector<float> distance_squared(const Mask& m);
+Mask erode_ball(const Mask& m, double r);   ///< Euclidean ball of radius r (voxels)
+Mask dilate_ball(const Mask& m, double r);
+Mask open_ball(const Mask& m, double r);
+Mask close_ball(const Mask& m, double r);
+/// Connected components of m != 0; 6- or 26-connectivity; labels 1..n ordered by first voxel
+/// (x fastest). Returns n in *count.
+Labels components(const Mask& m, int connectivity, int* count);
+/// Sets to 0 the components (of m != 0) smaller than min_voxels; returns how many were removed.
+int remove_islands(Mask& m, std::size_t min_voxels, int connectivity = 6);
+
+struct Region {
+  int label = 0;
+  std::size_t voxels = 0;
+  Vec3 centroid{};            ///< m (physical)
+  double volume_m3 = 0;
+  double equivalent_diameter_m = 0;  ///< (6V/π)^(1/3)
+  bool touches_surface = false;      ///< has a voxel on a face of the volume
+};
+/// Statistics of labels 1..n.
+std::vector<Region> regions(const Labels& l, int n);
+
+/// Interface area between m != 0 and m == 0 per unit total volume (1/m): face count × 2/3,
+/// the mean-projection correction of voxel faces for isotropic surfaces (Lang et al. 2001).
+double specific_surface(const Mask& m);
+
+// ---- macropores and grains (morph_itk.cpp, binary.cpp) ----
+/// Macropores = pore voxels within r + 1 of the centres where a ball of radius r (voxels) fits
+/// in the pores (an opening whose dilation is one voxel wider, restricted to the pores, so the
+/// digital ball's lost surface voxels come back); labelled (6-connectivity), filtered by min_voxels.
+Labels macropores(const Mask& pores, double r, std::size_t min_voxels, int* count);
+
+struct GrainOptions {
+  double h = 1.0;            ///< h-maxima height of the distance map (voxels)
+  int connectivity = 26;     ///< of markers and watershed
+};
+/// Separates touching grains of `solid`: signed Maurer distance (ITK), h-maxima markers,
+/// morphological watershed from markers on -distance, restricted to the solid.
+Labels watershed_grains(const Mask& solid, const GrainOptions& opt, int* count);
+
+}  // namespace tomodem::image

@@ -1,0 +1,86 @@
+#pragma once
+// Volumes as plain tomodem types (no ITK/OpenCV/OpenVDB here: STYLE.md P7).
+// Index order: x fastest, then y, then z (ITK, MetaImage, TIFF stacks with z = slice);
+// HDF5 datasets are (z, y, x). Physical position of voxel (i,j,k) = origin + (i,j,k)*spacing,
+// in metres (ITK convention: the origin is the centre of the first voxel).
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace tomodem::image {
+
+struct Dims {
+  std::size_t nx = 0, ny = 0, nz = 0;
+  std::size_t count() const { return nx * ny * nz; }
+  bool operator==(const Dims& o) const { return nx == o.nx && ny == o.ny && nz == o.nz; }
+};
+
+template <class T>
+struct Grid {
+  Dims dims;
+  std::array<double, 3> spacing{1, 1, 1};  ///< m, per axis (x, y, z)
+  std::array<double, 3> origin{0, 0, 0};   ///< m, centre of voxel (0,0,0)
+  std::vector<T> v;
+  Grid() = default;
+  Grid(Dims d, T fill = T{}) : dims(d), v(d.count(), fill) {}
+  std::size_t index(std::size_t x, std::size_t y, std::size_t z) const { return (z * dims.ny + y) * dims.nx + x; }
+  T& at(std::size_t x, std::size_t y, std::size_t z) { return v[index(x, y, z)]; }
+  const T& at(std::size_t x, std::size_t y, std::size_t z) const { return v[index(x, y, z)]; }
+  template <class U> void copy_geometry(const Grid<U>& o) { dims = o.dims; spacing = o.spacing; origin = o.origin; }
+};
+
+using Volume = Grid<float>;     ///< grey values (any input type is converted to float on read)
+using Mask = Grid<uint8_t>;     ///< 0/1, or small phase labels
+using Labels = Grid<int32_t>;   ///< component or grain ids, 0 = background
+
+/// How to read an input (docs/segment.md, "Inputs").
+struct ReadOptions {
+  std::string format = "auto";          ///< auto | tiff | mha | nrrd | nifti | raw | h5
+  // raw binary
+  std::array<std::size_t, 3> raw_dims{0, 0, 0};  ///< nx, ny, nz
+  std::string raw_type = "uint8";       ///< uint8 | uint16 | int16 | float32
+  std::string byte_order = "little";    ///< little | big
+  std::size_t raw_header = 0;           ///< bytes to skip
+  // HDF5
+  std::string h5_dataset = "/volume";   ///< (z, y, x); spacing from its attribute "spacing" (m, x y z) if present
+  // voxel size
+  std::array<double, 3> spacing{0, 0, 0};  ///< m; 0 = take from the header
+  double header_unit = 1e-3;            ///< metres per header length unit (ITK/medical files: mm)
+  // region of interest (voxels, after reading) and block-average downsampling
+  bool has_roi = false;
+  std::array<std::size_t, 6> roi{0, 0, 0, 0, 0, 0};  ///< x0, y0, z0, nx, ny, nz
+  int downsample = 1;
+};
+
+/// What the reader found, for the summary's provenance.
+struct ReadInfo {
+  std::string format;          ///< tiff-stack | tiff | mha | nrrd | nifti | raw | h5
+  std::string pixel_type;      ///< as stored: uint8, uint16, int16, float32, ...
+  std::string spacing_source;  ///< header | --spacing
+  std::vector<std::string> files;
+};
+
+/// Reads a volume. `input` is a file, a folder of TIFF slices, or a pattern with * or ?
+/// (slices sorted by name). InputError (exit 2) names the file and what is wrong: unknown
+/// format, truncated or mis-sized raw, mixed slice sizes, missing voxel size, empty volume.
+Volume read_volume(const std::string& input, const ReadOptions& opt, ReadInfo* info = nullptr);
+
+/// Crop to [x0, x0+nx) × … and block-average by `factor` (origin and spacing follow).
+Volume crop(const Volume& v, const std::array<std::size_t, 6>& roi);
+Volume downsample(const Volume& v, int factor);
+
+/// Parses a length with an optional unit: "60.7um", "0.06mm", "6e-5" (m), "3vox" (returns
+/// -3: voxels, negative by convention). Throws InputError naming `option` on nonsense.
+double parse_length(const std::string& option, const std::string& text);
+
+// Writers used by the tools and tests (atomic: temporary name, then rename).
+/// Grey volume in the format given by the extension: .mha .mhd .nrrd .nii .nii.gz .tif (multi-page),
+/// .h5 (dataset /volume), .raw (bare little-endian), or a folder path ending in '/' (TIFF stack).
+/// `as_uint16`: values are rounded and clamped to [0, 65535] first (else float32 where the format allows).
+void write_volume(const std::string& path, const Volume& v, bool as_uint16);
+void write_metaimage(const std::string& path, const Mask& m);    ///< .mha/.mhd (ITK), uint8
+void write_metaimage(const std::string& path, const Labels& m);  ///< .mha/.mhd (ITK), int32
+
+}  // namespace tomodem::image

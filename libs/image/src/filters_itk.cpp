@@ -1,0 +1,63 @@
+// ITK smoothing and denoising (float images only).
+#include <itkCurvatureAnisotropicDiffusionImageFilter.h>
+#include <itkMultiThreaderBase.h>
+#include <itkPatchBasedDenoisingImageFilter.h>
+#include <itkSmoothingRecursiveGaussianImageFilter.h>
+
+#include <omp.h>
+
+#include "itk_image.hpp"
+#include "tomodem/core/error.hpp"
+#include "tomodem/image/segment.hpp"
+
+namespace tomodem::image {
+
+using FI = itk::Image<float, 3>;
+
+void set_threads(int n) {
+  if (n <= 0) return;
+  omp_set_num_threads(n);
+  itk::MultiThreaderBase::SetGlobalDefaultNumberOfThreads(n);
+  itk::MultiThreaderBase::SetGlobalMaximumNumberOfThreads(n);
+}
+
+template <class Filter>
+static Volume run_filter(const Volume& v, Filter* f) {
+  auto in = itkb::to_voxel_image<float>(v);
+  f->SetInput(in);
+  try {
+    f->Update();
+  } catch (const itk::ExceptionObject& e) {
+    throw RuntimeFailure(std::string("ITK filter failed: ") + e.GetDescription());
+  }
+  return itkb::from_voxel_image<float>(f->GetOutput(), v);
+}
+
+Volume gaussian(const Volume& v, double sigma) {
+  if (!(sigma > 0)) throw InputError("", "--sigma", std::to_string(sigma), "must be > 0 (voxels)");
+  auto f = itk::SmoothingRecursiveGaussianImageFilter<FI, FI>::New();
+  f->SetSigma(sigma);
+  return run_filter(v, f.GetPointer());
+}
+
+Volume anisotropic_diffusion(const Volume& v, int iterations, double conductance, double time_step) {
+  if (iterations < 1) throw InputError("", "--iterations", std::to_string(iterations), "must be >= 1");
+  auto f = itk::CurvatureAnisotropicDiffusionImageFilter<FI, FI>::New();
+  f->SetNumberOfIterations(static_cast<unsigned>(iterations));
+  f->SetTimeStep(time_step);
+  f->SetConductanceParameter(conductance);
+  return run_filter(v, f.GetPointer());
+}
+
+Volume nlm(const Volume& v, int patch_radius, int iterations) {
+  if (patch_radius < 1) throw InputError("", "--filter-radius", std::to_string(patch_radius), "must be >= 1");
+  auto f = itk::PatchBasedDenoisingImageFilter<FI, FI>::New();
+  f->SetPatchRadius(static_cast<unsigned>(patch_radius));
+  f->SetNumberOfIterations(static_cast<unsigned>(std::max(1, iterations)));
+  f->SetNoiseModel(itk::PatchBasedDenoisingImageFilter<FI, FI>::NoiseModelEnum::GAUSSIAN);
+  f->SetNoiseModelFidelityWeight(0.0);
+  f->SetKernelBandwidthEstimation(true);
+  return run_filter(v, f.GetPointer());
+}
+
+}  // namespace tomodem::image

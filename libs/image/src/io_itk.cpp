@@ -1,0 +1,175 @@
+// ITK readers and writers: the only I/O translation unit that includes ITK.
+// Pixel types instantiated: float (reading, float output), uint16, uint8, int32 (writing).
+#include <itkImage.h>
+#include <itkImageFileReader.h>
+#include <itkImageFileWriter.h>
+#include <itkImageIOBase.h>
+#include <itkImageIOFactory.h>
+#include <itkImageSeriesReader.h>
+#include <itkImageSeriesWriter.h>
+#include <itkImportImageFilter.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "itk_bridge.hpp"
+#include "tomodem/core/error.hpp"
+
+namespace tomodem::image::itkb {
+namespace {
+
+using FloatImage = itk::Image<float, 3>;
+constexpr double kMmPerM = 1e3;  // files written by tomodem carry spacing in mm (ITK/medical convention)
+
+itk::ImageIOBase::Pointer probe(const std::string& path) {
+  auto io = itk::ImageIOFactory::CreateImageIO(path.c_str(), itk::ImageIOFactory::IOFileModeEnum::ReadMode);
+  if (!io) throw InputError(path, "format", "", "no reader recognises this file (corrupt or unknown format)");
+  try {
+    io->SetFileName(path);
+    io->ReadImageInformation();
+  } catch (const itk::ExceptionObject& e) {
+    throw InputError(path, "header", "", std::string("cannot read: ") + e.GetDescription());
+  }
+  return io;
+}
+
+std::string component_name(const itk::ImageIOBase* io) {
+  using C = itk::IOComponentEnum;
+  switch (io->GetComponentType()) {
+    case C::UCHAR: return "uint8";
+    case C::CHAR: return "int8";
+    case C::USHORT: return "uint16";
+    case C::SHORT: return "int16";
+    case C::UINT: return "uint32";
+    case C::INT: return "int32";
+    case C::FLOAT: return "float32";
+    case C::DOUBLE: return "float64";
+    default: return itk::ImageIOBase::GetComponentTypeAsString(io->GetComponentType());
+  }
+}
+
+Volume from_itk(const FloatImage* img) {
+  const auto size = img->GetLargestPossibleRegion().GetSize();
+  Volume v(Dims{size[0], size[1], size[2]});
+  std::copy_n(img->GetBufferPointer(), v.v.size(), v.v.data());
+  for (int k = 0; k < 3; ++k) {
+    v.spacing[k] = img->GetSpacing()[k];
+    v.origin[k] = img->GetOrigin()[k];
+  }
+  return v;
+}
+
+template <class P, class T>
+typename itk::Image<P, 3>::Pointer to_itk(const Grid<T>& g, P (*conv)(T)) {
+  using Image = itk::Image<P, 3>;
+  auto img = Image::New();
+  typename Image::SizeType size;
+  size[0] = g.dims.nx; size[1] = g.dims.ny; size[2] = g.dims.nz;
+  img->SetRegions(typename Image::RegionType(size));
+  typename Image::SpacingType sp;
+  typename Image::PointType org;
+  for (int k = 0; k < 3; ++k) { sp[k] = g.spacing[k] * kMmPerM; org[k] = g.origin[k] * kMmPerM; }
+  img->SetSpacing(sp);
+  img->SetOrigin(org);
+  img->Allocate();
+  P* out = img->GetBufferPointer();
+  for (std::size_t i = 0; i < g.v.size(); ++i) out[i] = conv(g.v[i]);
+  return img;
+}
+
+uint16_t to_u16(float x) { return static_cast<uint16_t>(std::clamp(std::round(static_cast<double>(x)), 0.0, 65535.0)); }
+float to_f(float x) { return x; }
+uint8_t to_u8(uint8_t x) { return x; }
+int32_t to_i32(int32_t x) { return x; }
+
+template <class Image>
+void write_image(const std::string& path, const Image* img) {
+  auto w = itk::ImageFileWriter<Image>::New();
+  w->SetFileName(path);
+  w->SetInput(img);
+  w->SetUseCompression(false);
+  try {
+    w->Update();
+  } catch (const itk::ExceptionObject& e) {
+    throw RuntimeFailure("cannot write " + path + ": " + e.GetDescription());
+  }
+}
+
+}  // namespace
+
+Volume read_file(const std::string& path, ReadInfo* info) {
+  auto io = probe(path);
+  if (io->GetNumberOfComponents() != 1)
+    throw InputError(path, "pixel", std::to_string(io->GetNumberOfComponents()) + " components", "expected a grey volume");
+  const unsigned nd = io->GetNumberOfDimensions();
+  if (nd != 3 && !(nd == 4 && io->GetDimensions(3) == 1))
+    throw InputError(path, "dimensions", std::to_string(nd), "expected a 3-D volume");
+  if (info) info->pixel_type = component_name(io);
+  auto r = itk::ImageFileReader<FloatImage>::New();
+  r->SetFileName(path);
+  r->SetImageIO(io);
+  try {
+    r->Update();
+  } catch (const itk::ExceptionObject& e) {
+    throw InputError(path, "data", "", std::string("cannot read (truncated or corrupt?): ") + e.GetDescription());
+  }
+  return from_itk(r->GetOutput());
+}
+
+Volume read_series(const std::vector<std::string>& files, ReadInfo* info) {
+  std::size_t nx = 0, ny = 0;
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    auto io = probe(files[i]);
+    const unsigned nd = io->GetNumberOfDimensions();
+    const std::size_t sx = io->GetDimensions(0), sy = nd > 1 ? io->GetDimensions(1) : 1;
+    if (nd > 2 && io->GetDimensions(2) > 1)
+      throw InputError(files[i], "pages", std::to_string(io->GetDimensions(2)), "a stack needs single-page slices");
+    if (io->GetNumberOfComponents() != 1)
+      throw InputError(files[i], "pixel", std::to_string(io->GetNumberOfComponents()) + " components", "expected grey slices");
+    if (i == 0) {
+      nx = sx; ny = sy;
+      if (info) info->pixel_type = component_name(io);
+    } else if (sx != nx || sy != ny) {
+      throw InputError(files[i], "slice size", std::to_string(sx) + "x" + std::to_string(sy),
+                       "differs from the first slice " + files[0] + " (" + std::to_string(nx) + "x" + std::to_string(ny) +
+                           "): mixed slice sizes");
+    }
+  }
+  auto r = itk::ImageSeriesReader<FloatImage>::New();
+  r->SetFileNames(files);
+  try {
+    r->Update();
+  } catch (const itk::ExceptionObject& e) {
+    throw InputError(files.front(), "data", "", std::string("cannot read the stack: ") + e.GetDescription());
+  }
+  return from_itk(r->GetOutput());
+}
+
+void write_file(const std::string& path, const Volume& v, bool as_uint16) {
+  if (as_uint16) write_image(path, to_itk<uint16_t, float>(v, to_u16).GetPointer());
+  else write_image(path, to_itk<float, float>(v, to_f).GetPointer());
+}
+
+void write_series(const std::vector<std::string>& files, const Volume& v, bool as_uint16) {
+  auto run = [&](auto img) {
+    using Image = typename decltype(img)::ObjectType;
+    using Slice = itk::Image<typename Image::PixelType, 2>;
+    auto w = itk::ImageSeriesWriter<Image, Slice>::New();
+    w->SetInput(img);
+    w->SetFileNames(files);
+    try {
+      w->Update();
+    } catch (const itk::ExceptionObject& e) {
+      throw RuntimeFailure("cannot write the TIFF stack: " + std::string(e.GetDescription()));
+    }
+  };
+  if (as_uint16) run(to_itk<uint16_t, float>(v, to_u16));
+  else run(to_itk<float, float>(v, to_f));
+}
+
+void write_file(const std::string& path, const Mask& m) { write_image(path, to_itk<uint8_t, uint8_t>(m, to_u8).GetPointer()); }
+void write_file(const std::string& path, const Labels& m) {
+  write_image(path, to_itk<int32_t, int32_t>(m, to_i32).GetPointer());
+}
+
+}  // namespace tomodem::image::itkb

@@ -1,0 +1,161 @@
+// HDF5 labels (core h5), the OpenVDB level set and OpenCV overlays.
+#include <openvdb/openvdb.h>
+#include <openvdb/tools/Interpolation.h>
+#include <openvdb/tools/ChangeBackground.h>
+#include <openvdb/tools/LevelSetRebuild.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+
+#include "tomodem/core/error.hpp"
+#include "tomodem/core/h5.hpp"
+#include "tomodem/core/output.hpp"
+#include "tomodem/core/tool.hpp"
+#include "tomodem/image/outputs.hpp"
+#include "tomodem/image/segment.hpp"
+
+namespace tomodem::image {
+
+void write_labels_h5(const std::string& path, const Mask& phases, const Labels& macro, const Labels* grains) {
+  const std::string tmp = temporary_path(path);
+  try {
+    h5::File f(tmp, h5::File::Mode::create);
+    const std::vector<std::size_t> dims{phases.dims.nz, phases.dims.ny, phases.dims.nx};
+    const std::vector<double> sp(phases.spacing.begin(), phases.spacing.end()), org(phases.origin.begin(), phases.origin.end());
+    auto geom = [&](const std::string& ds) {
+      f.set_attr(ds, "spacing", sp);
+      f.set_attr(ds, "origin", org);
+      f.set_attr(ds, "axes", std::string("z,y,x (spacing and origin listed x,y,z, m)"));
+    };
+    f.write("/labels", phases.v, dims);
+    f.set_attr("/labels", "legend", std::string(kLegend));
+    geom("/labels");
+    f.write("/macropores", macro.v, dims);
+    geom("/macropores");
+    if (grains) {
+      f.write("/grains", grains->v, dims);
+      geom("/grains");
+    }
+  } catch (...) {
+    std::remove(tmp.c_str());
+    throw;
+  }
+  commit_output(path);
+}
+
+namespace {
+constexpr double kMmPerM = 1e3;
+double voxel_size(const Mask& m) {
+  const double s = m.spacing[0];
+  if (std::abs(m.spacing[1] - s) > 1e-3 * s || std::abs(m.spacing[2] - s) > 1e-3 * s)
+    warn("the level set uses the x voxel size for all axes (anisotropic voxels)");
+  return s;
+}
+}  // namespace
+
+void write_level_set(const std::string& path, const Mask& m, double half_width_vox) {
+  openvdb::initialize();
+  Volume f;
+  f.copy_geometry(m);
+  f.v.resize(m.v.size());
+  for (std::size_t i = 0; i < m.v.size(); ++i) f.v[i] = m.v[i] ? 1.0f : 0.0f;
+  const Volume s = gaussian(f, 1.0);
+  // phi = 0.5 - smoothed indicator: negative inside; background +0.5 (outside).
+  // Built in voxel units (OpenVDB's mesher rejects voxel sizes of ~1e-5 as zero scale), then
+  // values and transform are scaled to metres.
+  const double h = voxel_size(m) * kMmPerM;  // OpenVDB refuses scale maps with |det| < 3e-15: store mm
+  auto fog = openvdb::FloatGrid::create(0.5f);
+  auto acc = fog->getAccessor();
+  for (std::size_t z = 0; z < m.dims.nz; ++z)
+    for (std::size_t y = 0; y < m.dims.ny; ++y)
+      for (std::size_t x = 0; x < m.dims.nx; ++x) {
+        const float v = s.at(x, y, z);
+        if (v > 1e-4f) acc.setValue(openvdb::Coord(int(x), int(y), int(z)), 0.5f - v);
+      }
+  auto ls = openvdb::tools::levelSetRebuild(*fog, 0.0f, float(half_width_vox));
+  for (auto it = ls->beginValueOn(); it; ++it) it.setValue(float(*it * h));
+  openvdb::tools::changeLevelSetBackground(ls->tree(), float(ls->background() * h));
+  auto xf = openvdb::math::Transform::createLinearTransform(h);
+  xf->postTranslate(openvdb::Vec3d(m.origin[0], m.origin[1], m.origin[2]) * kMmPerM);
+  ls->setTransform(xf);
+  ls->setName("macropores");
+  ls->setGridClass(openvdb::GRID_LEVEL_SET);
+  ls->insertMeta("units", openvdb::StringMetadata("mm"));
+  ls->insertMeta("metres_per_unit", openvdb::DoubleMetadata(1e-3));
+  const std::string tmp = temporary_path(path);
+  try {
+    openvdb::io::File file(tmp);
+    openvdb::GridPtrVec grids{ls};
+    file.write(grids);
+    file.close();
+  } catch (const std::exception& e) {
+    std::remove(tmp.c_str());
+    throw RuntimeFailure("cannot write " + path + ": " + e.what());
+  }
+  commit_output(path);
+}
+
+std::vector<double> sample_level_set(const std::string& path, const std::vector<Vec3>& pts) {
+  openvdb::initialize();
+  openvdb::io::File file(path);
+  try {
+    file.open();
+  } catch (const std::exception& e) {
+    throw InputError(path, "", "", std::string("cannot open: ") + e.what());
+  }
+  auto base = file.readGrid("macropores");
+  file.close();
+  auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(base);
+  if (!grid) throw InputError(path, "macropores", "", "not a float grid");
+  openvdb::tools::GridSampler<openvdb::FloatGrid, openvdb::tools::BoxSampler> sampler(*grid);
+  std::vector<double> out;
+  for (const auto& p : pts) out.push_back(sampler.wsSample(openvdb::Vec3d(p.x, p.y, p.z) * kMmPerM) / kMmPerM);
+  return out;
+}
+
+std::vector<std::string> write_overlays(const std::string& prefix, const Volume& grey, const Mask& phases) {
+  // Grey window from a subsample of the volume.
+  std::vector<float> sample;
+  const std::size_t step = std::max<std::size_t>(1, grey.v.size() / 200000);
+  for (std::size_t i = 0; i < grey.v.size(); i += step) sample.push_back(grey.v[i]);
+  std::sort(sample.begin(), sample.end());
+  const double lo = sample[std::size_t(0.005 * double(sample.size() - 1))];
+  const double hi = std::max(lo + 1e-12, double(sample[std::size_t(0.995 * double(sample.size() - 1))]));
+  const auto& d = grey.dims;
+  std::vector<std::string> written;
+  struct Plane { const char* name; std::size_t w, h; };
+  const Plane planes[3] = {{"xy", d.nx, d.ny}, {"xz", d.nx, d.nz}, {"yz", d.ny, d.nz}};
+  for (int p = 0; p < 3; ++p) {
+    cv::Mat img(int(planes[p].h), int(planes[p].w), CV_8UC3);
+    for (std::size_t b = 0; b < planes[p].h; ++b)
+      for (std::size_t a = 0; a < planes[p].w; ++a) {
+        std::size_t x, y, z;
+        if (p == 0) { x = a; y = b; z = d.nz / 2; }
+        else if (p == 1) { x = a; y = d.ny / 2; z = b; }
+        else { x = d.nx / 2; y = a; z = b; }
+        const double g = std::clamp((grey.at(x, y, z) - lo) / (hi - lo), 0.0, 1.0) * 255.0;
+        cv::Vec3d c(g, g, g);  // BGR
+        const uint8_t ph = phases.at(x, y, z);
+        const cv::Vec3d tint = ph == 1 ? cv::Vec3d(255, 80, 0) : ph == 2 ? cv::Vec3d(0, 0, 255)
+                                                           : ph == 3 ? cv::Vec3d(0, 200, 0) : c;
+        if (ph != 0) c = 0.55 * c + 0.45 * tint;
+        img.at<cv::Vec3b>(int(b), int(a)) = cv::Vec3b(cv::saturate_cast<uint8_t>(c[0]), cv::saturate_cast<uint8_t>(c[1]),
+                                                      cv::saturate_cast<uint8_t>(c[2]));
+      }
+    const int scale = std::max(1, int(std::ceil(256.0 / double(std::max(planes[p].w, planes[p].h)))));
+    if (scale > 1) cv::resize(img, img, cv::Size(), scale, scale, cv::INTER_NEAREST);
+    std::vector<uchar> png;
+    if (!cv::imencode(".png", img, png)) throw RuntimeFailure("PNG encoding failed");
+    const std::string path = prefix + "_" + planes[p].name + ".png";
+    write_text_atomic(path, std::string(png.begin(), png.end()));
+    written.push_back(path);
+  }
+  return written;
+}
+
+}  // namespace tomodem::image

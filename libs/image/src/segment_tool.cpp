@@ -1,0 +1,334 @@
+// tomodem-segment and tomodem-phantom drivers: read, filter, threshold, clean, label, measure, write.
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include "tomodem/core/error.hpp"
+#include "tomodem/core/h5.hpp"
+#include "tomodem/core/output.hpp"
+#include "tomodem/core/packing_io.hpp"
+#include "tomodem/core/tool.hpp"
+#include "tomodem/image/outputs.hpp"
+#include "tomodem/image/segment.hpp"
+#include "tomodem/image/tools.hpp"
+
+namespace tomodem::image {
+namespace {
+
+using json = nlohmann::json;
+
+std::vector<std::size_t> parse_list(const std::string& option, const std::string& text, std::size_t n) {
+  std::vector<std::size_t> out;
+  std::stringstream s(text);
+  std::string item;
+  while (std::getline(s, item, ',')) {
+    try {
+      std::size_t pos = 0;
+      const long v = std::stol(item, &pos);
+      if (pos != item.size() || v < 0) throw std::invalid_argument(item);
+      out.push_back(std::size_t(v));
+    } catch (const std::exception&) {
+      throw InputError("", option, text, "expected " + std::to_string(n) + " non-negative integers separated by commas");
+    }
+  }
+  if (out.size() != n) throw InputError("", option, text, "expected " + std::to_string(n) + " values");
+  return out;
+}
+
+double to_voxels(const std::string& option, const std::string& text, double voxel) {
+  const double L = parse_length(option, text);
+  return L < 0 ? -L : L / voxel;
+}
+
+std::string phase_rule(const SegmentConfig& c) { return c.pores_bright ? "pores above the threshold" : "pores below the threshold"; }
+
+}  // namespace
+
+std::string run_segment(const SegmentConfig& cfgin) {
+  const auto t0 = std::chrono::steady_clock::now();
+  SegmentConfig cfg = cfgin;
+  ReadOptions ro = cfg.read;
+  if (!cfg.spacing_text.empty()) {
+    const double s = parse_length("--spacing", cfg.spacing_text);
+    if (s < 0) throw InputError("", "--spacing", cfg.spacing_text, "give a physical length (e.g. 60.7um), not voxels");
+    ro.spacing = {s, s, s};
+  }
+  if (!cfg.roi_text.empty()) {
+    const auto r = parse_list("--roi", cfg.roi_text, 6);
+    std::copy(r.begin(), r.end(), ro.roi.begin());
+    ro.has_roi = true;
+  }
+  if (!cfg.raw_dims_text.empty()) {
+    const auto r = parse_list("--raw-dims", cfg.raw_dims_text, 3);
+    std::copy(r.begin(), r.end(), ro.raw_dims.begin());
+  }
+  // Check output names before the work, so a typo costs nothing.
+  if (!cfg.mha.empty() && !(cfg.mha.size() > 4 && (cfg.mha.substr(cfg.mha.size() - 4) == ".mha" ||
+                                                   cfg.mha.substr(cfg.mha.size() - 4) == ".mhd")))
+    throw InputError("", "--mha", cfg.mha, "MetaImage output needs a .mha or .mhd name");
+
+  ReadInfo rinfo;
+  info("reading " + cfg.input);
+  Volume v = read_volume(cfg.input, ro, &rinfo);
+  const auto [mn, mx] = std::minmax_element(v.v.begin(), v.v.end());
+  if (!(*mx > *mn))
+    throw InputError(cfg.input, "volume", std::to_string(*mn), "constant volume (every voxel has this value): nothing to segment");
+  json summary;
+  summary["input"] = {{"path", cfg.input}, {"format", rinfo.format}, {"pixel_type", rinfo.pixel_type},
+                      {"files", rinfo.files.size()}, {"dims", {v.dims.nx, v.dims.ny, v.dims.nz}},
+                      {"spacing_m", v.spacing}, {"origin_m", v.origin}, {"spacing_source", rinfo.spacing_source}};
+  // ---- filtering
+  json filt{{"name", cfg.filter}};
+  if (cfg.filter == "median") { v = median(v, cfg.filter_radius); filt["radius_vox"] = cfg.filter_radius; }
+  else if (cfg.filter == "gaussian") { v = gaussian(v, cfg.sigma); filt["sigma_vox"] = cfg.sigma; }
+  else if (cfg.filter == "cad") {
+    v = anisotropic_diffusion(v, cfg.iterations, cfg.conductance);
+    filt["iterations"] = cfg.iterations;
+    filt["conductance"] = cfg.conductance;
+    filt["time_step"] = 0.0625;
+  } else if (cfg.filter == "nlm") {
+    v = nlm(v, cfg.filter_radius, cfg.iterations);
+    filt["patch_radius_vox"] = cfg.filter_radius;
+    filt["iterations"] = cfg.iterations;
+  } else if (cfg.filter != "none") {
+    throw InputError("", "--filter", cfg.filter, "expected none, median, gaussian, cad or nlm");
+  }
+  info("filter: " + cfg.filter);
+  // ---- thresholds: solid (1) and an optional second solid phase (phase2)
+  std::vector<double> t;
+  Mask solid, phase2;
+  const bool dark = !cfg.pores_bright;
+  if (cfg.method == "otsu" || cfg.method == "multiotsu2") {
+    t = {otsu_threshold(v)};
+  } else if (cfg.method == "peaks") {
+    const double t_otsu = otsu_threshold(v);
+    t = {peaks_threshold(v, t_otsu)};
+    summary["otsu_threshold"] = t_otsu;
+  } else if (cfg.method == "intermeans") {
+    const double t_otsu = otsu_threshold(v);
+    t = {intermeans_threshold(v, t_otsu)};
+    summary["otsu_threshold"] = t_otsu;
+  } else if (cfg.method == "multiotsu3") {
+    t = multi_otsu_thresholds(v, 3);
+  } else if (cfg.method == "manual") {
+    if (cfg.levels.empty() || cfg.levels.size() > 2)
+      throw InputError("", "--levels", "", "manual thresholding needs one or two --levels");
+    t = cfg.levels;
+    std::sort(t.begin(), t.end());
+  } else if (cfg.method == "hysteresis") {
+    if (cfg.levels.size() != 2) throw InputError("", "--levels", "", "hysteresis needs --levels LOW,HIGH");
+    t = cfg.levels;
+    std::sort(t.begin(), t.end());
+  } else {
+    throw InputError("", "--method", cfg.method, "expected otsu, peaks, intermeans, multiotsu2, multiotsu3, manual or hysteresis");
+  }
+  if (cfg.method == "hysteresis") {
+    if (dark) solid = hysteresis(v, t[0], t[1]);
+    else {  // solid is dark: hysteresis on the negated volume
+      Volume n = v;
+      for (auto& x : n.v) x = -x;
+      solid = hysteresis(n, -t[1], -t[0]);
+    }
+  } else if (dark) {
+    solid = threshold(v, t.front());
+    if (t.size() == 2) phase2 = threshold(v, t[1]);
+  } else {
+    solid = threshold(v, t.back(), true);
+    if (t.size() == 2) phase2 = threshold(v, t[0], true);
+  }
+  // ---- cleaning
+  if (cfg.open_r > 0) solid = open_ball(solid, cfg.open_r);
+  if (cfg.close_r > 0) solid = close_ball(solid, cfg.close_r);
+  int removed_solid = 0, removed_pore = 0;
+  if (cfg.min_island > 1) {
+    removed_solid = remove_islands(solid, cfg.min_island, cfg.connectivity);
+    Mask pores = solid;
+    for (auto& x : pores.v) x = !x;
+    removed_pore = remove_islands(pores, cfg.min_island, cfg.connectivity);
+    for (std::size_t i = 0; i < pores.v.size(); ++i) solid.v[i] = !pores.v[i];
+  }
+  Mask pores = solid;
+  for (auto& x : pores.v) x = !x;
+  // ---- macropores
+  const double macro_r = to_voxels("--macropore-radius", cfg.macro_radius_text, v.spacing[0]);
+  int n_macro = 0;
+  const Labels macro = macropores(pores, macro_r, cfg.macro_min_voxels, &n_macro);
+  info("macropores: " + std::to_string(n_macro));
+  Mask phases;
+  phases.copy_geometry(v);
+  phases.v.resize(v.v.size());
+  std::size_t n_pore = 0, n_macro_vox = 0;
+  for (std::size_t i = 0; i < phases.v.size(); ++i) {
+    uint8_t p = 0;
+    if (macro.v[i]) { p = 2; ++n_macro_vox; }
+    else if (pores.v[i]) p = 1;
+    else if (!phase2.v.empty() && phase2.v[i]) p = 3;
+    n_pore += pores.v[i];
+    phases.v[i] = p;
+  }
+  const double N = double(v.v.size());
+  summary["porosity"] = double(n_pore) / N;
+  summary["macroporosity"] = double(n_macro_vox) / N;
+  summary["fine_porosity"] = double(n_pore - n_macro_vox) / N;
+  summary["n_macropores"] = n_macro;
+  summary["thresholds"] = t;
+  summary["threshold_rule"] = phase_rule(cfg) + " (value >= t is the brighter class)";
+  summary["method"] = cfg.method;
+  summary["filter"] = filt;
+  summary["cleaning"] = {{"open_radius_vox", cfg.open_r}, {"close_radius_vox", cfg.close_r},
+                         {"min_island_vox", cfg.min_island}, {"solid_islands_removed", removed_solid},
+                         {"pore_islands_removed", removed_pore}, {"connectivity", cfg.connectivity}};
+  summary["macropore_radius_m"] = macro_r * v.spacing[0];
+  summary["macropore_radius_vox"] = macro_r;
+  summary["specific_surface_per_m"] = specific_surface(solid);
+  const auto regs = regions(macro, n_macro);
+  json mp = json::array();
+  std::vector<double> diam;
+  int touching = 0;
+  for (const auto& r : regs) {
+    mp.push_back({{"id", r.label}, {"voxels", r.voxels}, {"volume_m3", r.volume_m3},
+                  {"equivalent_diameter_m", r.equivalent_diameter_m}, {"centroid_m", {r.centroid.x, r.centroid.y, r.centroid.z}},
+                  {"touches_surface", r.touches_surface}});
+    diam.push_back(r.equivalent_diameter_m);
+    touching += r.touches_surface;
+  }
+  std::sort(diam.begin(), diam.end());
+  summary["macropores"] = mp;
+  summary["n_macropores_touching_surface"] = touching;
+  summary["pore_size_distribution"] = {{"kind", "macropore equivalent diameters (6V/pi)^(1/3), ascending"},
+                                       {"equivalent_diameters_m", diam},
+                                       {"median_m", diam.empty() ? 0.0 : diam[diam.size() / 2]}};
+  // ---- grains
+  Labels grains;
+  Packing packing;
+  if (cfg.grains) {
+    int n = 0;
+    GrainOptions go;
+    go.h = cfg.h;
+    grains = watershed_grains(solid, go, &n);
+    const auto g = regions(grains, n);
+    const auto d2 = distance_squared(solid);
+    std::vector<float> inscribed(std::size_t(n) + 1, 0.0f);
+    std::vector<std::size_t> n_phase2(std::size_t(n) + 1, 0);
+    for (std::size_t i = 0; i < d2.size(); ++i) {
+      const auto k = std::size_t(grains.v[i]);
+      if (!k) continue;
+      inscribed[k] = std::max(inscribed[k], d2[i]);
+      if (phases.v[i] == 3) ++n_phase2[k];
+    }
+    std::vector<double> vols;
+    for (const auto& r : g) vols.push_back(double(r.voxels));
+    std::sort(vols.begin(), vols.end());
+    const double med = vols.empty() ? 0 : vols[vols.size() / 2];
+    int over = 0, under = 0, cut = 0;
+    packing.particles.resize(0);
+    for (const auto& r : g) {
+      if (!r.voxels) continue;
+      const double rin = std::sqrt(double(inscribed[std::size_t(r.label)]));
+      const double ratio = double(r.voxels) / (4.0 / 3.0 * M_PI * rin * rin * rin);
+      under += ratio > 2.0;               // much more volume than its largest inscribed ball: merged grains
+      over += double(r.voxels) < 0.2 * med;  // a fragment far below the typical grain
+      cut += r.touches_surface;
+      packing.particles.position.push_back(r.centroid);
+      packing.particles.radius.push_back(0.5 * r.equivalent_diameter_m);
+      packing.particles.phase.push_back(2 * n_phase2[std::size_t(r.label)] > r.voxels ? 1 : 0);
+    }
+    const Vec3 lo{v.origin[0] - 0.5 * v.spacing[0], v.origin[1] - 0.5 * v.spacing[1], v.origin[2] - 0.5 * v.spacing[2]};
+    packing.cell = Cell::box(lo, lo + Vec3{double(v.dims.nx) * v.spacing[0], double(v.dims.ny) * v.spacing[1],
+                                           double(v.dims.nz) * v.spacing[2]}, false);
+    Material m1, m2;
+    m1.name = "solid";
+    m2.name = "solid_phase_2";
+    packing.materials = {m1};
+    if (!phase2.v.empty()) packing.materials.push_back(m2);
+    summary["n_grains"] = packing.particles.size();
+    summary["grains"] = {{"h_vox", cfg.h}, {"median_voxels", med}, {"cut_by_surface", cut},
+                         {"over_segmentation_suspects", over}, {"under_segmentation_suspects", under},
+                         {"rules", "over: volume < 0.2 x median; under: volume > 2 x the ball of its largest inscribed radius"}};
+  }
+  // ---- outputs (everything computed: nothing is written before this point)
+  json outs;
+  if (!cfg.output.empty()) { write_labels_h5(cfg.output, phases, macro, cfg.grains ? &grains : nullptr); outs["labels_h5"] = cfg.output; }
+  if (!cfg.mha.empty()) { write_metaimage(cfg.mha, phases); outs["labels_mha"] = cfg.mha; }
+  if (!cfg.vdb.empty()) {
+    Mask m;
+    m.copy_geometry(phases);
+    m.v.resize(phases.v.size());
+    for (std::size_t i = 0; i < m.v.size(); ++i) m.v[i] = phases.v[i] == 2;
+    write_level_set(cfg.vdb, m);
+    outs["macropores_vdb"] = cfg.vdb;
+  }
+  if (!cfg.overlay.empty()) outs["overlays"] = write_overlays(cfg.overlay, v, phases);
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (cfg.grains && !cfg.packing.empty()) {
+    packing.provenance.tool = "tomodem-segment";
+    packing.provenance.version = version_string();
+    packing.provenance.parameters = "input: " + cfg.input + "\nh_vox: " + std::to_string(cfg.h);
+    packing.provenance.wall_time_s = wall;
+    packing.provenance.created_utc = utc_now();
+    write_packing(cfg.packing, packing);
+    outs["packing"] = cfg.packing;
+  }
+  summary["outputs"] = outs;
+  summary["wall_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  summary["tool"] = "tomodem-segment";
+  summary["version"] = version_string();
+  const std::string text = summary.dump(2) + "\n";
+  if (!cfg.json.empty() && cfg.json != "-") write_text_atomic(cfg.json, text);
+  return text;
+}
+
+std::string run_phantom(const PhantomConfig& c) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (c.output.empty()) throw InputError("", "--output", "", "an output volume is required");
+  const Phantom P = make_phantom(c.opt);
+  json s;
+  s["kind"] = c.opt.kind;
+  s["size"] = c.opt.n;
+  s["voxel_m"] = c.opt.voxel;
+  s["snr"] = c.opt.snr;
+  s["blur_vox"] = c.opt.blur;
+  s["rings"] = c.opt.rings;
+  s["cupping"] = c.opt.cupping;
+  s["seed"] = c.opt.seed;
+  std::size_t pore = 0;
+  for (auto x : P.truth.v) pore += (c.opt.kind == "packing") ? (x == 0) : (x != 0);
+  s["true_porosity"] = double(pore) / double(P.truth.v.size());
+  s["n_macropores"] = P.macropore_voxels.size();
+  s["macropore_voxels"] = P.macropore_voxels;
+  if (c.opt.kind == "packing") s["n_grains"] = P.packing.particles.size();
+  write_volume(c.output, P.grey, !c.as_float);
+  if (!c.truth.empty()) {
+    const std::string tmp = temporary_path(c.truth);
+    {
+      h5::File f(tmp, h5::File::Mode::create);
+      const std::vector<std::size_t> dims{c.opt.n, c.opt.n, c.opt.n};
+      f.write("/labels", P.truth.v, dims);
+      f.set_attr("/labels", "legend", std::string(c.opt.kind == "packing" ? "0:void,k:grain k (1-based row of the packing)"
+                                                                            : "0:solid,1:fine_pore,2:macropore"));
+      f.write("/macropores", P.macropore_ids.v, dims);
+      f.set_attr("/labels", "spacing", std::vector<double>(3, c.opt.voxel));
+    }
+    commit_output(c.truth);
+    s["truth"] = c.truth;
+    if (c.opt.kind == "packing") {
+      Packing pk = P.packing;
+      pk.provenance.tool = "tomodem-phantom";
+      pk.provenance.version = version_string();
+      pk.provenance.created_utc = utc_now();
+      const std::string pp = c.truth + ".packing.h5";
+      write_packing(pp, pk);
+      s["truth_packing"] = pp;
+    }
+  }
+  s["output"] = c.output;
+  s["wall_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const std::string text = s.dump(2) + "\n";
+  if (!c.json.empty() && c.json != "-") write_text_atomic(c.json, text);
+  return text;
+}
+
+}  // namespace tomodem::image

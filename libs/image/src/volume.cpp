@@ -1,0 +1,354 @@
+// Format dispatch, bare raw and HDF5 readers, crop and downsampling. No third-party headers.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fnmatch.h>
+#include <fstream>
+#include <sstream>
+
+#include "itk_bridge.hpp"
+#include "tomodem/core/error.hpp"
+#include "tomodem/core/h5.hpp"
+#include "tomodem/core/output.hpp"
+#include "tomodem/image/volume.hpp"
+
+namespace fs = std::filesystem;
+
+namespace tomodem::image {
+namespace {
+
+std::string lower(std::string s) {
+  for (auto& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+bool ends_with(const std::string& s, const std::string& e) {
+  return s.size() >= e.size() && s.compare(s.size() - e.size(), e.size(), e) == 0;
+}
+
+std::string detect_format(const std::string& input) {
+  if (input.find_first_of("*?") != std::string::npos) return "tiff-stack";
+  if (fs::is_directory(input)) return "tiff-stack";
+  const std::string l = lower(input);
+  if (ends_with(l, ".tif") || ends_with(l, ".tiff")) return "tiff";
+  if (ends_with(l, ".mha") || ends_with(l, ".mhd")) return "mha";
+  if (ends_with(l, ".nrrd") || ends_with(l, ".nhdr")) return "nrrd";
+  if (ends_with(l, ".nii") || ends_with(l, ".nii.gz")) return "nifti";
+  if (ends_with(l, ".raw") || ends_with(l, ".bin") || ends_with(l, ".vol")) return "raw";
+  if (ends_with(l, ".h5") || ends_with(l, ".hdf5") || ends_with(l, ".nxs")) return "h5";
+  if (ends_with(l, ".zarr") || ends_with(l, ".am"))
+    throw InputError(input, "format", fs::path(input).extension().string(),
+                     "Zarr and AmiraMesh are not supported; convert to MetaImage, TIFF or HDF5");
+  throw InputError(input, "format", fs::path(input).extension().string(),
+                   "unknown format (known: TIFF stack/folder, .tif, .mha/.mhd, .nrrd, .nii, .raw with --raw-dims, .h5)");
+}
+
+std::vector<std::string> stack_files(const std::string& input) {
+  std::string dir = input, pattern = "*";
+  if (!fs::is_directory(input)) {
+    dir = fs::path(input).parent_path().string();
+    if (dir.empty()) dir = ".";
+    pattern = fs::path(input).filename().string();
+  }
+  if (!fs::is_directory(dir)) throw InputError(input, "", "", "no such folder");
+  std::vector<std::string> files;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    if (!e.is_regular_file()) continue;
+    const std::string name = e.path().filename().string();
+    const std::string l = lower(name);
+    if (pattern == "*" && !(ends_with(l, ".tif") || ends_with(l, ".tiff"))) continue;
+    if (fnmatch(pattern.c_str(), name.c_str(), 0) == 0) files.push_back(e.path().string());
+  }
+  std::sort(files.begin(), files.end());
+  if (files.empty()) throw InputError(input, "", "", "no TIFF slices found");
+  return files;
+}
+
+std::size_t type_size(const std::string& t) {
+  if (t == "uint8" || t == "int8") return 1;
+  if (t == "uint16" || t == "int16") return 2;
+  if (t == "float32" || t == "uint32" || t == "int32") return 4;
+  if (t == "float64") return 8;
+  throw InputError("", "--raw-type", t, "expected uint8, int8, uint16, int16, uint32, int32, float32 or float64");
+}
+
+template <class T>
+void convert(const char* p, std::size_t n, bool swap, std::vector<float>& out) {
+  for (std::size_t i = 0; i < n; ++i) {
+    unsigned char b[sizeof(T)];
+    std::memcpy(b, p + i * sizeof(T), sizeof(T));
+    if (swap) std::reverse(b, b + sizeof(T));
+    T val;
+    std::memcpy(&val, b, sizeof(T));
+    out[i] = static_cast<float>(val);
+  }
+}
+
+Volume read_raw(const std::string& path, const ReadOptions& o, ReadInfo* info) {
+  const auto [nx, ny, nz] = o.raw_dims;
+  if (nx == 0 || ny == 0 || nz == 0)
+    throw InputError(path, "--raw-dims", "", "a raw file needs its dimensions (--raw-dims NX,NY,NZ)");
+  const std::size_t bytes = type_size(o.raw_type);
+  const std::uintmax_t expected = o.raw_header + nx * ny * nz * bytes;
+  std::error_code ec;
+  const std::uintmax_t size = fs::file_size(path, ec);
+  if (ec) throw InputError(path, "", "", "cannot read file size: " + ec.message());
+  if (size < expected)
+    throw InputError(path, "size", std::to_string(size) + " bytes",
+                     "truncated: dims " + std::to_string(nx) + "x" + std::to_string(ny) + "x" + std::to_string(nz) + " " +
+                         o.raw_type + " need " + std::to_string(expected) + " bytes");
+  if (size > expected)
+    throw InputError(path, "size", std::to_string(size) + " bytes",
+                     "does not match dims " + std::to_string(nx) + "x" + std::to_string(ny) + "x" + std::to_string(nz) +
+                         " " + o.raw_type + " (" + std::to_string(expected) + " bytes); check --raw-dims/--raw-type/--raw-header");
+  if (o.byte_order != "little" && o.byte_order != "big")
+    throw InputError("", "--byte-order", o.byte_order, "expected little or big");
+  std::ifstream in(path, std::ios::binary);
+  in.seekg(static_cast<std::streamoff>(o.raw_header));
+  Volume v(Dims{nx, ny, nz});
+  const bool swap = (o.byte_order == "big");  // x86: little-endian host
+  const std::size_t slab = nx * ny;
+  std::vector<char> buf(slab * bytes);
+  for (std::size_t z = 0; z < nz; ++z) {
+    in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
+    if (!in) throw InputError(path, "data", "slice " + std::to_string(z), "read failed (truncated?)");
+    std::vector<float> out(slab);
+    const auto& t = o.raw_type;
+    if (t == "uint8") convert<uint8_t>(buf.data(), slab, false, out);
+    else if (t == "int8") convert<int8_t>(buf.data(), slab, false, out);
+    else if (t == "uint16") convert<uint16_t>(buf.data(), slab, swap, out);
+    else if (t == "int16") convert<int16_t>(buf.data(), slab, swap, out);
+    else if (t == "uint32") convert<uint32_t>(buf.data(), slab, swap, out);
+    else if (t == "int32") convert<int32_t>(buf.data(), slab, swap, out);
+    else if (t == "float32") convert<float>(buf.data(), slab, swap, out);
+    else convert<double>(buf.data(), slab, swap, out);
+    std::copy(out.begin(), out.end(), v.v.begin() + static_cast<std::ptrdiff_t>(z * slab));
+  }
+  if (info) info->pixel_type = o.raw_type;
+  return v;
+}
+
+Volume read_h5(const std::string& path, const ReadOptions& o, bool* has_spacing) {
+  h5::File f(path, h5::File::Mode::read);
+  std::vector<std::size_t> d;
+  const auto data = f.read_double(o.h5_dataset, &d);
+  if (d.size() != 3)
+    throw InputError(path, o.h5_dataset, std::to_string(d.size()) + "-D", "expected a 3-D dataset (z, y, x)");
+  Volume v(Dims{d[2], d[1], d[0]});
+  for (std::size_t i = 0; i < data.size(); ++i) v.v[i] = static_cast<float>(data[i]);
+  *has_spacing = false;
+  if (f.has_attr(o.h5_dataset, "spacing")) {
+    const auto s = f.attr_doubles(o.h5_dataset, "spacing");
+    if (s.size() != 3) throw InputError(path, o.h5_dataset + "@spacing", "", "expected 3 values (x, y, z) in m");
+    v.spacing = {s[0], s[1], s[2]};
+    *has_spacing = true;
+  }
+  if (f.has_attr(o.h5_dataset, "origin")) {
+    const auto s = f.attr_doubles(o.h5_dataset, "origin");
+    if (s.size() == 3) v.origin = {s[0], s[1], s[2]};
+  }
+  return v;
+}
+
+}  // namespace
+
+double parse_length(const std::string& option, const std::string& text) {
+  std::size_t pos = 0;
+  double x = 0;
+  try {
+    x = std::stod(text, &pos);
+  } catch (const std::exception&) {
+    throw InputError("", option, text, "expected a length such as 60.7um, 0.05mm, 6e-5 (m) or 3vox");
+  }
+  const std::string unit = lower(text.substr(pos));
+  double f = 0;
+  if (unit.empty() || unit == "m") f = 1;
+  else if (unit == "mm") f = 1e-3;
+  else if (unit == "um" || unit == "µm") f = 1e-6;
+  else if (unit == "nm") f = 1e-9;
+  else if (unit == "vox" || unit == "voxel" || unit == "voxels") f = -1;
+  else throw InputError("", option, text, "unknown unit '" + unit + "' (m, mm, um, nm, vox)");
+  if (!(x > 0) || !std::isfinite(x)) throw InputError("", option, text, "must be finite and > 0");
+  return x * f;
+}
+
+Volume crop(const Volume& v, const std::array<std::size_t, 6>& r) {
+  const Dims& d = v.dims;
+  if (r[3] == 0 || r[4] == 0 || r[5] == 0 || r[0] + r[3] > d.nx || r[1] + r[4] > d.ny || r[2] + r[5] > d.nz)
+    throw InputError("", "--roi", "", "region outside the volume (" + std::to_string(d.nx) + "x" + std::to_string(d.ny) +
+                                          "x" + std::to_string(d.nz) + ") or empty");
+  Volume out(Dims{r[3], r[4], r[5]});
+  out.spacing = v.spacing;
+  for (int k = 0; k < 3; ++k) out.origin[k] = v.origin[k] + static_cast<double>(r[k]) * v.spacing[k];
+  for (std::size_t z = 0; z < r[5]; ++z)
+    for (std::size_t y = 0; y < r[4]; ++y)
+      std::copy_n(&v.at(r[0], r[1] + y, r[2] + z), r[3], &out.at(0, y, z));
+  return out;
+}
+
+Volume downsample(const Volume& v, int f) {
+  if (f <= 1) return v;
+  const std::size_t F = static_cast<std::size_t>(f);
+  Dims d{v.dims.nx / F, v.dims.ny / F, v.dims.nz / F};
+  if (d.count() == 0) throw InputError("", "--downsample", std::to_string(f), "larger than the volume");
+  Volume out(d);
+  for (int k = 0; k < 3; ++k) {
+    out.spacing[k] = v.spacing[k] * f;
+    out.origin[k] = v.origin[k] + 0.5 * (f - 1) * v.spacing[k];  // centre of the first block
+  }
+  const double inv = 1.0 / static_cast<double>(F * F * F);
+#pragma omp parallel for schedule(static)
+  for (std::ptrdiff_t z = 0; z < static_cast<std::ptrdiff_t>(d.nz); ++z)
+    for (std::size_t y = 0; y < d.ny; ++y)
+      for (std::size_t x = 0; x < d.nx; ++x) {
+        double s = 0;
+        for (std::size_t c = 0; c < F; ++c)
+          for (std::size_t b = 0; b < F; ++b)
+            for (std::size_t a = 0; a < F; ++a) s += v.at(x * F + a, y * F + b, z * F + c);
+        out.at(x, y, static_cast<std::size_t>(z)) = static_cast<float>(s * inv);
+      }
+  return out;
+}
+
+Volume read_volume(const std::string& input, const ReadOptions& o, ReadInfo* info_out) {
+  ReadInfo info;
+  info.format = (o.format == "auto") ? detect_format(input) : o.format;
+  if (info.format == "tiff" && (input.find_first_of("*?") != std::string::npos || fs::is_directory(input)))
+    info.format = "tiff-stack";
+  if (info.format != "tiff-stack" && !fs::exists(input)) throw InputError(input, "", "", "no such file");
+  Volume v;
+  bool header_spacing = false;  // spacing present in the file, in header units (ITK) or m (h5)
+  if (info.format == "tiff-stack") {
+    info.files = stack_files(input);
+    v = itkb::read_series(info.files, &info);
+  } else if (info.format == "tiff" || info.format == "mha" || info.format == "nrrd" || info.format == "nifti") {
+    info.files = {input};
+    v = itkb::read_file(input, &info);
+    header_spacing = info.format != "tiff";  // TIFF resolution tags are not a voxel size
+    if (header_spacing)
+      for (int k = 0; k < 3; ++k) { v.spacing[k] *= o.header_unit; v.origin[k] *= o.header_unit; }
+  } else if (info.format == "raw") {
+    info.files = {input};
+    v = read_raw(input, o, &info);
+  } else if (info.format == "h5") {
+    info.files = {input};
+    v = read_h5(input, o, &header_spacing);
+    info.pixel_type = "float64 (as read)";
+  } else {
+    throw InputError(input, "--format", o.format, "unknown format (auto, tiff, mha, nrrd, nifti, raw, h5)");
+  }
+  if (v.dims.count() == 0) throw InputError(input, "dims", "0", "empty volume");
+  if (o.spacing[0] > 0) {
+    v.spacing = o.spacing;
+    if (!header_spacing) v.origin = {0, 0, 0};
+    info.spacing_source = "--spacing";
+  } else if (header_spacing) {
+    for (double s : v.spacing)
+      if (!(s > 0) || !std::isfinite(s)) throw InputError(input, "spacing", std::to_string(s), "invalid voxel size in header");
+    info.spacing_source = "header";
+  } else {
+    throw InputError(input, "spacing", "", info.format + " carries no voxel size; give --spacing (e.g. 60.7um)");
+  }
+  if (o.has_roi) v = crop(v, o.roi);
+  if (o.downsample < 1) throw InputError("", "--downsample", std::to_string(o.downsample), "must be >= 1");
+  v = downsample(v, o.downsample);
+  if (info_out) *info_out = info;
+  return v;
+}
+
+void write_volume(const std::string& path, const Volume& v, bool as_uint16) {
+  const std::string l = lower(path);
+  if (!path.empty() && path.back() == '/') {  // TIFF stack: write a folder under a temporary name, then rename
+    const std::string dir = path.substr(0, path.size() - 1);
+    const std::string tmp = temporary_path(dir);
+    fs::create_directories(tmp);
+    std::vector<std::string> files;
+    for (std::size_t z = 0; z < v.dims.nz; ++z) {
+      char name[32];
+      std::snprintf(name, sizeof name, "/slice%05zu.tif", z);
+      files.push_back(tmp + name);
+    }
+    itkb::write_series(files, v, as_uint16);
+    fs::remove_all(dir);
+    commit_output(dir);
+    return;
+  }
+  if (ends_with(l, ".h5")) {
+    const std::string tmp = temporary_path(path);
+    {
+      h5::File f(tmp, h5::File::Mode::create);
+      std::vector<double> d(v.v.size());
+      for (std::size_t i = 0; i < d.size(); ++i)
+        d[i] = as_uint16 ? std::clamp(std::round(static_cast<double>(v.v[i])), 0.0, 65535.0) : v.v[i];
+      f.write("/volume", d, {v.dims.nz, v.dims.ny, v.dims.nx});
+      f.set_attr("/volume", "spacing", std::vector<double>(v.spacing.begin(), v.spacing.end()));
+      f.set_attr("/volume", "origin", std::vector<double>(v.origin.begin(), v.origin.end()));
+    }
+    commit_output(path);
+    return;
+  }
+  if (ends_with(l, ".raw")) {  // bare little-endian, no header: read back with --raw-dims/--raw-type
+    const std::string tmp = temporary_path(path);
+    {
+      std::ofstream out(tmp, std::ios::binary);
+      for (float x : v.v) {
+        if (as_uint16) {
+          const auto u = static_cast<uint16_t>(std::clamp(std::round(static_cast<double>(x)), 0.0, 65535.0));
+          out.write(reinterpret_cast<const char*>(&u), 2);
+        } else {
+          out.write(reinterpret_cast<const char*>(&x), 4);
+        }
+      }
+      if (!out) throw RuntimeFailure("cannot write " + tmp);
+    }
+    commit_output(path);
+    return;
+  }
+  // ITK formats: the temporary name keeps the extension so ITK picks the right ImageIO.
+  const fs::path p(path);
+  std::string ext = p.extension().string();
+  if (ends_with(l, ".nii.gz")) ext = ".nii.gz";
+  if (ext == ".mhd") {  // header + .raw pair: write both in a temporary folder, then move the pair
+    const std::string tmpdir = temporary_path(path) + ".d";
+    fs::create_directories(tmpdir);
+    const std::string stem = p.stem().string();
+    itkb::write_file(tmpdir + "/" + stem + ".mhd", v, as_uint16);
+    const fs::path dir = p.parent_path().empty() ? fs::path(".") : p.parent_path();
+    fs::rename(tmpdir + "/" + stem + ".raw", dir / (stem + ".raw"));
+    fs::rename(tmpdir + "/" + stem + ".mhd", path);
+    fs::remove_all(tmpdir);
+    return;
+  }
+  const std::string tmp = temporary_path(path) + ext;
+  itkb::write_file(tmp, v, as_uint16);
+  fs::rename(tmp, path);
+}
+
+namespace {
+template <class G>
+void write_meta(const std::string& path, const G& m) {
+  const std::string l = lower(path);
+  if (!ends_with(l, ".mha") && !ends_with(l, ".mhd"))
+    throw InputError("", "--mha", path, "MetaImage output needs a .mha or .mhd name");
+  const fs::path p(path);
+  if (ends_with(l, ".mhd")) {
+    const std::string tmpdir = temporary_path(path) + ".d";
+    fs::create_directories(tmpdir);
+    const std::string stem = p.stem().string();
+    itkb::write_file(tmpdir + "/" + stem + ".mhd", m);
+    const fs::path dir = p.parent_path().empty() ? fs::path(".") : p.parent_path();
+    fs::rename(tmpdir + "/" + stem + ".raw", dir / (stem + ".raw"));
+    fs::rename(tmpdir + "/" + stem + ".mhd", path);
+    fs::remove_all(tmpdir);
+    return;
+  }
+  const std::string tmp = temporary_path(path) + ".mha";
+  itkb::write_file(tmp, m);
+  fs::rename(tmp, path);
+}
+}  // namespace
+
+void write_metaimage(const std::string& path, const Mask& m) { write_meta(path, m); }
+void write_metaimage(const std::string& path, const Labels& m) { write_meta(path, m); }
+
+}  // namespace tomodem::image

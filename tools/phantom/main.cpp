@@ -1,0 +1,55 @@
+// tomodem-phantom: synthetic tomography volumes with ground truth (docs/segment.md, "Phantoms").
+#include <CLI/CLI.hpp>
+#include <iostream>
+
+#include "tomodem/core/error.hpp"
+#include "tomodem/core/tool.hpp"
+#include "tomodem/image/segment.hpp"
+#include "tomodem/image/tools.hpp"
+
+int main(int argc, char** argv) {
+  return tomodem::run_tool("tomodem-phantom", [&]() -> int {
+    tomodem::image::PhantomConfig c;
+    auto& o = c.opt;
+    CLI::App app{"Synthetic tomography volume with ground-truth labels (docs/segment.md)", "tomodem-phantom"};
+    app.add_option("-o,--output", c.output,
+                   "grey volume: .mha .mhd .nrrd .nii .tif (multi-page) .h5 .raw, or DIR/ for a TIFF stack")->required();
+    app.add_option("--truth", c.truth, "truth labels (.h5: /labels, /macropores); packing kind: also TRUTH.packing.h5");
+    app.add_option("--kind", o.kind, "pores | lamellae | sphere | packing")->capture_default_str();
+    app.add_option("--size", o.n, "cube edge (voxels)")->capture_default_str();
+    app.add_option("--voxel", o.voxel, "voxel size (m)")->capture_default_str();
+    app.add_option("--snr", o.snr, "contrast / noise sigma (0: no noise)")->capture_default_str();
+    app.add_option("--blur", o.blur, "Gaussian blur sigma (voxels)")->capture_default_str();
+    app.add_option("--rings", o.rings, "ring artefact amplitude (fraction of the contrast)")->capture_default_str();
+    app.add_option("--cupping", o.cupping, "beam-hardening cupping (fraction of the contrast)")->capture_default_str();
+    app.add_option("--seed", o.seed, "random seed")->capture_default_str();
+    app.add_option("--macropores", o.n_macropores, "pores kind: number of macropores")->capture_default_str();
+    app.add_option("--fine-porosity", o.fine_porosity, "pores kind: fine pore volume fraction")->capture_default_str();
+    app.add_option("--grains", o.n_grains, "packing kind: number of grains (at most)")->capture_default_str();
+    app.add_option("--sphere-radius", o.sphere_radius, "sphere kind: radius (voxels)")->capture_default_str();
+    app.add_flag("--float", c.as_float, "write float32 instead of uint16");
+    app.add_option("--json", c.json, "write the JSON summary to FILE (default: stdout)");
+    int threads = 0;
+    bool quiet = false;
+    app.add_option("--threads", threads, "threads (default: OMP_NUM_THREADS or all cores)");
+    app.add_flag("-q,--quiet", quiet, "no progress messages");
+    app.add_flag_callback("--version", [] {
+      std::cout << "tomodem-phantom " << tomodem::version_string() << "\n";
+      throw CLI::Success();
+    }, "print the version and exit");
+    try {
+      app.parse(argc, argv);
+    } catch (const CLI::Success& e) {
+      return app.exit(e);
+    } catch (const CLI::ParseError& e) {
+      app.exit(e);
+      return tomodem::exit_code::bad_input;
+    }
+    tomodem::set_quiet(quiet);
+    if (threads < 0) throw tomodem::InputError("", "--threads", std::to_string(threads), "must be >= 0");
+    tomodem::image::set_threads(threads);
+    const std::string summary = tomodem::image::run_phantom(c);
+    if (c.json.empty() || c.json == "-") std::cout << summary;
+    return tomodem::exit_code::ok;
+  });
+}

@@ -1,0 +1,74 @@
+// tomodem-segment: X-ray tomography volume -> phases, macropores, grains (docs/segment.md).
+#include <CLI/CLI.hpp>
+#include <iostream>
+
+#include "tomodem/core/error.hpp"
+#include "tomodem/core/tool.hpp"
+#include "tomodem/image/segment.hpp"
+#include "tomodem/image/tools.hpp"
+
+int main(int argc, char** argv) {
+  return tomodem::run_tool("tomodem-segment", [&]() -> int {
+    tomodem::image::SegmentConfig c;
+    CLI::App app{"Segment a tomography volume into solid, fine pores and macropores (docs/segment.md)", "tomodem-segment"};
+    app.add_option("input", c.input, "volume: file, folder of TIFF slices, or a pattern (slices sorted by name)")->required();
+    app.add_option("--format", c.read.format, "auto | tiff | mha | nrrd | nifti | raw | h5")->capture_default_str();
+    app.add_option("--spacing", c.spacing_text, "voxel size (60.7um, 0.05mm, 6e-5); overrides the header");
+    app.add_option("--header-unit", c.read.header_unit, "metres per length unit of MetaImage/NRRD/NIfTI headers")
+        ->capture_default_str();
+    app.add_option("--raw-dims", c.raw_dims_text, "raw: NX,NY,NZ");
+    app.add_option("--raw-type", c.read.raw_type, "raw: uint8 | int8 | uint16 | int16 | uint32 | int32 | float32 | float64")
+        ->capture_default_str();
+    app.add_option("--byte-order", c.read.byte_order, "raw: little | big")->capture_default_str();
+    app.add_option("--raw-header", c.read.raw_header, "raw: bytes to skip")->capture_default_str();
+    app.add_option("--dataset", c.read.h5_dataset, "HDF5 dataset (z, y, x)")->capture_default_str();
+    app.add_option("--roi", c.roi_text, "crop X0,Y0,Z0,NX,NY,NZ (voxels)");
+    app.add_option("--downsample", c.read.downsample, "block-average by this integer factor")->capture_default_str();
+    app.add_option("--filter", c.filter, "none | median | gaussian | cad | nlm")->capture_default_str();
+    app.add_option("--filter-radius", c.filter_radius, "median radius / NLM patch radius (voxels)")->capture_default_str();
+    app.add_option("--sigma", c.sigma, "gaussian sigma (voxels)")->capture_default_str();
+    app.add_option("--iterations", c.iterations, "cad / nlm iterations")->capture_default_str();
+    app.add_option("--conductance", c.conductance, "cad conductance")->capture_default_str();
+    app.add_option("--method", c.method, "otsu | peaks | intermeans | multiotsu2 | multiotsu3 | manual | hysteresis")->capture_default_str();
+    app.add_option("--levels", c.levels, "manual thresholds (1 or 2) or hysteresis LOW,HIGH (grey values)")->delimiter(',');
+    app.add_flag("--pores-bright", c.pores_bright, "pores are brighter than the solid");
+    app.add_option("--open", c.open_r, "open the solid with a ball of this radius (voxels)")->capture_default_str();
+    app.add_option("--close", c.close_r, "close the solid with a ball of this radius (voxels)")->capture_default_str();
+    app.add_option("--min-island", c.min_island, "remove solid and pore islands below this many voxels")->capture_default_str();
+    app.add_option("--connectivity", c.connectivity, "6 or 26 (islands)")->capture_default_str();
+    app.add_option("--macropore-radius", c.macro_radius_text, "opening ball radius separating macropores (3vox, 50um)")
+        ->capture_default_str();
+    app.add_option("--macropore-min-voxels", c.macro_min_voxels, "drop macropores smaller than this")->capture_default_str();
+    app.add_flag("--grains", c.grains, "separate grains (distance map + h-maxima + watershed)");
+    app.add_option("--h", c.h, "h-maxima height of the distance map (voxels)")->capture_default_str();
+    app.add_option("--packing", c.packing, "write the grains as a packing (.h5, implies --grains)");
+    app.add_option("-o,--output", c.output, "labels (.h5: /labels, /macropores, /grains)");
+    app.add_option("--mha", c.mha, "labels as MetaImage (.mha or .mhd)");
+    app.add_option("--vdb", c.vdb, "macropores as an OpenVDB signed-distance level set (m)");
+    app.add_option("--overlay", c.overlay, "mid-plane PNG overlays: PREFIX_xy.png, _xz, _yz");
+    app.add_option("--json", c.json, "write the JSON summary to FILE (default: stdout)");
+    int threads = 0;
+    bool quiet = false;
+    app.add_option("--threads", threads, "threads (default: OMP_NUM_THREADS or all cores)");
+    app.add_flag("-q,--quiet", quiet, "no progress messages");
+    app.add_flag_callback("--version", [] {
+      std::cout << "tomodem-segment " << tomodem::version_string() << "\n";
+      throw CLI::Success();
+    }, "print the version and exit");
+    try {
+      app.parse(argc, argv);
+    } catch (const CLI::Success& e) {
+      return app.exit(e);
+    } catch (const CLI::ParseError& e) {
+      app.exit(e);
+      return tomodem::exit_code::bad_input;
+    }
+    tomodem::set_quiet(quiet);
+    if (threads < 0) throw tomodem::InputError("", "--threads", std::to_string(threads), "must be >= 0");
+    tomodem::image::set_threads(threads);
+    if (!c.packing.empty()) c.grains = true;
+    const std::string summary = tomodem::image::run_segment(c);
+    if (c.json.empty() || c.json == "-") std::cout << summary;
+    return tomodem::exit_code::ok;
+  });
+}
