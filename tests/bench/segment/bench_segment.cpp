@@ -25,6 +25,16 @@ double peak_mib() {
   getrusage(RUSAGE_SELF, &u);
   return double(u.ru_maxrss) / 1024.0;
 }
+double cpu_s() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+double load1() {
+  double l = -1;
+  std::ifstream("/proc/loadavg") >> l;
+  return l;
+}
 }  // namespace
 
 TEST(BenchSegment, MedianOtsuLabelling512) {
@@ -54,7 +64,7 @@ TEST(BenchSegment, MedianOtsuLabelling512) {
       for (std::size_t i = 0; i < v.v.size(); ++i) v.v[i] = std::round(std::clamp(v.v[i] + G(r2), 0.0f, 65535.0f));
     }
   }
-  const double t0 = now();
+  const double t0 = now(), c0 = cpu_s();
   const Volume m = median(v, 1);
   const double t1 = now();
   const double t = otsu_threshold(m);
@@ -65,6 +75,6 @@ TEST(BenchSegment, MedianOtsuLabelling512) {
   const double t3 = now();
   std::cout << "bench_segment n=" << n << " threads=" << omp_get_max_threads() << " generate " << (t0 - t_gen)
             << " s, median " << (t1 - t0) << " s, otsu+threshold " << (t2 - t1) << " s, labelling " << (t3 - t2)
-            << " s, total " << (t3 - t0) << " s, pores " << count << ", peak RSS " << peak_mib() << " MiB\n";
+            << " s, total " << (t3 - t0) << " s (CPU " << (cpu_s() - c0) << " s), load average " << load1() << ", pores " << count << ", peak RSS " << peak_mib() << " MiB\n";
   EXPECT_GT(count, 0);
 }
