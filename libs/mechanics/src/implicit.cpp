@@ -207,7 +207,7 @@ ImplicitResult solve_implicit(const Packing& p, const std::vector<Image>& image,
     }
   }
   res.dofs = ndof;
-  const bool use_ldlt = o.solver == "ldlt" || (o.solver == "auto" && np < 20000);
+  const bool use_ldlt = o.solver == "ldlt" || (o.solver == "auto" && np < 2000);
   res.solver = use_ldlt ? "ldlt" : (o.solver == "cg-ic" ? "cg-ic" : "cg");
   // A tiny shift keeps the direct factorisation regular in mechanisms that the load does not
   // excite (e.g. the floppy shear of a lattice with normal bonds only); its relative effect on
@@ -331,7 +331,10 @@ ImplicitResult solve_implicit(const Packing& p, const std::vector<Image>& image,
   // Relative error of the diagonal entries C_cc = 2 W_c / V from the energy error of each case.
   for (int c = 0; c < ncase; ++c)
     if (C(c, c) > 0) res.E_error = std::max(res.E_error, 2 * err_energy[c] / (V * C(c, c)));
-  if (use_ldlt) res.E_error = std::max(res.E_error, res.residual);
+  // The Jacobi-weighted energy estimate alone is optimistic by 1–3 orders of magnitude on random
+  // networks (docs/young.md, measured against LDLT); the relative residual bounded the true error
+  // of E in every measured case (true error ≈ 0.2 × residual), so it is the reported estimate.
+  res.E_error = std::max(res.E_error, res.residual);
   res.wall_time_s = seconds_since(t0);
   return res;
 }

@@ -17,7 +17,7 @@ using Matrix6 = std::array<std::array<double, 6>, 6>;
 void uniaxial_from_tensor(const Matrix6& C, int axis, double& E, double& nu);
 
 struct ImplicitOptions {
-  std::string solver = "auto";  ///< ldlt (SimplicialLDLT), cg (ConjugateGradient), auto (ldlt below 20 000 particles)
+  std::string solver = "auto";  ///< ldlt (SimplicialLDLT), cg (ConjugateGradient), auto (ldlt below 2 000 particles: its fill-in grows fast in 3-D)
   double tolerance = 1e-10;     ///< relative residual of the CG solve
   int max_iterations = 0;       ///< CG cap (0: 20 × DOFs^(1/3) × 100)
   bool full_tensor = true;      ///< six strain cases; false: the three normal ones (E, ν only)
