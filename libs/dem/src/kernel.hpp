@@ -20,6 +20,7 @@ struct ForceJob {
   const double* m;
   const int32_t* phase;
   const int32_t* start;   ///< CSR: pairs of i are [start[i], start[i+1])
+  const int32_t* owner;   ///< i of each pair (the vectorised loop walks pairs, not particles)
   const int32_t* j;
   const uint8_t* img;     ///< periodic image of j, code (ix+1)*9+(iy+1)*3+(iz+1)
   double* hist;           ///< per-pair history, stride = hist_stride
@@ -72,10 +73,12 @@ struct KernelSet {
   WallKernel wall[2];
   double (*reach)(const PairParams&, double r_star);  ///< extra range of adhesive laws, m
   bool touch_flag;
+  bool vectorised = false;  ///< pair[0] is a four-contact-wide loop
   int normal_history, tangential_history, rolling_history;  ///< per-contact doubles, laid out in this order
 };
 
-KernelSet select_kernels(const ContactModel& model);
+/// `vectorised`: use the four-contact-wide loop where one exists (kernel_simd.hpp).
+KernelSet select_kernels(const ContactModel& model, bool vectorised = true);
 
 namespace detail {
 

@@ -1,6 +1,7 @@
 // The compiled law combinations: every normal × tangential × rolling choice, with and without
 // tallies, selected once when a Simulation is built.
 #include "kernel.hpp"
+#include "kernel_simd.hpp"
 #include "sinter_law.hpp"
 #include "tomodem/core/error.hpp"
 
@@ -45,9 +46,16 @@ KernelSet pick_sintering(const ContactModel& m) {
 }
 }  // namespace
 
-KernelSet select_kernels(const ContactModel& m) {
+KernelSet select_kernels(const ContactModel& m, bool vectorised) {
   if (const std::string why = m.incompatibility(); !why.empty())
     throw InputError("", "physics", m.describe(), why);
+  if (vectorised && m.normal == NormalLaw::hertz && m.tangential == TangentialLaw::mindlin &&
+      m.rolling == RollingLaw::none) {
+    KernelSet k = pick_tangential<law::NormalHertz>(m);
+    k.pair[0] = &detail::pair_kernel_hertz_mindlin_x4;  // the four-contact-wide loop
+    k.vectorised = true;
+    return k;
+  }
   switch (m.normal) {
     case NormalLaw::linear: return pick_tangential<law::NormalLinear>(m);
     case NormalLaw::hertz: return pick_tangential<law::NormalHertz>(m);

@@ -49,7 +49,7 @@ struct Simulation::Impl {
   int stride = 0;  // history doubles per contact
 
   // Half neighbour list (CSR) with per-pair history that survives rebuilds.
-  std::vector<int32_t> start, nj;
+  std::vector<int32_t> start, nj, owner;
   std::vector<uint8_t> img, touch;
   std::vector<double> hist;
   std::vector<Vec3> x_build;
@@ -91,7 +91,7 @@ struct Simulation::Impl {
 
   Impl(Particles particles, Cell c, ContactModel m, Settings s)
       : p(std::move(particles)), cell(c), model(std::move(m)), set(s) {
-    kern = select_kernels(model);
+    kern = select_kernels(model, !set.scalar_kernels);
     stride = kern.normal_history + kern.tangential_history + kern.rolling_history;
     if (model.needs_rotation()) p.enable_rotation();
     if (p.size() == 0) throw InputError("", "particles", "0", "a scene needs at least one particle");
@@ -289,6 +289,7 @@ struct Simulation::Impl {
     }
 
     partition_threads();
+    fill_owner();
     x_build = p.x;
     h_build = cell.h;
     need_build = false;
@@ -323,6 +324,12 @@ struct Simulation::Impl {
     }
     jj.resize(out);
     im.resize(out);
+  }
+
+  void fill_owner() {
+    owner.resize(nj.size());
+    for (std::size_t i = 0; i + 1 < start.size(); ++i)
+      for (int k = start[i]; k < start[i + 1]; ++k) owner[k] = int32_t(i);
   }
 
   /// Splits the particles among threads by pair count (deterministic for a thread count).
@@ -369,6 +376,7 @@ struct Simulation::Impl {
     jb.m = p.m.data();
     jb.phase = p.phase.data();
     jb.start = start.data();
+    jb.owner = owner.data();
     jb.j = nj.data();
     jb.img = img.data();
     jb.hist = hist.data();
@@ -940,7 +948,7 @@ void Simulation::invalidate_neighbors() {
 std::string Simulation::describe() const {
   const Impl& s = *impl_;
   std::ostringstream o;
-  o << "laws " << s.model.describe() << "; allocated:";
+  o << "laws " << s.model.describe() << (s.kern.vectorised ? " (vectorised loop)" : "") << "; allocated:";
   o << (s.p.has_rotation() ? " rotation" : "");
   o << (s.kern.normal_history ? " normal-history" : "");
   o << (s.kern.tangential_history ? " tangential-history" : "");
@@ -1044,6 +1052,7 @@ void Simulation::restore(const EngineState& e) {
   s.bonds = e.bonds;
   s.bond_events = e.bond_events;
   s.partition_threads();
+  s.fill_owner();
 }
 
 void Simulation::set_bonds(BondSet bonds, std::vector<BondLaw> laws, BondFailure failure) {

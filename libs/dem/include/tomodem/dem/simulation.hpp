@@ -53,6 +53,7 @@ struct Settings {
   int threads = 1;
   bool track_energy = false;     ///< accumulate dissipation every step (energy budget)
   int check_interval = 100;      ///< steps between stability checks
+  bool scalar_kernels = false;   ///< use the scalar force loops everywhere (cross-checks)
 };
 
 /// Everything one measurement gives. Stress is the Love–Weber tensor, tension positive,
