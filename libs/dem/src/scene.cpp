@@ -39,7 +39,9 @@ class Map {
   }
 
   bool has(const std::string& key) const { return node_ && node_[key]; }
-  YAML::Node raw(const std::string& key) const { return node_ ? node_[key] : YAML::Node(); }
+  // An absent section reads as undefined (a default YAML::Node is a defined null, which would
+  // make every nested section of an absent one "not a mapping").
+  YAML::Node raw(const std::string& key) const { return node_ ? node_[key] : YAML::Node(YAML::NodeType::Undefined); }
   Map map(const std::string& key) const { return Map(raw(key), join(key), file_); }
 
   double number(const std::string& key, double fallback) const {

@@ -1,0 +1,121 @@
+#pragma once
+// Sintering in the DEM core (docs/sintering.md): temperature programs, free and constrained
+// sintering of a periodic packing under the `sintering` contact law, stops at a target relative
+// density or time, and the necks handed over as bonds.
+#include <string>
+#include <vector>
+
+#include "tomodem/core/packing.hpp"
+#include "tomodem/dem/bonds.hpp"
+#include "tomodem/dem/scene.hpp"
+#include "tomodem/dem/simulation.hpp"
+
+namespace tomodem::dem {
+
+constexpr double kBoltzmann = 1.380649e-23;  ///< J/K
+constexpr double kGasConstant = 8.314462618; ///< J/(mol K)
+
+/// Piecewise-linear temperature history: from `start`, each segment either ramps at `rate`
+/// (K/s, > 0) to `target` (heating or cooling) or holds for `hold` seconds.
+struct TemperatureProgram {
+  struct Segment {
+    double rate = 0;    ///< K/s (ramp), 0 for a hold
+    double target = 0;  ///< K (ramp)
+    double hold = 0;    ///< s (hold)
+  };
+  double start = 293.15;  ///< K
+  std::vector<Segment> segments;
+  double temperature(double t) const;  ///< K at time t (the last temperature after the end)
+  double rate(double t) const;         ///< dT/dt at t, K/s
+  double duration() const;             ///< s
+  /// Start of the next segment boundary after t (the end of the program at most), s.
+  double next_boundary(double t) const;
+};
+
+/// Sintering parameters of one phase (Arrhenius grain-boundary diffusion).
+struct SinterPhase {
+  bool sinters = false;
+  double atomic_volume = 0;         ///< Ω, m³
+  double boundary_diffusion = 0;    ///< δ_b D_b0, m³/s
+  double activation_energy = 0;     ///< Q, J/mol
+  double surface_energy = 0;        ///< γ_s, J/m²
+  double dihedral_angle = 0;        ///< ψ, rad
+  double tangential_viscosity = 0;  ///< η (dimensionless)
+  /// Δ_b = Ω δ_b D_b0 exp(−Q/(R T))/(k T), m⁵/(N s).
+  double delta_b(double T) const;
+};
+
+struct SinterSettings {
+  TemperatureProgram program;
+  std::vector<SinterPhase> phases;  ///< per material (scene order)
+  double initial_neck = 0.05;       ///< a_min/R of a neck when its contact forms
+  double target_density = 0;        ///< stop at this relative density (0: off)
+  double max_time = 0;              ///< stop at this time, s (0: end of the program)
+  bool fixed[3] = {false, false, false};  ///< cell axes held (constrained sintering); others stress-free
+  double strain_per_step = 2e-5;    ///< accuracy: strain (ε̇ Δt) allowed per step
+  double neck_area_per_step = 1e-3; ///< accuracy: relative growth of the mean neck area a² per step
+  double temperature_step = 2.0;    ///< accuracy: K allowed per step
+  double viscous_fraction = 0.5;    ///< Δt / (m_i/Σ η) after mass scaling (< 1: stable)
+  bool conserve_volume = true;      ///< grow the radii so the union of the spheres keeps its volume
+  int update_interval = 10;         ///< steps between mass-scaling, density and radius updates
+  int output_rows = 200;            ///< rows of the densification curve (about)
+  std::string curve = "densification.csv";
+  std::string packing = "sintered.h5";
+};
+
+/// Reads the `sintering` section of a scene (docs/sintering.md) from scene.text; every problem is
+/// an InputError naming the file, the field and the value.
+SinterSettings read_sinter_settings(const Scene& scene);
+
+/// One row of the densification curve.
+struct SinterRow {
+  long step = 0;
+  double time = 0, temperature = 0;
+  double density = 0;        ///< union of the spheres (overlaps counted once) / cell volume
+  double density_cell = 0;   ///< ρ₀ V₀ / V (mass conservation through the cell shrinkage)
+  double rate = 0;           ///< dρ/dt, 1/s
+  double shrinkage[3] = {0, 0, 0};  ///< 1 − L_k/L_k0 per cell axis
+  double mean_neck_ratio = 0;       ///< ⟨a/R⟩ over sintering contacts (R = 2R_iR_j/(R_i+R_j))
+  double coordination = 0;
+  double time_step = 0, mass_scaling = 0;  ///< s; mean m/m_physical
+};
+
+struct SinterReport {
+  std::vector<SinterRow> rows;
+  SinterRow initial, final;
+  std::string stop_reason;  ///< "target_density", "time", "program_end"
+  long steps = 0;
+  double wall_time_s = 0;
+  double min_time_step = 0, max_time_step = 0, max_mass_scaling = 0;
+};
+
+/// Relative density of the spheres with the overlaps counted once (pair lenses subtracted;
+/// triple overlaps neglected), and the mean neck ratio ⟨a/R⟩.
+struct DensityState {
+  double solid_volume = 0, density = 0, mean_neck_ratio = 0;
+  long contacts = 0;
+};
+DensityState density_state(const Simulation& sim);
+/// Volume of the lens shared by two spheres at centre distance d, m³ (0 when apart).
+double lens_volume(double r1, double r2, double d);
+
+/// Sets Δ_b, γ_s, ψ and η of every phase pair for temperature T (K). Unlike sintering phases
+/// combine as: Δ_b geometric mean, γ_s, ψ and η arithmetic means; a pair with a non-sintering
+/// phase gets Δ_b = 0 (Hertz repulsion).
+void apply_temperature(ContactModel& model, const std::vector<SinterPhase>& phases, double T, double initial_neck);
+
+/// Checks the settings against the scene's packing (target above the start, the program reaches
+/// sintering temperatures); throws InputError naming the field.
+void check_sinter_settings(const Scene& scene, const SinterSettings& s);
+
+/// Runs the program on a scene's simulation: mass scaling and the automatic step, the stress-free
+/// (or constrained) cell, radius growth; restores the physical masses at the end.
+SinterReport run_sintering(Simulation& sim, const SinterSettings& s, bool progress = false);
+
+/// The necks as bonds: every sintering contact becomes a bond with radius = neck radius and
+/// rest length = current centre distance (image through the periodic cell).
+BondSet necks_to_bonds(const Simulation& sim);
+/// The same as the /bonds table of the shared data model.
+BondTable necks_to_bond_table(const Simulation& sim);
+
+}  // namespace tomodem::dem

@@ -1,0 +1,706 @@
+// Sintering driver (docs/sintering.md): temperature program → pair parameters, mass scaling and
+// the automatic step, stress-free or constrained periodic cell, volume-conserving radii,
+// densification curve, and the necks as bonds.
+#include "tomodem/dem/sinter.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <set>
+#include <sstream>
+
+#include "sinter_law.hpp"
+#include "tomodem/core/error.hpp"
+
+namespace tomodem::dem {
+
+// ---------------------------------------------------------------- temperature program
+double TemperatureProgram::duration() const {
+  double t = 0, T = start;
+  for (const auto& s : segments) {
+    if (s.rate > 0) {
+      t += std::abs(s.target - T) / s.rate;
+      T = s.target;
+    } else {
+      t += s.hold;
+    }
+  }
+  return t;
+}
+
+namespace {
+/// Walks the program to time t: the segment index, its start time and start temperature.
+struct Where {
+  std::size_t seg;
+  double t0, T0, t1;
+};
+Where locate(const TemperatureProgram& p, double t) {
+  double t0 = 0, T = p.start;
+  for (std::size_t k = 0; k < p.segments.size(); ++k) {
+    const auto& s = p.segments[k];
+    const double len = s.rate > 0 ? std::abs(s.target - T) / s.rate : s.hold;
+    if (t < t0 + len) return {k, t0, T, t0 + len};
+    t0 += len;
+    if (s.rate > 0) T = s.target;
+  }
+  return {p.segments.size(), t0, T, std::numeric_limits<double>::infinity()};
+}
+}  // namespace
+
+double TemperatureProgram::temperature(double t) const {
+  const Where w = locate(*this, t);
+  if (w.seg >= segments.size()) return w.T0;
+  const auto& s = segments[w.seg];
+  if (s.rate <= 0) return w.T0;
+  return w.T0 + (s.target >= w.T0 ? 1 : -1) * s.rate * (t - w.t0);
+}
+
+double TemperatureProgram::rate(double t) const {
+  const Where w = locate(*this, t);
+  if (w.seg >= segments.size()) return 0;
+  const auto& s = segments[w.seg];
+  return s.rate > 0 ? (s.target >= w.T0 ? s.rate : -s.rate) : 0;
+}
+
+double TemperatureProgram::next_boundary(double t) const { return std::min(locate(*this, t).t1, duration()); }
+
+double SinterPhase::delta_b(double T) const {
+  return atomic_volume * boundary_diffusion * std::exp(-activation_energy / (kGasConstant * T)) / (kBoltzmann * T);
+}
+
+void apply_temperature(ContactModel& model, const std::vector<SinterPhase>& phases, double T, double initial_neck) {
+  for (int a = 0; a < model.n_phases; ++a)
+    for (int b = 0; b < model.n_phases; ++b) {
+      PairParams& pp = model.pair(a, b);
+      const bool both = a < int(phases.size()) && b < int(phases.size()) && phases[a].sinters && phases[b].sinters;
+      pp.sinter_initial_neck = initial_neck;
+      if (!both) {
+        pp.sinter_delta_b = 0;
+        continue;
+      }
+      const SinterPhase& pa = phases[a];
+      const SinterPhase& pb = phases[b];
+      pp.sinter_delta_b = std::sqrt(pa.delta_b(T) * pb.delta_b(T));
+      pp.sinter_gamma = 0.5 * (pa.surface_energy + pb.surface_energy);
+      pp.sinter_dihedral = 0.5 * (pa.dihedral_angle + pb.dihedral_angle);
+      pp.sinter_eta = 0.5 * (pa.tangential_viscosity + pb.tangential_viscosity);
+    }
+}
+
+// ---------------------------------------------------------------- reading the settings
+namespace {
+
+class Sec {
+ public:
+  Sec(YAML::Node n, std::string path, const std::string& file) : n_(n), path_(std::move(path)), file_(file) {
+    if (n_ && !n_.IsMap()) throw InputError(file_, where(""), "", "must be a mapping of keys to values");
+  }
+  void allow(std::initializer_list<const char*> keys) const {
+    if (!n_) return;
+    const std::set<std::string> ok(keys.begin(), keys.end());
+    for (const auto& kv : n_) {
+      const std::string k = kv.first.as<std::string>();
+      if (!ok.count(k)) {
+        std::string list;
+        for (const auto* a : keys) list += (list.empty() ? "" : ", ") + std::string(a);
+        throw InputError(file_, where(k), k, "unknown key; expected one of: " + list);
+      }
+    }
+  }
+  bool has(const std::string& k) const { return n_ && n_[k]; }
+  YAML::Node raw(const std::string& k) const { return n_ ? n_[k] : YAML::Node(YAML::NodeType::Undefined); }
+  Sec sec(const std::string& k) const { return Sec(raw(k), join(k), file_); }
+  double number(const std::string& k, double fallback) const {
+    if (!has(k)) return fallback;
+    double v;
+    try {
+      v = raw(k).as<double>();
+    } catch (const YAML::Exception&) {
+      throw InputError(file_, where(k), text(k), "must be a number");
+    }
+    if (!std::isfinite(v)) throw InputError(file_, where(k), text(k), "must be a finite number");
+    return v;
+  }
+  double positive(const std::string& k, double fallback) const {
+    const double v = number(k, fallback);
+    if (has(k) && !(v > 0)) throw InputError(file_, where(k), text(k), "must be positive");
+    return v;
+  }
+  double required_positive(const std::string& k, const std::string& what) const {
+    if (!has(k)) throw InputError(file_, where(k), "", "missing: " + what);
+    return positive(k, 0);
+  }
+  double non_negative(const std::string& k, double fallback) const {
+    const double v = number(k, fallback);
+    if (has(k) && !(v >= 0)) throw InputError(file_, where(k), text(k), "must be zero or positive");
+    return v;
+  }
+  std::string string(const std::string& k, const std::string& fallback) const {
+    if (!has(k)) return fallback;
+    if (!raw(k).IsScalar()) throw InputError(file_, where(k), "", "must be a text value");
+    return raw(k).as<std::string>();
+  }
+  bool flag(const std::string& k, bool fallback) const {
+    if (!has(k)) return fallback;
+    try {
+      return raw(k).as<bool>();
+    } catch (const YAML::Exception&) {
+      throw InputError(file_, where(k), text(k), "must be true or false");
+    }
+  }
+  std::string where(const std::string& k) const {
+    std::string f = k.empty() ? path_ : join(k);
+    const YAML::Node n = k.empty() ? n_ : raw(k);
+    if (n && n.Mark().line >= 0) f += " (line " + std::to_string(n.Mark().line + 1) + ")";
+    return f;
+  }
+  std::string text(const std::string& k) const {
+    const YAML::Node n = raw(k);
+    if (!n) return "";
+    if (n.IsScalar()) return n.Scalar();
+    std::ostringstream s;
+    s << YAML::Dump(n);
+    std::string t = s.str();
+    std::replace(t.begin(), t.end(), '\n', ' ');
+    return t;
+  }
+  const YAML::Node& node() const { return n_; }
+  const std::string& path() const { return path_; }
+  const std::string& file() const { return file_; }
+
+ private:
+  std::string join(const std::string& k) const { return path_.empty() ? k : path_ + "." + k; }
+  YAML::Node n_;
+  std::string path_;
+  const std::string& file_;
+};
+
+}  // namespace
+
+SinterSettings read_sinter_settings(const Scene& scene) {
+  const std::string& file = scene.file;
+  const YAML::Node doc = YAML::Load(scene.text);
+  if (!doc["sintering"]) throw InputError(file, "sintering", "", "the scene has no sintering section (docs/sintering.md)");
+  if (scene.sim->model().normal != NormalLaw::sintering)
+    throw InputError(file, "physics.normal", to_string(scene.sim->model().normal),
+                     "sintering needs physics.normal: sintering");
+  const Sec root(doc["sintering"], "sintering", file);
+  root.allow({"temperature", "phases", "initial_neck_ratio", "stop", "constrained", "accuracy", "conserve_volume",
+              "output"});
+  SinterSettings s;
+
+  // Temperature program.
+  const Sec tp = root.sec("temperature");
+  if (!root.has("temperature")) throw InputError(file, "sintering.temperature", "", "missing: the temperature program");
+  tp.allow({"start", "segments"});
+  s.program.start = tp.required_positive("start", "the start temperature (K)");
+  const YAML::Node segs = tp.raw("segments");
+  if (!segs || !segs.IsSequence() || segs.size() == 0)
+    throw InputError(file, tp.where("segments"), tp.text("segments"),
+                     "needs a list of segments, e.g. [{rate: 0.1667, to: 1600}, {hold: 3600}] (K/s, K, s)");
+  double T = s.program.start;
+  for (std::size_t k = 0; k < segs.size(); ++k) {
+    const Sec g(segs[k], tp.path() + ".segments[" + std::to_string(k) + "]", file);
+    g.allow({"rate", "to", "hold"});
+    TemperatureProgram::Segment seg;
+    if (g.has("hold")) {
+      if (g.has("rate") || g.has("to")) throw InputError(file, g.where("hold"), g.text("hold"), "a hold takes no rate or to");
+      seg.hold = g.positive("hold", 0);
+    } else {
+      seg.rate = g.required_positive("rate", "the heating or cooling rate (K/s, > 0)");
+      seg.target = g.required_positive("to", "the temperature at the end of the ramp (K)");
+      if (seg.target == T) throw InputError(file, g.where("to"), g.text("to"), "equals the temperature before the ramp");
+      T = seg.target;
+    }
+    s.program.segments.push_back(seg);
+  }
+
+  // Phases: materials that sinter, with their diffusion parameters.
+  const auto& mats = scene.materials;
+  s.phases.assign(mats.size(), SinterPhase{});
+  const YAML::Node ph = root.raw("phases");
+  if (!ph || !ph.IsSequence() || ph.size() == 0)
+    throw InputError(file, root.where("phases"), root.text("phases"),
+                     "needs a list of sintering phases with their diffusion parameters");
+  for (std::size_t k = 0; k < ph.size(); ++k) {
+    const Sec g(ph[k], root.path() + ".phases[" + std::to_string(k) + "]", file);
+    g.allow({"material", "atomic_volume", "boundary_diffusion", "activation_energy", "surface_energy", "dihedral_angle",
+             "tangential_viscosity"});
+    const std::string name = g.string("material", "");
+    int idx = -1;
+    for (std::size_t m = 0; m < mats.size(); ++m)
+      if (mats[m].name == name) idx = int(m);
+    if (idx < 0) {
+      std::string list;
+      for (const auto& m : mats) list += (list.empty() ? "" : ", ") + m.name;
+      throw InputError(file, g.where("material"), name, "unknown material; the scene defines: " + list);
+    }
+    SinterPhase& p = s.phases[std::size_t(idx)];
+    if (p.sinters) throw InputError(file, g.where("material"), name, "this material is listed twice");
+    p.sinters = true;
+    p.atomic_volume = g.required_positive("atomic_volume", "the atomic volume Ω (m^3) of a sintering phase");
+    p.boundary_diffusion =
+        g.required_positive("boundary_diffusion", "δ_b D_b0, grain-boundary width times diffusion prefactor (m^3/s)");
+    if (!g.has("activation_energy"))
+      throw InputError(file, g.where("activation_energy"), "", "missing: the activation energy Q (J/mol)");
+    p.activation_energy = g.non_negative("activation_energy", 0);
+    p.surface_energy = g.has("surface_energy") ? g.positive("surface_energy", 0) : mats[std::size_t(idx)].surface_energy;
+    if (!(p.surface_energy > 0))
+      throw InputError(file, g.where("surface_energy"), "", "missing: the surface energy (here or in the material)");
+    const double psi = g.number("dihedral_angle", 150);
+    if (!(psi > 0 && psi <= 180))
+      throw InputError(file, g.where("dihedral_angle"), g.text("dihedral_angle"), "must lie in (0, 180] degrees");
+    p.dihedral_angle = psi * M_PI / 180;
+    p.tangential_viscosity = g.non_negative("tangential_viscosity", 0);
+    if (p.tangential_viscosity > 0 && scene.sim->model().tangential != TangentialLaw::viscous)
+      throw InputError(file, g.where("tangential_viscosity"), g.text("tangential_viscosity"),
+                       "needs physics.tangential: viscous");
+  }
+
+  s.initial_neck = root.positive("initial_neck_ratio", s.initial_neck);
+  if (s.initial_neck >= 1)
+    throw InputError(file, root.where("initial_neck_ratio"), root.text("initial_neck_ratio"), "must be below 1");
+  const Sec st = root.sec("stop");
+  st.allow({"relative_density", "time"});
+  s.target_density = st.positive("relative_density", 0);
+  if (s.target_density >= 1)
+    throw InputError(file, st.where("relative_density"), st.text("relative_density"), "must be below 1");
+  s.max_time = st.positive("time", 0);
+  if (root.has("constrained")) {
+    const YAML::Node c = root.raw("constrained");
+    if (!c.IsSequence()) throw InputError(file, root.where("constrained"), root.text("constrained"), "must be a list of axes, e.g. [x, y]");
+    for (const auto& a : c) {
+      const std::string ax = a.as<std::string>();
+      if (ax != "x" && ax != "y" && ax != "z")
+        throw InputError(file, root.where("constrained"), ax, "unknown axis; expected x, y or z");
+      s.fixed[ax[0] - 'x'] = true;
+    }
+  }
+  const Sec ac = root.sec("accuracy");
+  ac.allow({"strain_per_step", "neck_area_per_step", "temperature_per_step", "viscous_fraction", "update_interval"});
+  s.strain_per_step = ac.positive("strain_per_step", s.strain_per_step);
+  s.neck_area_per_step = ac.positive("neck_area_per_step", s.neck_area_per_step);
+  s.temperature_step = ac.positive("temperature_per_step", s.temperature_step);
+  s.viscous_fraction = ac.positive("viscous_fraction", s.viscous_fraction);
+  if (s.viscous_fraction >= 1)
+    throw InputError(file, ac.where("viscous_fraction"), ac.text("viscous_fraction"), "must be below 1 (stability)");
+  s.update_interval = int(ac.positive("update_interval", s.update_interval));
+  s.conserve_volume = root.flag("conserve_volume", true);
+  const Sec out = root.sec("output");
+  out.allow({"curve", "packing", "rows"});
+  s.curve = out.string("curve", s.curve);
+  s.packing = out.string("packing", s.packing);
+  s.output_rows = int(out.positive("rows", s.output_rows));
+
+  bool any = false;
+  for (const auto& p : s.phases) any = any || p.sinters;
+  if (!any) throw InputError(file, "sintering.phases", "", "no phase sinters");
+  return s;
+}
+
+// ---------------------------------------------------------------- geometry
+double lens_volume(double r1, double r2, double d) {
+  if (d >= r1 + r2) return 0;
+  const double rmin = std::min(r1, r2);
+  if (d <= std::abs(r1 - r2)) return 4.0 / 3.0 * M_PI * rmin * rmin * rmin;  // one inside the other
+  const double s = r1 + r2 - d;
+  return M_PI * s * s * (d * d + 2 * d * (r1 + r2) - 3 * (r1 - r2) * (r1 - r2)) / (12 * d);
+}
+
+namespace {
+
+Vec3 image_of(int code) { return {double(code / 9 - 1), double((code / 3) % 3 - 1), double(code % 3 - 1)}; }
+
+/// One pass over the neighbour list: overlaps, necks and the per-particle lens shares.
+struct Scan {
+  double solid = 0, lens = 0, neck_sum = 0, force_l = 0, area_sum = 0, r_sum = 0;
+  long necks = 0, contacts = 0;
+  std::vector<double> share, dshare;  ///< per particle: ½ Σ lens, ½ Σ ∂lens/∂r_i
+};
+
+Scan scan(const Simulation& sim, bool per_particle) {
+  const Simulation::EngineState e = sim.engine_state();
+  const Particles& p = sim.particles();
+  const ContactModel& model = sim.model();
+  const Mat3& H = sim.cell().h;
+  const std::size_t n = p.size();
+  Scan sc;
+  if (per_particle) sc.share.assign(n, 0.0), sc.dshare.assign(n, 0.0);
+  for (std::size_t i = 0; i < n; ++i) sc.solid += 4.0 / 3.0 * M_PI * p.r[i] * p.r[i] * p.r[i];
+  const std::size_t stride = e.j.empty() ? 0 : e.history.size() / e.j.size();
+  if (e.start.size() == n + 1)
+    for (std::size_t i = 0; i < n; ++i)
+      for (int k = e.start[i]; k < e.start[i + 1]; ++k) {
+        const int j = e.j[k];
+        const Vec3 dv = p.x[j] + H * image_of(e.image[k]) - p.x[i];
+        const double d = norm(dv), ri = p.r[i], rj = p.r[j];
+        if (d >= ri + rj) continue;
+        const double v = lens_volume(ri, rj, d);
+        sc.lens += v;
+        ++sc.contacts;
+        if (per_particle) {
+          // ∂lens/∂r_i is the area of i's surface inside j: 2π r_i h_i, h_i = r_i − (d² + r_i² − r_j²)/(2d).
+          const double hi = ri - (d * d + ri * ri - rj * rj) / (2 * d), hj = rj - (d * d + rj * rj - ri * ri) / (2 * d);
+          sc.share[i] += 0.5 * v;
+          sc.share[std::size_t(j)] += 0.5 * v;
+          sc.dshare[i] += M_PI * ri * std::max(hi, 0.0);
+          sc.dshare[std::size_t(j)] += M_PI * rj * std::max(hj, 0.0);
+        }
+        const PairParams& pp = model.pair(p.phase[i], p.phase[j]);
+        if (!(pp.sinter_delta_b > 0)) continue;
+        const double R = 2 * ri * rj / (ri + rj);
+        double a = stride > 0 ? e.history[std::size_t(k) * stride] : 0;
+        if (a <= 0) a = law::NormalSintering::initial_neck(pp, R, ri + rj - d);
+        sc.neck_sum += a / R;
+        sc.area_sum += a * a;
+        sc.r_sum += R;
+        sc.force_l += law::NormalSintering::driving_force(pp, a, R) * d;
+        ++sc.necks;
+      }
+  sc.solid -= sc.lens;
+  return sc;
+}
+
+double axis_length(const Cell& c, int k) { return norm(c.h.col(k)); }
+
+}  // namespace
+
+DensityState density_state(const Simulation& sim) {
+  const Scan sc = scan(sim, false);
+  DensityState d;
+  d.solid_volume = sc.solid;
+  d.density = sc.solid / sim.cell().volume();
+  d.mean_neck_ratio = sc.necks ? sc.neck_sum / double(sc.necks) : 0;
+  d.contacts = sc.contacts;
+  return d;
+}
+
+// ---------------------------------------------------------------- checks
+namespace {
+/// Free two-particle neck over the whole program (quasi-static N = 0): the shrinkage h/(2R)
+/// it reaches, as the test of a program that never reaches sintering temperatures.
+double two_particle_shrinkage(const SinterPhase& ph, const TemperatureProgram& prog, double R, double a0) {
+  PairParams pp;
+  pp.sinter_gamma = ph.surface_energy;
+  pp.sinter_dihedral = ph.dihedral_angle;
+  const double tend = prog.duration();
+  double t = 0, a2 = a0 * a0, h = 0;
+  while (t < tend && h < 0.05 * R) {
+    const double T = prog.temperature(t);
+    pp.sinter_delta_b = ph.delta_b(T);
+    const double a = std::sqrt(a2);
+    const double hdot = law::NormalSintering::driving_force(pp, a, R) / law::NormalSintering::viscosity(pp, a);
+    // Steps of at most 1 % neck-area growth and 1 K.
+    double dt = 0.01 * a2 / (2 * R * hdot);
+    const double rate = std::abs(prog.rate(t));
+    if (rate > 0) dt = std::min(dt, 1.0 / rate);
+    dt = std::min(dt, prog.next_boundary(t) - t);
+    dt = std::max(dt, 1e-9 * std::max(tend, 1.0));
+    h += hdot * dt;
+    a2 += 2 * R * hdot * dt;
+    t += dt;
+  }
+  return h / (2 * R);
+}
+}  // namespace
+
+void check_sinter_settings(const Scene& scene, const SinterSettings& s) {
+  const Simulation& sim = *scene.sim;
+  const DensityState d0 = density_state(sim);
+  if (s.target_density > 0 && s.target_density <= d0.density) {
+    std::ostringstream v;
+    v << s.target_density;
+    throw InputError(scene.file, "sintering.stop.relative_density", v.str(),
+                     "at or below the starting relative density " + std::to_string(d0.density));
+  }
+  const Particles& p = sim.particles();
+  double rmean = 0;
+  for (double r : p.r) rmean += r;
+  rmean /= double(p.size());
+  double best = 0;
+  for (const auto& ph : s.phases)
+    if (ph.sinters) best = std::max(best, two_particle_shrinkage(ph, s.program, rmean, s.initial_neck * rmean));
+  if (best < 1e-4) {
+    std::ostringstream v;
+    double tmax = s.program.start;
+    for (const auto& g : s.program.segments)
+      if (g.rate > 0) tmax = std::max(tmax, g.target);
+    v << tmax << " K";
+    throw InputError(scene.file, "sintering.temperature", v.str(),
+                     "the program never reaches sintering temperatures: two free particles of the mean radius "
+                     "would shrink by " + std::to_string(best) + " (< 1e-4) over the whole program");
+  }
+}
+
+// ---------------------------------------------------------------- the run
+SinterReport run_sintering(Simulation& sim, const SinterSettings& s, bool progress) {
+  const auto wall0 = std::chrono::steady_clock::now();
+  Particles& p = sim.particles();
+  const std::size_t n = p.size();
+  const std::vector<double> m_phys = p.m, inv_m_phys = p.inv_m, inv_I_phys = p.inv_I;
+  const bool rot = p.has_rotation();
+  SinterReport rep;
+
+  // Rayleigh time of the particles of phases with an elastic (non-sintering) pair, physical mass;
+  // and the viscosity of a fresh neck (a_min R_i with itself), the floor of the scaled masses, so
+  // a contact that forms between two updates is stable too.
+  std::vector<double> rayleigh(n, 0.0), fresh(n, 0.0);
+  {
+    apply_temperature(sim.model(), s.phases, s.program.temperature(sim.time()), s.initial_neck);
+    const ContactModel& m = sim.model();
+    for (std::size_t i = 0; i < n; ++i) {
+      const int ph = p.phase[i];
+      bool elastic = false;
+      for (int b = 0; b < m.n_phases; ++b) elastic = elastic || !(m.pair(ph, b).sinter_delta_b > 0);
+      const PairParams& self = m.pair(ph, ph);
+      if (self.sinter_delta_b > 0) fresh[i] = 1;  // filled per step below (Δ_b depends on T)
+      if (!elastic || ph >= int(m.materials.size())) continue;
+      const Material& mat = m.materials[std::size_t(ph)];
+      const double G = mat.youngs_modulus / (2 * (1 + mat.poisson_ratio));
+      const double rho = p.m[i] / (4.0 / 3.0 * M_PI * p.r[i] * p.r[i] * p.r[i]);
+      if (G > 0) rayleigh[i] = M_PI * p.r[i] * std::sqrt(rho / G) / (0.1631 * mat.poisson_ratio + 0.8766);
+    }
+  }
+
+  // Reference state.
+  sim.invalidate_neighbors();
+  sim.measure();  // builds the neighbour list at the current state
+  Scan sc = scan(sim, true);
+  std::vector<double> target(n);
+  for (std::size_t i = 0; i < n; ++i) target[i] = 4.0 / 3.0 * M_PI * p.r[i] * p.r[i] * p.r[i] - sc.share[i];
+  const double V0 = sim.cell().volume();
+  const double rho0 = sc.solid / V0;
+  double L0[3];
+  for (int k = 0; k < 3; ++k) L0[k] = axis_length(sim.cell(), k);
+  const double t_end = s.max_time > 0 ? sim.time() + s.max_time : s.program.duration();
+  const double t_start = sim.time();
+
+  const bool servo = !(s.fixed[0] && s.fixed[1] && s.fixed[2]);
+  CellControl& cc = sim.cell_control();
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) {
+      cc.velocity_gradient(a, b) = 0;
+      cc.stress_controlled[a][b] = false;  // the viscous servo below sets the rates
+    }
+
+  auto make_row = [&](const Scan& q, double dt_now, double mass_scale, double rho_prev, double t_prev) {
+    SinterRow r;
+    r.step = sim.step_count();
+    r.time = sim.time();
+    r.temperature = s.program.temperature(sim.time());
+    const double V = sim.cell().volume();
+    r.density = q.solid / V;
+    r.density_cell = rho0 * V0 / V;
+    r.rate = (sim.time() > t_prev) ? (r.density - rho_prev) / (sim.time() - t_prev) : 0;
+    for (int k = 0; k < 3; ++k) r.shrinkage[k] = 1 - axis_length(sim.cell(), k) / L0[k];
+    r.mean_neck_ratio = q.necks ? q.neck_sum / double(q.necks) : 0;
+    r.coordination = 2.0 * double(q.contacts) / double(n);
+    r.time_step = dt_now;
+    r.mass_scaling = mass_scale;
+    return r;
+  };
+  rep.initial = make_row(sc, 0, 1, rho0, sim.time());
+  rep.rows.push_back(rep.initial);
+
+  double grown = 0;  // radius growth since the last neighbour rebuild, m
+  double skin = 0;
+  {
+    double dsum = 0;
+    for (double r : p.r) dsum += 2 * r;
+    skin = sim.settings().skin > 0 ? sim.settings().skin : 0.1 * dsum / double(n);
+  }
+  // Volume conservation: grow the radii of sintering particles so each keeps its share of the
+  // union (one Newton step on share(r) = 4/3 π r³ − ½ Σ lens, ∂share/∂r = exposed area).
+  auto grow_radii = [&](const Scan& q) {
+    const ContactModel& m = sim.model();
+    double dmax = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!(m.pair(p.phase[i], p.phase[i]).sinter_delta_b > 0)) continue;
+      const double r = p.r[i];
+      const double cur = 4.0 / 3.0 * M_PI * r * r * r - q.share[i];
+      const double der = 4 * M_PI * r * r - q.dshare[i];
+      if (der <= 0) continue;
+      const double dr = (target[i] - cur) / der;
+      p.r[i] = r + dr;
+      dmax = std::max(dmax, std::abs(dr));
+    }
+    grown += 2 * dmax;
+    if (grown > 0.25 * skin) {
+      sim.invalidate_neighbors();
+      grown = 0;
+    }
+  };
+
+  std::vector<double> visc;
+  double dt = 0, modulus = 0, T_at_update = -1, rho_last = rho0, t_last = sim.time();
+  rep.min_time_step = std::numeric_limits<double>::infinity();
+  const double row_dt = (t_end - t_start) / std::max(1, s.output_rows);
+  double next_row = t_start + row_dt;
+  long since_update = s.update_interval;  // update on the first step
+  double mass_scale = 1;
+  rep.stop_reason = s.max_time > 0 ? "time" : "program_end";
+  auto last_print = wall0;
+
+  while (sim.time() < t_end * (1 - 1e-12)) {
+    const double t = sim.time();
+    const double T = s.program.temperature(t);
+    apply_temperature(sim.model(), s.phases, T, s.initial_neck);
+    modulus = sim.viscous_sums(visc);
+
+    // Automatic step (on update steps or when the temperature moved by more than 1 K).
+    if (since_update >= s.update_interval || std::abs(T - T_at_update) > 1.0) {
+      sc = scan(sim, s.conserve_volume);
+      const double V = sim.cell().volume();
+      // Mean-field strain rate of the necks: Σ F_s l / Σ η l² (affine viscous balance), or the
+      // cell's measured rate when larger.
+      double erate = modulus > 0 ? sc.force_l / modulus : 0;
+      for (int k = 0; k < 3; ++k) erate = std::max(erate, std::abs(cc.velocity_gradient(k, k)));
+      double dt_new = std::numeric_limits<double>::infinity();
+      if (erate > 0) {
+        dt_new = s.strain_per_step / erate;
+        // Relative neck-area growth per step: Δ(a²)/a² ≈ 2R (2R ε̇ Δt)/a².
+        if (sc.necks > 0) {
+          const double a2 = sc.area_sum / double(sc.necks), R = sc.r_sum / double(sc.necks);
+          dt_new = std::min(dt_new, s.neck_area_per_step * a2 / (4 * R * R * erate));
+        }
+      }
+      const double Tdot = std::abs(s.program.rate(t));
+      if (Tdot > 0) dt_new = std::min(dt_new, s.temperature_step / Tdot);
+      if (dt > 0) dt_new = std::min(dt_new, 1.5 * dt);
+      // Land on the segment boundaries and the end.
+      const double to_boundary = std::min(s.program.next_boundary(t), t_end) - t;
+      if (to_boundary > 0) dt_new = std::min(dt_new, to_boundary);
+      if (!std::isfinite(dt_new)) dt_new = t_end - t;
+      dt = dt_new;
+      T_at_update = T;
+      since_update = 0;
+
+      if (s.conserve_volume) grow_radii(sc);
+      (void)V;
+    }
+    ++since_update;
+
+    // Mass scaling: m_i ≥ Σ(η_n + 5η_t) Δt / f (viscous limit) and the Rayleigh time of the
+    // elastic pairs ≥ Δt/0.2; physical masses are the floor. Rotational inertia follows.
+    double msum = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      double m = m_phys[i];
+      double c = visc[i];
+      if (fresh[i] > 0) {
+        const PairParams& self = sim.model().pair(p.phase[i], p.phase[i]);
+        c = std::max(c, law::NormalSintering::viscosity(self, s.initial_neck * p.r[i]));
+      }
+      if (c > 0) m = std::max(m, c * dt / s.viscous_fraction);
+      if (rayleigh[i] > 0) {
+        const double need = dt / (0.2 * rayleigh[i]);
+        if (need > 1) m = std::max(m, m_phys[i] * need * need);
+      }
+      p.m[i] = m;
+      if (inv_m_phys[i] > 0) p.inv_m[i] = 1 / m;
+      if (rot && inv_I_phys[i] > 0) p.inv_I[i] = 1 / (0.4 * m * p.r[i] * p.r[i]);
+      msum += m / m_phys[i];
+    }
+    mass_scale = msum / double(n);
+    rep.max_mass_scaling = std::max(rep.max_mass_scaling, mass_scale);
+    if (sim.time_step() != dt) sim.set_time_step(dt);
+    rep.min_time_step = std::min(rep.min_time_step, dt);
+    rep.max_time_step = std::max(rep.max_time_step, dt);
+
+    // Stress-free (or constrained) cell: viscous servo, ε̇_kk -= g σ_kk / C, C = Σ η l²/(5V).
+    if (servo) {
+      const Mat3 sig = cc.active() ? sim.contact_stress() : sim.measure().stress_contact;
+      const double C = modulus / (5 * sim.cell().volume());
+      for (int k = 0; k < 3; ++k) {
+        if (s.fixed[k] || C <= 0) {
+          cc.velocity_gradient(k, k) = 0;
+          continue;
+        }
+        cc.velocity_gradient(k, k) -= 0.5 * sig(k, k) / C;
+      }
+    }
+
+    sim.step();
+    ++rep.steps;
+
+    const bool row_due = sim.time() >= next_row * (1 - 1e-12) || sim.time() >= t_end * (1 - 1e-12);
+    const bool check = s.target_density > 0 && since_update >= s.update_interval;
+    if (row_due || check) {
+      // Radii brought up to date first, so the density is not late by the update interval.
+      if (s.conserve_volume) grow_radii(scan(sim, true));
+      const Scan q = scan(sim, false);
+      const double dens = q.solid / sim.cell().volume();
+      const bool reached = s.target_density > 0 && dens >= s.target_density;
+      if (row_due || reached) {
+        rep.rows.push_back(make_row(q, dt, mass_scale, rho_last, t_last));
+        rho_last = rep.rows.back().density;
+        t_last = sim.time();
+        while (next_row <= sim.time()) next_row += row_dt;
+      }
+      if (reached) {
+        rep.stop_reason = "target_density";
+        break;
+      }
+    }
+    const auto now = std::chrono::steady_clock::now();
+    if (progress && std::chrono::duration<double>(now - last_print).count() > 10) {
+      const SinterRow& r = rep.rows.back();
+      std::fprintf(stderr, "step %ld  t=%.4g s  T=%.1f K  rho=%.4f  a/R=%.3f  dt=%.3g s\n", sim.step_count(), r.time,
+                   r.temperature, r.density, r.mean_neck_ratio, dt);
+      last_print = now;
+    }
+  }
+  if (rep.rows.back().step != sim.step_count()) {
+    rep.rows.push_back(make_row(scan(sim, false), dt, mass_scale, rho_last, t_last));
+  }
+  rep.final = rep.rows.back();
+  // Physical masses back, the cell at rest.
+  p.m = m_phys;
+  p.inv_m = inv_m_phys;
+  if (rot) p.inv_I = inv_I_phys;
+  for (int a = 0; a < 3; ++a) cc.velocity_gradient(a, a) = 0;
+  for (auto& v : p.v) v = Vec3{};
+  if (rot)
+    for (auto& w : p.omega) w = Vec3{};
+  sim.invalidate_neighbors();
+  rep.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  return rep;
+}
+
+// ---------------------------------------------------------------- necks → bonds
+BondSet necks_to_bonds(const Simulation& sim) {
+  const Simulation::EngineState e = sim.engine_state();
+  const Particles& p = sim.particles();
+  const ContactModel& model = sim.model();
+  const Mat3& H = sim.cell().h;
+  const std::size_t stride = e.j.empty() ? 0 : e.history.size() / e.j.size();
+  BondSet b;
+  if (e.start.size() != p.size() + 1 || model.normal != NormalLaw::sintering) return b;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    for (int k = e.start[i]; k < e.start[i + 1]; ++k) {
+      const int j = e.j[k];
+      const Vec3 img = image_of(e.image[k]);
+      const double d = norm(p.x[j] + H * img - p.x[i]);
+      const double a = stride > 0 ? e.history[std::size_t(k) * stride] : 0;
+      if (d >= p.r[i] + p.r[j] || a <= 0) continue;
+      if (int(i) != j) b.add(int32_t(i), j, img, a, d);  // (a self-image pair of a tiny cell is left out)
+    }
+  return b;
+}
+
+BondTable necks_to_bond_table(const Simulation& sim) {
+  const BondSet b = necks_to_bonds(sim);
+  BondTable t;
+  t.i = b.i;
+  t.j = b.j;
+  t.radius = b.radius;
+  t.rest_length = b.rest_length;
+  t.state.assign(b.size(), BondTable::intact);
+  t.broken_at.assign(b.size(), std::numeric_limits<double>::quiet_NaN());
+  return t;
+}
+
+}  // namespace tomodem::dem
