@@ -536,7 +536,7 @@ SinterReport run_sintering(Simulation& sim, const SinterSettings& s, bool progre
   };
 
   std::vector<double> visc;
-  double dt = 0, modulus = 0, T_at_update = -1, rho_last = rho0, t_last = sim.time();
+  double dt = 0, dt_free = 0, modulus = 0, T_at_update = -1, rho_last = rho0, t_last = sim.time();
   rep.min_time_step = std::numeric_limits<double>::infinity();
   const double row_dt = (t_end - t_start) / std::max(1, s.output_rows);
   double next_row = t_start + row_dt;
@@ -552,7 +552,8 @@ SinterReport run_sintering(Simulation& sim, const SinterSettings& s, bool progre
     modulus = sim.viscous_sums(visc);
 
     // Automatic step (on update steps or when the temperature moved by more than 1 K).
-    if (since_update >= s.update_interval || std::abs(T - T_at_update) > 1.0) {
+    const bool crosses = t + dt > std::min(s.program.next_boundary(t), t_end);
+    if (since_update >= s.update_interval || std::abs(T - T_at_update) > 1.0 || crosses) {
       sc = scan(sim, s.conserve_volume);
       const double V = sim.cell().volume();
       // Mean-field strain rate of the necks: Σ F_s l / Σ η l² (affine viscous balance), or the
@@ -570,11 +571,12 @@ SinterReport run_sintering(Simulation& sim, const SinterSettings& s, bool progre
       }
       const double Tdot = std::abs(s.program.rate(t));
       if (Tdot > 0) dt_new = std::min(dt_new, s.temperature_step / Tdot);
-      if (dt > 0) dt_new = std::min(dt_new, 1.5 * dt);
-      // Land on the segment boundaries and the end.
+      if (dt_free > 0) dt_new = std::min(dt_new, 1.5 * dt_free);
       const double to_boundary = std::min(s.program.next_boundary(t), t_end) - t;
-      if (to_boundary > 0) dt_new = std::min(dt_new, to_boundary);
-      if (!std::isfinite(dt_new)) dt_new = t_end - t;
+      if (!std::isfinite(dt_new)) dt_new = to_boundary;
+      dt_free = dt_new;  // the growth limit applies to this, not to a step cut at a boundary
+      // Land on the segment boundaries and the end (a remainder below 1 % of a step joins it).
+      if (to_boundary > 0 && to_boundary < 1.01 * dt_new) dt_new = to_boundary;
       dt = dt_new;
       T_at_update = T;
       since_update = 0;
