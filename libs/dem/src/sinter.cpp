@@ -318,6 +318,7 @@ Vec3 image_of(int code) { return {double(code / 9 - 1), double((code / 3) % 3 - 
 /// One pass over the neighbour list: overlaps, necks and the per-particle lens shares.
 struct Scan {
   double solid = 0, lens = 0, neck_sum = 0, force_l = 0, area_sum = 0, r_sum = 0;
+  double modulus = 0;  ///< Σ (η_n + ⅔ η_t) l²: V × 5 × the affine viscous modulus of a normal component
   long necks = 0, contacts = 0;
   std::vector<double> share, dshare;  ///< per particle: ½ Σ lens, ½ Σ ∂lens/∂r_i
 };
@@ -359,6 +360,10 @@ Scan scan(const Simulation& sim, bool per_particle) {
         sc.area_sum += a * a;
         sc.r_sum += R;
         sc.force_l += law::NormalSintering::driving_force(pp, a, R) * d;
+        // Affine Δσ_kk/Δε̇_kk = Σ l² (η_n ⟨n_k⁴⟩ + η_t ⟨n_k² − n_k⁴⟩)/V = Σ l² (η_n + ⅔ η_t)/(5V).
+        const double et = model.tangential == TangentialLaw::viscous
+                              ? law::NormalSintering::tangential_viscosity(pp, a, R) : 0;
+        sc.modulus += (law::NormalSintering::viscosity(pp, a) + 2.0 / 3.0 * et) * d * d;
         ++sc.necks;
       }
   sc.solid -= sc.lens;
@@ -549,16 +554,17 @@ SinterReport run_sintering(Simulation& sim, const SinterSettings& s, bool progre
     const double t = sim.time();
     const double T = s.program.temperature(t);
     apply_temperature(sim.model(), s.phases, T, s.initial_neck);
-    modulus = sim.viscous_sums(visc);
+    sim.viscous_sums(visc);
 
     // Automatic step (on update steps or when the temperature moved by more than 1 K).
     const bool crosses = t + dt > std::min(s.program.next_boundary(t), t_end);
     if (since_update >= s.update_interval || std::abs(T - T_at_update) > 1.0 || crosses) {
       sc = scan(sim, s.conserve_volume);
+      modulus = sc.modulus;
       const double V = sim.cell().volume();
       // Mean-field strain rate of the necks: Σ F_s l / Σ η l² (affine viscous balance), or the
       // cell's measured rate when larger.
-      double erate = modulus > 0 ? sc.force_l / modulus : 0;
+      double erate = sc.modulus > 0 ? sc.force_l / sc.modulus : 0;
       for (int k = 0; k < 3; ++k) erate = std::max(erate, std::abs(cc.velocity_gradient(k, k)));
       double dt_new = std::numeric_limits<double>::infinity();
       if (erate > 0) {
