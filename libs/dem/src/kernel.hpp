@@ -82,6 +82,12 @@ KernelSet select_kernels(const ContactModel& model, bool vectorised = true);
 
 namespace detail {
 
+/// Contact radius sqrt(R* δ) of the step before a contact opened: δ_prev = δ + v_n Δt (δ̇ = -v_n).
+inline double last_radius(double r_star, double delta, double vn, double dt) {
+  const double prev = delta + vn * dt;
+  return prev > 0 ? std::sqrt(r_star * prev) : 0;
+}
+
 /// History of one contact: [normal | tangential | rolling], each as wide as its law declares.
 template <class N, class T, class R>
 inline void reset_history(double* hist) {
@@ -103,7 +109,9 @@ inline void contact(const law::Geometry& g, double* hist, unsigned char* touch, 
   const law::Normal nr = eval_normal<N>(g, touch, hist);
   active = nr.active;
   if (!nr.active) {
-    if constexpr (kTally) tally->dissipated += T::released(*g.pp, hist + N::kHistory);
+    if constexpr (kTally)
+      tally->dissipated +=
+          T::released(*g.pp, hist + N::kHistory, last_radius(g.r_star, g.delta, dot(g.v_rel, g.n), g.dt));
     reset_history<N, T, R>(hist);
     return;
   }
@@ -164,7 +172,11 @@ void pair_kernel(const ForceJob& job, int i_begin, int i_end, Vec3* f, Vec3* tor
       const double r_star = ri * rj / rsum;
       if constexpr (!N::kTouchFlag) {
         if (dist2 >= rsum * rsum) {  // apart: forget the history
-          if constexpr (kTally) tally->dissipated += T::released(*pp, h + N::kHistory);
+          if constexpr (kTally) {
+            const double dist = std::sqrt(dist2);
+            const double vn = dot(job.u[jj] + job.vshift[im] - job.u[i], (1.0 / dist) * d);
+            tally->dissipated += T::released(*pp, h + N::kHistory, last_radius(r_star, rsum - dist, vn, job.dt));
+          }
           reset_history<N, T, R>(h);
           continue;
         }
@@ -173,7 +185,11 @@ void pair_kernel(const ForceJob& job, int i_begin, int i_end, Vec3* f, Vec3* tor
         if (!*tf && dist2 >= rsum * rsum) continue;
         if (dist2 >= reach * reach) {
           *tf = 0;
-          if constexpr (kTally) tally->dissipated += T::released(*pp, h + N::kHistory);
+          if constexpr (kTally) {
+            const double dist = std::sqrt(dist2);
+            const double vn = dot(job.u[jj] + job.vshift[im] - job.u[i], (1.0 / dist) * d);
+            tally->dissipated += T::released(*pp, h + N::kHistory, last_radius(r_star, rsum - dist, vn, job.dt));
+          }
           reset_history<N, T, R>(h);
           continue;
         }
@@ -233,7 +249,9 @@ void wall_kernel(const ForceJob& job, const WallJob& w, Vec3* f, Vec3* torque, T
     g.delta = ri - gap;
     if (g.delta < -N::reach(*pp, ri) || (!N::kTouchFlag && g.delta <= 0)) {
       if constexpr (N::kTouchFlag) *tf = 0;
-      if constexpr (kTally) tally->dissipated += T::released(*pp, h + N::kHistory);
+      if constexpr (kTally)
+        tally->dissipated +=
+            T::released(*pp, h + N::kHistory, last_radius(ri, g.delta, dot(w.velocity - job.u[i], n), job.dt));
       reset_history<N, T, R>(h);
       continue;
     }

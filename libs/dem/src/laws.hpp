@@ -122,7 +122,7 @@ struct TangentialNone {
   template <bool kTally>
   static Tangential eval(const Geometry&, const Normal&, double*) { return {{0, 0, 0}, 0, 0}; }
   static void reset(double*) {}
-  static double released(const PairParams&, const double*) { return 0; }
+  static double released(const PairParams&, const double*, double) { return 0; }
 };
 
 /// Incremental spring with Coulomb limit. The stored force is rotated into the current tangent
@@ -137,11 +137,11 @@ struct TangentialSpring {
   /// Energy still stored in the spring when the contact opens; the reset discards it and the
   /// budget books it as dissipated (in the continuum limit the cone μF_n → 0 slips it away).
   /// The spring can hold a large remainder when the dashpot alone exceeds the cone
-  /// (F_s = F_t − η_t v_t), so this is O(1) per contact, not O(Δt). Known for the linear law
-  /// (constant k_t); the Mindlin k_t of the last contact step is not kept, so not booked there.
-  static double released(const PairParams& p, const double* h) {
-    if constexpr (kMindlin) return 0;
-    else return p.k_t > 0 ? 0.5 * (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]) / p.k_t : 0;
+  /// (F_s = F_t − η_t v_t), so this is O(1) per contact, not O(Δt). Mindlin: k_t = 8G*a of the
+  /// last contact step, with `a_last` reconstructed by the caller from δ + v_n Δt.
+  static double released(const PairParams& p, const double* h, double a_last) {
+    const double kt = kMindlin ? 8 * p.G_star * a_last : p.k_t;
+    return kt > 0 ? 0.5 * (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]) / kt : 0;
   }
   template <bool kTally>
   static Tangential eval(const Geometry& g, const Normal& nr, double* h) {
@@ -171,7 +171,18 @@ struct TangentialSpring {
     }
     h[0] = fs.x; h[1] = fs.y; h[2] = fs.z;
     if constexpr (!kTally) return {ft, 0, 0};
-    const double e_before = kt > 0 ? 0.5 * norm2(fs_before) / kt : 0;
+    // The stored energy at the start of the step is |F|²/2k_t with the previous step's k_t. For
+    // Mindlin k_t = 8G*a follows the contact radius, and a spring whose stiffness changes at
+    // constant force gains or loses energy without work; the previous radius
+    // a_prev = sqrt(R* (δ + v_n Δt)) (δ̇ = -v_n, Hertz geometry) books that change into the
+    // tally so the budget closes. It is signed: positive while a contact loads, negative while
+    // it unloads.
+    double k_before = kt;
+    if constexpr (kMindlin) {
+      const double prev = g.delta + dot(g.v_rel, g.n) * g.dt;
+      k_before = prev > 0 ? 8 * p.G_star * std::sqrt(g.r_star * prev) : 0;
+    }
+    const double e_before = k_before > 0 ? 0.5 * norm2(fs_before) / k_before : 0;
     const double e_after = kt > 0 ? 0.5 * norm2(fs) / kt : 0;
     // Work put into the contact this step minus the change of stored energy. The spring's work
     // uses its mean force over the step (trapezoid): exact for a sticking linear spring, so a

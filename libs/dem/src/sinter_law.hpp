@@ -59,7 +59,7 @@ struct TangentialViscous {
   static constexpr int kHistory = 0;
   static constexpr bool kRotation = true;
   static void reset(double*) {}
-  static double released(const PairParams&, const double*) { return 0; }
+  static double released(const PairParams&, const double*, double) { return 0; }
   template <bool kTally>
   static Tangential eval(const Geometry& g, const Normal& nr, double*) {
     const PairParams& p = *g.pp;
