@@ -47,7 +47,8 @@ if [ -n "$need" ]; then
     echo "error: could not install$need" >&2; exit 1; }
 fi
 if [ ! -x "$BENCH" ]; then
-  cmake -S "$REPO" -B "$BUILD" -G Ninja -DCMAKE_BUILD_TYPE=Release -DTOMODEM_SKIP="network;pipeline" &&
+  cmake -S "$REPO" -B "$BUILD" -G Ninja -DCMAKE_BUILD_TYPE=Release -DTOMODEM_NATIVE="${NATIVE:-ON}" \
+    -DTOMODEM_SKIP="network;pipeline;image;geometry;mechanics" &&
     cmake --build "$BUILD" --target tomodem-bench-sceneA -j2 || exit 1
 fi
 
@@ -116,6 +117,6 @@ echo "load average after: $LOAD1"
 cp "$CSV" "$REPO/tests/bench/dem/last_run.csv"
 python3 "$REPO/tests/bench/dem/summarize.py" "$CSV" "$DOC" \
   --meta "date=$START" "cpu=$(lscpu | awk -F: '/Model name/{gsub(/^ +/,"",$2);print $2; exit}')" \
-  "cores=$(nproc)" "kernel=$(uname -r)" "debian=$(cat /etc/debian_version)" "lammps=$LV" "liggghts=$GV" \
+  "cores=$(getconf _NPROCESSORS_ONLN)" "native=$(grep -q "TOMODEM_NATIVE:BOOL=ON" "$BUILD/CMakeCache.txt" 2>/dev/null && echo "-march=native" || echo "no -march=native")" "kernel=$(uname -r)" "debian=$(cat /etc/debian_version)" "lammps=$LV" "liggghts=$GV" \
   "compiler=$(c++ --version | head -1)" "load_before=$LOAD0" "load_after=$LOAD1" "repeats=$REPEATS (N >= 50000: $REPEATS_LARGE)" \
   "warm=$WARM" "steps=$STEPS" "commit=${COMMIT:-$(git -C "$REPO" rev-parse --short HEAD)}" "pin=${PIN:-none}"

@@ -40,7 +40,7 @@ def main():
     out.append(f"Run {meta.get('date','?')} on {meta.get('cpu','?')} ({meta.get('cores','?')} vCPUs), "
                f"kernel {meta.get('kernel','?')}, Debian {meta.get('debian','?')}; LAMMPS `{meta.get('lammps','?')}`, "
                f"LIGGGHTS `{meta.get('liggghts','?')}`; tomodem commit {meta.get('commit','?')} built with "
-               f"{meta.get('compiler','?')} (Release, no -march=native). Load average (1/5/15 min) before the run "
+               f"{meta.get('compiler','?')} (Release, {meta.get('native','?')}). Load average (1/5/15 min) before the run "
                f"{meta.get('load_before','?')}, after {meta.get('load_after','?')}. {meta.get('warm','?')} warm-up "
                f"steps, then {meta.get('steps','?')} timed steps; **medians of {meta.get('repeats','?')} repeats** "
                f"run one after the other with the codes interleaved; pinning: {meta.get('pin','none')}. "
