@@ -4,6 +4,7 @@
 #include <iostream>
 #include <omp.h>
 
+#include "tomodem/core/cli.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/network/conduct_tool.hpp"
@@ -41,18 +42,8 @@ int main(int argc, char** argv) {
     int threads = 0;
     app.add_option("--threads", threads, "threads (default: OMP_NUM_THREADS or all cores)");
     app.add_flag("-q,--quiet", quiet, "no progress messages");
-    app.add_flag_callback("--version", [] {
-      std::cout << "tomodem-conduct " << tomodem::version_string() << "\n";
-      throw CLI::Success();
-    }, "print the version and exit");
-    try {
-      app.parse(argc, argv);
-    } catch (const CLI::Success& e) {
-      return app.exit(e);
-    } catch (const CLI::ParseError& e) {
-      app.exit(e);
-      return tomodem::exit_code::bad_input;
-    }
+    tomodem::cli::add_version(app, "tomodem-conduct");
+    if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
     c.bonds = !no_bonds;
     c.contacts = !no_contacts;
     tomodem::set_quiet(quiet);

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <iostream>
 
+#include "tomodem/core/cli.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/packing_io.hpp"
@@ -38,7 +39,7 @@ int run(int argc, char** argv) {
   std::string scene_path, out_dir = ".", json_path, restart;
   int threads = 0;
   long steps = 0;
-  bool quiet_flag = false, version = false;
+  bool quiet_flag = false;
   app.add_option("scene", scene_path, "scene file (YAML, see docs/dem.md)");
   app.add_option("-o,--output-dir", out_dir, "folder for the outputs (created if missing)");
   app.add_option("--json", json_path, "also write the JSON summary to this file");
@@ -46,16 +47,8 @@ int run(int argc, char** argv) {
   app.add_option("--steps", steps, "override the protocol's total steps")->check(CLI::PositiveNumber);
   app.add_option("--restart", restart, "continue from this checkpoint (same scene)");
   app.add_flag("-q,--quiet", quiet_flag, "no progress on stderr");
-  app.add_flag("--version", version, "print the version");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return e.get_exit_code() == 0 ? app.exit(e) : (app.exit(e), exit_code::bad_input);
-  }
-  if (version) {
-    std::cout << version_string() << '\n';
-    return 0;
-  }
+  tomodem::cli::add_version(app, "tomodem-dem");
+  if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
   if (scene_path.empty()) throw InputError("", "scene", "", "no scene file given (see --help)");
   set_quiet(quiet_flag);
 

@@ -4,6 +4,7 @@
 
 #include <iostream>
 
+#include "tomodem/core/cli.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/packing_io.hpp"
@@ -20,7 +21,7 @@ int run(int argc, char** argv) {
   int threads = 0;
   long particles = 0, seed = -1;
   double pressure = 0, phi = 0, friction = -1;
-  bool quiet_flag = false, version = false, no_tess = false;
+  bool quiet_flag = false, no_tess = false;
   app.add_option("config", config, "packing config (YAML, see docs/pack.md)");
   app.add_option("-o,--output", out, "packing file (.h5; an .xdmf sidecar is written next to it)");
   app.add_option("--json", json_path, "also write the JSON summary to this file");
@@ -32,13 +33,8 @@ int run(int argc, char** argv) {
   app.add_option("--friction", friction, "override the Coulomb friction coefficient")->check(CLI::NonNegativeNumber);
   app.add_flag("--no-tessellation", no_tess, "skip the Laguerre tessellation");
   app.add_flag("-q,--quiet", quiet_flag, "no progress on stderr");
-  app.add_flag("--version", version, "print the version");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return e.get_exit_code() == 0 ? app.exit(e) : (app.exit(e), exit_code::bad_input);
-  }
-  if (version) return std::cout << version_string() << '\n', 0;
+  tomodem::cli::add_version(app, "tomodem-pack");
+  if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
   if (config.empty()) throw InputError("", "config", "", "no config file given (see --help)");
   set_quiet(quiet_flag);
   geometry::PackConfig cfg = geometry::load_pack_config(config);

@@ -2,6 +2,7 @@
 #include <CLI/CLI.hpp>
 #include <iostream>
 
+#include "tomodem/core/cli.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/image/segment.hpp"
@@ -33,18 +34,8 @@ int main(int argc, char** argv) {
     bool quiet = false;
     app.add_option("--threads", threads, "threads (default: OMP_NUM_THREADS or all cores)");
     app.add_flag("-q,--quiet", quiet, "no progress messages");
-    app.add_flag_callback("--version", [] {
-      std::cout << "tomodem-phantom " << tomodem::version_string() << "\n";
-      throw CLI::Success();
-    }, "print the version and exit");
-    try {
-      app.parse(argc, argv);
-    } catch (const CLI::Success& e) {
-      return app.exit(e);
-    } catch (const CLI::ParseError& e) {
-      app.exit(e);
-      return tomodem::exit_code::bad_input;
-    }
+    tomodem::cli::add_version(app, "tomodem-phantom");
+    if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
     tomodem::set_quiet(quiet);
     if (threads < 0) throw tomodem::InputError("", "--threads", std::to_string(threads), "must be >= 0");
     tomodem::image::set_threads(threads);

@@ -7,6 +7,7 @@
 #include <iostream>
 #include <thread>
 
+#include "tomodem/core/cli.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/tool.hpp"
@@ -62,11 +63,7 @@ int main(int argc, char** argv) {
   sl->add_option("--partition", so.partition, "Slurm partition");
   sl->add_option("--runner", so.runner, "command that runs tomodem-run on the nodes")->capture_default_str();
   app.require_subcommand(0, 1);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : tomodem::exit_code::bad_input;
-  }
+  if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
   return tomodem::run_tool("tomodem-run", [&] {
     tomodem::set_quiet(quiet);
     ro.quiet = quiet;

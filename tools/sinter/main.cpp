@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <iostream>
 
+#include "tomodem/core/cli.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/packing_io.hpp"
@@ -31,22 +32,14 @@ int run(int argc, char** argv) {
   CLI::App app{"tomodem-sinter: sinter a packing (scene YAML with a sintering section, docs/sintering.md)"};
   std::string scene_path, out_dir = ".", json_path;
   int threads = 0;
-  bool quiet_flag = false, version = false;
+  bool quiet_flag = false;
   app.add_option("scene", scene_path, "scene file (YAML, see docs/sintering.md)");
   app.add_option("-o,--output-dir", out_dir, "folder for the outputs (created if missing)");
   app.add_option("--json", json_path, "also write the JSON summary to this file");
   app.add_option("--threads", threads, "threads (default: the scene's, else 1)")->check(CLI::PositiveNumber);
   app.add_flag("-q,--quiet", quiet_flag, "no progress on stderr");
-  app.add_flag("--version", version, "print the version");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return e.get_exit_code() == 0 ? app.exit(e) : (app.exit(e), exit_code::bad_input);
-  }
-  if (version) {
-    std::cout << version_string() << '\n';
-    return 0;
-  }
+  tomodem::cli::add_version(app, "tomodem-sinter");
+  if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
   if (scene_path.empty()) throw InputError("", "scene", "", "no scene file given (see --help)");
   set_quiet(quiet_flag);
 
