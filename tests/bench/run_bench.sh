@@ -47,6 +47,7 @@ if [ -n "$need" ]; then
     echo "error: could not install$need" >&2; exit 1; }
 fi
 if [ ! -x "$BENCH" ]; then
+  bash "$REPO/tools/scripts/install-deps.sh" || exit 1
   cmake -S "$REPO" -B "$BUILD" -G Ninja -DCMAKE_BUILD_TYPE=Release -DTOMODEM_NATIVE="${NATIVE:-ON}" \
     -DTOMODEM_SKIP="network;pipeline;image;geometry;mechanics" &&
     cmake --build "$BUILD" --target tomodem-bench-sceneA -j2 || exit 1
