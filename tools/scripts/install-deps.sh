@@ -5,7 +5,7 @@ set -euo pipefail
 PKGS=(build-essential cmake ninja-build pkg-config git
       libhdf5-dev hdf5-tools libeigen3-dev libyaml-cpp-dev nlohmann-json3-dev libcli11-dev
       libfmt-dev libspdlog-dev libxxhash-dev
-      libgtest-dev libgmock-dev libbenchmark-dev python3
+      libgtest-dev libgmock-dev libbenchmark-dev python3 gnuplot-nox
       libcgal-dev libgmp-dev libmpfr-dev
       libinsighttoolkit5-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
       libopenvdb-dev libboost-iostreams-dev libtbb-dev libblosc-dev)
