@@ -96,6 +96,13 @@ inline void reset_history(double* hist) {
   R::reset(hist + N::kHistory + T::kHistory);
 }
 
+/// Elastic energy left in the history springs of a contact that opens: the reset discards it
+/// and the budget books it as dissipated.
+template <class N, class T, class R>
+inline double released_energy(const PairParams& pp, const double* hist, double a_last) {
+  return T::released(pp, hist + N::kHistory, a_last) + R::released(hist + N::kHistory + T::kHistory);
+}
+
 template <class N>
 inline law::Normal eval_normal(const law::Geometry& g, unsigned char* touch, double* hist) {
   if constexpr (N::kHistory > 0) return N::eval(g, touch, hist);
@@ -111,7 +118,7 @@ inline void contact(const law::Geometry& g, double* hist, unsigned char* touch, 
   if (!nr.active) {
     if constexpr (kTally)
       tally->dissipated +=
-          T::released(*g.pp, hist + N::kHistory, last_radius(g.r_star, g.delta, dot(g.v_rel, g.n), g.dt));
+          released_energy<N, T, R>(*g.pp, hist, last_radius(g.r_star, g.delta, dot(g.v_rel, g.n), g.dt));
     reset_history<N, T, R>(hist);
     return;
   }
@@ -175,7 +182,7 @@ void pair_kernel(const ForceJob& job, int i_begin, int i_end, Vec3* f, Vec3* tor
           if constexpr (kTally) {
             const double dist = std::sqrt(dist2);
             const double vn = dot(job.u[jj] + job.vshift[im] - job.u[i], (1.0 / dist) * d);
-            tally->dissipated += T::released(*pp, h + N::kHistory, last_radius(r_star, rsum - dist, vn, job.dt));
+            tally->dissipated += released_energy<N, T, R>(*pp, h, last_radius(r_star, rsum - dist, vn, job.dt));
           }
           reset_history<N, T, R>(h);
           continue;
@@ -188,7 +195,7 @@ void pair_kernel(const ForceJob& job, int i_begin, int i_end, Vec3* f, Vec3* tor
           if constexpr (kTally) {
             const double dist = std::sqrt(dist2);
             const double vn = dot(job.u[jj] + job.vshift[im] - job.u[i], (1.0 / dist) * d);
-            tally->dissipated += T::released(*pp, h + N::kHistory, last_radius(r_star, rsum - dist, vn, job.dt));
+            tally->dissipated += released_energy<N, T, R>(*pp, h, last_radius(r_star, rsum - dist, vn, job.dt));
           }
           reset_history<N, T, R>(h);
           continue;
@@ -251,7 +258,7 @@ void wall_kernel(const ForceJob& job, const WallJob& w, Vec3* f, Vec3* torque, T
       if constexpr (N::kTouchFlag) *tf = 0;
       if constexpr (kTally)
         tally->dissipated +=
-            T::released(*pp, h + N::kHistory, last_radius(ri, g.delta, dot(w.velocity - job.u[i], n), job.dt));
+            released_energy<N, T, R>(*pp, h, last_radius(ri, g.delta, dot(w.velocity - job.u[i], n), job.dt));
       reset_history<N, T, R>(h);
       continue;
     }

@@ -200,16 +200,23 @@ struct RollingNone {
   static constexpr int kHistory = 0;
   static constexpr bool kRotation = false;
   static void reset(double*) {}
+  static double released(const double*) { return 0; }
   template <bool kTally>
   static Tangential eval(const Geometry&, const Normal&, const Vec3&, double*) { return {{0, 0, 0}, 0, 0}; }
 };
 
 /// Elastic–plastic spring (Ai, Chen, Rotter & Ooi 2011, model C without its dashpot):
 /// ΔM = -k_r Δθ_r with k_r = 2.25 S_n μ_r² R*², |M| ≤ μ_r R* F_n^rep. `w_rel` = ω_i - ω_j.
+/// History: the moment (3) and the k_r of the last step, so the stored energy |M|²/2k_r is
+/// known exactly when k_r follows the contact radius (Hertz family) and when the contact opens.
 struct RollingElasticPlastic {
-  static constexpr int kHistory = 3;
+  static constexpr int kHistory = 4;
   static constexpr bool kRotation = true;
-  static void reset(double* h) { h[0] = h[1] = h[2] = 0; }
+  static void reset(double* h) { h[0] = h[1] = h[2] = h[3] = 0; }
+  /// Energy left in the spring when the contact opens (booked as dissipated, as the tangential one).
+  static double released(const double* h) {
+    return h[3] > 0 ? 0.5 * (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]) / h[3] : 0;
+  }
   template <bool kTally>
   static Tangential eval(const Geometry& g, const Normal& nr, const Vec3& w_rel, double* h) {
     const PairParams& p = *g.pp;
@@ -223,13 +230,16 @@ struct RollingElasticPlastic {
     }
     const Vec3 wr = w_rel - dot(w_rel, g.n) * g.n;
     const Vec3 m_before = m;
+    const double kr_before = h[3];
     m -= (kr * g.dt) * wr;
     const double limit = p.rolling_friction * g.r_star * nr.fn_rep;
     const double m2 = norm2(m);
     if (m2 > limit * limit) m *= m2 > 0 ? limit / std::sqrt(m2) : 0;
-    h[0] = m.x; h[1] = m.y; h[2] = m.z;
+    h[0] = m.x; h[1] = m.y; h[2] = m.z; h[3] = kr;
     if constexpr (!kTally) return {m, 0, 0};
-    const double e_before = kr > 0 ? 0.5 * norm2(m_before) / kr : 0;
+    // Stored energy before with the previous step's k_r (its change at constant moment is work
+    // done by no one: booked, signed, as for Mindlin's k_t), after with this step's.
+    const double e_before = kr_before > 0 ? 0.5 * norm2(m_before) / kr_before : 0;
     const double e_after = kr > 0 ? 0.5 * norm2(m) / kr : 0;
     // Mean moment over the step (trapezoid), as for the tangential spring.
     return {m, e_after, -dot(0.5 * (m_before + m), wr) * g.dt - (e_after - e_before)};

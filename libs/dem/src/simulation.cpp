@@ -69,6 +69,7 @@ struct Simulation::Impl {
 
   std::vector<Vec3> u;  // absolute velocities when the cell deforms
   int threads = 1;
+  std::size_t pair_capacity_hint = 0;  ///< pairs in the last list (+N), to reserve the next one
   std::vector<std::vector<Vec3>> fbuf, tbuf;
   std::vector<std::vector<double>> sbuf;
   std::vector<int> split;
@@ -198,49 +199,118 @@ struct Simulation::Impl {
     }
     update_image_tables();
 
+    // Each thread lists the pairs of a contiguous range of particles; the ranges are joined in
+    // order, so the list is the same for every thread count.
     new_start.assign(n + 1, 0);
-    new_j.reserve(nj.size() + n);
-    new_img.reserve(nj.size() + n);
-    for (std::size_t i = 0; i < n; ++i) {
-      const int b = bin_of[i];
-      const int c0 = b / (nb[1] * nb[2]), c1 = (b / nb[2]) % nb[1], c2 = b % nb[2];
-      const int c[3] = {c0, c1, c2};
-      for (int o = 0; o < 27; ++o) {
-        const int off[3] = {o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1};
-        int cb[3], im[3];
-        bool skip = false;
-        for (int k = 0; k < 3 && !skip; ++k) {
-          cb[k] = c[k] + off[k];
-          im[k] = 0;
-          if (cb[k] < 0 || cb[k] >= nb[k]) {
-            if (!cell.periodic[k]) skip = true;
-            else if (cb[k] < 0) cb[k] += nb[k], im[k] = -1;
-            else cb[k] -= nb[k], im[k] = 1;
+    std::vector<std::vector<int32_t>> part_j(threads);
+    std::vector<std::vector<uint8_t>> part_img(threads);
+    int parts = 1;
+#pragma omp parallel num_threads(threads) if (threads > 1)
+    {
+      const int t = omp_get_thread_num();
+#pragma omp single
+      parts = omp_get_num_threads();
+      const std::size_t i0 = n * t / parts, i1 = n * (t + 1) / parts;
+      auto& pj = part_j[t];
+      auto& pimg = part_img[t];
+      pj.reserve(pair_capacity_hint / parts);
+      pimg.reserve(pair_capacity_hint / parts);
+      for (std::size_t i = i0; i < i1; ++i) {
+        const int b = bin_of[i];
+        const int c0 = b / (nb[1] * nb[2]), c1 = (b / nb[2]) % nb[1], c2 = b % nb[2];
+        const int c[3] = {c0, c1, c2};
+        for (int o = 0; o < 27; ++o) {
+          const int off[3] = {o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1};
+          int cb[3], im[3];
+          bool skip = false;
+          for (int k = 0; k < 3 && !skip; ++k) {
+            cb[k] = c[k] + off[k];
+            im[k] = 0;
+            if (cb[k] < 0 || cb[k] >= nb[k]) {
+              if (!cell.periodic[k]) skip = true;
+              else if (cb[k] < 0) cb[k] += nb[k], im[k] = -1;
+              else cb[k] -= nb[k], im[k] = 1;
+            }
+          }
+          if (skip) continue;
+          const int code = (im[0] + 1) * 9 + (im[1] + 1) * 3 + (im[2] + 1);
+          const int nbin = (cb[0] * nb[1] + cb[1]) * nb[2] + cb[2];
+          for (int q = bin_start[nbin]; q < bin_start[nbin + 1]; ++q) {
+            const int j = bin_items[q];
+            // Each pair once: i < j for any image, and i == j only for the positive half of images.
+            if (j < int(i) || (j == int(i) && code <= kCentreImage)) continue;
+            const Vec3 d = p.x[j] + shift[code] - p.x[i];
+            const double rc = p.r[i] + p.r[j] + skin + reach_max;
+            if (dot(d, d) < rc * rc) {
+              pj.push_back(j);
+              pimg.push_back(uint8_t(code));
+            }
           }
         }
-        if (skip) continue;
-        const int code = (im[0] + 1) * 9 + (im[1] + 1) * 3 + (im[2] + 1);
-        const int nbin = (cb[0] * nb[1] + cb[1]) * nb[2] + cb[2];
-        for (int q = bin_start[nbin]; q < bin_start[nbin + 1]; ++q) {
-          const int j = bin_items[q];
-          // Each pair once: i < j for any image, and i == j only for the positive half of images.
-          if (j < int(i) || (j == int(i) && code <= kCentreImage)) continue;
-          const Vec3 d = p.x[j] + shift[code] - p.x[i];
-          const double rc = p.r[i] + p.r[j] + skin + reach_max;
-          if (dot(d, d) < rc * rc) {
-            new_j.push_back(j);
-            new_img.push_back(uint8_t(code));
-          }
-        }
+        new_start[i + 1] = int32_t(pj.size());
       }
-      new_start[i + 1] = int32_t(new_j.size());
     }
+    if (parts == 1) {
+      new_j.swap(part_j[0]);
+      new_img.swap(part_img[0]);
+      return;
+    }
+    std::size_t total = 0;
+    for (int t = 0; t < parts; ++t) total += part_j[t].size();
+    new_j.reserve(total);
+    new_img.reserve(total);
+    for (int t = 0; t < parts; ++t) {
+      const auto offset = int32_t(new_j.size());
+      for (std::size_t i = n * t / parts; i < n * (t + 1) / parts; ++i) new_start[i + 1] += offset;
+      new_j.insert(new_j.end(), part_j[t].begin(), part_j[t].end());
+      new_img.insert(new_img.end(), part_img[t].begin(), part_img[t].end());
+      std::vector<int32_t>().swap(part_j[t]);
+      std::vector<uint8_t>().swap(part_img[t]);
+    }
+  }
+
+  /// The history worth carrying over a rebuild: pairs whose springs or contact flag are set,
+  /// re-imaged after the wrap. Kept apart so the old list can be freed before the new one is
+  /// built (peak memory one list, not two: in a gas most listed pairs never touch).
+  struct KeptHistory {
+    std::vector<int32_t> start;  // per particle, CSR over the kept pairs
+    std::vector<int32_t> j;
+    std::vector<uint8_t> img, touch;
+    std::vector<double> hist;
+  };
+
+  KeptHistory keep_history() {
+    KeptHistory kept;
+    if (start.empty() || (stride == 0 && !kern.touch_flag)) return kept;
+    const std::size_t n = p.size();
+    kept.start.assign(n + 1, 0);
+    for (std::size_t i = 0; i < n; ++i) {
+      for (int q = start[i]; q < start[i + 1]; ++q) {
+        const double* h = &hist[std::size_t(q) * stride];
+        bool carries = kern.touch_flag && touch[q];
+        for (int s = 0; s < stride; ++s) carries = carries || h[s] != 0;
+        const int code = carries ? image_after_wrap(i, nj[q], img[q]) : -1;
+        if (code < 0) continue;
+        kept.j.push_back(nj[q]);
+        kept.img.push_back(uint8_t(code));
+        kept.touch.push_back(kern.touch_flag ? touch[q] : 0);
+        kept.hist.insert(kept.hist.end(), h, h + stride);
+      }
+      kept.start[i + 1] = int32_t(kept.j.size());
+    }
+    return kept;
   }
 
   void build_neighbors() {
     wrap_positions();
     for (std::size_t b = 0; b < bonds.size(); ++b) bonds.image[b] += wrapped[bonds.j[b]] - wrapped[bonds.i[b]];
     const std::size_t n = p.size();
+    const KeptHistory kept = keep_history();
+    pair_capacity_hint = nj.size() + n;
+    std::vector<int32_t>().swap(nj);
+    std::vector<uint8_t>().swap(img);
+    std::vector<double>().swap(hist);
+    std::vector<uint8_t>().swap(touch);
     std::vector<int32_t> new_start, new_j;
     std::vector<uint8_t> new_img;
     if (use_hgrid(p.r)) {  // wide size distributions: hierarchical grid (hgrid.hpp)
@@ -250,18 +320,18 @@ struct Simulation::Impl {
       linked_cells(new_start, new_j, new_img);
     }
     if (!bonds.i.empty()) exclude_bonded(new_start, new_j, new_img);
-    // Carry the history of pairs that stay in the list (small per-particle lists: linear search),
-    // matching images across the wrap (a pair whose particle crossed a periodic face keeps its
-    // tangential spring and JKR flag).
+    // Carry the kept history to the pairs that stay in the list (short per-particle lists: linear
+    // search); a pair whose particle crossed a periodic face keeps its spring and JKR flag.
     std::vector<double> new_hist(new_j.size() * stride, 0.0);
     std::vector<uint8_t> new_touch(kern.touch_flag ? new_j.size() : 0, 0);
-    if (!start.empty() && (stride > 0 || kern.touch_flag)) {
-      for (std::size_t i = 0; i < n; ++i)
-        for (int k = new_start[i]; k < new_start[i + 1]; ++k)
-          for (int q = start[i]; q < start[i + 1]; ++q)
-            if (nj[q] == new_j[k] && image_after_wrap(i, nj[q], img[q]) == new_img[k]) {
-              std::copy_n(&hist[std::size_t(q) * stride], stride, &new_hist[std::size_t(k) * stride]);
-              if (kern.touch_flag) new_touch[k] = touch[q];
+    if (!kept.start.empty()) {
+#pragma omp parallel for num_threads(threads) if (threads > 1) schedule(static)
+      for (long i = 0; i < long(n); ++i)
+        for (int q = kept.start[i]; q < kept.start[i + 1]; ++q)
+          for (int k = new_start[i]; k < new_start[i + 1]; ++k)
+            if (new_j[k] == kept.j[q] && new_img[k] == kept.img[q]) {
+              std::copy_n(&kept.hist[std::size_t(q) * stride], stride, &new_hist[std::size_t(k) * stride]);
+              if (kern.touch_flag) new_touch[k] = kept.touch[q];
               break;
             }
     }
@@ -296,13 +366,13 @@ struct Simulation::Impl {
     ++builds;
   }
 
-  /// Removes pairs joined by an intact bond from a new half list: the bond carries them, and
-  /// the contact law takes over only when the bond breaks (which triggers a rebuild).
+  /// Removes pairs joined by a bond from a new half list: an intact bond carries them, and a
+  /// broken one is their contact (compression and friction between the fracture faces, in the
+  /// bond loop: the faces close at the rest length, not at R_i + R_j).
   void exclude_bonded(std::vector<int32_t>& st, std::vector<int32_t>& jj, std::vector<uint8_t>& im) const {
     const std::size_t n = p.size();
     std::vector<std::vector<std::pair<int32_t, int>>> partners(n);
     for (std::size_t b = 0; b < bonds.size(); ++b) {
-      if (bonds.state[b] != BondSet::intact) continue;
       const Vec3& v = bonds.image[b];
       const int code = (int(std::lround(v.x)) + 1) * 9 + (int(std::lround(v.y)) + 1) * 3 + int(std::lround(v.z)) + 1;
       partners[bonds.i[b]].push_back({bonds.j[b], code});
@@ -348,7 +418,9 @@ struct Simulation::Impl {
   bool rebuild_due() const {
     if (need_build) return true;
     double dmax2 = 0;
-    for (std::size_t i = 0; i < p.size(); ++i) dmax2 = std::max(dmax2, norm2(p.x[i] - x_build[i]));
+    const long n = long(p.size());
+#pragma omp parallel for num_threads(threads) if (threads > 1) schedule(static) reduction(max : dmax2)
+    for (long i = 0; i < n; ++i) dmax2 = std::max(dmax2, norm2(p.x[i] - x_build[i]));
     const double dmax = std::sqrt(dmax2);
     Mat3 dh = cell.h;
     for (int a = 0; a < 3; ++a)
@@ -397,8 +469,6 @@ struct Simulation::Impl {
     update_image_tables();
     const std::size_t n = p.size();
     const bool rot = p.has_rotation();
-    std::fill(p.f.begin(), p.f.end(), Vec3{});
-    if (rot) std::fill(p.torque.begin(), p.torque.end(), Vec3{});
     ForceJob jb = job();
     jb.pair_force = pair_force;
     BondJob bj{};
@@ -409,52 +479,60 @@ struct Simulation::Impl {
       event_buf.assign(threads, {});
     }
     std::vector<Tally> tallies(threads);
-    if (tally) stiffness.assign(n, 0.0);
+    if (tally) stiffness.resize(n);
     if (int(fbuf.size()) < threads) {
       fbuf.resize(threads);
       tbuf.resize(threads);
       sbuf.resize(threads);
     }
+    // The helper threads' buffers stay zero between calls (the reduction below clears what it
+    // reads), so each is touched twice a step instead of three times; one parallel region.
+    for (int q = 1; q < threads; ++q) {
+      if (fbuf[q].size() != n) fbuf[q].assign(n, Vec3{});
+      if (rot && tbuf[q].size() != n) tbuf[q].assign(n, Vec3{});
+      if (tally && sbuf[q].size() != n) sbuf[q].assign(n, 0.0);
+    }
+    const long reduce_from = (have_bonds || threads == 1) ? 0 : split[1];
 #pragma omp parallel num_threads(threads) if (threads > 1)
     {
       const int tid = omp_get_thread_num();
-      Vec3* f = p.f.data();
-      Vec3* tq = rot ? p.torque.data() : nullptr;
-      double* st = tally ? stiffness.data() : nullptr;
-      if (tid > 0) {
-        fbuf[tid].assign(n, Vec3{});
-        f = fbuf[tid].data();
-        if (rot) {
-          tbuf[tid].assign(n, Vec3{});
-          tq = tbuf[tid].data();
-        }
-        if (tally) {
-          sbuf[tid].assign(n, 0.0);
-          st = sbuf[tid].data();
-        }
+#pragma omp for schedule(static)
+      for (long i = 0; i < long(n); ++i) {
+        p.f[i] = Vec3{};
+        if (rot) p.torque[i] = Vec3{};
+        if (tally) stiffness[i] = 0;
       }
+      Vec3* f = tid > 0 ? fbuf[tid].data() : p.f.data();
+      Vec3* tq = rot ? (tid > 0 ? tbuf[tid].data() : p.torque.data()) : nullptr;
+      double* st = tally ? (tid > 0 ? sbuf[tid].data() : stiffness.data()) : nullptr;
       kern.pair[tally](jb, split[tid], split[tid + 1], f, tq, &tallies[tid], st);
       if (have_bonds)
         bond_kernel[tally](bj, bond_split[tid], bond_split[tid + 1], f, tq, &tallies[tid], st, &event_buf[tid]);
 #pragma omp barrier
       // Reduce the per-thread buffers in a fixed order: the result depends on the thread count
       // only through round-off, and not at all on scheduling.
+      // A pair list stores j ≥ i, so without bonds thread q writes only to particles from its
+      // first one, split[q], on: the rest of its buffer stays zero and is not read.
 #pragma omp for schedule(static)
-      for (long i = 0; i < long(n); ++i)
-        for (int q = 1; q < threads; ++q) {
+      for (long i = reduce_from; i < long(n); ++i)
+        for (int q = 1; q < threads && (have_bonds || split[q] <= i); ++q) {
           p.f[i] += fbuf[q][i];
-          if (rot) p.torque[i] += tbuf[q][i];
-          if (tally) stiffness[i] += sbuf[q][i];
+          fbuf[q][i] = Vec3{};
+          if (rot) {
+            p.torque[i] += tbuf[q][i];
+            tbuf[q][i] = Vec3{};
+          }
+          if (tally) {
+            stiffness[i] += sbuf[q][i];
+            sbuf[q][i] = 0;
+          }
         }
     }
     Tally total;
     for (const auto& tt : tallies) total.add(tt);
     if (have_bonds)
       for (const auto& ev : event_buf)
-        if (!ev.empty()) {
-          bond_events.insert(bond_events.end(), ev.begin(), ev.end());
-          need_build = true;  // the broken pairs join the contact list
-        }
+        if (!ev.empty()) bond_events.insert(bond_events.end(), ev.begin(), ev.end());
     // Walls (few candidates each): serial, through the same law functions.
     for (std::size_t w = 0; w < walls.size(); ++w) {
       WallJob wj{walls[w].point, walls[w].normal, walls[w].velocity, walls[w].phase,
@@ -510,11 +588,11 @@ struct Simulation::Impl {
   // ------------------------------------------------------------ integration
   void kick(double h) {
     const std::size_t n = p.size();
+    const bool rot = p.has_rotation();
 #pragma omp parallel for num_threads(threads) if (threads > 1) schedule(static)
-    for (long i = 0; i < long(n); ++i) p.v[i] += (h * p.inv_m[i]) * p.f[i];
-    if (p.has_rotation()) {
-#pragma omp parallel for num_threads(threads) if (threads > 1) schedule(static)
-      for (long i = 0; i < long(n); ++i) p.omega[i] += (h * p.inv_I[i]) * p.torque[i];
+    for (long i = 0; i < long(n); ++i) {
+      p.v[i] += (h * p.inv_m[i]) * p.f[i];
+      if (rot) p.omega[i] += (h * p.inv_I[i]) * p.torque[i];
     }
   }
 
@@ -577,6 +655,9 @@ struct Simulation::Impl {
     if (g.x != 0 || g.y != 0 || g.z != 0)
       for (std::size_t i = 0; i < p.size(); ++i) ext_work += p.m[i] * dot(g, p.v[i]) * dt;
     for (const auto& w : walls) ext_work += -dot(w.force, w.velocity) * dt;
+    // Particles moved at a prescribed velocity (grips) work against the forces they receive.
+    for (std::size_t i = 0; i < p.size(); ++i)
+      if (p.motion[i] == Motion::prescribed) ext_work -= dot(p.f[i], p.v[i]) * dt;
     if (deforming()) {
       const double vol = cell.volume();
       const Mat3& L = control.velocity_gradient;
