@@ -308,6 +308,7 @@ struct Simulation::Impl {
     const KeptHistory kept = keep_history();
     pair_capacity_hint = nj.size() + n;
     std::vector<int32_t>().swap(nj);
+    std::vector<int32_t>().swap(owner);
     std::vector<uint8_t>().swap(img);
     std::vector<double>().swap(hist);
     std::vector<uint8_t>().swap(touch);
