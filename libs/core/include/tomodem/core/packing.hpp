@@ -89,4 +89,9 @@ struct Packing {
   Provenance provenance;
 };
 
+/// The particles with keep[i] != 0, in their order: contacts and bonds between kept particles
+/// re-indexed, the optional columns and the result series whose columns all have one value per
+/// particle filtered alike; cell, materials, result scalars and provenance copied.
+Packing select_particles(const Packing& p, const std::vector<uint8_t>& keep);
+
 }  // namespace tomodem
