@@ -1,0 +1,102 @@
+// tomodem-carve: carve the macropores of a level set, label volume, closed mesh or spheres into a
+// packing (docs/carve.md); writes the carved packing and prints a JSON summary.
+#include <CLI/CLI.hpp>
+
+#include <iostream>
+
+#include "tomodem/carve/tool.hpp"
+#include "tomodem/core/cli.hpp"
+#include "tomodem/core/error.hpp"
+#include "tomodem/core/tool.hpp"
+#include "tomodem/image/volume.hpp"
+
+using namespace tomodem;
+
+namespace {
+double length(const std::string& option, const std::string& text) {
+  if (text.empty()) return 0;
+  const double v = image::parse_length(option, text);
+  if (!(v > 0)) throw InputError("", option, text, "expected a length such as 1mm, 60.7um or 1e-3 (m)");
+  return v;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  return run_tool("tomodem-carve", [&]() -> int {
+    carve::CarveConfig c;
+    auto& o = c.options;
+    CLI::App app{"Carve macropores (level set, label volume, closed mesh or spheres) into a packing (docs/carve.md)",
+                 "tomodem-carve"};
+    std::string unit_text, spacing_text, margin_text, rule = "centre", cut = "rule", method = "exact";
+    std::vector<double> offset, rotate, image_box;
+    bool quiet = false, any_label = false;
+    app.add_option("packing", c.packing, "homogeneous packing (.h5)")->required();
+    app.add_option("--level-set", c.level_set, "macropores: OpenVDB level set (tomodem-segment --vdb)");
+    app.add_option("--grid", c.grid, "grid name in the .vdb (default: macropores, else the first float grid)");
+    app.add_option("--labels", c.labels, "macropores: label volume (tomodem-segment -o labels.h5, .mha, .tif ...)");
+    app.add_option("--dataset", c.dataset, "HDF5 dataset of the label volume (default /labels)");
+    app.add_option("--label-values", c.label_values, "labels that are macropores (default 2)")->delimiter(',');
+    app.add_flag("--any-label", any_label, "every non-zero label is a macropore (e.g. --dataset /macropores)");
+    app.add_option("--mesh", c.mesh, "macropores: closed surface mesh (STL, OFF, PLY, OBJ)");
+    app.add_option("--spheres", c.spheres, "macropores: the particles of a packing file (e.g. pore formers)");
+    app.add_option("--image-unit", unit_text, "length of one image unit (level set: overrides its metadata; mesh: default 1 m), e.g. 1mm");
+    app.add_option("--spacing", spacing_text, "voxel size of the label volume (overrides the file), e.g. 60.7um");
+    app.add_option("--scale", o.mapping.scale, "packing length per image length")->capture_default_str();
+    app.add_option("--offset", offset, "shift of the image centre from the cell centre X,Y,Z (m)")->delimiter(',')->expected(3);
+    app.add_option("--rotate", rotate, "rotation of the image about x, then y, then z (degrees) AX,AY,AZ")->delimiter(',')->expected(3);
+    app.add_option("--image-box", image_box, "the image's box X0,Y0,Z0,X1,Y1,Z1 (m, image frame; default: its bounds)")
+        ->delimiter(',')->expected(6);
+    app.add_flag("--fit", o.mapping.fit, "scale the image so that it just fits the cell");
+    app.add_flag("--tile", o.mapping.tile, "repeat the image periodically (packing larger than the image)");
+    app.add_option("--rule", rule, "centre | fraction")->capture_default_str();
+    app.add_option("--fraction", o.fraction, "fraction rule: remove when more than this volume fraction is inside")->capture_default_str();
+    app.add_option("--cut", cut, "particles cut by the surface: rule | keep | remove")->capture_default_str();
+    app.add_option("--fraction-method", method, "exact (sphere/surface overlap) | sample")->capture_default_str();
+    app.add_option("--samples", o.samples_per_diameter, "sample method: grid points per diameter")->capture_default_str();
+    app.add_option("--target-grid", o.target_grid, "integration grid per axis (0: from the image resolution)")->capture_default_str();
+    app.add_option("--relax", o.relax_steps, "DEM relaxation steps after carving")->capture_default_str();
+    app.add_flag("--remove-floating", o.remove_floating, "remove particles outside the main contact cluster");
+    app.add_option("--contact-gap", o.contact_gap, "contact when the gap is below this fraction of the mean radius")->capture_default_str();
+    app.add_option("--margin", margin_text, "solid_fraction_outside: distance from the pores (default 2 r_max)");
+    app.add_option("-o,--output", c.output, "carved packing (.h5; .xdmf sidecar beside it)")->required();
+    app.add_option("--json", c.json, "write the JSON summary to FILE (default: stdout)");
+    app.add_option("--picture", c.picture, "mid-plane picture (.png)");
+    app.add_option("--threads", o.threads, "threads (default: OMP_NUM_THREADS or all cores)");
+    app.add_flag("-q,--quiet", quiet, "no progress messages");
+    cli::add_version(app, "tomodem-carve");
+    if (const auto code = cli::parse(app, argc, argv)) return *code;
+    set_quiet(quiet);
+    for (int k = 1; k < argc; ++k) c.command_line += std::string(k > 1 ? " " : "") + argv[k];
+    c.image_unit = length("--image-unit", unit_text);
+    c.spacing = length("--spacing", spacing_text);
+    o.outside_margin = length("--margin", margin_text);
+    if (any_label) c.label_values.clear();
+    if (offset.size() == 3) o.mapping.offset = {offset[0], offset[1], offset[2]};
+    if (image_box.size() == 6) {
+      o.mapping.use_image_box = true;
+      o.mapping.image_box = {{image_box[0], image_box[1], image_box[2]}, {image_box[3], image_box[4], image_box[5]}};
+      for (int k = 0; k < 3; ++k)
+        if (!(o.mapping.image_box.hi[k] > o.mapping.image_box.lo[k]))
+          throw InputError("", "--image-box", std::to_string(image_box[k]) + "," + std::to_string(image_box[k + 3]),
+                           "each upper bound must exceed the lower one");
+    }
+    if (rotate.size() == 3) o.mapping.rotation_deg = {rotate[0], rotate[1], rotate[2]};
+    if (rule == "centre" || rule == "center") o.rule = carve::Rule::centre;
+    else if (rule == "fraction") o.rule = carve::Rule::fraction;
+    else throw InputError("", "--rule", rule, "expected centre or fraction");
+    if (cut == "rule") o.cut = carve::Cut::rule;
+    else if (cut == "keep") o.cut = carve::Cut::keep;
+    else if (cut == "remove") o.cut = carve::Cut::remove;
+    else throw InputError("", "--cut", cut, "expected rule, keep or remove");
+    if (method == "exact") o.method = carve::FractionMethod::exact;
+    else if (method == "sample") o.method = carve::FractionMethod::sample;
+    else throw InputError("", "--fraction-method", method, "expected exact or sample");
+    if (o.mapping.fit && app.count("--scale")) throw InputError("", "--fit", "", "give either --fit or --scale");
+    if (!(o.mapping.scale > 0)) throw InputError("", "--scale", std::to_string(o.mapping.scale), "must be > 0");
+    if (o.threads < 0) throw InputError("", "--threads", std::to_string(o.threads), "must be >= 0");
+    if (o.relax_steps < 0) throw InputError("", "--relax", std::to_string(o.relax_steps), "must be >= 0");
+    const std::string summary = carve::run_carve(c);
+    if (c.json.empty() || c.json == "-") std::cout << summary << std::endl;
+    return exit_code::ok;
+  });
+}
