@@ -34,7 +34,6 @@ void bond_kernel(const BondJob& job, std::size_t begin, std::size_t end, Vec3* f
                  double* stiffness, std::vector<BondEvent>* events) {
   BondSet& B = *job.bonds;
   for (std::size_t b = begin; b < end; ++b) {
-    if (B.state[b] != BondSet::intact) continue;
     const int i = B.i[b], j = B.j[b];
     const Vec3 d = job.x[j] + job.h * B.image[b] - job.x[i];
     const double dist = std::sqrt(dot(d, d));
@@ -49,9 +48,6 @@ void bond_kernel(const BondJob& job, std::size_t begin, std::size_t end, Vec3* f
     const Vec3 vt = vrel - vn * n;
     const double eta_n = 2 * law.damping_ratio * std::sqrt(mstar * k.kn);
     const double eta_t = 2 * law.damping_ratio * std::sqrt(mstar * k.kt);
-    // Normal: total form from the rest length (repulsive positive; tension pulls together).
-    const double fn_el = -k.kn * (dist - B.rest_length[b]);
-    const double fn = fn_el - eta_n * vn;
     // Tangential force and bending moment: incremental, rotated into the current tangent plane.
     auto rotate = [&n](Vec3& v) {
       const double m0 = norm2(v);
@@ -60,6 +56,53 @@ void bond_kernel(const BondJob& job, std::size_t begin, std::size_t end, Vec3* f
       const double m1 = norm2(v);
       if (m1 > 0) v *= std::sqrt(m0 / m1);
     };
+    if (B.state[b] != BondSet::intact) {
+      // A broken bond is an ordinary contact between the two fracture faces: compression when
+      // the pair comes closer than at bonding (the faces close at the rest length, so bonds
+      // made with an overlap do not spring apart when they break), Coulomb friction μ on an
+      // incremental tangential spring, no tension and no moments.
+      const double un = dist - B.rest_length[b];
+      if (un >= 0) {
+        B.shear_force[b] = {0, 0, 0};
+        continue;
+      }
+      const double fn_el = -k.kn * un;
+      const double fn = std::max(fn_el - eta_n * vn, 0.0);
+      Vec3 fs = B.shear_force[b];
+      rotate(fs);
+      fs += (k.kt * job.dt) * vt;
+      const double limit = law.friction * fn_el;
+      const double fs_norm = norm(fs);
+      double slip = 0;
+      if (fs_norm > limit) {
+        const Vec3 fs_new = fs_norm > 0 ? (limit / fs_norm) * fs : Vec3{0, 0, 0};
+        slip = (fs_norm - limit) * (fs_norm + limit) / (2 * k.kt);  // spring energy lost to slip
+        fs = fs_new;
+      }
+      B.shear_force[b] = fs;
+      const Vec3 fi = (-fn) * n + fs;
+      f[i] += fi;
+      f[j] -= fi;
+      const Vec3 c = cross(n, fs);
+      torque[i] += ri * c;
+      torque[j] += rj * c;
+      if constexpr (kTally) {
+        tally->virial += outer(-fi, d);
+        tally->elastic += 0.5 * k.kn * un * un + (k.kt > 0 ? 0.5 * norm2(fs) / k.kt : 0.0);
+        tally->dissipated += slip + (fn > 0 ? eta_n * vn * vn * job.dt : 0.0);
+        tally->sum_contact_force += norm(fi);
+        ++tally->contacts;
+        if (stiffness) {
+          stiffness[i] += k.kn;
+          stiffness[j] += k.kn;
+        }
+      }
+      continue;
+    }
+    // Normal: total form from the rest length (repulsive positive; tension pulls together).
+    const double un = dist - B.rest_length[b];
+    const double fn_el = -k.kn * un;
+    const double fn = fn_el - eta_n * vn;
     Vec3 fs = B.shear_force[b];
     rotate(fs);
     fs += (k.kt * job.dt) * vt;
@@ -74,25 +117,21 @@ void bond_kernel(const BondJob& job, std::size_t begin, std::size_t end, Vec3* f
       const double area = M_PI * a * a;
       const double sigma = std::max(-fn_el, 0.0) / area + 4 * norm(mb) / (area * a);
       const double tau = norm(fs) / area + 2 * std::abs(tw) / (area * a);
-      double sc, tc;
-      if constexpr (kFail == BondFailure::stress) {
-        sc = law.tensile_strength;
-        tc = law.shear_strength;
-      } else {
-        // LEFM (Jauffrès et al. 2012): critical stresses of a circular ligament from the
-        // energy release rate of the bond stiffnesses; smaller necks are stronger.
-        sc = 2 * std::sqrt(2 * law.E_star * law.fracture_energy * k.gn / (M_PI * a));
-        tc = 2 * std::sqrt(8 * law.G_star * law.fracture_energy * k.gt / (M_PI * a));
-      }
-      const bool t_fail = sigma > sc, s_fail = tau > tc;
+      const BondStrength sc = bond_strength(kFail, law, a, k);
+      const bool t_fail = sigma > sc.tension, s_fail = tau > sc.shear;
       if (t_fail || s_fail) {
         B.state[b] = BondSet::broken;
-        B.mode[b] = (t_fail && sigma / sc >= tau / tc) ? BondSet::tension : BondSet::shear;
+        B.mode[b] = (t_fail && sigma / sc.tension >= tau / sc.shear) ? BondSet::tension : BondSet::shear;
         B.broken_at[b] = job.time;
+        // The energy stored in the bond at this state is released (fracture dissipation).
+        const double released = 0.5 * k.kn * un * un + (k.kt > 0 ? 0.5 * norm2(fs) / k.kt : 0.0) +
+                                (k.ktwist > 0 ? 0.5 * tw * tw / k.ktwist : 0.0) +
+                                (k.kbend > 0 ? 0.5 * norm2(mb) / k.kbend : 0.0);
         B.shear_force[b] = {0, 0, 0};
         B.twist[b] = 0;
         B.bend[b] = {0, 0, 0};
-        events->push_back({job.time, int32_t(b), B.mode[b]});
+        if constexpr (kTally) tally->dissipated += released;
+        events->push_back({job.time, int32_t(b), B.mode[b], job.x[i] + (ri / (ri + rj)) * d, released});
         continue;
       }
     }
@@ -109,9 +148,8 @@ void bond_kernel(const BondJob& job, std::size_t begin, std::size_t end, Vec3* f
     torque[j] += rj * c - mt - mb;
     if constexpr (kTally) {
       tally->virial += outer(-fi, d);
-      const double un = dist - B.rest_length[b];
-      tally->elastic += 0.5 * k.kn * un * un + 0.5 * norm2(fs) / k.kt + 0.5 * tw * tw / k.ktwist +
-                        0.5 * norm2(mb) / k.kbend;
+      tally->elastic += 0.5 * k.kn * un * un + (k.kt > 0 ? 0.5 * norm2(fs) / k.kt : 0.0) +
+                        (k.ktwist > 0 ? 0.5 * tw * tw / k.ktwist : 0.0) + (k.kbend > 0 ? 0.5 * norm2(mb) / k.kbend : 0.0);
       tally->dissipated += (eta_n * vn * vn + eta_t * norm2(vt)) * job.dt;
       tally->sum_contact_force += norm(fi);
       ++tally->bonds;

@@ -27,6 +27,7 @@ struct BondLaw {
   double tensile_strength = 0;        ///< Pa, stress criterion
   double shear_strength = 0;          ///< Pa, stress criterion
   double fracture_energy = 0;         ///< Γ = 2γ_s, J/m², LEFM criterion
+  double friction = 0;                ///< Coulomb μ between the faces of a broken bond
 };
 
 /// Stiffnesses of one bond (PHYSICS.md, bonded-particle model); shared by the DEM bond loop and
@@ -45,6 +46,24 @@ inline BondStiffness bond_stiffness(const BondLaw& law, double a, double ri, dou
   k.ktwist = 0.5 * k.kt * a * a;
   k.kbend = 0.25 * k.kn * a * a;
   return k;
+}
+
+/// Critical mean stresses of one bond (Pa): σ = F_n/(πa²) + 4|Γ_t|/(πa³) against `tension`,
+/// τ = |F_t|/(πa²) + 2|Γ_n|/(πa³) against `shear` (Potyondy & Cundall 2004).
+struct BondStrength {
+  double tension, shear;
+};
+/// Stress criterion: the given strengths. LEFM (Jauffrès et al. 2012, docs/fracture.md): the neck
+/// is a circular ligament whose compliance 1/k gives the energy release rate G = (F²/2) dC/dA
+/// (dA = −2πa da, g held fixed); G = Γ gives F_c² = 8π E* g_n a³ Γ, i.e. σ_c = 2 sqrt(2E* Γ g_n/(π a)) and
+/// τ_c = 2 sqrt(8G* Γ g_t/(π a)) (for g = 1 the first is Tada's external circular crack,
+/// K_I = F/(2a sqrt(πa)) = K_IC): smaller necks are stronger in stress.
+inline BondStrength bond_strength(BondFailure failure, const BondLaw& law, double a, const BondStiffness& k) {
+  if (failure == BondFailure::lefm)
+    return {2 * std::sqrt(2 * law.E_star * law.fracture_energy * k.gn / (M_PI * a)),
+            2 * std::sqrt(8 * law.G_star * law.fracture_energy * k.gt / (M_PI * a))};
+  if (failure == BondFailure::stress) return {law.tensile_strength, law.shear_strength};
+  return {HUGE_VAL, HUGE_VAL};
 }
 
 /// Bonds as structure of arrays, i < j; `image` is the periodic image of j seen from i
@@ -74,6 +93,8 @@ struct BondEvent {
   double time;
   int32_t bond;
   uint8_t mode;
+  Vec3 position;          ///< where: the neck centre (on the bond axis, R_i/(R_i+R_j) from i), m
+  double energy = 0;      ///< elastic energy the bond held when it broke (released), J
 };
 
 }  // namespace tomodem::dem
