@@ -11,6 +11,7 @@
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/tool.hpp"
+#include "tomodem/pipeline/results.hpp"
 #include "tomodem/pipeline/run.hpp"
 
 namespace {
@@ -62,11 +63,40 @@ int main(int argc, char** argv) {
   sl->add_option("--time", so.time, "time limit per task")->capture_default_str();
   sl->add_option("--partition", so.partition, "Slurm partition");
   sl->add_option("--runner", so.runner, "command that runs tomodem-run on the nodes")->capture_default_str();
+  // Results: one row per cell from its steps' JSON summaries, then the table, plots and report.
+  std::string row_out, report_dir;
+  std::vector<std::string> row_values, row_summaries, report_rows;
+  tp::ReportOptions rep;
+  CLI::App* rw = app.add_subcommand("row", "write one results row (JSON) from values and step summaries");
+  rw->add_option("-o,--output", row_out, "row file (.json)")->required();
+  rw->add_option("--value", row_values, "a column KEY=VALUE (numbers stay numbers); repeatable")->allow_extra_args(false);
+  rw->add_option("--summary", row_summaries, "NAME=FILE.json: the summary's scalars as columns NAME.key; repeatable")
+      ->allow_extra_args(false);
+  CLI::App* rp = app.add_subcommand("report", "rows -> DIR/table.csv, plots (PNG, SVG; gnuplot) and DIR/index.html");
+  rp->add_option("-o,--output", report_dir, "report folder (replaced as a whole)")->required();
+  rp->add_option("rows", report_rows, "row files (from `tomodem run row`), one table row each")->required();
+  rp->add_option("--title", rep.title, "title of the report")->capture_default_str();
+  rp->add_option("--command", rep.command, "the command that makes the report, shown in it");
+  rp->add_option("--columns", rep.columns, "the table's columns, in order (default: all)")->delimiter(',');
+  rp->add_option("--ratio", rep.ratios, "NAME=A/B: a column A/B (columns or numbers); repeatable")->allow_extra_args(false);
+  rp->add_option("--plot", rep.plots,
+                 "name=N;x=COL;y=COL[,COL];by=COL;logx;logy;title=T;xlabel=L;ylabel=L (repeatable)")
+      ->allow_extra_args(false);
   app.require_subcommand(0, 1);
   if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
   return tomodem::run_tool("tomodem-run", [&] {
     tomodem::set_quiet(quiet);
     ro.quiet = quiet;
+    if (rw->parsed()) {
+      tomodem::write_text_atomic(row_out, tp::make_row(row_values, row_summaries));
+      return 0;
+    }
+    if (rp->parsed()) {
+      const tp::ReportFiles f = tp::write_report(report_dir, report_rows, rep);
+      tomodem::info("wrote " + f.table + " (" + std::to_string(f.rows) + " rows, " + std::to_string(f.columns) +
+                    " columns), " + std::to_string(f.plots.size()) + " plots and " + f.html);
+      return 0;
+    }
     if (file.empty()) throw tomodem::InputError("", "pipeline", "", "no pipeline file given (see --help)");
     if (!shard.empty()) std::tie(ro.shard, ro.shards) = tp::parse_shard(shard);
     lo.check_inputs = !(dt->parsed() || sl->parsed());  // nothing runs, so inputs may come later

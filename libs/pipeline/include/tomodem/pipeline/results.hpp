@@ -1,0 +1,62 @@
+#pragma once
+// Results of a pipeline: one row per sweep cell made from the JSON summaries of its steps, a
+// table (CSV) of the rows, plots (gnuplot, PNG + SVG) and a short HTML report that links them.
+// The row and report steps of pipelines/demo.yaml and pipelines/study.yaml run these through
+// `tomodem run row` and `tomodem run report` (docs/pipelines.md, "Results").
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace tomodem::pipeline {
+
+/// One cell of a table: its text as written to the CSV, and whether it is a number.
+struct Value {
+  std::string text;
+  bool number = false;
+  double x = 0;  // the number, when `number`
+};
+/// Columns in order of first appearance.
+using Row = std::vector<std::pair<std::string, Value>>;
+
+/// The scalars of a JSON object as columns "prefix.key.sub" (numbers, strings, booleans as
+/// 0/1); arrays and nulls are left out. Throws InputError naming `file` when the text is not a
+/// JSON object.
+Row flatten_json(const std::string& json_text, const std::string& prefix, const std::string& file);
+
+/// A row from `KEY=VALUE` texts (values that parse as numbers become numbers) and
+/// `NAME=FILE.json` summaries (flattened with the prefix NAME), as a JSON object text.
+/// Bad items (no '=', an unreadable or malformed file) throw InputError naming them.
+std::string make_row(const std::vector<std::string>& values, const std::vector<std::string>& summaries);
+
+/// One plot, parsed from "name=N;x=COL;y=COL[,COL...][;by=COL][;logx][;logy][;title=T][;xlabel=L][;ylabel=L]".
+/// For every value of `by` (or once) and every y column, a series of the mean of y over the
+/// rows that share an x value (replicas), sorted by x.
+struct PlotRequest {
+  std::string name, x, by, title, xlabel, ylabel;
+  std::vector<std::string> y;
+  bool logx = false, logy = false;
+};
+PlotRequest parse_plot(const std::string& spec);
+
+struct ReportOptions {
+  std::string title = "tomodem results";
+  std::vector<std::string> columns;  // the CSV's columns, in order (empty: every column)
+  std::vector<std::string> ratios;   // "NAME=A/B": a column A/B (A, B columns or numbers)
+  std::vector<std::string> plots;    // plot specs (parse_plot)
+  std::string command;               // the command line, shown in the report
+};
+
+/// What write_report wrote, for the caller's summary.
+struct ReportFiles {
+  std::string table, html;
+  std::vector<std::string> plots;  // stems; each has .png, .svg, .gp, .dat
+  std::size_t rows = 0, columns = 0;
+};
+
+/// Reads the row files (make_row's JSON), adds the ratio columns and writes `dir`/table.csv,
+/// `dir`/<plot>.{png,svg,gp,dat} and `dir`/index.html. The folder is built under a temporary
+/// name and renamed, so it never exists half-written. Bad specs, unknown columns and unreadable
+/// rows throw InputError before anything is written.
+ReportFiles write_report(const std::string& dir, const std::vector<std::string>& row_files, const ReportOptions& o);
+
+}  // namespace tomodem::pipeline

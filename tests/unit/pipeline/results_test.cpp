@@ -1,0 +1,142 @@
+// Results: rows from JSON summaries, the table, the plots' data (replica means) and the report.
+// Expected numbers are written out by hand from the inputs, not taken from an earlier run.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <sstream>
+
+#include "scratch.hpp"
+#include "tomodem/core/error.hpp"
+#include "tomodem/core/plot.hpp"
+#include "tomodem/pipeline/results.hpp"
+
+using tomodem::test::Scratch;
+namespace tp = tomodem::pipeline;
+namespace fs = std::filesystem;
+
+namespace {
+std::string text(const tp::Row& r) {
+  std::string s;
+  for (const auto& [k, v] : r) s += k + "=" + v.text + (v.number ? "#" : "") + " ";
+  return s;
+}
+
+// One row file per (family, density, replica) with E = density^2 * scale(family) * (1 + 0.1 replica).
+std::vector<std::string> rows(const Scratch& s) {
+  std::vector<std::string> files;
+  for (const char* fam : {"a", "b"})
+    for (const double d : {0.5, 0.8})
+      for (int rep = 0; rep < 2; ++rep) {
+        const double scale = fam[0] == 'a' ? 1e9 : 2e9;
+        std::ostringstream young;
+        young.precision(17);
+        young << "{\"E\": " << d * d * scale * (1 + 0.1 * rep) << ", \"curve\": [1, 2], \"implicit\": {\"dofs\": 60}}";
+        const std::string name = std::string(fam) + std::to_string(d) + "r" + std::to_string(rep);
+        const auto y = s.write(name + "/young.json", young.str());
+        const auto row = s.write(name + "/row.json",
+                                 tp::make_row({"family=" + std::string(fam), "density=" + std::to_string(d).substr(0, 3),
+                                               "replica=" + std::to_string(rep), "E_s=1e9"},
+                                              {"young=" + y}));
+        files.push_back(row);
+      }
+  return files;
+}
+}  // namespace
+
+TEST(Results, FlattenKeepsScalarsWithDottedNamesAndDropsArrays) {
+  const auto r = tp::flatten_json(R"({"E": 2.5e7, "ok": true, "axis": "x", "s": {"x": 1, "y": [1, 2]}, "n": null})",
+                                  "young", "y.json");
+  EXPECT_EQ(text(r), "young.E=25000000.0# young.ok=1# young.axis=x young.s.x=1# ");
+  EXPECT_THROW(tp::flatten_json("[1, 2]", "p", "f.json"), tomodem::InputError);
+  EXPECT_THROW(tp::flatten_json("{oops", "p", "f.json"), tomodem::InputError);
+}
+
+TEST(Results, RowNamesBadItems) {
+  Scratch s;
+  EXPECT_THROW(tp::make_row({"novalue"}, {}), tomodem::InputError);
+  EXPECT_THROW(tp::make_row({}, {"young=" + s.path("missing.json")}), tomodem::InputError);
+  try {
+    tp::make_row({}, {"young=" + s.write("bad.json", "{")});
+    FAIL();
+  } catch (const tomodem::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.json"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Results, PlotSpecParsingAndErrors) {
+  const auto p = tp::parse_plot("name=E;x=density;y=E_rel,G_rel;by=family;logy;title=It's E");
+  EXPECT_EQ(p.x, "density");
+  EXPECT_EQ(p.y, (std::vector<std::string>{"E_rel", "G_rel"}));
+  EXPECT_EQ(p.by, "family");
+  EXPECT_TRUE(p.logy);
+  EXPECT_FALSE(p.logx);
+  EXPECT_EQ(p.title, "It's E");
+  EXPECT_EQ(p.xlabel, "density");  // defaults to the column
+  EXPECT_THROW(tp::parse_plot("x=a;y=b"), tomodem::InputError);              // no name
+  EXPECT_THROW(tp::parse_plot("name=p;x=a"), tomodem::InputError);           // no y
+  EXPECT_THROW(tp::parse_plot("name=p;x=a;y=b;logz"), tomodem::InputError);  // unknown flag
+  EXPECT_THROW(tp::parse_plot("name=a/b;x=a;y=b"), tomodem::InputError);     // not a file name
+}
+
+TEST(Results, TableRatiosPlotMeansAndReport) {
+  Scratch s;
+  const auto files = rows(s);
+  tp::ReportOptions o;
+  o.title = "t";
+  o.columns = {"family", "density", "replica", "young.E", "E_rel"};
+  o.ratios = {"E_rel=young.E/E_s"};
+  o.plots = {"name=stiffness;x=density;y=E_rel;by=family;logy"};
+  if (!tomodem::plotting_available()) GTEST_SKIP() << "gnuplot is not installed (Debian gnuplot-nox)";
+  const auto f = tp::write_report(s.path("report"), files, o);
+  EXPECT_EQ(f.rows, 8u);
+  // The table: selected columns in order; E_rel = E / 1e9 = density^2 * scale * (1 + 0.1 replica).
+  std::istringstream csv(s.read("report/table.csv"));
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, "family,density,replica,young.E,E_rel");
+  int n = 0;
+  while (std::getline(csv, line)) {
+    char fam = 0;
+    double d = 0, rep = 0, e = 0, rel = 0;
+    ASSERT_EQ(std::sscanf(line.c_str(), "%c,%lf,%lf,%lf,%lf", &fam, &d, &rep, &e, &rel), 5) << line;
+    const double expect = d * d * (fam == 'a' ? 1 : 2) * (1 + 0.1 * rep);
+    EXPECT_NEAR(rel, expect, 1e-9 * expect) << line;  // 10 significant digits printed
+    ++n;
+  }
+  EXPECT_EQ(n, 8);
+  // The plot data: per family, the mean of the two replicas (factor 1.05) at each density.
+  std::istringstream dat(s.read("report/stiffness.dat"));
+  std::vector<double> y;
+  for (std::string l; std::getline(dat, l);) {
+    double a = 0, b = 0;
+    if (std::sscanf(l.c_str(), "%lf %lf", &a, &b) == 2) y.push_back(b);
+  }
+  const std::vector<double> expect = {0.25 * 1.05, 0.64 * 1.05, 0.5 * 1.05, 1.28 * 1.05};
+  ASSERT_EQ(y.size(), expect.size());
+  for (std::size_t k = 0; k < y.size(); ++k) EXPECT_NEAR(y[k], expect[k], 1e-9 * expect[k]);
+  for (const char* file : {"stiffness.png", "stiffness.svg", "stiffness.gp", "index.html"})
+    EXPECT_TRUE(fs::exists(s.path(std::string("report/") + file))) << file;
+  const std::string html = s.read("report/index.html");
+  EXPECT_NE(html.find("href=\"table.csv\""), std::string::npos);
+  EXPECT_NE(html.find("<img src=\"stiffness.svg\""), std::string::npos);
+  EXPECT_FALSE(fs::exists(s.path("report.tmp")));
+}
+
+TEST(Results, BadReportRequestsWriteNothing) {
+  Scratch s;
+  const auto files = rows(s);
+  const auto bad = [&](tp::ReportOptions o) {
+    EXPECT_THROW(tp::write_report(s.path("report"), files, o), tomodem::InputError);
+    EXPECT_FALSE(fs::exists(s.path("report")));
+  };
+  tp::ReportOptions o;
+  o.columns = {"family", "nope"};
+  bad(o);
+  o = {};
+  o.ratios = {"r=young.E/missing"};
+  bad(o);
+  o = {};
+  o.plots = {"name=p;x=density;y=nope"};
+  bad(o);
+  EXPECT_THROW(tp::write_report(s.path("report"), {s.write("x.json", "{\"E\": {\"a\": 1}}")}, {}), tomodem::InputError);
+}
