@@ -5,7 +5,6 @@
 #include <itkImageFileWriter.h>
 #include <itkImageIOBase.h>
 #include <itkImageIOFactory.h>
-#include <itkImageSeriesReader.h>
 #include <itkImageSeriesWriter.h>
 #include <itkImportImageFilter.h>
 
@@ -46,17 +45,6 @@ std::string component_name(const itk::ImageIOBase* io) {
     case C::DOUBLE: return "float64";
     default: return itk::ImageIOBase::GetComponentTypeAsString(io->GetComponentType());
   }
-}
-
-Volume from_itk(const FloatImage* img) {
-  const auto size = img->GetLargestPossibleRegion().GetSize();
-  Volume v(Dims{size[0], size[1], size[2]});
-  std::copy_n(img->GetBufferPointer(), v.v.size(), v.v.data());
-  for (int k = 0; k < 3; ++k) {
-    v.spacing[k] = img->GetSpacing()[k];
-    v.origin[k] = img->GetOrigin()[k];
-  }
-  return v;
 }
 
 template <class P, class T>
@@ -105,15 +93,47 @@ Volume read_file(const std::string& path, ReadInfo* info) {
   if (nd != 3 && !(nd == 4 && io->GetDimensions(3) == 1))
     throw InputError(path, "dimensions", std::to_string(nd), "expected a 3-D volume");
   if (info) info->pixel_type = component_name(io);
+  // Read in slabs of about 64 MiB of float straight into the volume: where the ImageIO can stream
+  // (uncompressed MetaImage, NRRD, NIfTI, TIFF strips) no second full-size copy is made and the
+  // file-type buffer is one slab. Other files are read whole on the first slab and copied.
   auto r = itk::ImageFileReader<FloatImage>::New();
   r->SetFileName(path);
   r->SetImageIO(io);
+  const auto fail = [&](const itk::ExceptionObject& e) {
+    return InputError(path, "data", "", std::string("cannot read (truncated or corrupt?): ") + e.GetDescription());
+  };
   try {
-    r->Update();
+    r->UpdateOutputInformation();
   } catch (const itk::ExceptionObject& e) {
-    throw InputError(path, "data", "", std::string("cannot read (truncated or corrupt?): ") + e.GetDescription());
+    throw fail(e);
   }
-  return from_itk(r->GetOutput());
+  FloatImage* img = r->GetOutput();
+  const auto size = img->GetLargestPossibleRegion().GetSize();
+  Volume v(Dims{size[0], size[1], size[2]});
+  const std::size_t plane = v.dims.nx * v.dims.ny;
+  const std::size_t slab = std::max<std::size_t>(1, (std::size_t(64) << 20) / std::max<std::size_t>(1, plane * sizeof(float)));
+  for (std::size_t z0 = 0; z0 < v.dims.nz; z0 += slab) {
+    const std::size_t nz = std::min(slab, v.dims.nz - z0);
+    FloatImage::RegionType want;
+    want.SetIndex({0, 0, itk::IndexValueType(z0)});
+    want.SetSize({size[0], size[1], nz});
+    img->SetRequestedRegion(want);
+    try {
+      img->Update();
+    } catch (const itk::ExceptionObject& e) {
+      throw fail(e);
+    }
+    const auto have = img->GetBufferedRegion();
+    if (!have.IsInside(want) || have.GetSize(0) != size[0] || have.GetSize(1) != size[1])
+      throw RuntimeFailure("ITK returned a region other than the slab asked for while reading " + path);
+    const std::size_t offset = (z0 - std::size_t(have.GetIndex(2))) * plane;
+    std::copy_n(img->GetBufferPointer() + offset, nz * plane, v.v.data() + z0 * plane);
+  }
+  for (int k = 0; k < 3; ++k) {
+    v.spacing[k] = img->GetSpacing()[k];
+    v.origin[k] = img->GetOrigin()[k];
+  }
+  return v;
 }
 
 Volume read_series(const std::vector<std::string>& files, ReadInfo* info) {
@@ -135,14 +155,24 @@ Volume read_series(const std::vector<std::string>& files, ReadInfo* info) {
                            "): mixed slice sizes");
     }
   }
-  auto r = itk::ImageSeriesReader<FloatImage>::New();
-  r->SetFileNames(files);
-  try {
-    r->Update();
-  } catch (const itk::ExceptionObject& e) {
-    throw InputError(files.front(), "data", "", std::string("cannot read the stack: ") + e.GetDescription());
+  // Slice by slice into the volume (no full-size ITK image and copy). The voxel size of a stack
+  // comes from --spacing (TIFF resolution tags are not one), so only the values are taken.
+  using Slice = itk::Image<float, 2>;
+  Volume v(Dims{nx, ny, files.size()});
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    auto r = itk::ImageFileReader<Slice>::New();
+    r->SetFileName(files[i]);
+    try {
+      r->Update();
+    } catch (const itk::ExceptionObject& e) {
+      throw InputError(files[i], "data", "", std::string("cannot read the slice: ") + e.GetDescription());
+    }
+    const auto got = r->GetOutput()->GetBufferedRegion().GetSize();
+    if (got[0] != nx || got[1] != ny)
+      throw InputError(files[i], "slice size", std::to_string(got[0]) + "x" + std::to_string(got[1]), "differs from its header");
+    std::copy_n(r->GetOutput()->GetBufferPointer(), nx * ny, v.v.data() + i * nx * ny);
   }
-  return from_itk(r->GetOutput());
+  return v;
 }
 
 void write_file(const std::string& path, const Volume& v, bool as_uint16) {

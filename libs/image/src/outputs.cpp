@@ -118,18 +118,31 @@ std::vector<double> sample_level_set(const std::string& path, const std::vector<
   return out;
 }
 
-std::vector<std::string> write_overlays(const std::string& prefix, const Volume& grey, const Mask& phases) {
+OverlayPlanes overlay_planes(const Volume& grey) {
   // Grey window from a subsample of the volume.
   std::vector<float> sample;
   const std::size_t step = std::max<std::size_t>(1, grey.v.size() / 200000);
   for (std::size_t i = 0; i < grey.v.size(); i += step) sample.push_back(grey.v[i]);
   std::sort(sample.begin(), sample.end());
-  const double lo = sample[std::size_t(0.005 * double(sample.size() - 1))];
-  const double hi = std::max(lo + 1e-12, double(sample[std::size_t(0.995 * double(sample.size() - 1))]));
+  OverlayPlanes o;
+  const auto& d = o.dims = grey.dims;
+  o.lo = sample[std::size_t(0.005 * double(sample.size() - 1))];
+  o.hi = std::max(o.lo + 1e-12, double(sample[std::size_t(0.995 * double(sample.size() - 1))]));
+  for (std::size_t y = 0; y < d.ny; ++y)
+    for (std::size_t x = 0; x < d.nx; ++x) o.xy.push_back(grey.at(x, y, d.nz / 2));
+  for (std::size_t z = 0; z < d.nz; ++z)
+    for (std::size_t x = 0; x < d.nx; ++x) o.xz.push_back(grey.at(x, d.ny / 2, z));
+  for (std::size_t z = 0; z < d.nz; ++z)
+    for (std::size_t y = 0; y < d.ny; ++y) o.yz.push_back(grey.at(d.nx / 2, y, z));
+  return o;
+}
+
+std::vector<std::string> write_overlays(const std::string& prefix, const OverlayPlanes& grey, const Mask& phases) {
   const auto& d = grey.dims;
+  if (!(phases.dims == d)) throw RuntimeFailure("overlay: grey planes and labels differ in size");
   std::vector<std::string> written;
-  struct Plane { const char* name; std::size_t w, h; };
-  const Plane planes[3] = {{"xy", d.nx, d.ny}, {"xz", d.nx, d.nz}, {"yz", d.ny, d.nz}};
+  struct Plane { const char* name; std::size_t w, h; const std::vector<float>* grey; };
+  const Plane planes[3] = {{"xy", d.nx, d.ny, &grey.xy}, {"xz", d.nx, d.nz, &grey.xz}, {"yz", d.ny, d.nz, &grey.yz}};
   for (int p = 0; p < 3; ++p) {
     cv::Mat img(int(planes[p].h), int(planes[p].w), CV_8UC3);
     for (std::size_t b = 0; b < planes[p].h; ++b)
@@ -138,7 +151,8 @@ std::vector<std::string> write_overlays(const std::string& prefix, const Volume&
         if (p == 0) { x = a; y = b; z = d.nz / 2; }
         else if (p == 1) { x = a; y = d.ny / 2; z = b; }
         else { x = d.nx / 2; y = a; z = b; }
-        const double g = std::clamp((grey.at(x, y, z) - lo) / (hi - lo), 0.0, 1.0) * 255.0;
+        const double gv = (*planes[p].grey)[b * planes[p].w + a];
+        const double g = std::clamp((gv - grey.lo) / (grey.hi - grey.lo), 0.0, 1.0) * 255.0;
         cv::Vec3d c(g, g, g);  // BGR
         const uint8_t ph = phases.at(x, y, z);
         const cv::Vec3d tint = ph == 1 ? cv::Vec3d(255, 80, 0) : ph == 2 ? cv::Vec3d(0, 0, 255)

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <sstream>
+#include <sys/resource.h>
 
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/h5.hpp"
@@ -43,6 +44,24 @@ double to_voxels(const std::string& option, const std::string& text, double voxe
   return L < 0 ? -L : L / voxel;
 }
 
+// Peak resident memory of this process so far (Linux reports kilobytes).
+double peak_rss_bytes() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_maxrss) * 1024.0;
+}
+
+// Wall time of each stage, in the order run, for the summary.
+struct StageClock {
+  std::chrono::steady_clock::time_point last = std::chrono::steady_clock::now();
+  json times = json::object();
+  void done(const std::string& stage) {
+    const auto t = std::chrono::steady_clock::now();
+    times[stage] = std::chrono::duration<double>(t - last).count();
+    last = t;
+  }
+};
+
 std::string phase_rule(const SegmentConfig& c) { return c.pores_bright ? "pores above the threshold" : "pores below the threshold"; }
 
 }  // namespace
@@ -71,6 +90,7 @@ std::string run_segment(const SegmentConfig& cfgin) {
     throw InputError("", "--mha", cfg.mha, "MetaImage output needs a .mha or .mhd name");
 
   ReadInfo rinfo;
+  StageClock clock;
   info("reading " + cfg.input);
   Volume v = read_volume(cfg.input, ro, &rinfo);
   const auto [mn, mx] = std::minmax_element(v.v.begin(), v.v.end());
@@ -80,9 +100,10 @@ std::string run_segment(const SegmentConfig& cfgin) {
   summary["input"] = {{"path", cfg.input}, {"format", rinfo.format}, {"pixel_type", rinfo.pixel_type},
                       {"files", rinfo.files.size()}, {"dims", {v.dims.nx, v.dims.ny, v.dims.nz}},
                       {"spacing_m", v.spacing}, {"origin_m", v.origin}, {"spacing_source", rinfo.spacing_source}};
+  clock.done("read");
   // ---- filtering
   json filt{{"name", cfg.filter}};
-  if (cfg.filter == "median") { v = median(v, cfg.filter_radius); filt["radius_vox"] = cfg.filter_radius; }
+  if (cfg.filter == "median") { median_inplace(v, cfg.filter_radius); filt["radius_vox"] = cfg.filter_radius; }
   else if (cfg.filter == "gaussian") { v = gaussian(v, cfg.sigma); filt["sigma_vox"] = cfg.sigma; }
   else if (cfg.filter == "cad") {
     v = anisotropic_diffusion(v, cfg.iterations, cfg.conductance);
@@ -97,6 +118,7 @@ std::string run_segment(const SegmentConfig& cfgin) {
     throw InputError("", "--filter", cfg.filter, "expected none, median, gaussian, cad or nlm");
   }
   info("filter: " + cfg.filter);
+  clock.done("filter");
   // ---- thresholds: solid (1) and an optional second solid phase (phase2)
   std::vector<double> t;
   Mask solid, phase2;
@@ -139,6 +161,12 @@ std::string run_segment(const SegmentConfig& cfgin) {
     solid = threshold(v, t.back(), true);
     if (t.size() == 2) phase2 = threshold(v, t[0], true);
   }
+  // The grey values are not needed any more (but for the overlay's three planes): release them
+  // before the distance maps and labels (docs/segment.md, "Memory").
+  OverlayPlanes planes;
+  if (!cfg.overlay.empty()) planes = overlay_planes(v);
+  std::vector<float>().swap(v.v);
+  clock.done("threshold");
   // ---- cleaning
   if (cfg.open_r > 0) solid = open_ball(solid, cfg.open_r);
   if (cfg.close_r > 0) solid = close_ball(solid, cfg.close_r);
@@ -152,15 +180,18 @@ std::string run_segment(const SegmentConfig& cfgin) {
   }
   Mask pores = solid;
   for (auto& x : pores.v) x = !x;
+  clock.done("clean");
   // ---- macropores
   const double macro_r = to_voxels("--macropore-radius", cfg.macro_radius_text, v.spacing[0]);
   int n_macro = 0;
   const Labels macro = macropores(pores, macro_r, cfg.macro_min_voxels, &n_macro);
   info("macropores: " + std::to_string(n_macro));
+  clock.done("macropores");
   Mask phases;
   phases.copy_geometry(v);
-  phases.v.resize(v.v.size());
+  phases.v.resize(v.dims.count());
   std::size_t n_pore = 0, n_macro_vox = 0;
+#pragma omp parallel for schedule(static) reduction(+ : n_pore, n_macro_vox)
   for (std::size_t i = 0; i < phases.v.size(); ++i) {
     uint8_t p = 0;
     if (macro.v[i]) { p = 2; ++n_macro_vox; }
@@ -169,7 +200,7 @@ std::string run_segment(const SegmentConfig& cfgin) {
     n_pore += pores.v[i];
     phases.v[i] = p;
   }
-  const double N = double(v.v.size());
+  const double N = double(v.dims.count());
   summary["porosity"] = double(n_pore) / N;
   summary["macroporosity"] = double(n_macro_vox) / N;
   summary["fine_porosity"] = double(n_pore - n_macro_vox) / N;
@@ -201,6 +232,8 @@ std::string run_segment(const SegmentConfig& cfgin) {
   summary["pore_size_distribution"] = {{"kind", "macropore equivalent diameters (6V/pi)^(1/3), ascending"},
                                        {"equivalent_diameters_m", diam},
                                        {"median_m", diam.empty() ? 0.0 : diam[diam.size() / 2]}};
+  std::vector<uint8_t>().swap(pores.v);
+  clock.done("measure");
   // ---- grains
   Labels grains;
   Packing packing;
@@ -248,6 +281,7 @@ std::string run_segment(const SegmentConfig& cfgin) {
     summary["grains"] = {{"h_vox", cfg.h}, {"median_voxels", med}, {"cut_by_surface", cut},
                          {"over_segmentation_suspects", over}, {"under_segmentation_suspects", under},
                          {"rules", "over: volume < 0.2 x median; under: volume > 2 x the ball of its largest inscribed radius"}};
+    clock.done("grains");
   }
   // ---- outputs (everything computed: nothing is written before this point)
   json outs;
@@ -261,7 +295,7 @@ std::string run_segment(const SegmentConfig& cfgin) {
     write_level_set(cfg.vdb, m);
     outs["macropores_vdb"] = cfg.vdb;
   }
-  if (!cfg.overlay.empty()) outs["overlays"] = write_overlays(cfg.overlay, v, phases);
+  if (!cfg.overlay.empty()) outs["overlays"] = write_overlays(cfg.overlay, planes, phases);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (cfg.grains && !cfg.packing.empty()) {
     packing.provenance.tool = "tomodem-segment";
@@ -273,6 +307,9 @@ std::string run_segment(const SegmentConfig& cfgin) {
     outs["packing"] = cfg.packing;
   }
   summary["outputs"] = outs;
+  clock.done("outputs");
+  summary["stage_times_s"] = clock.times;
+  summary["peak_rss_bytes"] = peak_rss_bytes();
   summary["wall_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   summary["tool"] = "tomodem-segment";
   summary["version"] = version_string();

@@ -59,6 +59,16 @@ TEST(SegmentCli, PhantomToLabelsWithEveryOutput) {
     EXPECT_TRUE(s.contains(k)) << k;
   EXPECT_EQ(s["n_macropores"], ph["n_macropores"]);
   EXPECT_NEAR(s["porosity"].get<double>(), ph["true_porosity"].get<double>(), 0.01);
+  // Stage times: every stage that ran, each within the wall time, together not more than it.
+  double stages = 0;
+  for (const char* k : {"read", "filter", "threshold", "clean", "macropores", "measure", "grains", "outputs"}) {
+    ASSERT_TRUE(s["stage_times_s"].contains(k)) << k;
+    stages += s["stage_times_s"][k].get<double>();
+  }
+  EXPECT_LE(stages, s["wall_time_s"].get<double>());
+  // Peak memory: at least the 64^3 float grey volume the tool held (1 MiB), below 4 GiB.
+  EXPECT_GT(s["peak_rss_bytes"].get<double>(), 64.0 * 64 * 64 * 4);
+  EXPECT_LT(s["peak_rss_bytes"].get<double>(), 4.0 * (1 << 30));
   for (const char* f : {"labels.h5", "labels.mha", "pores.vdb", "ov_xy.png", "ov_xz.png", "ov_yz.png", "grains.h5",
                         "grains.xdmf"})
     EXPECT_TRUE(fs::exists(d / f)) << f;

@@ -2,6 +2,7 @@
 // and the bad-input errors (InputError -> exit 2).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -32,22 +33,27 @@ Mask random_mask(Dims d, double p, unsigned seed) {
 }  // namespace
 
 TEST(DistanceTransform, MatchesBruteForceOnRandomMask) {
-  const Mask m = random_mask({13, 9, 7}, 0.9, 3);
-  const auto d2 = distance_squared(m);
-  for (std::size_t z = 0; z < 7; ++z)
-    for (std::size_t y = 0; y < 9; ++y)
-      for (std::size_t x = 0; x < 13; ++x) {
-        if (!m.at(x, y, z)) { EXPECT_EQ(d2[m.index(x, y, z)], 0.0f); continue; }
-        double best = 1e30;
-        for (std::size_t c = 0; c < 7; ++c)
-          for (std::size_t b = 0; b < 9; ++b)
-            for (std::size_t a = 0; a < 13; ++a)
-              if (!m.at(a, b, c)) {
-                const double dx = double(a) - x, dy = double(b) - y, dz = double(c) - z;
-                best = std::min(best, dx * dx + dy * dy + dz * dz);
-              }
-        EXPECT_EQ(d2[m.index(x, y, z)], float(best)) << x << "," << y << "," << z;  // exact integers
-      }
+  // 37 columns: lines along y and z are transformed in groups of 16 neighbouring x (two full
+  // groups and a partial one); 13: one partial group.
+  const Dims sizes[] = {{13, 9, 7}, {37, 5, 6}};
+  for (const Dims& d : sizes) {
+    const Mask m = random_mask(d, 0.9, 3);
+    const auto d2 = distance_squared(m);
+    for (std::size_t z = 0; z < d.nz; ++z)
+      for (std::size_t y = 0; y < d.ny; ++y)
+        for (std::size_t x = 0; x < d.nx; ++x) {
+          if (!m.at(x, y, z)) { EXPECT_EQ(d2[m.index(x, y, z)], 0.0f); continue; }
+          double best = 1e30;
+          for (std::size_t c = 0; c < d.nz; ++c)
+            for (std::size_t b = 0; b < d.ny; ++b)
+              for (std::size_t a = 0; a < d.nx; ++a)
+                if (!m.at(a, b, c)) {
+                  const double dx = double(a) - x, dy = double(b) - y, dz = double(c) - z;
+                  best = std::min(best, dx * dx + dy * dy + dz * dz);
+                }
+          ASSERT_EQ(d2[m.index(x, y, z)], float(best)) << x << "," << y << "," << z;  // exact integers
+        }
+  }
 }
 
 TEST(Components, SixVersusTwentySixConnectivity) {
@@ -93,22 +99,45 @@ TEST(Components, RandomMaskAgreesWithFloodFill) {
   EXPECT_EQ(n, fills);
 }
 
-TEST(Median, MatchesBruteForceInside) {
-  Volume v(Dims{8, 7, 6});
+// Reference: sort the (2r+1)^3 box with the borders replicated and take the middle value.
+static float brute_median(const Volume& v, long x, long y, long z, int r) {
+  const auto c = [](long i, std::size_t n) { return std::size_t(std::clamp<long>(i, 0, long(n) - 1)); };
+  std::vector<float> b;
+  for (long cz = -r; cz <= r; ++cz)
+    for (long by = -r; by <= r; ++by)
+      for (long ax = -r; ax <= r; ++ax) b.push_back(v.at(c(x + ax, v.dims.nx), c(y + by, v.dims.ny), c(z + cz, v.dims.nz)));
+  std::sort(b.begin(), b.end());
+  return b[b.size() / 2];
+}
+
+TEST(Median, NetworkAndSelectionMatchBruteForceEverywhere) {
+  // Sizes with full eight-voxel vectors and scalar tails (nx = 19), tiny edges (1, 2, 3) where
+  // every voxel is a border voxel; values continuous and with many ties (4 levels).
+  const Dims sizes[] = {{19, 7, 6}, {8, 3, 5}, {1, 4, 3}, {2, 2, 2}, {3, 1, 9}, {17, 9, 1}};
   std::mt19937 rng(1);
   std::normal_distribution<float> G(0, 1);
+  std::uniform_int_distribution<int> L(0, 3);
+  for (const Dims& d : sizes)
+    for (int ties = 0; ties < 2; ++ties)
+      for (int r = 1; r <= 2; ++r)
+        for (int generic = 0; generic < 2; ++generic) {
+          if (r == 2 && !generic) continue;  // r > 1 always selects
+          Volume v(d);
+          for (auto& x : v.v) x = ties ? float(L(rng)) : G(rng);
+          Volume m = v;
+          median_inplace(m, r, generic != 0);
+          for (std::size_t z = 0; z < d.nz; ++z)
+            for (std::size_t y = 0; y < d.ny; ++y)
+              for (std::size_t x = 0; x < d.nx; ++x)
+                ASSERT_EQ(m.at(x, y, z), brute_median(v, long(x), long(y), long(z), r))
+                    << d.nx << "x" << d.ny << "x" << d.nz << " r " << r << " generic " << generic << " ties " << ties << " at "
+                    << x << "," << y << "," << z;
+        }
+  Volume v(Dims{11, 6, 5});
   for (auto& x : v.v) x = G(rng);
-  const Volume m = median(v, 1);
-  for (std::size_t z = 1; z + 1 < 6; ++z)
-    for (std::size_t y = 1; y + 1 < 7; ++y)
-      for (std::size_t x = 1; x + 1 < 8; ++x) {
-        std::vector<float> b;
-        for (int c = -1; c <= 1; ++c)
-          for (int bb = -1; bb <= 1; ++bb)
-            for (int a = -1; a <= 1; ++a) b.push_back(v.at(x + a, y + bb, z + c));
-        std::sort(b.begin(), b.end());
-        EXPECT_EQ(m.at(x, y, z), b[13]);
-      }
+  Volume w = v;
+  median_inplace(w, 1);
+  EXPECT_EQ(median(v, 1).v, w.v);  // the copying form is the same filter
 }
 
 TEST(Otsu, SplitsTwoAndThreeModes) {
@@ -153,6 +182,32 @@ TEST(Morphology, OpeningKeepsBallRemovesThinPlate) {
   // (pole tips, rim corners) no digital 3-ball inside it covers: measured 4.6 % for r = 8.
   EXPECT_LE(ball_after, ball);
   EXPECT_GE(double(ball_after), 0.94 * double(ball));
+}
+
+TEST(Macropores, SameAsOpeningFromTheBuildingBlocks) {
+  // macropores() runs erosion and dilation in one distance field; the reference composes
+  // erode_ball and dilate_ball (r + 1), keeps pore voxels and labels with 6-connectivity.
+  // Pores: random balls of radius 1.5-5 voxels (touching, cut by the faces) and isolated voxels.
+  Mask pores = random_mask({41, 23, 19}, 0.1, 11);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> U(0, 1);
+  for (int k = 0; k < 25; ++k) {
+    const double cx = 41 * U(rng), cy = 23 * U(rng), cz = 19 * U(rng), rr = 1.5 + 3.5 * U(rng);
+    for (std::size_t z = 0; z < 19; ++z)
+      for (std::size_t y = 0; y < 23; ++y)
+        for (std::size_t x = 0; x < 41; ++x)
+          if (std::pow(x - cx, 2) + std::pow(y - cy, 2) + std::pow(z - cz, 2) <= rr * rr) pores.at(x, y, z) = 1;
+  }
+  for (double r : {1.0, 1.5, 2.0, 3.0}) {
+    int n = 0, n_ref = 0;
+    const Labels L = macropores(pores, r, 1, &n);
+    Mask ref = dilate_ball(erode_ball(pores, r), r + 1);
+    for (std::size_t i = 0; i < ref.v.size(); ++i) ref.v[i] = ref.v[i] && pores.v[i];
+    const Labels R = components(ref, 6, &n_ref);
+    EXPECT_EQ(n, n_ref) << "r " << r;
+    EXPECT_GT(n, 0) << "r " << r;
+    EXPECT_EQ(L.v, R.v) << "r " << r;  // both number components by first voxel
+  }
 }
 
 TEST(Hysteresis, KeepsOnlyRegionsReachingHigh) {

@@ -23,8 +23,17 @@ void write_level_set(const std::string& path, const Mask& m, double half_width_v
 /// Trilinear samples of the level set at world points given in m, returned in m.
 std::vector<double> sample_level_set(const std::string& path, const std::vector<Vec3>& world_points);
 
+/// What an overlay needs of the grey volume: the grey window and the three mid-planes (xy at
+/// z = nz/2, xz at y = ny/2, yz at x = nx/2; first index fastest). Taken before the grey volume is
+/// released, so the later stages do not hold 4 bytes per voxel for three PNGs.
+struct OverlayPlanes {
+  Dims dims;
+  double lo = 0, hi = 1;
+  std::vector<float> xy, xz, yz;
+};
+OverlayPlanes overlay_planes(const Volume& grey);
 /// Mid-plane overlays <prefix>_xy.png, _xz.png, _yz.png (OpenCV): grey between the 0.5 and 99.5
 /// percentiles; fine pores blue, macropores red, a second solid phase green. Returns the paths.
-std::vector<std::string> write_overlays(const std::string& prefix, const Volume& grey, const Mask& phases);
+std::vector<std::string> write_overlays(const std::string& prefix, const OverlayPlanes& grey, const Mask& phases);
 
 }  // namespace tomodem::image

@@ -10,7 +10,13 @@
 namespace tomodem::image {
 
 // ---- filtering (filters_itk.cpp, binary.cpp) ----
-/// Median over a (2r+1)^3 box; processed slab by slab (exact, own code, OpenMP).
+/// Median over a (2r+1)^3 box, borders replicated (exact, own code, OpenMP over rows), in place:
+/// plane by plane with a ring of the 2r+1 original planes it still needs, so the memory is the
+/// volume plus 2r+1 planes. r = 1: a selection network over sorted 3x3 columns, eight voxels at a
+/// time (about 200 min/max per voxel); r > 1, or `generic`: std::nth_element over the box (the
+/// reference the benchmark compares against).
+void median_inplace(Volume& v, int radius, bool generic = false);
+/// The same on a copy.
 Volume median(const Volume& v, int radius);
 /// Gaussian smoothing, sigma in voxels (ITK SmoothingRecursiveGaussianImageFilter).
 Volume gaussian(const Volume& v, double sigma_vox);
