@@ -1,0 +1,41 @@
+#pragma once
+// FIRE energy minimisation (Bitzek, Koskinen, Gähler, Moseler & Gumbsch, PRL 97 (2006) 170201)
+// as a mode of the DEM integrator: the Simulation's own velocity-Verlet step, with the velocity
+// mixed towards the force (v ← (1−α)v + α|v|F̂), the step grown while the power F·v stays
+// positive and the motion stopped when it turns negative. At a fixed cell this relaxes a
+// frictionless packing to a local minimum of its elastic energy (zero net force on every
+// particle); with friction it is a quasi-static relaxation to mechanical equilibrium.
+#include "tomodem/dem/simulation.hpp"
+
+namespace tomodem::dem {
+
+struct FireOptions {
+  double dt_start = 0.1;   ///< first step, fraction of Simulation::critical_time_step()
+  /// Largest step, fraction of the critical (two-particle) step. A particle with Z contacts of
+  /// stiffness k has ω² up to 2Zk/m (Gershgorin); at Z = 6 that is 2/sqrt(12) ≈ 0.41 of the
+  /// two-particle limit, so 0.35 stays inside the network's stability limit.
+  double dt_max = 0.35;
+  double dt_min = 0.01;    ///< floor of the step after repeated stops
+  int n_min = 5;           ///< Bitzek et al.: steps of positive power before the step grows
+  double f_inc = 1.1, f_dec = 0.5, alpha_start = 0.1, f_alpha = 0.99;
+  double unbalanced_force_ratio = 1e-4;  ///< converged: mean |ΣF_i| / mean |F_contact| below this
+  /// J: stop as soon as the elastic plus kinetic energy falls below this (an unjammed packing
+  /// reaches zero; a caller bracketing a target pressure stops early once it is clearly below).
+  double energy_floor = 0;
+  long max_steps = 200000;
+  int check_interval = 20;  ///< steps between measurements (one extra force pass each)
+};
+
+struct FireResult {
+  bool converged = false;    ///< force criterion met with contacts carrying load
+  bool below_floor = false;  ///< energy fell below energy_floor (or no contact carries force)
+  long steps = 0;
+  Measurements last;         ///< measurement at the stop
+};
+
+/// Minimises at the current cell (the cell control must be inactive). Local damping is switched
+/// off during the minimisation and the caller's time step and damping are restored afterwards.
+/// Velocities are zero at the start and at a converged stop.
+FireResult minimise_fire(Simulation& sim, const FireOptions& options = {});
+
+}  // namespace tomodem::dem
