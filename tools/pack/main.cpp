@@ -2,6 +2,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <iostream>
 
 #include "tomodem/core/cli.hpp"
@@ -82,6 +83,11 @@ int run(int argc, char** argv) {
   j["neighbor_search"] = r.neighbor_search;
   j["pore_formers_removed"] = r.pore_formers_removed;
   j["aggregates"] = r.aggregates;
+  j["aggregate_bonds"] = r.aggregate_bonds;
+  j["method"] = r.method;
+  j["minimisations"] = r.minimisations;
+  if (std::isfinite(r.jamming_solid_fraction)) j["jamming_solid_fraction"] = r.jamming_solid_fraction;
+  else j["jamming_solid_fraction"] = nullptr;
   j["phases"] = json::array();
   double dev_psd = 0, dev_phase = 0;
   for (const auto& p : r.phases) {

@@ -143,7 +143,8 @@ PackConfig load_pack_config(const std::string& path) {
     s.phases.push_back(spec);
   }
   const Node c = r.sub("contact");
-  c.allow({"normal", "friction", "restitution", "work_of_adhesion", "normal_stiffness", "aggregate_adhesion"});
+  c.allow({"normal", "friction", "restitution", "work_of_adhesion", "normal_stiffness", "aggregate_bond_radius",
+           "rolling_friction"});
   const std::string law = c.string("normal", "hertz");
   if (!dem::parse(law, s.normal)) {
     if (law == "dmt") s.normal = dem::NormalLaw::hertz_dmt;
@@ -151,11 +152,15 @@ PackConfig load_pack_config(const std::string& path) {
     else throw InputError(path, c.where("normal"), law, "expected linear, hertz, dmt or jkr");
   }
   s.friction = c.number("friction", 0);
+  s.rolling_friction = c.number("rolling_friction", 0);
   s.restitution = c.number("restitution", s.restitution);
   if (!(s.restitution > 0 && s.restitution <= 1)) throw InputError(path, c.field("restitution"), std::to_string(s.restitution), "must lie in (0, 1]");
   s.work_of_adhesion = c.number("work_of_adhesion", 0);
   s.normal_stiffness = c.number("normal_stiffness", 0);
-  s.aggregate_adhesion = c.number("aggregate_adhesion", 0);
+  s.aggregate_bond_radius = c.number("aggregate_bond_radius", s.aggregate_bond_radius);
+  if (!(s.aggregate_bond_radius > 0 && s.aggregate_bond_radius <= 1))
+    throw InputError(path, c.where("aggregate_bond_radius"), std::to_string(s.aggregate_bond_radius),
+                     "must lie in (0, 1] (fraction of the smaller radius)");
   const Node t = r.sub("target");
   t.allow({"pressure", "solid_fraction"});
   if (t.has("pressure") && t.has("solid_fraction"))
@@ -163,7 +168,10 @@ PackConfig load_pack_config(const std::string& path) {
   if (t.has("solid_fraction")) s.target = Target::solid_fraction, s.target_solid_fraction = t.number("solid_fraction", 0);
   else s.target = Target::pressure, s.target_pressure = t.number("pressure", 0);
   const Node pr = r.sub("protocol");
-  pr.allow({"strain_rate", "final_strain_rate", "local_damping", "timestep_fraction", "unbalanced_force_ratio", "max_steps"});
+  pr.allow({"method", "strain_rate", "final_strain_rate", "local_damping", "timestep_fraction", "unbalanced_force_ratio", "max_steps"});
+  s.method = pr.string("method", s.method);
+  if (s.method != "quasistatic" && s.method != "dynamic")
+    throw InputError(path, pr.where("method"), s.method, "expected quasistatic or dynamic");
   s.strain_rate = pr.number("strain_rate", 0);
   s.final_strain_rate = pr.number("final_strain_rate", 0);
   s.local_damping = pr.number("local_damping", s.local_damping);

@@ -11,6 +11,7 @@
 
 #include "../../dem/src/hgrid.hpp"
 #include "tomodem/core/error.hpp"
+#include "tomodem/dem/fire.hpp"
 #include "tomodem/dem/scene.hpp"
 #include "tomodem/dem/simulation.hpp"
 #include "tomodem/geometry/laguerre.hpp"
@@ -35,11 +36,135 @@ double lattice_max_fraction(const std::string& a) {
 }
 int lattice_basis(const std::string& a) { return a == "simple_cubic" ? 1 : (a == "bcc" ? 2 : 4); }
 
+/// Isotropic affine rescale of the cell and the positions about its origin to solid fraction
+/// `phi` (an isotropic compression moves contacts only along their normals: tangential springs
+/// need no increment).
+void set_solid_fraction(dem::Simulation& sim, double vsolid, double phi) {
+  const double s = std::cbrt(vsolid / phi / sim.cell().volume());
+  auto& c = sim.cell();
+  for (auto& xi : sim.particles().x) xi = c.origin + s * (xi - c.origin);
+  c.h *= s;
+  sim.invalidate_neighbors();
+}
+
+/// Largest solid-fraction change between two relaxations: from a relaxed state at φ ≥ 0.25,
+/// overlaps grow by at most about Δφ/(3φ) d ≤ 0.07 d, inside the engine's 0.5 R stability limit.
+/// A solid-fraction target is approached in steps of kPhiStep (closer to quasi-static).
+constexpr double kMaxPhiStep = 0.05, kPhiStep = 0.02;
+
+struct QuasiStaticResult {
+  long steps = 0;
+  bool converged = false;
+  dem::Measurements last;
+};
+
+/// Compress–relax densification (O'Hern, Silbert, Liu & Nagel 2003): the cell is rescaled in
+/// steps, each followed by a FIRE energy minimisation to zero net force (dem/fire.hpp), always
+/// from the previous relaxed configuration. A pressure target is bracketed on q = p^(1/(α−1)),
+/// which is linear in φ above jamming (α = 2 linear law, 5/2 Hertz; p ∝ (φ − φ_J)^(α−1)):
+/// compress while relaxed states are below the target, then regula falsi between the last two
+/// jammed states, bisection while the lower end is unjammed. A relaxed state is unjammed when its
+/// energy falls below 1e-16 per particle of the law's energy scale (k d² or E* d³), and is known
+/// to be below the target once its energy is under 1 % of the target's (E ∝ q^α from the last
+/// jammed state), which ends minimisations far below the target early.
+QuasiStaticResult quasistatic(dem::Simulation& sim, const PackSpec& spec, double vsolid, double dmean, PackReport& rep,
+                              const std::function<void(const std::string&)>& say) {
+  QuasiStaticResult out;
+  const std::size_t n = sim.particles().size();
+  const bool linear = spec.normal == dem::NormalLaw::linear;
+  const double alpha = linear ? 2.0 : 2.5;
+  double escale = 0;
+  for (const auto& pp : sim.model().pairs)
+    escale = std::max(escale, linear ? pp.k_n * dmean * dmean : pp.E_star * dmean * dmean * dmean);
+  dem::FireOptions fo;
+  fo.unbalanced_force_ratio = spec.unbalanced_force_ratio;
+  const double floor0 = 1e-16 * double(n) * escale;
+  double phi = vsolid / sim.cell().volume();
+  const auto relax = [&](double floor) {
+    fo.energy_floor = floor;
+    fo.max_steps = std::max<long>(1, spec.max_steps - out.steps);
+    const dem::FireResult r = dem::minimise_fire(sim, fo);
+    out.steps += r.steps;
+    ++rep.minimisations;
+    out.last = r.last;
+    return r;
+  };
+  if (spec.target == Target::solid_fraction) {
+    say("compress-relax to solid fraction " + num(spec.target_solid_fraction));
+    dem::FireResult r;
+    do {
+      phi = std::min(spec.target_solid_fraction, phi + kPhiStep);
+      set_solid_fraction(sim, vsolid, phi);
+      r = relax(phi < spec.target_solid_fraction ? floor0 : 0.0);
+      if (r.last.max_overlap_ratio > 0.1) break;  // the caller refuses the target
+    } while (phi < spec.target_solid_fraction && out.steps < spec.max_steps);
+    out.converged = r.converged || r.below_floor;
+    return out;
+  }
+  const double pt = spec.target_pressure;
+  const auto q_of = [&](double p) { return p > 0 ? std::pow(p, 1 / (alpha - 1)) : 0.0; };
+  const double qt = q_of(pt);
+  struct Point {
+    double phi = 0, q = 0, energy = 0;
+    bool set = false;
+  };
+  Point lo, hi;
+  std::vector<Point> jammed;  // relaxed states carrying load, in order
+  say("compress-relax (FIRE) to pressure " + num(pt) + " Pa from solid fraction " + num(phi));
+  while (out.steps < spec.max_steps) {
+    double floor = floor0;
+    if (!jammed.empty()) floor = std::max(floor, 0.01 * jammed.back().energy * std::pow(qt / jammed.back().q, alpha));
+    const dem::FireResult r = relax(floor);
+    const double p = r.below_floor ? 0.0 : std::max(r.last.pressure, 0.0);
+    const Point pnt{phi, q_of(p), r.last.elastic_energy, true};
+    if (p > 0 && r.converged) jammed.push_back(pnt);
+    say("relaxed at phi " + num(phi) + ": p " + num(p) + " Pa, Z " + num(r.last.coordination) + ", " +
+        std::to_string(r.steps) + " steps" + (r.converged ? "" : (r.below_floor ? " (below target)" : " (not converged)")));
+    if (r.converged && std::abs(p / pt - 1) < 0.05) {
+      out.converged = true;
+      break;
+    }
+    (p < pt ? lo : hi) = pnt;
+    // Slope dq/dφ of the last two jammed states (linear above jamming).
+    double slope = 0;
+    if (jammed.size() >= 2) {
+      const Point &a = jammed[jammed.size() - 2], &b = jammed.back();
+      if (b.phi != a.phi) slope = (b.q - a.q) / (b.phi - a.phi);
+    }
+    double next;
+    if (slope > 0) next = jammed.back().phi + (qt - jammed.back().q) / slope;
+    else if (!hi.set) next = phi + (p > 0 ? 0.005 : std::min(kMaxPhiStep, 0.1 * phi));
+    else if (!lo.set) next = phi - 0.005;
+    else next = 0.5 * (lo.phi + hi.phi);
+    if (lo.set && hi.set) {
+      const double w = hi.phi - lo.phi;
+      if (w < 1e-9 * phi) break;  // bracket collapsed (a rearrangement jump at the target)
+      // Stay inside the bracket (an extrapolation outside it bisects instead).
+      if (!(next > lo.phi && next < hi.phi)) next = 0.5 * (lo.phi + hi.phi);
+    }
+    next = std::clamp(next, phi - kMaxPhiStep, phi + kMaxPhiStep);
+    phi = next;
+    set_solid_fraction(sim, vsolid, phi);
+  }
+  if (!out.converged && hi.set && out.last.pressure < pt && phi != hi.phi) {
+    // End on the jammed side of a collapsed bracket.
+    phi = hi.phi;
+    set_solid_fraction(sim, vsolid, phi);
+    out.converged = relax(0.0).converged;
+  }
+  if (jammed.size() >= 2) {
+    const Point &a = jammed[jammed.size() - 2], &b = jammed.back();
+    if (b.phi != a.phi && b.q != a.q) rep.jamming_solid_fraction = b.phi - b.q * (b.phi - a.phi) / (b.q - a.q);
+  }
+  return out;
+}
+
 /// Compact random cluster of `m` spheres (radii r): each new sphere touches a random earlier one
-/// without overlapping the others (diffusion-limited-like growth). Offsets from the centroid.
-std::vector<Vec3> cluster_offsets(const std::vector<double>& r, std::mt19937_64& rng) {
+/// (its parent, which it is bonded to) without overlapping the others. Offsets from the centroid.
+std::vector<Vec3> cluster_offsets(const std::vector<double>& r, std::mt19937_64& rng, std::vector<int>& parent) {
   std::normal_distribution<double> G(0, 1);
   std::vector<Vec3> p{{0, 0, 0}};
+  parent.assign(r.size(), -1);
   std::uniform_int_distribution<std::size_t> pick;
   for (std::size_t k = 1; k < r.size(); ++k) {
     for (int tries = 0; tries < 10000; ++tries) {
@@ -51,10 +176,12 @@ std::vector<Vec3> cluster_offsets(const std::vector<double>& r, std::mt19937_64&
       for (std::size_t b = 0; b < k && ok; ++b) ok = norm(c - p[b]) >= r[b] + r[k];
       if (ok) {
         p.push_back(c);
+        parent[k] = int(a);
         break;
       }
     }
-    if (p.size() != k + 1) p.push_back(p.back() + Vec3{2 * (r[k] + r[k - 1]), 0, 0});  // chain end (never in practice)
+    if (p.size() != k + 1)  // chain end (never in practice): touching the previous sphere
+      p.push_back(p.back() + Vec3{(r[k] + r[k - 1]) * (1 + 1e-9), 0, 0}), parent[k] = int(k) - 1;
   }
   Vec3 g;
   for (const auto& q : p) g += q;
@@ -80,9 +207,9 @@ void validate(const PackSpec& s) {
       throw InputError(f, field + ".material.youngs_modulus", num(ph.material.youngs_modulus),
                        "must be > 0 for the Hertz family of normal laws");
     if (ph.aggregate_size < 1) throw InputError(f, field + ".aggregate_size", std::to_string(ph.aggregate_size), "must be >= 1");
-    if (ph.aggregate_size > 1 && s.normal != dem::NormalLaw::hertz_dmt && s.normal != dem::NormalLaw::hertz_jkr)
-      throw InputError(f, field + ".aggregate_size", std::to_string(ph.aggregate_size),
-                       "aggregates are held by adhesion during packing: use contact.normal dmt or jkr");
+    if (ph.aggregate_size > 1 && !(ph.material.youngs_modulus > 0))
+      throw InputError(f, field + ".material.youngs_modulus", num(ph.material.youngs_modulus),
+                       "aggregates are bonded (bond stiffness from E): must be > 0");
   }
   if (std::abs(sum - 1) > 1e-6)
     throw InputError(f, "phases[*].volume_fraction", num(sum), "volume fractions must add up to 1");
@@ -114,6 +241,7 @@ void validate(const PackSpec& s) {
   if (s.arrangement != "random" && (s.phases.size() != 1 || s.phases[0].psd.kind != PsdKind::monodisperse))
     throw InputError(f, "arrangement", s.arrangement, "lattices need one monodisperse phase");
   if (!(s.friction >= 0)) throw InputError(f, "contact.friction", num(s.friction), "must be >= 0");
+  if (!(s.rolling_friction >= 0)) throw InputError(f, "contact.rolling_friction", num(s.rolling_friction), "must be >= 0");
 }
 
 PackOutput make_packing(const PackSpec& spec, const std::function<void(const std::string&)>& progress) {
@@ -134,6 +262,7 @@ PackOutput make_packing(const PackSpec& spec, const std::function<void(const std
   std::vector<double> radius;
   std::vector<int32_t> phase;
   std::vector<std::vector<int>> clusters;
+  std::vector<std::pair<int, int>> bonded;  // aggregate members bonded to their parent
   std::vector<Vec3> offsets;
   PackOutput out;
   PackReport& rep = out.report;
@@ -162,9 +291,13 @@ PackOutput make_packing(const PackSpec& spec, const std::function<void(const std
       offsets.assign(radius.size(), Vec3{});
       for (const auto& c : clusters) {
         std::vector<double> rr;
+        std::vector<int> parent;
         for (int i : c) rr.push_back(radius[std::size_t(i)]);
-        const auto off = cluster_offsets(rr, rng);
-        for (std::size_t k = 0; k < c.size(); ++k) offsets[std::size_t(c[k])] = off[k];
+        const auto off = cluster_offsets(rr, rng, parent);
+        for (std::size_t k = 0; k < c.size(); ++k) {
+          offsets[std::size_t(c[k])] = off[k];
+          if (parent[k] >= 0) bonded.emplace_back(c[std::size_t(parent[k])], c[k]);
+        }
       }
     }
     double vs = 0;
@@ -195,18 +328,19 @@ PackOutput make_packing(const PackSpec& spec, const std::function<void(const std
   const bool hertz_family = spec.normal != dem::NormalLaw::linear;
   model.tangential = spec.friction > 0 ? (hertz_family ? dem::TangentialLaw::mindlin : dem::TangentialLaw::linear)
                                        : dem::TangentialLaw::none;
+  model.rolling = spec.rolling_friction > 0 ? dem::RollingLaw::elastic_plastic : dem::RollingLaw::none;
   for (const auto& ph : spec.phases) model.materials.push_back(ph.material);
   model.n_phases = np;
   model.finalize();
   double dmean = 0;
   for (double r : radius) dmean += 2 * r;
   dmean /= double(n);
-  double wmax = spec.work_of_adhesion;
   for (int a = 0; a < np; ++a)
     for (int b = 0; b < np; ++b) {
       auto& pp = model.pair(a, b);
       pp.restitution = spec.restitution;
       pp.friction = spec.friction;
+      pp.rolling_friction = spec.rolling_friction;
       if (spec.normal == dem::NormalLaw::linear) {
         const double E = std::max(spec.phases[std::size_t(a)].material.youngs_modulus, 0.0);
         pp.k_n = spec.normal_stiffness > 0 ? spec.normal_stiffness : E * dmean;
@@ -217,11 +351,6 @@ PackOutput make_packing(const PackSpec& spec, const std::function<void(const std
       if (spec.work_of_adhesion > 0) pp.work_of_adhesion = spec.work_of_adhesion;
     }
   model.finalize();
-  for (const auto& pp : model.pairs) wmax = std::max(wmax, pp.work_of_adhesion);
-  for (int a = 0; a < np; ++a)
-    if (spec.phases[std::size_t(a)].aggregate_size > 1)
-      model.pair(a, a).work_of_adhesion = spec.aggregate_adhesion > 0 ? spec.aggregate_adhesion : std::max(1.0, 100 * wmax);
-  model.finalize();
 
   dem::Particles parts;
   for (std::size_t i = 0; i < n; ++i)
@@ -229,6 +358,27 @@ PackOutput make_packing(const PackSpec& spec, const std::function<void(const std
   dem::Settings set;
   set.threads = std::max(1, spec.threads);
   dem::Simulation sim(std::move(parts), cell, model, set);
+  if (!bonded.empty()) {
+    // Aggregates: each member bonded to the one it was grown on (at its insertion distance), by
+    // a bond of the phases' elastic constants; bonded pairs leave the contact list.
+    dem::BondSet bs;
+    const Mat3 hinv = cell.h.inverse();
+    for (const auto& [a, b] : bonded) {
+      const Vec3 d = pos[std::size_t(b)] - pos[std::size_t(a)];
+      const Vec3 s = hinv * d;
+      Vec3 img;
+      for (int k = 0; k < 3; ++k) img[k] = -std::round(s[k]);
+      const double ra = radius[std::size_t(a)], rb = radius[std::size_t(b)];
+      bs.add(a, b, img, spec.aggregate_bond_radius * std::min(ra, rb), norm(d + cell.h * img));
+    }
+    std::vector<dem::BondLaw> laws(std::size_t(np * np));
+    for (int a = 0; a < np; ++a)
+      for (int b = 0; b < np; ++b) {
+        laws[std::size_t(a * np + b)].E_star = model.pair(a, b).E_star;
+        laws[std::size_t(a * np + b)].G_star = model.pair(a, b).G_star;
+      }
+    sim.set_bonds(std::move(bs), laws, dem::BondFailure::none);
+  }
   const double dtc = sim.critical_time_step();
   sim.set_time_step(spec.timestep_fraction * dtc);
   const double dt = sim.time_step();
@@ -263,7 +413,15 @@ PackOutput make_packing(const PackSpec& spec, const std::function<void(const std
                        "not reachable for this size distribution: the packing jammed and particles overlap by " +
                            num(100 * mm.max_overlap_ratio) + "% of a radius at solid fraction " + num(phi_now()));
   };
-  if (!lattice && spec.target == Target::pressure) {
+  rep.method = lattice ? "lattice" : spec.method;
+  const bool quasi = !lattice && spec.method == "quasistatic";
+  if (quasi) {
+    const QuasiStaticResult q = quasistatic(sim, spec, vsolid, dmean, rep, say);
+    steps = q.steps;
+    m = q.last;
+    if (spec.target == Target::solid_fraction) refuse_overlap(m);
+    rep.equilibrium = q.converged;
+  } else if (!lattice && spec.target == Target::pressure) {
     // 1. fast isotropic compression until the contact pressure reaches a fraction of the target
     say("compressing at strain rate " + num(rate_fast) + " 1/s to pressure " + num(spec.target_pressure) + " Pa");
     set_rate(rate_fast);
@@ -325,10 +483,10 @@ PackOutput make_packing(const PackSpec& spec, const std::function<void(const std
     c.h *= s;
     sim.invalidate_neighbors();
   }
-  // 3. relaxation at fixed cell to mechanical equilibrium
+  // 3. relaxation at fixed cell to mechanical equilibrium (dynamic protocol and lattices)
   set_rate(0);
-  say("relaxing to unbalanced-force ratio " + num(spec.unbalanced_force_ratio));
-  while (steps < spec.max_steps) {
+  if (!quasi) say("relaxing to unbalanced-force ratio " + num(spec.unbalanced_force_ratio));
+  while (!quasi && steps < spec.max_steps) {
     m = sim.measure();
     if (spec.target == Target::solid_fraction) refuse_overlap(m);
     if (steps % 5000 == 0)
@@ -389,6 +547,20 @@ PackOutput make_packing(const PackSpec& spec, const std::function<void(const std
     pk.contacts.overlap.push_back(contacts.overlap[k]);
     pk.contacts.normal_force.push_back(contacts.normal_force[k]);
     pk.contacts.tangential_force.push_back(contacts.tangential_force[k]);
+  }
+  {
+    const auto& B = sim.bonds();
+    for (std::size_t b = 0; b < B.size(); ++b) {
+      const int32_t a = new_index[std::size_t(B.i[b])], c = new_index[std::size_t(B.j[b])];
+      if (a < 0 || c < 0) continue;
+      pk.bonds.i.push_back(a);
+      pk.bonds.j.push_back(c);
+      pk.bonds.radius.push_back(B.radius[b]);
+      pk.bonds.rest_length.push_back(B.rest_length[b]);
+      pk.bonds.state.push_back(B.state[b]);
+      pk.bonds.broken_at.push_back(B.broken_at[b]);
+    }
+    rep.aggregate_bonds = pk.bonds.size();
   }
   pk.cell = final_cell;
   for (const auto& ph : spec.phases) pk.materials.push_back(ph.material);

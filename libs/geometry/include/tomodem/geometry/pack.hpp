@@ -4,6 +4,7 @@
 // fraction or pressure, mechanical equilibrium, and the structure of the result.
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -33,10 +34,15 @@ struct PackSpec {
   dem::NormalLaw normal = dem::NormalLaw::hertz;
   double normal_stiffness = 0;         ///< N/m, linear law (0: E d_mean)
   double friction = 0;                 ///< Coulomb μ (Mindlin for Hertz family, linear otherwise)
+  double rolling_friction = 0;         ///< μ_r of the elastic–plastic rolling law (0: no rolling resistance)
   double restitution = 0.3;
   double work_of_adhesion = 0;         ///< J/m² (dmt/jkr); 0: from the surface energies
-  double aggregate_adhesion = 0;       ///< J/m² within aggregate phases (0: 100 × the largest w, min 1)
+  /// Bond radius of aggregate members, fraction of the smaller radius of the pair.
+  double aggregate_bond_radius = 0.3;
   // Protocol.
+  /// "quasistatic": compress in steps, each relaxed by FIRE energy minimisation (pressure
+  /// targets bracket p(φ)); "dynamic": compression at a strain rate, stress servo, relaxation.
+  std::string method = "quasistatic";
   Target target = Target::pressure;
   double target_pressure = 0;          ///< Pa
   double target_solid_fraction = 0;
@@ -84,6 +90,13 @@ struct PackReport {
   double local_solid_fraction_mean = 0, local_solid_fraction_std = 0;
   std::vector<double> local_solid_fraction_histogram;  ///< 20 bins over [0, 1]
   std::string neighbor_search;          ///< "hgrid" or "linked cells"
+  std::string method;                   ///< quasistatic or dynamic
+  /// Quasistatic pressure target: φ extrapolated to p → 0 along the last two relaxed jammed
+  /// states (p^(1/(α−1)) is linear in φ near jamming, α = 2 linear law, 5/2 Hertz); NaN if
+  /// fewer than two jammed states were relaxed.
+  double jamming_solid_fraction = std::numeric_limits<double>::quiet_NaN();
+  int minimisations = 0;                ///< FIRE relaxations (quasistatic)
+  std::size_t aggregate_bonds = 0;      ///< bonds holding the aggregates (in the output packing)
 };
 
 struct PackOutput {

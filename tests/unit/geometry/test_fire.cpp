@@ -1,0 +1,75 @@
+// FIRE minimisation (dem/fire.hpp) against closed-form minima: a compressed FCC crystal of
+// harmonic spheres, randomly disturbed, relaxes back to the lattice, whose energy is
+// 6 N · ½ k δ² (12 neighbours per sphere, each contact shared by two) with δ = d − a/√2.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "tomodem/dem/fire.hpp"
+#include "tomodem/dem/scene.hpp"
+
+using namespace tomodem;
+
+namespace {
+dem::Simulation fcc(int cells, double a, double d, double k, double jitter, uint64_t seed, double friction = 0) {
+  std::vector<Vec3> x = dem::lattice_sites("fcc", cells, a);
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-jitter, jitter);
+  dem::Particles p;
+  for (auto& xi : x) p.add(xi + Vec3{u(rng), u(rng), u(rng)}, 0.5 * d, 1000, 0);
+  dem::ContactModel m;
+  m.normal = dem::NormalLaw::linear;
+  m.tangential = friction > 0 ? dem::TangentialLaw::linear : dem::TangentialLaw::none;
+  Material mat;
+  mat.density = 1000;
+  mat.youngs_modulus = 1e6;
+  m.materials = {mat};
+  m.finalize();
+  m.pair(0, 0).k_n = k;
+  m.pair(0, 0).friction = friction;
+  m.pair(0, 0).restitution = 1;
+  m.finalize();
+  dem::Simulation sim(std::move(p), Cell::box({0, 0, 0}, {cells * a, cells * a, cells * a}, true), m);
+  sim.set_time_step(0.1 * sim.critical_time_step());
+  return sim;
+}
+}  // namespace
+
+TEST(Fire, DisturbedCompressedFccRelaxesToTheLatticeEnergy) {
+  const double d = 1e-3, k = 1000, delta = 1e-3 * d;
+  const double a = std::sqrt(2.0) * (d - delta);  // nearest-neighbour distance d − δ
+  dem::Simulation sim = fcc(4, a, d, k, 0.02 * d, 3);
+  dem::FireOptions o;
+  o.unbalanced_force_ratio = 1e-9;
+  const dem::FireResult r = dem::minimise_fire(sim, o);
+  ASSERT_TRUE(r.converged) << r.steps << " steps, ratio " << r.last.unbalanced_force_ratio;
+  const double n = double(sim.particles().size());
+  const double expected = 6 * n * 0.5 * k * delta * delta;
+  // The FCC minimum is unique up to a translation: force ratio 1e-9 leaves displacements of
+  // order 1e-9 δ, so the energy agrees to far better than 1e-6.
+  EXPECT_NEAR(r.last.elastic_energy / expected, 1, 1e-6);
+  EXPECT_NEAR(r.last.coordination, 12, 1e-12);
+  // Pressure of the lattice: p = (1/3V) Σ f l = 6N k δ (d − δ) / (3V).
+  const double V = sim.cell().volume();
+  EXPECT_NEAR(r.last.pressure / (6 * n * k * delta * (d - delta) / (3 * V)), 1, 1e-6);
+  EXPECT_LT(r.steps, 20000);
+  // Velocities are left at zero, the caller's time step restored.
+  for (const auto& v : sim.particles().v) EXPECT_EQ(norm(v), 0);
+}
+
+TEST(Fire, UnjammedGasStopsAtZeroEnergy) {
+  // Below touching (a/√2 > d) the disturbed lattice separates: no contact carries force.
+  const double d = 1e-3;
+  dem::Simulation sim = fcc(3, std::sqrt(2.0) * 1.05 * d, d, 1000, 0.04 * d, 5);
+  const dem::FireResult r = dem::minimise_fire(sim, {});
+  EXPECT_TRUE(r.below_floor);
+  EXPECT_FALSE(r.converged);
+  EXPECT_EQ(r.last.contacts, 0);
+}
+
+TEST(Fire, RefusesADeformingCell) {
+  dem::Simulation sim = fcc(2, std::sqrt(2.0) * 1e-3, 1e-3, 1000, 0, 1);
+  sim.cell_control().velocity_gradient(0, 0) = -1;
+  EXPECT_ANY_THROW(dem::minimise_fire(sim, {}));
+}
