@@ -119,6 +119,19 @@ std::vector<dem::BondLaw> bond_laws(const Packing& p, const std::string& file, c
   return laws;
 }
 
+void override_materials(Packing& p, double youngs_modulus, double poisson_ratio, double density) {
+  if (youngs_modulus == 0 && !(poisson_ratio > -2) && density == 0) return;
+  if (p.materials.empty() && p.particles.size()) {
+    const int n = 1 + *std::max_element(p.particles.phase.begin(), p.particles.phase.end());
+    for (int k = 0; k < n; ++k) p.materials.push_back(Material{"phase" + std::to_string(k)});
+  }
+  for (Material& m : p.materials) {
+    if (youngs_modulus != 0) m.youngs_modulus = youngs_modulus;
+    if (poisson_ratio > -2) m.poisson_ratio = poisson_ratio;
+    if (density != 0) m.density = density;
+  }
+}
+
 BondStiffnesses bond_stiffnesses(const Packing& p, const std::vector<dem::BondLaw>& laws) {
   const std::size_t m = p.bonds.size();
   const int n = int(std::lround(std::sqrt(double(laws.size()))));

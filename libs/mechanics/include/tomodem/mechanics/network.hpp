@@ -42,6 +42,10 @@ struct LawOptions {
 std::vector<dem::BondLaw> bond_laws(const Packing& p, const std::string& file, const LawOptions& o,
                                     bool need_density);
 
+/// Command-line material overrides for every phase (E > 0 unless 0, ν unless ≤ −2, density
+/// unless 0); a packing without materials gets one per phase index ("phase0", ...).
+void override_materials(Packing& p, double youngs_modulus, double poisson_ratio, double density);
+
 /// Per-bond stiffnesses (dem::bond_stiffness, the formula of the DEM bond loop).
 struct BondStiffnesses {
   std::vector<double> kn, kt, ktwist, kbend;  ///< N/m, N/m, N m, N m

@@ -1,0 +1,252 @@
+// The pre-cracked sample, the geometry factors and the failure parameters of tomodem-fracture
+// (docs/fracture.md). The two loadings are in fracture_sla.cpp (sequentially linear, direct
+// solver) and fracture_explicit.cpp (quasi-static DEM test); the tool body in fracture_tool.cpp.
+#include "tomodem/mechanics/fracture.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numeric>
+
+#include "tomodem/core/error.hpp"
+#include "tomodem/core/tool.hpp"
+
+namespace tomodem::mechanics {
+
+namespace {
+std::string num(double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%.6g", v);
+  return b;
+}
+
+/// Union–find over particles.
+struct Components {
+  std::vector<int32_t> parent;
+  explicit Components(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  int32_t find(int32_t a) {
+    while (parent[a] != a) a = parent[a] = parent[parent[a]];
+    return a;
+  }
+  void join(int32_t a, int32_t b) { parent[find(a)] = find(b); }
+};
+}  // namespace
+
+FractureSample make_sample(const Network& net, const CrackOptions& o, const std::string& file) {
+  FractureSample s;
+  s.packing = net.packing;
+  s.image = net.image;
+  Packing& p = s.packing;
+  const std::size_t n = p.particles.size(), m = p.bonds.size();
+  if (o.geometry != "centre" && o.geometry != "edge")
+    throw InputError("", "--geometry", o.geometry, "expected centre (crack 2a in the middle) or edge (notch a at x = 0)");
+  s.geometry = o.geometry;
+  if (m == 0) throw InputError(file, "/bonds", "missing", "a packing without bonds: make the network with tomodem-bond first");
+  if (n < 2) throw InputError(file, "/particles/radius", std::to_string(n), "needs at least two particles");
+  const Mat3& h = p.cell.h;
+  const double scale = std::max({std::abs(h(0, 0)), std::abs(h(1, 1)), std::abs(h(2, 2))});
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b)
+      if (a != b && std::abs(h(a, b)) > 1e-12 * scale)
+        throw InputError(file, "/cell/h", num(h(a, b)), "the fracture sample is cut from an orthogonal (box) cell");
+  if (!p.cell.periodic[1])
+    throw InputError(file, "/cell/periodic", "y not periodic",
+                     "the crack front runs along y, which must be periodic (plane strain)");
+  const double L[3] = {h(0, 0), h(1, 1), h(2, 2)};
+  for (int k = 0; k < 3; ++k)
+    if (!(L[k] > 0)) throw InputError(file, "/cell/h", num(L[k]), "cell lengths must be positive");
+  // Wrap the particles into the cell along periodic directions; the bond images follow.
+  std::vector<std::array<int32_t, 3>> w(n, {0, 0, 0});
+  for (std::size_t i = 0; i < n; ++i)
+    for (int k = 0; k < 3; ++k)
+      if (p.cell.periodic[k]) {
+        const double f = std::floor((p.particles.position[i][k] - p.cell.origin[k]) / L[k]);
+        if (f != 0) {
+          p.particles.position[i][k] -= f * L[k];
+          w[i][k] = int32_t(f);
+        }
+      }
+  for (std::size_t b = 0; b < m; ++b)
+    for (int k = 0; k < 3; ++k) s.image[b][k] += w[p.bonds.j[b]][k] - w[p.bonds.i[b]][k];
+
+  double dsum = 0, zmin = HUGE_VAL, zmax = -HUGE_VAL;
+  for (std::size_t i = 0; i < n; ++i) {
+    dsum += 2 * p.particles.radius[i];
+    zmin = std::min(zmin, p.particles.position[i].z);
+    zmax = std::max(zmax, p.particles.position[i].z);
+  }
+  s.mean_diameter = dsum / double(n);
+  const double grip = o.grip > 0 ? o.grip : s.mean_diameter;
+  s.W = L[0];
+  s.B = L[1];
+  s.H = zmax - zmin;
+  if (!(o.a_over_w > 0)) throw InputError("", "--a-over-w", num(o.a_over_w), "the crack length must be > 0");
+  s.a = o.a_over_w * s.W;
+  const double total = o.geometry == "centre" ? 2 * s.a : s.a;
+  if (total >= s.W)
+    throw InputError("", "--a-over-w", num(o.a_over_w),
+                     "the crack (" + num(total) + " m) is longer than the sample width W = " + num(s.W) + " m");
+  if (!(s.H > 2 * grip))
+    throw InputError(file, "/particles/position", "height " + num(s.H) + " m",
+                     "the sample is too short for two grip layers of " + num(grip) + " m");
+  if (!(std::abs(o.plane_offset) < 0.5 - grip / s.H))
+    throw InputError("", "--crack-offset", num(o.plane_offset), "the crack plane must lie between the grips");
+  s.crack_z = 0.5 * (zmin + zmax) + o.plane_offset * s.H;
+  const double x0 = p.cell.origin.x;
+  if (o.geometry == "centre") {
+    s.crack_x0 = x0 + 0.5 * s.W - s.a;
+    s.crack_x1 = x0 + 0.5 * s.W + s.a;
+  } else {
+    s.crack_x0 = x0 - s.W;  // from beyond the free face
+    s.crack_x1 = x0 + s.a;
+  }
+  s.role.assign(n, ParticleRole::free);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double z = p.particles.position[i].z;
+    if (z < zmin + grip) s.role[i] = ParticleRole::bottom;
+    else if (z > zmax - grip) s.role[i] = ParticleRole::top;
+  }
+  // Bonds: across the x or z faces -> cut (free faces, grips); across the crack -> pre-crack.
+  s.bond_role.assign(m, BondRole::load);
+  s.crosses_plane.assign(m, 0);
+  for (std::size_t b = 0; b < m; ++b) {
+    if (p.bonds.state[b] != BondTable::intact) {
+      s.bond_role[b] = BondRole::absent;
+      continue;
+    }
+    if (s.image[b][0] != 0 || s.image[b][2] != 0) {
+      s.bond_role[b] = BondRole::face_cut;
+      ++s.face_cut_bonds;
+      continue;
+    }
+    const Vec3 xi = p.particles.position[p.bonds.i[b]];
+    const Vec3 d = bond_vector(p, s.image[b], b);
+    const double zi = xi.z - s.crack_z, zj = xi.z + d.z - s.crack_z;
+    if (zi * zj < 0) {
+      const double x = xi.x + d.x * (-zi / (zj - zi));
+      if (x >= s.crack_x0 && x <= s.crack_x1) {
+        s.bond_role[b] = BondRole::precrack;
+        ++s.precrack_bonds;
+      } else {
+        s.crosses_plane[b] = 1;
+      }
+    }
+  }
+  // Keep the particles connected to a grip; the grips must be connected to each other.
+  Components comp(n);
+  for (std::size_t b = 0; b < m; ++b)
+    if (s.bond_role[b] == BondRole::load) comp.join(p.bonds.i[b], p.bonds.j[b]);
+  std::vector<uint8_t> has(n, 0);  // per root: 1 bottom, 2 top
+  for (std::size_t i = 0; i < n; ++i) {
+    if (s.role[i] == ParticleRole::bottom) has[comp.find(int32_t(i))] |= 1;
+    if (s.role[i] == ParticleRole::top) has[comp.find(int32_t(i))] |= 2;
+  }
+  bool spans = false;
+  for (std::size_t i = 0; i < n; ++i) spans = spans || has[i] == 3;
+  for (std::size_t i = 0; i < n; ++i)
+    if (has[comp.find(int32_t(i))] == 0) {
+      s.role[i] = ParticleRole::removed;
+      ++s.removed_particles;
+    }
+  double lsum = 0;
+  long lcount = 0;
+  for (std::size_t b = 0; b < m; ++b) {
+    if (s.bond_role[b] != BondRole::load) continue;
+    if (s.role[p.bonds.i[b]] == ParticleRole::removed) {
+      s.bond_role[b] = BondRole::absent;
+      s.crosses_plane[b] = 0;
+      continue;
+    }
+    lsum += norm(bond_vector(p, s.image[b], b));
+    ++lcount;
+    s.ligament_bonds += s.crosses_plane[b];
+  }
+  if (s.ligament_bonds == 0)
+    throw InputError(file, "/bonds", "0 intact bonds cross z = " + num(s.crack_z) + " m outside the crack",
+                     "no bonds across the crack path: nothing holds the two halves together");
+  if (!spans)
+    throw InputError(file, "/bonds", "grips at z < " + num(zmin + grip) + " and z > " + num(zmax - grip) + " m",
+                     "the grips are not connected by intact bonds (no load path)");
+  s.mean_bond_length = lsum / double(std::max(1L, lcount));
+  for (std::size_t i = 0; i < n; ++i) {
+    s.bottom_grip += s.role[i] == ParticleRole::bottom;
+    s.top_grip += s.role[i] == ParticleRole::top;
+  }
+  if (s.precrack_bonds == 0)
+    warn("the crack region holds no bond: the pre-crack is shorter than the bond spacing (" + num(s.a) + " m)");
+  return s;
+}
+
+double geometry_factor(const std::string& geometry, double a) {
+  if (geometry == "centre") return std::sqrt(1 / std::cos(M_PI * a));
+  return 1.12 - 0.231 * a + 10.55 * a * a - 21.72 * a * a * a + 30.39 * a * a * a * a;
+}
+
+double dlnK_da(const std::string& geometry, double a, double W) {
+  const double al = a / W;
+  double dlnY;  // d ln Y / d α
+  if (geometry == "centre") {
+    dlnY = 0.5 * M_PI * std::tan(M_PI * al);
+  } else {
+    const double dY = -0.231 + 2 * 10.55 * al - 3 * 21.72 * al * al + 4 * 30.39 * al * al * al;
+    dlnY = dY / geometry_factor(geometry, al);
+  }
+  return 1 / (2 * a) + dlnY / W;
+}
+
+void set_failure(std::vector<dem::BondLaw>& laws, const Packing& p, const FailureOptions& f, const std::string& file) {
+  const std::size_t n = p.materials.size();
+  if (f.criterion == dem::BondFailure::stress) {
+    if (!(f.tensile_strength > 0) || !std::isfinite(f.tensile_strength))
+      throw InputError("", "--tensile-strength", num(f.tensile_strength),
+                       "the stress criterion needs the tensile strength of the bonds (Pa, > 0)");
+    if (!(f.shear_strength > 0) || !std::isfinite(f.shear_strength))
+      throw InputError("", "--shear-strength", num(f.shear_strength),
+                       "the stress criterion needs the shear strength of the bonds (Pa, > 0)");
+  } else if (f.criterion == dem::BondFailure::lefm) {
+    if (!(f.fracture_energy >= 0) || !std::isfinite(f.fracture_energy))
+      throw InputError("", "--fracture-energy", num(f.fracture_energy), "must be >= 0 (0: from the materials)");
+    if (f.fracture_energy == 0)
+      for (std::size_t k = 0; k < n; ++k)
+        if (!(p.materials[k].surface_energy > 0))
+          throw InputError(file, "/materials/" + std::to_string(k) + " (" + p.materials[k].name + ")@surface_energy_J_per_m2",
+                           num(p.materials[k].surface_energy),
+                           "the LEFM criterion needs the fracture energy Γ = 2γ_s: give --fracture-energy or a "
+                           "surface energy > 0 for every material");
+  } else {
+    throw InputError("", "--criterion", "none", "a failure criterion is needed");
+  }
+  if (!(f.friction >= 0)) throw InputError("", "--friction", num(f.friction), "must be >= 0");
+  for (std::size_t a = 0; a < n; ++a)
+    for (std::size_t b = 0; b < n; ++b) {
+      dem::BondLaw& l = laws[a * n + b];
+      l.tensile_strength = f.tensile_strength;
+      l.shear_strength = f.shear_strength;
+      l.fracture_energy =
+          f.fracture_energy > 0 ? f.fracture_energy : p.materials[a].surface_energy + p.materials[b].surface_energy;
+      l.friction = f.friction;
+    }
+}
+
+void finish_result(const FractureSample& s, FractureResult& r, double dynamic_error) {
+  r.peak_force = 0;
+  for (const FracturePoint& c : r.curve)
+    if (c.force > r.peak_force) {
+      r.peak_force = c.force;
+      r.peak_displacement = c.displacement;
+    }
+  r.peak_stress = r.peak_force / (s.W * s.B);
+  r.Y = geometry_factor(s.geometry, s.a / s.W);
+  r.K_IC = r.Y * r.peak_stress * std::sqrt(M_PI * s.a);
+  // The crack tip lies somewhere between the last removed and the first intact bond: the crack
+  // length is known to ± half a bond length, which moves K by dlnK/da × that.
+  const double discrete = dlnK_da(s.geometry, s.a, s.W) * 0.5 * s.mean_bond_length;
+  r.K_IC_error = std::sqrt(discrete * discrete + dynamic_error * dynamic_error);
+  // Each broken bond opens, on average, the share of the section that one bond of the intact
+  // ligament carries: the created crack area (rough cracks and off-plane breaks count).
+  const double ligament = (s.W - (s.geometry == "centre" ? 2 * s.a : s.a)) * s.B;
+  r.crack_area = double(r.events.size()) * ligament / double(s.ligament_bonds);
+  r.work_of_fracture = r.cut_through ? r.dissipated_energy / ligament : std::nan("");
+}
+
+}  // namespace tomodem::mechanics

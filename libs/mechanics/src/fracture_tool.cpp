@@ -1,0 +1,299 @@
+// tomodem-fracture: read, check every input before any output, run the chosen methods, write the
+// curve (CSV, plot), the broken-bond map (HDF5 + XDMF for ParaView) and the JSON summary.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "tomodem/core/error.hpp"
+#include "tomodem/core/h5.hpp"
+#include "tomodem/core/output.hpp"
+#include "tomodem/core/tool.hpp"
+#include "tomodem/core/plot.hpp"
+#include "tomodem/mechanics/fracture.hpp"
+
+namespace tomodem::mechanics {
+
+using json = nlohmann::json;
+
+namespace {
+
+json finite(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+
+std::string stem_of(const std::string& path) {
+  const auto slash = path.find_last_of('/');
+  const auto dot = path.find_last_of('.');
+  const bool ext = dot != std::string::npos && (slash == std::string::npos || dot > slash + 1);
+  return ext ? path.substr(0, dot) : path;
+}
+
+std::string curve_csv(const FractureResult& r) {
+  std::vector<std::vector<double>> rows;
+  for (const FracturePoint& c : r.curve) rows.push_back({c.displacement, c.force, double(c.broken)});
+  return csv_table({"opening_m", "force_N", "broken_bonds"}, rows);
+}
+
+/// Bond states in the map: 0 intact, 1 broken in tension, 2 broken in shear, 3 pre-crack.
+void write_map(const std::string& path, const FractureSample& s, const FractureResult& r) {
+  const Packing& p = s.packing;
+  const std::size_t n = p.particles.size();
+  std::vector<int32_t> state(p.bonds.size(), -1), order(p.bonds.size(), -1);
+  for (std::size_t b = 0; b < p.bonds.size(); ++b) {
+    if (s.bond_role[b] == BondRole::load) state[b] = 0;
+    if (s.bond_role[b] == BondRole::precrack) state[b] = 3;
+  }
+  std::vector<int32_t> per_particle(n, 0);
+  for (std::size_t e = 0; e < r.events.size(); ++e) {
+    const std::size_t b = std::size_t(r.events[e].bond);
+    state[b] = r.events[e].mode == dem::BondSet::shear ? 2 : 1;
+    order[b] = int32_t(e);
+    ++per_particle[std::size_t(p.bonds.i[b])];
+    ++per_particle[std::size_t(p.bonds.j[b])];
+  }
+  std::vector<double> pos, rad, pts;
+  std::vector<int32_t> role, st, ord, conn;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3& x = p.particles.position[i];
+    pos.insert(pos.end(), {x.x, x.y, x.z});
+    rad.push_back(p.particles.radius[i]);
+    role.push_back(int32_t(s.role[i]));
+  }
+  for (std::size_t b = 0; b < p.bonds.size(); ++b) {
+    if (state[b] < 0) continue;
+    const Vec3 xi = p.particles.position[std::size_t(p.bonds.i[b])];
+    const Vec3 xj = xi + bond_vector(p, s.image[b], b);  // the image of j: bonds across y stay short
+    const int32_t k = int32_t(pts.size() / 3);
+    pts.insert(pts.end(), {xi.x, xi.y, xi.z, xj.x, xj.y, xj.z});
+    conn.insert(conn.end(), {k, k + 1});
+    st.push_back(state[b]);
+    ord.push_back(order[b]);
+  }
+  const std::string tmp = temporary_path(path);
+  try {
+    h5::File f(tmp, h5::File::Mode::create);
+    f.write("/particles/position", pos, {n, 3}, "m");
+    f.write("/particles/radius", rad, {}, "m");
+    f.write("/particles/role", role);
+    f.write("/particles/broken_bonds", per_particle);
+    f.write("/bonds/points", pts, {pts.size() / 3, 3}, "m");
+    f.write("/bonds/connectivity", conn, {conn.size() / 2, 2});
+    f.write("/bonds/state", st);
+    f.write("/bonds/break_order", ord);
+    f.set_attr("/bonds", "state_codes", "0 intact, 1 broken in tension, 2 broken in shear, 3 pre-crack");
+    f.set_attr("/particles", "role_codes", "0 free, 1 bottom grip, 2 top grip, 3 not connected to a grip");
+    f.set_attr("/", "method", r.method);
+  } catch (...) {
+    std::remove(tmp.c_str());
+    throw;
+  }
+  commit_output(path);
+  const auto slash = path.find_last_of('/');
+  const std::string h5 = slash == std::string::npos ? path : path.substr(slash + 1);
+  const std::string N = std::to_string(n), M = std::to_string(st.size()), P = std::to_string(pts.size() / 3);
+  std::ostringstream x;
+  auto item = [&](const std::string& dims, const char* type, int prec, const std::string& ds) {
+    x << "        <DataItem Dimensions=\"" << dims << "\" NumberType=\"" << type << "\" Precision=\"" << prec
+      << "\" Format=\"HDF\">" << h5 << ":" << ds << "</DataItem>\n";
+  };
+  auto attr = [&](const char* name, const char* center, const std::string& dims, const std::string& ds) {
+    x << "      <Attribute Name=\"" << name << "\" AttributeType=\"Scalar\" Center=\"" << center << "\">\n";
+    item(dims, "Int", 4, ds);
+    x << "      </Attribute>\n";
+  };
+  x << "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n<Xdmf Version=\"2.0\">\n  <Domain>\n"
+    << "    <Grid Name=\"particles\" GridType=\"Uniform\">\n"
+    << "      <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << N << "\" NodesPerElement=\"1\"/>\n"
+    << "      <Geometry GeometryType=\"XYZ\">\n";
+  item(N + " 3", "Float", 8, "/particles/position");
+  x << "      </Geometry>\n      <Attribute Name=\"radius\" AttributeType=\"Scalar\" Center=\"Node\">\n";
+  item(N, "Float", 8, "/particles/radius");
+  x << "      </Attribute>\n";
+  attr("broken_bonds", "Node", N, "/particles/broken_bonds");
+  attr("role", "Node", N, "/particles/role");
+  x << "    </Grid>\n    <Grid Name=\"bonds\" GridType=\"Uniform\">\n"
+    << "      <Topology TopologyType=\"Polyline\" NumberOfElements=\"" << M << "\" NodesPerElement=\"2\">\n";
+  item(M + " 2", "Int", 4, "/bonds/connectivity");
+  x << "      </Topology>\n      <Geometry GeometryType=\"XYZ\">\n";
+  item(P + " 3", "Float", 8, "/bonds/points");
+  x << "      </Geometry>\n";
+  attr("state", "Cell", M, "/bonds/state");
+  attr("break_order", "Cell", M, "/bonds/break_order");
+  x << "    </Grid>\n  </Domain>\n</Xdmf>\n";
+  write_text_atomic(stem_of(path) + ".xdmf", x.str());
+}
+
+json result_json(const FractureResult& r, const FractureSample& s) {
+  json j = {{"K_IC", r.K_IC},
+            {"K_IC_error", r.K_IC_error},
+            {"peak_stress", r.peak_stress},
+            {"peak_force", r.peak_force},
+            {"peak_opening", r.peak_displacement},
+            {"broken_bonds", r.events.size()},
+            {"dissipated_energy", r.dissipated_energy},
+            {"broken_bond_energy", r.broken_bond_energy},
+            {"crack_area", r.crack_area},
+            {"energy_release_rate", r.crack_area > 0 ? finite(r.dissipated_energy / r.crack_area) : json(nullptr)},
+            {"work_of_fracture", finite(r.work_of_fracture)},
+            {"cut_through", r.cut_through},
+            {"stop_reason", r.stop_reason},
+            {"wall_time_s", r.wall_time_s}};
+  if (r.method == "sla") {
+    j["initial_stiffness"] = r.initial_stiffness;
+    j["solves"] = r.solves;
+    j["factorizations"] = r.factorizations;
+    j["fragment_particles_removed"] = r.fragments_removed;
+    j["closed_broken_bonds"] = r.closed_broken_bonds;
+  } else {
+    j["strain_rate"] = r.strain_rate;
+    j["reference_strain"] = r.reference_strain;
+    j["transit_time_s"] = r.transit_time;
+    j["transits_to_peak"] = r.transits_to_peak;
+    j["time_step_s"] = r.time_step;
+    j["steps"] = r.steps;
+    j["external_work"] = r.external_work;
+    j["energy_balance_error"] = r.energy_balance_error;
+    j["grip_force_imbalance"] = r.grip_force_imbalance;
+  }
+  (void)s;
+  return j;
+}
+
+}  // namespace
+
+std::string run_fracture(const FractureConfig& c) {
+  const auto t0 = std::chrono::steady_clock::now();
+  // Options first: a bad value stops the run before anything is read or written.
+  if (c.method != "sla" && c.method != "explicit" && c.method != "both")
+    throw InputError("", "--method", c.method, "expected sla, explicit or both");
+  FailureOptions fo = c.failure;
+  if (c.criterion == "lefm") fo.criterion = dem::BondFailure::lefm;
+  else if (c.criterion == "stress") fo.criterion = dem::BondFailure::stress;
+  else throw InputError("", "--criterion", c.criterion, "expected lefm or stress");
+  if (!(c.stop_fraction >= 0 && c.stop_fraction < 1))
+    throw InputError("", "--stop-fraction", std::to_string(c.stop_fraction), "must lie in [0, 1)");
+  const bool want_sla = c.method != "explicit", want_explicit = c.method != "sla";
+  if (want_explicit) {
+    if (!(c.explicit_.transits > 0)) throw InputError("", "--transits", std::to_string(c.explicit_.transits), "must be > 0");
+    if (!(c.explicit_.damping_ratio >= 0))
+      throw InputError("", "--damping-ratio", std::to_string(c.explicit_.damping_ratio), "must be >= 0");
+    if (!(c.explicit_.local_damping >= 0 && c.explicit_.local_damping < 1))
+      throw InputError("", "--local-damping", std::to_string(c.explicit_.local_damping), "must lie in [0, 1)");
+    if (!(c.explicit_.timestep_fraction > 0 && c.explicit_.timestep_fraction <= 1))
+      throw InputError("", "--timestep-fraction", std::to_string(c.explicit_.timestep_fraction), "must lie in (0, 1]");
+  }
+
+  Network net = read_network(c.input);
+  Packing& p = net.packing;
+  if (p.bonds.size() == 0)
+    throw InputError(c.input, "/bonds", "missing", "a packing without bonds: make the network with tomodem-bond first");
+  override_materials(p, c.youngs_modulus, c.poisson_ratio, c.density);
+  std::vector<dem::BondLaw> laws = bond_laws(p, c.input, c.law, want_explicit);
+  set_failure(laws, p, fo, c.input);
+  const FractureSample s = make_sample(net, c.crack, c.input);
+  info("sample " + std::to_string(s.W) + " x " + std::to_string(s.B) + " x " + std::to_string(s.H) + " m, " +
+       std::to_string(s.precrack_bonds) + " bonds removed for the crack, " + std::to_string(s.ligament_bonds) +
+       " across the ligament");
+
+  double E = std::nan(""), nu = std::nan("");
+  if (c.elastic) {
+    try {
+      ImplicitOptions io;
+      io.full_tensor = false;
+      io.axis = 2;
+      info("elastic constants of the periodic network (implicit, for G = K^2 (1 - nu^2) / E)");
+      const ImplicitResult ir = solve_implicit(net.packing, net.image, bond_stiffnesses(net.packing, laws), io, c.input);
+      E = ir.E;
+      nu = ir.nu;
+    } catch (const InputError& e) {
+      warn(std::string("no elastic constants: ") + e.what());
+    }
+  }
+  FractureResult sla, ex;
+  if (want_sla) {
+    info("sequentially linear analysis");
+    SlaOptions so = c.sla;
+    so.stop_fraction = c.stop_fraction;
+    sla = run_sla(s, laws, fo, so);
+  }
+  if (want_explicit) {
+    info("explicit quasi-static test");
+    ExplicitFractureOptions eo = c.explicit_;
+    eo.stop_fraction = c.stop_fraction;
+    ex = run_explicit_fracture(s, laws, fo, eo);
+  }
+  const FractureResult& primary = want_sla ? sla : ex;
+  const double ligament = (s.W - (s.geometry == "centre" ? 2 * s.a : s.a)) * s.B;
+  json out = {{"tool", "tomodem-fracture"},
+              {"version", version_string()},
+              {"input", c.input},
+              {"method", c.method},
+              {"criterion", c.criterion},
+              {"geometry", s.geometry},
+              {"a_over_W", s.a / s.W},
+              {"crack_length", s.a},
+              {"crack_total_length", s.geometry == "centre" ? 2 * s.a : s.a},
+              {"width", s.W},
+              {"thickness", s.B},
+              {"height", s.H},
+              {"ligament_area", ligament},
+              {"Y", primary.Y},
+              {"K_IC", primary.K_IC},
+              {"K_IC_error", primary.K_IC_error},
+              {"peak_stress", primary.peak_stress},
+              {"peak_force", primary.peak_force},
+              {"broken_bonds", primary.events.size()},
+              {"dissipated_energy", primary.dissipated_energy},
+              {"energy_release_rate", primary.crack_area > 0 ? finite(primary.dissipated_energy / primary.crack_area) : json(nullptr)},
+              {"work_of_fracture", finite(primary.work_of_fracture)},
+              {"E", finite(E)},
+              {"nu", finite(nu)},
+              {"G_from_K_IC", finite(primary.K_IC * primary.K_IC * (1 - nu * nu) / E)},
+              {"sample",
+               {{"particles", p.particles.size()},
+                {"particles_removed", s.removed_particles},
+                {"bottom_grip", s.bottom_grip},
+                {"top_grip", s.top_grip},
+                {"precrack_bonds", s.precrack_bonds},
+                {"ligament_bonds", s.ligament_bonds},
+                {"face_cut_bonds", s.face_cut_bonds},
+                {"mean_bond_length", s.mean_bond_length},
+                {"crack_plane_z", s.crack_z}}}};
+  if (want_sla) out["sla"] = result_json(sla, s);
+  if (want_explicit) out["explicit"] = result_json(ex, s);
+  if (want_sla && want_explicit) out["explicit_vs_sla"] = ex.K_IC / sla.K_IC - 1;
+  out["units"] = {{"K_IC", "Pa m^0.5"}, {"peak_stress", "Pa (load / (W B))"}, {"crack_length", "m (a in K = Y sigma sqrt(pi a))"},
+                  {"energy", "J"}, {"energy_release_rate", "J/m^2"}, {"K_IC_error", "relative"}};
+
+  // Outputs, each atomic.
+  if (!c.curve_csv.empty()) {
+    write_text_atomic(c.curve_csv, curve_csv(primary));
+    if (want_sla && want_explicit) write_text_atomic(stem_of(c.curve_csv) + "_explicit.csv", curve_csv(ex));
+  }
+  if (!c.plot.empty()) {
+    PlotSpec spec;
+    spec.title = "tomodem-fracture: " + s.geometry + " crack, a/W = " + std::to_string(s.a / s.W);
+    spec.xlabel = "grip opening (um)";
+    spec.ylabel = "load (N)";
+    for (const FractureResult* r : {&sla, &ex}) {
+      if (r->curve.empty()) continue;
+      PlotSeries se;
+      se.title = r->method;
+      for (const FracturePoint& q : r->curve) se.x.push_back(q.displacement * 1e6), se.y.push_back(q.force);
+      spec.series.push_back(se);
+    }
+    try {
+      write_plot(c.plot, spec);
+    } catch (const RuntimeFailure& e) {
+      warn(std::string("no plot: ") + e.what());
+    }
+  }
+  if (!c.map.empty()) write_map(c.map, s, primary);
+  out["wall_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const std::string text = out.dump(2) + "\n";
+  if (!c.json.empty() && c.json != "-") write_text_atomic(c.json, text);
+  return text;
+}
+
+}  // namespace tomodem::mechanics

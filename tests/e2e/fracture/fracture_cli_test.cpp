@@ -1,0 +1,129 @@
+// tomodem-fracture from the command line: outputs and summary keys, K_IC from the peak with the
+// geometry factor of PHYSICS.md, and bad input (exit 2, no output at all).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "../../validation/fracture/samples.hpp"
+#include "tomodem/core/h5.hpp"
+
+namespace fs = std::filesystem;
+using namespace tomodem;
+
+namespace {
+const std::string kBin = std::string(TOMODEM_BIN_DIR);
+
+class FractureCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("tomodem-fracture-e2e-" + std::to_string(::getpid()) + "-" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string path(const std::string& n) const { return (dir_ / n).string(); }
+  std::pair<int, std::string> run(const std::string& args) const {
+    const std::string err = path("stderr.txt");
+    const int st = std::system((kBin + "/tomodem-fracture " + args + " > " + path("stdout.txt") + " 2> " + err).c_str());
+    std::ifstream in(err);
+    std::stringstream s;
+    s << in.rdbuf();
+    return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, s.str()};
+  }
+  std::string network(mechanics::Network net) const {
+    mechanics::write_network(path("net.h5"), net);
+    return path("net.h5");
+  }
+  std::string outputs() const {
+    return " --json " + path("out.json") + " --curve " + path("curve.csv") + " --map " + path("map.h5") + " -q";
+  }
+  void expect_no_output() const {
+    for (const char* f : {"out.json", "curve.csv", "map.h5", "map.xdmf"}) EXPECT_FALSE(fs::exists(path(f))) << f;
+  }
+  fs::path dir_;
+};
+}  // namespace
+
+TEST_F(FractureCli, SlaAndExplicitWriteCurveMapAndSummary) {
+  const std::string in = network(mechanics::test::slab(12, 3, 18, 11));
+  auto [code, err] = run(in + " --method both --a-over-w 0.2 --stop-fraction 0.5 --no-elastic" + outputs());
+  ASSERT_EQ(code, 0) << err;
+  std::ifstream js(path("out.json"));
+  const auto j = nlohmann::json::parse(js);
+  for (const char* key : {"K_IC", "K_IC_error", "peak_stress", "crack_length", "broken_bonds", "wall_time_s"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  // K_IC = Y σ sqrt(πa), Y = sqrt(sec(πa/W)) (PHYSICS.md, centre crack), σ = peak force / (W B).
+  const double a = j["crack_length"], W = j["width"], B = j["thickness"];
+  const double sigma = j["peak_force"].get<double>() / (W * B);
+  EXPECT_NEAR(j["peak_stress"].get<double>() / sigma, 1.0, 1e-12);
+  EXPECT_NEAR(a / W, 0.2, 1e-12);
+  EXPECT_NEAR(j["K_IC"].get<double>() / (std::sqrt(1 / std::cos(M_PI * a / W)) * sigma * std::sqrt(M_PI * a)), 1.0, 1e-12);
+  EXPECT_GT(j["broken_bonds"].get<long>(), 0);
+  EXPECT_GT(j["K_IC_error"].get<double>(), 0);
+  EXPECT_LT(j["K_IC_error"].get<double>(), 0.5);
+  EXPECT_TRUE(j.contains("explicit_vs_sla"));
+  // The curve: header and rising then falling load.
+  std::ifstream csv(path("curve.csv"));
+  std::string header;
+  std::getline(csv, header);
+  EXPECT_EQ(header, "opening_m,force_N,broken_bonds");
+  EXPECT_TRUE(fs::exists(path("curve_explicit.csv")));
+  // The map: bonds coloured by state, particles by broken bonds, one broken bond per event.
+  ASSERT_TRUE(fs::exists(path("map.xdmf")));
+  h5::File m(path("map.h5"), h5::File::Mode::read);
+  const auto state = m.read_int32("/bonds/state");
+  const auto per = m.read_int32("/particles/broken_bonds");
+  long broken = 0, ends = 0;
+  for (int s : state) broken += s == 1 || s == 2;
+  for (int c : per) ends += c;
+  EXPECT_EQ(broken, j["broken_bonds"].get<long>());
+  EXPECT_EQ(ends, 2 * broken);
+}
+
+TEST_F(FractureCli, CrackLongerThanSampleExits2WithoutOutput) {
+  const std::string in = network(mechanics::test::slab(12, 3, 18, 11));
+  auto [c1, e1] = run(in + " --geometry edge --a-over-w 1.2" + outputs());
+  EXPECT_EQ(c1, 2) << e1;
+  EXPECT_NE(e1.find("longer than the sample"), std::string::npos) << e1;
+  auto [c2, e2] = run(in + " --geometry centre --a-over-w 0.5" + outputs());
+  EXPECT_EQ(c2, 2) << e2;
+  expect_no_output();
+}
+
+TEST_F(FractureCli, MissingStrengthsExit2WithoutOutput) {
+  const std::string in = network(mechanics::test::slab(12, 3, 18, 11, mechanics::test::alumina(100e9, 0.25, 3000, 0.0)));
+  auto [c1, e1] = run(in + " --criterion stress --tensile-strength 1e8" + outputs());
+  EXPECT_EQ(c1, 2) << e1;
+  EXPECT_NE(e1.find("--shear-strength"), std::string::npos) << e1;
+  auto [c2, e2] = run(in + " --criterion lefm" + outputs());  // surface energy 0 in the file
+  EXPECT_EQ(c2, 2) << e2;
+  EXPECT_NE(e2.find("surface_energy"), std::string::npos) << e2;
+  expect_no_output();
+}
+
+TEST_F(FractureCli, NoBondsAcrossTheCrackPathExit2WithoutOutput) {
+  mechanics::Network net = mechanics::test::slab(12, 3, 18, 11);
+  Packing& p = net.packing;
+  // Break every bond that crosses the mid-plane of the particle centres (where the crack goes).
+  double zmin = 1e300, zmax = -1e300;
+  for (const Vec3& x : p.particles.position) zmin = std::min(zmin, x.z), zmax = std::max(zmax, x.z);
+  const double zc = 0.5 * (zmin + zmax);
+  for (std::size_t b = 0; b < p.bonds.size(); ++b) {
+    const double zi = p.particles.position[p.bonds.i[b]].z;
+    const double zj = zi + mechanics::bond_vector(p, net.image[b], b).z;
+    if ((zi - zc) * (zj - zc) < 0) p.bonds.state[b] = BondTable::broken;
+  }
+  const std::string in = network(net);
+  auto [code, err] = run(in + outputs());
+  EXPECT_EQ(code, 2) << err;
+  EXPECT_NE(err.find("no bonds across the crack path"), std::string::npos) << err;
+  expect_no_output();
+}
