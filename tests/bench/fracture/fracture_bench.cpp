@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <fstream>
 #include <string>
 
@@ -25,6 +26,11 @@ double load_average() {
   double l = 0;
   in >> l;
   return l;
+}
+double cpu_seconds() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
 }
 double peak_rss_mb() {
   rusage u{};
@@ -64,9 +70,12 @@ TEST(FractureBench, ErrorAgainstRunTime) {
     const FractureSample s = centre(net, 0.1875);
     SlaOptions so;
     so.stop_fraction = 0.5;
+    double c0 = cpu_seconds();
     const FractureResult ref = run_sla(s, laws, f, so);
+    const double ref_cpu = cpu_seconds() - c0;
     const std::size_t n = net.packing.particles.size();
-    std::printf("| %zu | SLA | stop at 0.5 peak | %.4e | 0 | %.3f | %.2f |\n", n, ref.K_IC, ref.K_IC_error, ref.wall_time_s);
+    std::printf("| %zu | SLA | stop at 0.5 peak | %.4e | 0 | %.3f | %.2f (CPU %.2f) |\n", n, ref.K_IC, ref.K_IC_error,
+                ref.wall_time_s, ref_cpu);
     csv += std::to_string(n) + ",sla,," + std::to_string(ref.K_IC) + ",0," + std::to_string(ref.K_IC_error) + "," +
            std::to_string(ref.wall_time_s) + "\n";
     PlotSeries ps{"explicit, N = " + std::to_string(n), {}, {}};
@@ -76,10 +85,11 @@ TEST(FractureBench, ErrorAgainstRunTime) {
       eo.transits = transits;
       eo.stop_fraction = 0.5;
       eo.track_energy = false;
+      c0 = cpu_seconds();
       const FractureResult r = run_explicit_fracture(s, laws, f, eo);
       const double diff = r.K_IC / ref.K_IC - 1;
-      std::printf("| %zu | explicit | %.0f transits | %.4e | %+.3f | %.3f | %.2f |\n", n, transits, r.K_IC, diff,
-                  r.K_IC_error, r.wall_time_s);
+      std::printf("| %zu | explicit | %.0f transits | %.4e | %+.3f | %.3f | %.2f (CPU %.2f) |\n", n, transits, r.K_IC,
+                  diff, r.K_IC_error, r.wall_time_s, cpu_seconds() - c0);
       csv += std::to_string(n) + ",explicit," + std::to_string(transits) + " transits," + std::to_string(r.K_IC) + "," +
              std::to_string(diff) + "," + std::to_string(r.K_IC_error) + "," + std::to_string(r.wall_time_s) + "\n";
       ps.x.push_back(r.wall_time_s);
@@ -101,23 +111,28 @@ TEST(FractureBench, ExplicitAgreesWithSlaOn5000Particles) {
   const FractureSample s = centre(net, 0.1875);
   SlaOptions so;
   so.stop_fraction = 0.5;
+  double c0 = cpu_seconds();
   const FractureResult a = run_sla(s, laws, f, so);
+  const double a_cpu = cpu_seconds() - c0;
   ExplicitFractureOptions eo;
   eo.stop_fraction = 0.5;
   eo.track_energy = false;
   eo.threads = 2;
+  c0 = cpu_seconds();
   const FractureResult b = run_explicit_fracture(s, laws, f, eo);
-  std::printf("N = %zu: SLA K_IC %.4e (%zu breaks, %ld factorisations, %.1f s), explicit %.4e (%ld steps, %.1f s), "
-              "ratio %.4f, load %.1f, peak RSS %.0f MB\n",
-              net.packing.particles.size(), a.K_IC, a.events.size(), a.factorizations, a.wall_time_s, b.K_IC, b.steps,
-              b.wall_time_s, b.K_IC / a.K_IC, load_average(), peak_rss_mb());
+  const double b_cpu = cpu_seconds() - c0;
+  std::printf("N = %zu: SLA K_IC %.4e (%zu breaks, %ld factorisations, %.1f s wall, %.1f s CPU), explicit %.4e "
+              "(%ld steps, %.1f s wall, %.1f s CPU, 2 threads), ratio %.4f, load %.1f, peak RSS %.0f MB\n",
+              net.packing.particles.size(), a.K_IC, a.events.size(), a.factorizations, a.wall_time_s, a_cpu, b.K_IC,
+              b.steps, b.wall_time_s, b_cpu, b.K_IC / a.K_IC, load_average(), peak_rss_mb());
   EXPECT_NEAR(b.K_IC / a.K_IC, 1.0, 0.10);
 }
 
-// K_IC of a ~50 000-particle network on two threads (explicit test): the issue asks < 10 min.
+// K_IC of a ~50 000-particle network on two threads (explicit test, 50 transits to the reference
+// strain: the rate study shows 50 within 1% of 200): the issue asks < 10 min.
 TEST(FractureBench, FiftyThousandParticlesOnTwoThreads) {
   const auto t0 = std::chrono::steady_clock::now();
-  const Network net = slab(80, 8, 140, 41);
+  const Network net = slab(80, 12, 80, 41);
   const double t_build = seconds(t0);
   FailureOptions f;
   const auto laws = lefm_laws(net.packing, f);
@@ -126,11 +141,12 @@ TEST(FractureBench, FiftyThousandParticlesOnTwoThreads) {
   eo.stop_fraction = 0.5;
   eo.track_energy = false;
   eo.threads = 2;
-  eo.transits = 100;
+  eo.transits = 50;
+  const double c0 = cpu_seconds();
   const FractureResult r = run_explicit_fracture(s, laws, f, eo);
-  std::printf("N = %zu (network built in %.1f s): K_IC %.4e +- %.1f%%, %zu breaks, %ld steps, %.1f s on 2 threads, "
-              "load %.1f, peak RSS %.0f MB\n",
+  std::printf("N = %zu (network built in %.1f s): K_IC %.4e +- %.1f%%, %zu breaks, %ld steps, %.1f s wall, %.1f s CPU "
+              "on 2 threads, load %.1f, peak RSS %.0f MB\n",
               net.packing.particles.size(), t_build, r.K_IC, 100 * r.K_IC_error, r.events.size(), r.steps,
-              r.wall_time_s, load_average(), peak_rss_mb());
+              r.wall_time_s, cpu_seconds() - c0, load_average(), peak_rss_mb());
   EXPECT_GT(r.events.size(), 0u);
 }
