@@ -12,8 +12,8 @@ namespace tomodem::image {
 // ---- filtering (filters_itk.cpp, binary.cpp) ----
 /// Median over a (2r+1)^3 box, borders replicated (exact, own code, OpenMP over rows), in place:
 /// plane by plane with a ring of the 2r+1 original planes it still needs, so the memory is the
-/// volume plus 2r+1 planes. r = 1: a selection network over sorted 3x3 columns, eight voxels at a
-/// time (about 200 min/max per voxel); r > 1, or `generic`: std::nth_element over the box (the
+/// volume plus 2r+1 planes. r = 1: a selection network over sorted 3x3 columns, 4 (SSE) or 8 (AVX)
+/// voxels at a time (about 200 min/max per voxel); r > 1, or `generic`: std::nth_element over the box (the
 /// reference the benchmark compares against).
 void median_inplace(Volume& v, int radius, bool generic = false);
 /// The same on a copy.
