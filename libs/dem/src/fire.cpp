@@ -33,8 +33,10 @@ FireResult minimise_fire(Simulation& sim, const FireOptions& o) {
     ++r.steps;
     // Power and norms over the free particles (fixed or prescribed ones keep their velocity).
     double power = 0, vv = 0, ff = 0, ww = 0, tt = 0;
+    long nfree = 0;
     for (std::size_t i = 0; i < n; ++i) {
       if (p.motion[i] != Motion::free) continue;
+      ++nfree;
       power += dot(p.f[i], p.v[i]);
       vv += norm2(p.v[i]);
       ff += norm2(p.f[i]);
@@ -70,7 +72,9 @@ FireResult minimise_fire(Simulation& sim, const FireOptions& o) {
         r.below_floor = true;
         break;
       }
-      if (r.last.unbalanced_force_ratio < o.unbalanced_force_ratio) {
+      const bool balanced = o.force_tolerance > 0 ? ff < o.force_tolerance * o.force_tolerance * double(nfree)
+                                                  : r.last.unbalanced_force_ratio < o.unbalanced_force_ratio;
+      if (balanced) {
         r.converged = true;
         break;
       }

@@ -19,6 +19,9 @@ struct FireOptions {
   int n_min = 5;           ///< Bitzek et al.: steps of positive power before the step grows
   double f_inc = 1.1, f_dec = 0.5, alpha_start = 0.1, f_alpha = 0.99;
   double unbalanced_force_ratio = 1e-4;  ///< converged: mean |ΣF_i| / mean |F_contact| below this
+  /// N; when > 0, converged instead when the root-mean-square net force on the free particles is
+  /// below it (adhesive packings, whose contact forces balance to zero pair by pair).
+  double force_tolerance = 0;
   /// J: stop as soon as the elastic plus kinetic energy falls below this (an unjammed packing
   /// reaches zero; a caller bracketing a target pressure stops early once it is clearly below).
   double energy_floor = 0;
