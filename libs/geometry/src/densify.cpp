@@ -78,7 +78,19 @@ QuasiStaticResult quasistatic(dem::Simulation& sim, const PackSpec& spec, double
     escale = std::max(escale, linear ? pp.k_n * dmean * dmean : pp.E_star * dmean * dmean * dmean);
   dem::FireOptions fo;
   fo.unbalanced_force_ratio = spec.unbalanced_force_ratio;
-  const double floor0 = 1e-16 * double(n) * escale;
+  // Adhesive contacts store negative energy: no energy floor, relaxations end on the force
+  // criterion (or when no contact is left).
+  bool adhesive = false;
+  for (const auto& pp : sim.model().pairs)
+    adhesive = adhesive || (pp.work_of_adhesion > 0 && spec.normal != dem::NormalLaw::hertz && !linear);
+  const double floor0 = adhesive ? -std::numeric_limits<double>::infinity() : 1e-16 * double(n) * escale;
+  if (adhesive) {
+    // Force criterion relative to the smallest DMT pull-off force 2π w R* (R* = d_min/4).
+    double rmin = *std::min_element(sim.particles().r.begin(), sim.particles().r.end()), wmin = 0;
+    for (const auto& pp : sim.model().pairs)
+      if (pp.work_of_adhesion > 0) wmin = wmin > 0 ? std::min(wmin, pp.work_of_adhesion) : pp.work_of_adhesion;
+    fo.force_tolerance = spec.unbalanced_force_ratio * 2 * kPi * wmin * 0.5 * rmin;
+  }
   double phi = vsolid / sim.cell().volume();
   const auto relax = [&](double floor) {
     fo.energy_floor = floor;
@@ -95,7 +107,7 @@ QuasiStaticResult quasistatic(dem::Simulation& sim, const PackSpec& spec, double
     do {
       phi = std::min(spec.target_solid_fraction, phi + kPhiStep);
       set_solid_fraction(sim, vsolid, phi);
-      r = relax(phi < spec.target_solid_fraction ? floor0 : 0.0);
+      r = relax(floor0);
       if (r.last.max_overlap_ratio > 0.1) break;  // the caller refuses the target
     } while (phi < spec.target_solid_fraction && out.steps < spec.max_steps);
     out.converged = r.converged || r.below_floor;
@@ -110,10 +122,19 @@ QuasiStaticResult quasistatic(dem::Simulation& sim, const PackSpec& spec, double
   };
   Point lo, hi;
   std::vector<Point> jammed;  // relaxed states carrying load, in order
+  // The relaxed state at the upper end of the bracket (positions, cell, contact history): a
+  // bracket that collapses on a rearrangement ends there rather than on an unjammed state.
+  struct Snapshot {
+    std::vector<Vec3> x;
+    Cell cell;
+    dem::Simulation::EngineState engine;
+    bool set = false;
+  } upper;
   say("compress-relax (FIRE) to pressure " + num(pt) + " Pa from solid fraction " + num(phi));
   while (out.steps < spec.max_steps) {
     double floor = floor0;
-    if (!jammed.empty()) floor = std::max(floor, 0.01 * jammed.back().energy * std::pow(qt / jammed.back().q, alpha));
+    if (!jammed.empty() && !adhesive)
+      floor = std::max(floor, 0.01 * jammed.back().energy * std::pow(qt / jammed.back().q, alpha));
     const dem::FireResult r = relax(floor);
     const double p = r.below_floor ? 0.0 : std::max(r.last.pressure, 0.0);
     const Point pnt{phi, q_of(p), r.last.elastic_energy, true};
@@ -125,11 +146,13 @@ QuasiStaticResult quasistatic(dem::Simulation& sim, const PackSpec& spec, double
       break;
     }
     (p < pt ? lo : hi) = pnt;
+    if (p >= pt && r.converged) upper = {sim.particles().x, sim.cell(), sim.engine_state(), true};
     // Slope dq/dφ of the last two jammed states (linear above jamming).
     double slope = 0;
     if (jammed.size() >= 2) {
       const Point &a = jammed[jammed.size() - 2], &b = jammed.back();
-      if (b.phi != a.phi) slope = (b.q - a.q) / (b.phi - a.phi);
+      // Two states at (almost) the same φ give no slope (their p differ by the relaxation's noise).
+      if (std::abs(b.phi - a.phi) > 1e-7 * phi) slope = (b.q - a.q) / (b.phi - a.phi);
     }
     double next;
     if (slope > 0) next = jammed.back().phi + (qt - jammed.back().q) / slope;
@@ -143,14 +166,17 @@ QuasiStaticResult quasistatic(dem::Simulation& sim, const PackSpec& spec, double
       if (!(next > lo.phi && next < hi.phi)) next = 0.5 * (lo.phi + hi.phi);
     }
     next = std::clamp(next, phi - kMaxPhiStep, phi + kMaxPhiStep);
+    if (std::abs(next - phi) < 1e-10 * phi) break;  // no progress left
     phi = next;
     set_solid_fraction(sim, vsolid, phi);
   }
-  if (!out.converged && hi.set && out.last.pressure < pt && phi != hi.phi) {
-    // End on the jammed side of a collapsed bracket.
-    phi = hi.phi;
-    set_solid_fraction(sim, vsolid, phi);
-    out.converged = relax(0.0).converged;
+  if (!out.converged && upper.set) {  // end on the jammed side of a collapsed bracket
+    sim.particles().x = upper.x;
+    sim.cell() = upper.cell;
+    std::fill(sim.particles().v.begin(), sim.particles().v.end(), Vec3{});
+    sim.restore(upper.engine);
+    out.last = sim.measure();
+    out.converged = out.last.unbalanced_force_ratio < spec.unbalanced_force_ratio || adhesive;
   }
   if (jammed.size() >= 2) {
     const Point &a = jammed[jammed.size() - 2], &b = jammed.back();

@@ -1,0 +1,211 @@
+// Jamming of frictionless spheres by the quasistatic (compress–relax, FIRE) protocol against
+// O'Hern, Silbert, Liu & Nagel, PRE 68 (2003) 011306, and the frictional and adhesive packings
+// of issue 3. The contact network is recounted here from positions and radii (all pairs), not
+// taken from the library's contact table or rattler removal.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <vector>
+
+#include "tomodem/geometry/pack.hpp"
+
+using namespace tomodem;
+using namespace tomodem::geometry;
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+
+struct Recount {
+  double phi = 0, z = 0, z_no_rattlers = 0, rattlers = 0;
+};
+
+/// Contacts (overlap > 0) of a periodic cubic packing by brute force over all pairs and the 27
+/// nearest images; rattlers (fewer than `min_contacts`) removed recursively.
+Recount recount(const Packing& pk, int min_contacts) {
+  const auto& x = pk.particles.position;
+  const auto& r = pk.particles.radius;
+  const std::size_t n = r.size();
+  const double L = pk.cell.h(0, 0);
+  std::vector<std::vector<int>> adj(n);
+  long contacts = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = i + 1; j < n; ++j) {
+      Vec3 d = x[j] - x[i];
+      for (int k = 0; k < 3; ++k) d[k] -= L * std::round(d[k] / L);  // minimum image (L > 4 d here)
+      if (norm(d) < r[i] + r[j]) adj[i].push_back(int(j)), adj[j].push_back(int(i)), ++contacts;
+    }
+  Recount c;
+  double vs = 0;
+  for (double ri : r) vs += 4 * kPi / 3 * ri * ri * ri;
+  c.phi = vs / (L * L * L);
+  c.z = 2.0 * double(contacts) / double(n);
+  std::vector<int> z(n);
+  std::vector<char> gone(n, 0);
+  for (std::size_t i = 0; i < n; ++i) z[i] = int(adj[i].size());
+  for (bool again = true; again;) {
+    again = false;
+    for (std::size_t i = 0; i < n; ++i)
+      if (!gone[i] && z[i] < min_contacts) {
+        gone[i] = 1;
+        again = true;
+        for (int j : adj[i]) --z[std::size_t(j)];
+      }
+  }
+  long kept = 0, zsum = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    if (!gone[i]) ++kept, zsum += z[i];
+  c.rattlers = double(long(n) - kept) / double(n);
+  c.z_no_rattlers = kept ? double(zsum) / double(kept) : 0;
+  return c;
+}
+
+/// Frictionless harmonic spheres (O'Hern's model, α = 2): d = 1 mm, k = 1000 N/m, packed to
+/// p d/k = 1e-6, i.e. overlaps δ/d ~ 1e-6: φ(p) − φ_J and Z − Z_J ~ 7.7 (φ − φ_J)^½ (O'Hern)
+/// are far below the tolerances.
+PackSpec harmonic(std::size_t n, bool bidisperse, double friction) {
+  PackSpec s;
+  PhaseSpec p;
+  p.name = "spheres";
+  p.material.density = 1000;
+  p.material.youngs_modulus = 1e6;
+  p.psd.diameter = 1e-3;
+  if (bidisperse) {  // 50:50 by number, diameter ratio 1.4 (O'Hern's bidisperse system)
+    p.psd.kind = PsdKind::bimodal;
+    p.psd.diameter2 = 1.4e-3;
+    p.psd.fraction2 = 0.5;
+    p.psd.basis = PsdBasis::number;
+  }
+  s.phases = {p};
+  s.n_particles = n;
+  s.initial_solid_fraction = 0.3;
+  s.normal = dem::NormalLaw::linear;
+  s.normal_stiffness = 1000;
+  s.restitution = 1;  // no dashpot: FIRE alone removes the energy
+  s.friction = friction;
+  s.target = Target::pressure;
+  s.target_pressure = 1e-6 * s.normal_stiffness / p.psd.diameter;
+  s.tessellate = false;
+  s.seed = 7;
+  s.threads = 1;
+  if (const char* t = std::getenv("TOMODEM_TEST_THREADS")) s.threads = std::atoi(t);
+  return s;
+}
+
+// Validation runs N = 1000 (about 4 s of CPU); the issue's N = 4000 (about 70 s of CPU, 5–6 min
+// at a load of 12 on two cores) is the same file built as the bench `pack_jamming_bench`
+// (TOMODEM_JAMMING_N_DEFAULT=4000), or any N through the environment variable TOMODEM_JAMMING_N.
+#ifndef TOMODEM_JAMMING_N_DEFAULT
+#define TOMODEM_JAMMING_N_DEFAULT 1000
+#endif
+std::size_t particles() {
+  const char* e = std::getenv("TOMODEM_JAMMING_N");
+  return e ? std::size_t(std::atol(e)) : std::size_t(TOMODEM_JAMMING_N_DEFAULT);
+}
+
+void print(const char* what, const PackReport& r, const Recount& c) {
+  std::printf("%s: N %zu, phi %.5f (recount %.5f), phi_J %.5f, p %.4g Pa, Z %.4f, Z_nr %.4f (recount %.4f), "
+              "rattlers %.4f (recount %.4f), minimisations %d, steps %ld, unbalanced %.2e, %.1f s\n",
+              what, r.n_particles, r.solid_fraction, c.phi, r.jamming_solid_fraction, r.pressure, r.coordination,
+              r.coordination_no_rattlers, c.z_no_rattlers, r.rattler_fraction, c.rattlers, r.minimisations, r.steps,
+              r.unbalanced_force_ratio, r.wall_time_s);
+}
+}  // namespace
+
+// O'Hern et al. 2003: φ_J = 0.639 (monodisperse, 3D), isostatic Z = 2d = 6 without rattlers.
+// Issue 3 asks 0.64 ± 0.01 and 6.0 ± 0.2 at N ≥ 4000. The spread of φ_J between configurations
+// falls as N^(-1/2) (O'Hern: width ≈ 0.003–0.004 around N = 1000 in 3D, and the mean is within
+// about 0.002 of its large-N value), so the same ± 0.01 holds at the validation's N = 1000 with a
+// margin of 2–3 widths; Z at p d/k = 1e-6 exceeds Z_J by about 7.7 sqrt(φ − φ_J) < 0.01, and an
+// isostatic network of N' particles has Z = 6 − O(1/N'). The pressure ends within 5 % of the
+// target, or within a factor 2 when the bracket collapses on a rearrangement (p jumps there);
+// either way p d/k ≤ 2e-6 keeps φ − φ_J below 1e-4.
+TEST(Jamming, MonodisperseFrictionlessIsostaticAtRandomClosePacking) {
+  const PackSpec s = harmonic(particles(), false, 0);
+  const PackOutput out = make_packing(s);
+  const PackReport& r = out.report;
+  const Recount c = recount(out.packing, 4);
+  print("monodisperse", r, c);
+  EXPECT_TRUE(r.equilibrium);
+  EXPECT_GT(r.pressure, 0.5 * s.target_pressure);
+  EXPECT_LT(r.pressure, 2 * s.target_pressure);
+  EXPECT_NEAR(c.phi, r.solid_fraction, 1e-12);
+  EXPECT_NEAR(r.solid_fraction, 0.64, 0.01);           // issue 3
+  EXPECT_NEAR(r.jamming_solid_fraction, 0.64, 0.01);   // p → 0 extrapolation
+  EXPECT_LT(r.solid_fraction - r.jamming_solid_fraction, 1e-4);  // p d/k = 1e-6: φ − φ_J ~ 1e-5
+  EXPECT_GE(r.solid_fraction, r.jamming_solid_fraction);
+  EXPECT_NEAR(c.z_no_rattlers, 6.0, 0.2);              // issue 3 (isostatic)
+  EXPECT_NEAR(r.coordination_no_rattlers, c.z_no_rattlers, 1e-12);
+  EXPECT_LT(c.rattlers, 0.05);  // O'Hern: a few per cent rattlers at jamming
+}
+
+// O'Hern's 50:50 bidisperse mixture (diameter ratio 1.4): φ_J = 0.648 in 3D; same bounds.
+TEST(Jamming, BidisperseFrictionlessIsostatic) {
+  const PackSpec s = harmonic(particles(), true, 0);
+  const PackOutput out = make_packing(s);
+  const PackReport& r = out.report;
+  const Recount c = recount(out.packing, 4);
+  print("bidisperse", r, c);
+  EXPECT_TRUE(r.equilibrium);
+  EXPECT_NEAR(r.solid_fraction, 0.648, 0.01);
+  EXPECT_NEAR(c.z_no_rattlers, 6.0, 0.2);
+}
+
+// Friction μ = 0.5 (linear tangential spring, k_t = 2/7 k_n), same protocol and pressure:
+// frictional spheres jam looser and with fewer contacts (Silbert, Soft Matter 6 (2010) 2918:
+// μ = 0.5 gives φ_J ≈ 0.60–0.61 and Z_J ≈ 4.5–4.7, between the isostatic limits d + 1 = 4 at
+// infinite friction and 2d = 6 without). Bounds: below the frictionless 0.64 − 0.01 and 6 − 0.5,
+// at or above the frictional isostatic Z = 4 (less 0.2 for the finite-N spread).
+TEST(Jamming, FrictionalLooserWithFewerContacts) {
+  PackSpec s = harmonic(particles(), false, 0.5);
+  const PackOutput out = make_packing(s);
+  const PackReport& r = out.report;
+  const Recount c = recount(out.packing, 2);
+  print("friction 0.5", r, c);
+  EXPECT_TRUE(r.equilibrium);
+  EXPECT_LT(r.solid_fraction, 0.63);
+  EXPECT_GT(r.solid_fraction, 0.55);  // random loose packing bound (Onoda & Liniger 1990: 0.555)
+  EXPECT_LT(c.z_no_rattlers, 5.5);
+  EXPECT_GT(c.z_no_rattlers, 3.8);
+  EXPECT_NEAR(r.coordination_no_rattlers, c.z_no_rattlers, 1e-12);
+}
+
+// Fine cohesive powder (issue 3): 1 µm alumina spheres, Hertz + DMT with w = 0.1 and 1 J/m²,
+// Coulomb μ = 0.5 and rolling friction μ_r = 0.1 (as the DEM studies cited, which need rolling
+// resistance for the loose structures: without it, chains of adhesive spheres roll shut and the
+// same run ends at φ ≈ 0.53, docs/pack.md), at 1 kPa — three orders below the cohesive stress
+// 2π w R*/d² ≈ 0.16–1.6 MPa.
+// Contacts that form stick, and the adhesive, frictional network carries the load long before
+// the particles can rearrange into a dense packing: loose packings far below 0.6 (DEM and
+// experiments: φ ≈ 0.35–0.45 at 1 µm, Yang, Zou & Yu, PRE 62 (2000) 3900; Parteli et al.,
+// Sci. Rep. 4 (2014) 6227). Bound: φ < 0.5.
+TEST(Jamming, AdhesiveMicronPowderPacksLoose) {
+  for (double w : {0.1, 1.0}) {
+    PackSpec s;
+    PhaseSpec p;
+    p.name = "alumina";
+    p.material.density = 3950;
+    p.material.youngs_modulus = 3.8e11;
+    p.material.poisson_ratio = 0.22;
+    p.psd.diameter = 1e-6;
+    s.phases = {p};
+    s.n_particles = 500;
+    s.initial_solid_fraction = 0.2;
+    s.normal = dem::NormalLaw::hertz_dmt;
+    s.work_of_adhesion = w;
+    s.friction = 0.5;
+    s.rolling_friction = 0.1;
+    s.target = Target::pressure;
+    s.target_pressure = 1e3;
+    s.tessellate = false;
+    s.seed = 3;
+    const PackOutput out = make_packing(s);
+    const PackReport& r = out.report;
+    const Recount c = recount(out.packing, 2);
+    std::printf("adhesion w = %.1f J/m^2: ", w);
+    print("", r, c);
+    EXPECT_LT(r.solid_fraction, 0.5) << "w = " << w;
+    EXPECT_GT(r.coordination, 0) << "w = " << w;
+  }
+}
