@@ -27,8 +27,8 @@ int main(int argc, char** argv) {
     app.add_option("--gt-coefficient", c.law.g_t_coefficient, "g_t = 1 + c (a/R)^2")->capture_default_str();
     bool normal_only = false, normal_cases = false, quiet = false;
     app.add_flag("--normal-bonds", normal_only, "bonds without shear force and twist (G* = 0)");
-    app.add_option("--solver", im.solver, "implicit: auto | ldlt | cg | cg-ic")->capture_default_str();
-    app.add_option("--tolerance", im.tolerance, "implicit: relative residual of CG")->capture_default_str();
+    app.add_option("--solver", im.solver, "implicit: auto | ldlt | amg | cg | cg-ic")->capture_default_str();
+    app.add_option("--tolerance", im.tolerance, "implicit: relative residual of the iterative solve")->capture_default_str();
     app.add_option("--max-iterations", im.max_iterations, "implicit: CG iteration cap (0: automatic)");
     app.add_flag("--no-tensor", normal_cases, "implicit: only the three normal strain cases (E, nu; no shear moduli)");
     app.add_option("--loading", ex.loading, "explicit: stress (uniaxial stress) | strain (uniaxial strain)")
@@ -46,6 +46,9 @@ int main(int argc, char** argv) {
     app.add_option("--timestep-fraction", ex.timestep_fraction, "explicit: fraction of the critical step")
         ->capture_default_str();
     app.add_option("--max-steps", ex.max_steps, "explicit: step cap")->capture_default_str();
+    bool no_rate_check = false;
+    app.add_flag("--no-rate-check", no_rate_check,
+                 "explicit: skip the second run over half the loading time (E_error is then the slope spread only)");
     app.add_option("--curve", c.output_csv, "explicit: write the stress-strain points as CSV");
     int threads = 0;
     app.add_option("--threads", threads, "threads (default: OMP_NUM_THREADS or all cores)");
@@ -59,6 +62,7 @@ int main(int argc, char** argv) {
     if (threads > 0) omp_set_num_threads(threads);
     ex.threads = threads > 0 ? threads : omp_get_max_threads();
     ex.quiet = quiet;
+    ex.rate_check = !no_rate_check;
     tomodem::info("reading " + c.input);
     const std::string summary = tomodem::mechanics::run_young(c);
     if (c.json.empty() || c.json == "-") std::cout << summary;

@@ -185,8 +185,9 @@ std::string run_young(const YoungConfig& c) {
     throw InputError("", "--method", c.method, "expected implicit, explicit or both");
   if (c.axis.size() != 1 || c.axis[0] < 'x' || c.axis[0] > 'z') throw InputError("", "--axis", c.axis, "expected x, y or z");
   const int axis = c.axis[0] - 'x';
-  if (c.implicit.solver != "auto" && c.implicit.solver != "ldlt" && c.implicit.solver != "cg" && c.implicit.solver != "cg-ic")
-    throw InputError("", "--solver", c.implicit.solver, "expected auto, ldlt, cg or cg-ic");
+  if (c.implicit.solver != "auto" && c.implicit.solver != "ldlt" && c.implicit.solver != "amg" &&
+      c.implicit.solver != "cg" && c.implicit.solver != "cg-ic")
+    throw InputError("", "--solver", c.implicit.solver, "expected auto, ldlt, amg, cg or cg-ic");
   if (!(c.implicit.tolerance > 0 && c.implicit.tolerance < 1))
     throw InputError("", "--tolerance", std::to_string(c.implicit.tolerance), "must lie in (0, 1)");
   if (!(c.explicit_.strain > 0 && c.explicit_.strain < 0.05))
@@ -234,6 +235,9 @@ std::string run_young(const YoungConfig& c) {
                        {"solver", ir.solver},
                        {"tolerance", c.implicit.tolerance},
                        {"iterations", ir.iterations},
+                       {"multigrid_levels", ir.levels},
+                       {"operator_complexity", ir.operator_complexity},
+                       {"setup_s", ir.setup_s},
                        {"dofs", ir.dofs},
                        {"particles_used", ir.particles_used},
                        {"particles_removed", ir.particles_removed},
@@ -252,6 +256,11 @@ std::string run_young(const YoungConfig& c) {
     out["explicit"] = {{"E", er.E},
                        {"nu", er.nu},
                        {"E_error", er.E_error},
+                       {"E_error_spread", er.E_error_spread},
+                       {"E_error_rate", er.E_error_rate},
+                       {"E_error_strain", er.E_error_strain},
+                       {"E_half_time", er.E_half_time},
+                       {"rate_check", eo.rate_check},
                        {"nu_error", er.nu_error},
                        {"loading", eo.loading},
                        {"protocol", eo.protocol},

@@ -50,15 +50,50 @@ TEST(ImplicitLattice, SimpleCubicNormalBondsHasKnOver2R) {
   }
 }
 
-// The same with the conjugate-gradient solver at a tight tolerance (error ∝ tolerance).
+// The same with the iterative solvers (Jacobi and multigrid CG) at a tight tolerance (error ∝
+// tolerance).
 TEST(ImplicitLattice, SimpleCubicByConjugateGradient) {
   Sc sc(true);
+  for (const char* solver : {"cg", "amg"}) {
+    ImplicitOptions o;
+    o.solver = solver;
+    o.tolerance = 1e-10;
+    const ImplicitResult r = solve_implicit(sc.net.packing, sc.net.image, bond_stiffnesses(sc.net.packing, sc.laws), o);
+    std::printf("SC %s: E/E_expected - 1 = %.3e, %ld iterations, %d levels\n", solver, r.E / (sc.kn() / (2 * sc.R)) - 1,
+                r.iterations, r.levels);
+    EXPECT_NEAR(r.E / (sc.kn() / (2 * sc.R)), 1.0, 0.005) << solver;
+    EXPECT_NEAR(r.nu, 0.0, 0.005) << solver;
+  }
+}
+
+// The solver API of the fracture analysis: under a uniaxial strain ε_zz the z bonds of the SC
+// lattice carry N = k_n·2R·ε and the others nothing (exact: the response is affine), σ_zz =
+// k_n ε/(2R); after every stiffness is halved (update_stiffnesses, multigrid kept), all halve.
+TEST(StiffnessSystem, SimpleCubicBondForcesUnderStrain) {
+  Sc sc(true);
+  BondStiffnesses k = bond_stiffnesses(sc.net.packing, sc.laws);
   ImplicitOptions o;
-  o.solver = "cg";
-  o.tolerance = 1e-10;
-  const ImplicitResult r = solve_implicit(sc.net.packing, sc.net.image, bond_stiffnesses(sc.net.packing, sc.laws), o);
-  EXPECT_NEAR(r.E / (sc.kn() / (2 * sc.R)), 1.0, 0.005);
-  EXPECT_NEAR(r.nu, 0.0, 0.005);
+  o.solver = "amg";
+  o.tolerance = 1e-12;
+  StiffnessSystem sys(sc.net.packing, sc.net.image, k, o);
+  const double eps = 1e-3, kn = sc.kn();
+  for (int pass = 0; pass < 2; ++pass) {
+    const double scale = pass == 0 ? 1.0 : 0.5;
+    const LinearResponse r = sys.solve({0, 0, eps, 0, 0, 0});
+    EXPECT_LT(r.residual, 1e-11);
+    EXPECT_NEAR(r.stress[2] / (scale * kn * eps / (2 * sc.R)), 1.0, 1e-8);
+    for (int c : {0, 1, 3, 4, 5}) EXPECT_NEAR(r.stress[c], 0.0, 1e-8 * r.stress[2]);
+    for (std::size_t b = 0; b < sc.net.packing.bonds.size(); ++b) {
+      const Vec3 d = bond_vector(sc.net.packing, sc.net.image[b], b);
+      const double expected = std::abs(d.z) > 0.5 * sc.R ? scale * kn * 2 * sc.R * eps : 0.0;
+      EXPECT_NEAR(r.normal_force[b], expected, 1e-8 * kn * 2 * sc.R * eps) << b;
+      EXPECT_NEAR(r.shear_force[b], 0.0, 1e-8 * kn * 2 * sc.R * eps) << b;
+      EXPECT_NEAR(r.bend_moment[b], 0.0, 1e-8 * kn * 2 * sc.R * eps * sc.R) << b;
+    }
+    for (double* v : {k.kn.data(), k.kt.data(), k.ktwist.data(), k.kbend.data()})
+      for (std::size_t b = 0; b < k.kn.size(); ++b) v[b] *= 0.5;
+    sys.update_stiffnesses(k);
+  }
 }
 
 // FCC with central nearest-neighbour springs k, cubic lattice constant a: C11 = 2k/a,
@@ -105,4 +140,7 @@ TEST(ExplicitLattice, SimpleCubicUniaxialStress) {
   EXPECT_NEAR(r.E / E, 1.0, 0.005);
   EXPECT_NEAR(r.nu, 0.0, 0.005);
   EXPECT_LT(r.lateral_stress_ratio, 0.01);
+  std::printf("SC explicit: error estimate %.2e (spread %.2e, rate check %.2e) vs measured %.2e\n", r.E_error,
+              r.E_error_spread, r.E_error_rate, std::abs(r.E / E - 1));
+  EXPECT_GE(r.E_error, std::abs(r.E / E - 1));  // the estimate bounds the error
 }

@@ -21,39 +21,53 @@ double implicit_E(const Network& net, const std::vector<dem::BondLaw>& laws, con
 }
 }  // namespace
 
-// N = 1000 random packing (RSA at 0.30, densified to 0.55): the quasi-static DEM test and the
-// direct solve give the same E. Tolerance 1.5%: the explicit slope carries a residual dynamic error
-// (its own spread estimate is printed) that is larger for soft random networks than for lattices.
+// N = 400 random packing (RSA at 0.30, densified to 0.55): the quasi-static DEM test and the
+// direct solve give the same E (the N ≥ 5000 case of issue 5 is the bench
+// YoungBench.ExplicitAgreesWithImplicit5000). Tolerance 1.5%: the explicit slope carries a
+// dynamic error of a few 1e-3 at 50 transits (docs/young.md). The explicit error estimate (slope
+// spread and the rate check over half the loading time) must bound the measured difference.
 TEST(RandomNetwork, ExplicitAgreesWithImplicit) {
-  Network net = test::random_network(1000, 0.5e-3, 0.30, 0.55, 5, 0.05);
+  Network net = test::random_network(400, 0.5e-3, 0.30, 0.55, 5, 0.05);
   const auto laws = bond_laws(net.packing, "", LawOptions{}, true);
   ImplicitResult ir;
   const double Ei = implicit_E(net, laws, "ldlt", &ir);
   ExplicitOptions o;
-  o.transits = 100;
+  o.transits = 50;
   o.points = 4;
   o.local_damping = 0.3;
   const ExplicitResult er = run_explicit(net.packing, net.image, laws, o);
-  std::printf("random N=1000: Z %.2f, E_impl %.4e Pa (%.2f s), E_expl %.4e Pa (%.2f s, est %.1e), diff %.2e; nu %.4f %.4f\n",
-              2.0 * double(net.packing.bonds.size()) / 1000, Ei, ir.wall_time_s, er.E, er.wall_time_s, er.E_error,
-              er.E / Ei - 1, ir.nu, er.nu);
+  std::printf("random N=400: Z %.2f, E_impl %.4e Pa (%.2f s), E_expl %.4e Pa (%.2f s), diff %.2e, estimate %.2e "
+              "(spread %.2e, rate check %.2e); nu %.4f %.4f\n",
+              2.0 * double(net.packing.bonds.size()) / 400, Ei, ir.wall_time_s, er.E, er.wall_time_s, er.E / Ei - 1,
+              er.E_error, er.E_error_spread, er.E_error_rate, ir.nu, er.nu);
   EXPECT_GT(Ei, 0);
   EXPECT_NEAR(er.E / Ei, 1.0, 0.015);
   EXPECT_NEAR(er.nu, ir.nu, 0.02);
+  EXPECT_GE(er.E_error, std::abs(er.E / Ei - 1));
 }
 
-// The direct and the iterative solvers agree on a random network (CG tolerance 1e-10: relative
-// difference well below 1e-6), and the tensor is symmetric positive definite.
-TEST(RandomNetwork, LdltAndConjugateGradientAgree) {
+// The direct and the iterative solvers agree on a random network (tolerance 1e-10: relative
+// difference well below 1e-6 of C11), and the tensor is symmetric positive definite. Multigrid
+// (two levels or more at 4 800 unknowns) needs a fraction of the Jacobi iterations.
+TEST(RandomNetwork, LdltAndIterativeSolversAgree) {
   Network net = test::random_network(800, 0.5e-3, 0.30, 0.55, 9, 0.05);
   const auto laws = bond_laws(net.packing, "", LawOptions{}, false);
-  ImplicitResult a, b;
+  ImplicitResult a, b, c;
   implicit_E(net, laws, "ldlt", &a);
   implicit_E(net, laws, "cg", &b);
+  implicit_E(net, laws, "amg", &c);
+  std::printf("N=800: Jacobi-CG %ld iterations, multigrid-CG %ld iterations (%d levels, complexity %.2f)\n",
+              b.iterations, c.iterations, c.levels, c.operator_complexity);
   for (int i = 0; i < 6; ++i)
-    for (int j = 0; j < 6; ++j) EXPECT_NEAR(a.C[i][j], b.C[i][j], 1e-6 * a.C[0][0]) << i << j;
+    for (int j = 0; j < 6; ++j) {
+      EXPECT_NEAR(a.C[i][j], b.C[i][j], 1e-6 * a.C[0][0]) << i << j;
+      EXPECT_NEAR(a.C[i][j], c.C[i][j], 1e-6 * a.C[0][0]) << i << j;
+    }
   for (int i = 0; i < 6; ++i) EXPECT_GT(a.C[i][i], 0);
   EXPECT_LT(b.E_error, 1e-6);
+  EXPECT_LT(c.E_error, 1e-6);
+  EXPECT_GE(c.levels, 2);
+  EXPECT_LT(5 * c.iterations, b.iterations);
 }
 
 // Stiff and extreme cases (issue 5): E = 400 GPa, a_b/R from 0.01 to 0.5, floating particles
@@ -87,6 +101,7 @@ TEST(RandomNetwork, StiffExtremeNecksWithRattlersAreStable) {
       o.transits = 40;
       o.points = 3;
       o.local_damping = 0.3;
+      o.rate_check = false;  // stability is the point here; the estimate is checked above
       const ExplicitResult er = run_explicit(net.packing, net.image, laws, o);
       std::printf("400 GPa, a/R 0.5 explicit: E %.4e Pa (diff %.2e), %ld steps\n", er.E, er.E / E - 1, er.steps);
       EXPECT_NEAR(er.E / E, 1.0, 0.03);

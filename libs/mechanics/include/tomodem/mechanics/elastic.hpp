@@ -2,6 +2,7 @@
 // Elastic properties of a bonded network on the periodic cell, two ways (docs/young.md):
 // implicit (assemble the stiffness matrix, solve) and explicit (quasi-static DEM test).
 #include <array>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -17,9 +18,13 @@ using Matrix6 = std::array<std::array<double, 6>, 6>;
 void uniaxial_from_tensor(const Matrix6& C, int axis, double& E, double& nu);
 
 struct ImplicitOptions {
-  std::string solver = "auto";  ///< ldlt (SimplicialLDLT), cg (ConjugateGradient), auto (ldlt below 2 000 particles: its fill-in grows fast in 3-D)
-  double tolerance = 1e-10;     ///< relative residual of the CG solve
-  int max_iterations = 0;       ///< CG cap (0: 20 × DOFs^(1/3) × 100)
+  /// ldlt (Eigen SimplicialLDLT, exact), amg (conjugate gradients preconditioned by smoothed-
+  /// aggregation multigrid with the rigid-body modes, tomodem/core/amg.hpp), cg (Jacobi), cg-ic
+  /// (Eigen incomplete Cholesky), auto (ldlt below 2 000 particles: its fill-in grows fast in 3-D;
+  /// amg above).
+  std::string solver = "auto";
+  double tolerance = 1e-10;     ///< relative residual of the iterative solves
+  int max_iterations = 0;       ///< iterative cap (0: 20 × DOFs^(1/3) × 100)
   bool full_tensor = true;      ///< six strain cases; false: the three normal ones (E, ν only)
   int axis = 2;
 };
@@ -29,14 +34,56 @@ struct ImplicitResult {
   bool full_tensor = true;
   double E = 0, nu = 0;         ///< along `axis`
   std::array<double, 3> E_axes{}, nu_axes{};
-  double E_error = 0;           ///< relative, estimated from the residuals (energy norm)
+  double E_error = 0;           ///< relative: the largest relative residual (docs/young.md)
   double residual = 0;          ///< largest relative residual |K q − f| / |f| over the cases
   long iterations = 0;          ///< CG iterations, all cases
+  int levels = 0;               ///< amg: multigrid levels
+  double operator_complexity = 0;  ///< amg: Σ nonzeros of all levels / nonzeros of K
+  double setup_s = 0;           ///< factorisation or preconditioner set-up
   std::string solver;
   long dofs = 0, particles_used = 0, bonds_used = 0;
   long particles_removed = 0, bonds_removed = 0;  ///< outside the load-bearing cluster
   double assembly_s = 0, solve_s = 0, wall_time_s = 0;
   double prestress_bonds = 0;   ///< bonds whose length differs from the rest length (geometric terms)
+};
+
+/// Relaxed linear response of a bonded network to a macroscopic strain.
+struct LinearResponse {
+  std::array<double, 6> stress{};  ///< Pa, Voigt (xx, yy, zz, yz, xz, xy): (1/V) Σ_bonds k e a
+  /// Per bond of the packing (0 for bonds outside the solve): the bond loop's force and moment
+  /// increments, normal force > 0 in tension (N), shear force and bending moment magnitudes (N, N m),
+  /// twisting moment (N m, signed about n).
+  std::vector<double> normal_force, shear_force, twist_moment, bend_moment;
+  long iterations = 0;             ///< iterative solvers
+  double residual = 0;             ///< |K q − f| / |f|
+};
+
+/// The stiffness matrix of the load-bearing network (six DOF per particle, periodic), assembled and
+/// factorised (ldlt) or given its multigrid preconditioner (amg) once, then solved for any number
+/// of macroscopic strains: tomodem-young solves it for six unit strains; a sequentially linear
+/// fracture analysis solves it after each change of bond stiffnesses (`update_stiffnesses`).
+/// Keeps references to the packing and the images: they must outlive it.
+class StiffnessSystem {
+ public:
+  /// Throws InputError (exit 2) without intact bonds or when no cluster spans the cell.
+  StiffnessSystem(const Packing& p, const std::vector<Image>& image, const BondStiffnesses& k,
+                  const ImplicitOptions& o, const std::string& file = "");
+  ~StiffnessSystem();
+  StiffnessSystem(const StiffnessSystem&) = delete;
+  StiffnessSystem& operator=(const StiffnessSystem&) = delete;
+  /// Relaxed response to `strain` (Voigt, engineering shear strains).
+  LinearResponse solve(const std::array<double, 6>& strain) const;
+  /// New bond stiffnesses (same bonds; a broken bond gets zeros) on the same DOFs: the matrix is
+  /// re-assembled; ldlt refactorises, amg keeps its coarse levels (a good preconditioner while
+  /// the changes are local). A particle or cluster that loses all its stiffness makes the matrix
+  /// singular: build a new system then (its clusters are found again).
+  void update_stiffnesses(const BondStiffnesses& k);
+  /// Counts, solver, timings of the set-up (C, E, ν and the per-solve fields stay zero).
+  const ImplicitResult& summary() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
 };
 
 /// Linearises every intact bond about the current state (six DOF per particle: translations and
@@ -61,10 +108,17 @@ struct ExplicitOptions {
   long max_steps = 50'000'000;
   int threads = 1;
   bool quiet = true;
+  /// Run again over half the loading time; E_error = max(slope spread, |E(T) − E(T/2)| / E, largest
+  /// strain) (rate protocol and increments alike; costs 1.5× the single run).
+  bool rate_check = true;
 };
 
 struct ExplicitResult {
   double E = 0, nu = 0, E_error = 0, nu_error = 0;
+  double E_error_spread = 0;         ///< largest relative deviation of a segment slope from the fit
+  double E_error_rate = 0;           ///< rate check: |E(T) − E(T/2)| / E(T) (0 without it)
+  double E_error_strain = 0;         ///< finite-strain floor: the largest strain reached
+  double E_half_time = 0;            ///< rate check: E over half the loading time
   double strain_rate = 0, time_step = 0, transit_time = 0;
   double inertial_number = 0, unbalanced_force_ratio = 0;
   double lateral_stress_ratio = 0;   ///< |σ_lateral| / |σ_axial| at the end (stress loading)
