@@ -19,7 +19,7 @@ int main(int argc, char** argv) {
     app.add_option("--phases", c.phases, "conducting phases by material name (default: all)")->delimiter(',');
     app.add_option("--bc", c.bc, "boundary conditions: electrodes | periodic")->capture_default_str();
     app.add_option("--axis", c.axes, "electrode axes: x, y, z, any combination (xz) or all")->capture_default_str();
-    app.add_option("--contact-radius", c.contact_radius, "geometric | hertz")->capture_default_str();
+    app.add_option("--contact-radius", c.contact_radius, "geometric | hertz | hertz-force (from /contacts/normal_force)")->capture_default_str();
     app.add_option("--gap-tolerance", c.gap_tolerance, "contact when gap < tol * R* (-)")->capture_default_str();
     app.add_option("--min-contact-ratio", c.min_contact_ratio, "floor of a/R* for touching contacts (-)")
         ->capture_default_str();
@@ -32,7 +32,7 @@ int main(int argc, char** argv) {
     app.add_flag("--no-contacts", no_contacts, "ignore contacts (bonds only)");
     app.add_option("--tolerance", c.tolerance, "relative residual of the CG solve")->capture_default_str();
     app.add_option("--max-iterations", c.max_iterations, "CG iteration cap (0: automatic)")->capture_default_str();
-    app.add_option("--preconditioner", c.preconditioner, "ic | jacobi")->capture_default_str();
+    app.add_option("--preconditioner", c.preconditioner, "ic | jacobi | amg")->capture_default_str();
     app.add_option("--electronic", c.electronic, "composite electrode: electronic phases")->delimiter(',');
     app.add_option("--ionic", c.ionic, "composite electrode: ionic phases")->delimiter(',');
     app.add_option("--charge-transfer", c.charge_transfer,

@@ -21,11 +21,13 @@ using json = nlohmann::json;
 const char* kAxis[3] = {"x", "y", "z"};
 
 json solver_json(const SolverReport& r) {
-  return {{"unknowns", r.unknowns},         {"nonzeros", r.nonzeros},
-          {"iterations", r.iterations},     {"residual", r.residual},
-          {"converged", r.converged},       {"assemble_time_s", r.assemble_time_s},
-          {"setup_time_s", r.setup_time_s}, {"solve_time_s", r.solve_time_s},
-          {"memory_bytes", r.memory_bytes}};
+  json j = {{"unknowns", r.unknowns},         {"nonzeros", r.nonzeros},
+            {"iterations", r.iterations},     {"residual", r.residual},
+            {"converged", r.converged},       {"assemble_time_s", r.assemble_time_s},
+            {"setup_time_s", r.setup_time_s}, {"solve_time_s", r.solve_time_s},
+            {"memory_bytes", r.memory_bytes}};
+  if (r.levels > 0) j["multigrid"] = {{"levels", r.levels}, {"operator_complexity", r.operator_complexity}};
+  return j;
 }
 json finite(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 

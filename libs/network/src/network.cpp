@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <unordered_map>
 #include <unordered_set>
 
 #include "tomodem/core/error.hpp"
@@ -11,7 +12,8 @@ namespace tomodem::network {
 ContactRadius parse_contact_radius(const std::string& name) {
   if (name == "geometric") return ContactRadius::geometric;
   if (name == "hertz") return ContactRadius::hertz;
-  throw InputError("", "--contact-radius", name, "expected 'geometric' or 'hertz'");
+  if (name == "hertz-force") return ContactRadius::hertz_force;
+  throw InputError("", "--contact-radius", name, "expected 'geometric', 'hertz' or 'hertz-force'");
 }
 
 Vec3 Network::branch(std::size_t e) const {
@@ -183,6 +185,24 @@ Network build_network(const Packing& pk, const NetworkOptions& opt) {
       add(i, j, a, im, EdgeKind::bond);
     }
   }
+  // Contact forces of the packing by pair, for the Hertz radius from the force.
+  std::unordered_map<int64_t, double> force;
+  if (opt.use_contacts && opt.contact_radius == ContactRadius::hertz_force) {
+    const ContactTable& C = pk.contacts;
+    if (C.i.empty() || C.normal_force.size() != C.i.size())
+      throw InputError(src, "/contacts/normal_force", C.i.empty() ? "missing" : "length mismatch",
+                       "--contact-radius hertz-force needs the packing's contact forces (tomodem-pack writes them)");
+    for (std::size_t c = 0; c < C.i.size(); ++c) force[key(C.i[c], C.j[c])] += norm(C.normal_force[c]);
+  }
+  // (1 − ν²)/E of a phase in a contact (hertz-force); bad input when E or ν are not physical.
+  const auto compliance = [&](int32_t m) {
+    const Material& mat = pk.materials[m];
+    if (!(mat.youngs_modulus > 0 && mat.poisson_ratio > -1 && mat.poisson_ratio < 0.5))
+      throw InputError(src, "/materials/" + std::to_string(m) + "/youngs_modulus",
+                       std::to_string(mat.youngs_modulus) + " (poisson_ratio " + std::to_string(mat.poisson_ratio) + ")",
+                       "--contact-radius hertz-force needs E > 0 and -1 < nu < 0.5 for phase '" + mat.name + "'");
+    return (1 - mat.poisson_ratio * mat.poisson_ratio) / mat.youngs_modulus;
+  };
   if (opt.use_contacts) {
     // Only conducting particles take part in the search.
     std::vector<double> r(net.radius);
@@ -195,7 +215,14 @@ Network build_network(const Packing& pk, const NetworkOptions& opt) {
       const double d = norm(net.position[cp.j[c]] + shift - net.position[cp.i[c]]);
       const double overlap = ra + rb - d;
       double a = 0;
-      if (overlap > 0) {
+      if (opt.contact_radius == ContactRadius::hertz_force) {
+        // Hertz: a³ = 3 F R* / (4 E*), 1/E* = (1 − ν_i²)/E_i + (1 − ν_j²)/E_j.
+        const auto it = force.find(key(pa, pb));
+        if (it != force.end() && it->second > 0) {
+          const double estar = 1.0 / (compliance(pk.particles.phase[pa]) + compliance(pk.particles.phase[pb]));
+          a = std::cbrt(3 * it->second * rstar / (4 * estar));
+        }
+      } else if (overlap > 0) {
         if (opt.contact_radius == ContactRadius::hertz) {
           a = std::sqrt(rstar * overlap);
         } else {  // intersection circle of the two spheres (one inside the other: the smaller radius)

@@ -71,6 +71,7 @@ double bench(Preconditioner pc) {
   // On a shared machine the wall time depends on the load: print both (and the load average).
   std::printf("load average %.1f, process CPU time of the axis %.2f s (wall %.2f s)\n", load_average(), cpu, wall);
   const SolverReport& s = r.solver;
+  if (s.levels > 0) std::printf("multigrid: %d levels, operator complexity %.2f\n", s.levels, s.operator_complexity);
   std::printf("%s: unknowns %zu, nnz %zu, iterations %d, residual %.2e, assemble %.2f s, set-up %.2f s, "
               "CG %.2f s, solver total %.2f s, whole axis (percolation + solve) %.2f s, solver memory %.0f MB, "
               "peak RSS %.0f MB, sigma %.6g, conservation %.1e\n",
@@ -88,3 +89,4 @@ double bench(Preconditioner pc) {
 // assertions above are the converged residual and the problem size.
 TEST(ConductBench, MillionNodesIncompleteCholesky) { bench(Preconditioner::incomplete_cholesky); }
 TEST(ConductBench, MillionNodesJacobi) { bench(Preconditioner::jacobi); }
+TEST(ConductBench, MillionNodesMultigrid) { bench(Preconditioner::amg); }

@@ -87,6 +87,38 @@ TEST(Network, GeometricAndHertzContactRadius) {
   EXPECT_NEAR(h.graph.g[0], 2 * 1.0 * h.contact_radius[0], 1e-14);
 }
 
+// Hertz radius from the packing's contact force: a = (3 F R* / 4 E*)^(1/3), 1/E* = Σ (1 − ν²)/E
+// (PHYSICS.md), conductance 2σa for like phases (σ = 1 S/m here).
+TEST(Network, HertzRadiusFromContactForce) {
+  Packing p = test::sc_lattice(2, 1, 1, 1.0, 0.1, false);
+  p.bonds = BondTable{};
+  p.particles.radius = {1.0, 1.0};  // touching at distance 2
+  p.materials[0].youngs_modulus = 2e9;
+  p.materials[0].poisson_ratio = 0.25;
+  p.contacts.i = {0};
+  p.contacts.j = {1};
+  p.contacts.overlap = {0.0};
+  p.contacts.normal_force = {Vec3{3e6, 0, 0}};
+  p.contacts.tangential_force = {Vec3{0, 0, 0}};
+  NetworkOptions o;
+  o.contact_radius = ContactRadius::hertz_force;
+  const Network g = build_network(p, o);
+  ASSERT_EQ(g.n_edges(), 1u);
+  const double estar = 1 / (2 * (1 - 0.25 * 0.25) / 2e9), rstar = 0.5;
+  const double a = std::cbrt(3 * 3e6 * rstar / (4 * estar));  // 0.1018
+  EXPECT_NEAR(g.contact_radius[0], a, 1e-12 * a);
+  EXPECT_NEAR(g.graph.g[0], 2 * 1.0 * a, 1e-12 * a);
+  EXPECT_EQ(parse_contact_radius("hertz-force"), ContactRadius::hertz_force);
+  // No contact forces in the packing: bad input naming the dataset.
+  p.contacts = ContactTable{};
+  try {
+    build_network(p, o);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "/contacts/normal_force");
+  }
+}
+
 TEST(Network, BondReplacesContactAndBrokenBondsAreIgnored) {
   Packing p = test::sc_lattice(3, 1, 1, 1.0, 0.25, false);
   Network n = build_network(p, NetworkOptions{});

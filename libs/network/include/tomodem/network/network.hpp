@@ -16,8 +16,9 @@ namespace tomodem::network {
 enum class ContactRadius {
   geometric,  ///< radius of the circle where the two spheres intersect
   hertz,      ///< a = sqrt(R* δ) (Hertz, PHYSICS.md): √2 smaller than geometric for small δ
+  hertz_force,  ///< a = (3 F R* / 4 E*)^(1/3) from the packing's contact forces (/contacts/normal_force)
 };
-ContactRadius parse_contact_radius(const std::string& name);  ///< "geometric" | "hertz"
+ContactRadius parse_contact_radius(const std::string& name);  ///< "geometric" | "hertz" | "hertz-force"
 
 struct NetworkOptions {
   std::vector<std::string> phases;  ///< conducting phases by material name; empty = every phase

@@ -13,8 +13,9 @@ namespace tomodem::network {
 enum class Preconditioner {
   incomplete_cholesky,  ///< Eigen::IncompleteCholesky (Lin & Moré), natural ordering
   jacobi,               ///< diagonal scaling: cheapest set-up, multi-threaded apply
+  amg,                  ///< smoothed-aggregation multigrid (tomodem/core/amg.hpp): iterations nearly independent of size
 };
-Preconditioner parse_preconditioner(const std::string& name);  ///< "ic" | "jacobi"
+Preconditioner parse_preconditioner(const std::string& name);  ///< "ic" | "jacobi" | "amg"
 std::string to_string(Preconditioner p);
 
 struct SolverOptions {
@@ -31,6 +32,8 @@ struct SolverReport {
   bool converged = false;
   double assemble_time_s = 0, setup_time_s = 0, solve_time_s = 0;
   std::size_t memory_bytes = 0;  ///< matrix + preconditioner + CG vectors (estimate)
+  int levels = 0;                  ///< amg: multigrid levels
+  double operator_complexity = 0;  ///< amg: Σ nonzeros of all levels / nonzeros of the matrix
 };
 
 /// Solves  sum_j g_ij (v_i - v_j) = source_i  for the nodes with active[i] && !fixed[i].
