@@ -15,10 +15,11 @@ int main(int argc, char** argv) {
     app.add_option("input", c.input, "packing (.h5, shared data model)")->required();
     app.add_option("-o,--output", c.output, "bonded packing (.h5 + .xdmf), with /bonds and /bonds/image")->required();
     app.add_option("--json", c.json, "write the JSON summary to FILE (default: stdout)");
-    app.add_option("--rule", c.rule, "neck radius: ratio | overlap | density")->capture_default_str();
+    app.add_option("--rule", c.rule, "neck radius: ratio | overlap | density | sinter")->capture_default_str();
+    app.add_option("--sinter-config", c.sinter_config, "rule sinter: sintering settings YAML (docs/sintering.md)");
     app.add_option("--neck-ratio", c.neck_ratio, "rule ratio: a_b/R, R = 2R_iR_j/(R_i+R_j)")->capture_default_str();
     app.add_option("--min-neck-ratio", c.min_neck_ratio, "rules overlap/density: smallest a_b/R")->capture_default_str();
-    app.add_option("--target-density", c.target_density, "rule density: relative density after densification");
+    app.add_option("--target-density", c.target_density, "rules density, sinter: relative density to reach");
     app.add_option("--gap-tolerance", c.gap_tolerance, "bond when the gap is below tol * R (-)")->capture_default_str();
     app.add_option("--exclude", c.exclude, "no bonds between these phases: A:B (names or indices), repeatable");
     app.add_option("--pair-ratio", c.pair_ratio, "rule ratio per phase pair: A:B=RATIO, repeatable");
@@ -33,6 +34,7 @@ int main(int argc, char** argv) {
     tomodem::set_quiet(quiet);
     if (threads < 0) throw tomodem::InputError("", "--threads", std::to_string(threads), "must be >= 0");
     if (threads > 0) omp_set_num_threads(threads);
+    c.threads = threads;
     tomodem::info("reading " + c.input);
     const std::string summary = tomodem::mechanics::run_bond(c);
     if (c.json.empty() || c.json == "-") std::cout << summary;

@@ -4,6 +4,8 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <iostream>
 
@@ -11,6 +13,7 @@
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/packing_io.hpp"
+#include "tomodem/core/plot.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/dem/sinter.hpp"
 
@@ -28,6 +31,51 @@ std::vector<double> row(const dem::SinterRow& r) {
           r.shrinkage[2], r.mean_neck_ratio, r.coordination, r.time_step, r.mass_scaling};
 }
 
+/// Neck-size distribution: bins of a/R̄ 0.025 wide from 0 to the largest neck.
+constexpr double kNeckBin = 0.025;
+std::vector<std::vector<double>> neck_histogram(const std::vector<double>& ratio) {
+  double top = 0;
+  for (double a : ratio) top = std::max(top, a);
+  const std::size_t bins = std::max<std::size_t>(1, std::size_t(std::ceil(top / kNeckBin)));
+  std::vector<double> count(bins, 0);
+  for (double a : ratio) count[std::min(bins - 1, std::size_t(a / kNeckBin))] += 1;
+  std::vector<std::vector<double>> rows;
+  for (std::size_t b = 0; b < bins; ++b)
+    rows.push_back({b * kNeckBin, (b + 1) * kNeckBin, count[b], ratio.empty() ? 0 : count[b] / double(ratio.size())});
+  return rows;
+}
+
+/// Densification curve, shrinkage per axis and the neck-size distribution as PNG + SVG.
+void plot_outputs(const std::string& dir, const std::vector<std::vector<double>>& rows,
+                  const std::vector<std::vector<double>>& necks) {
+  auto column = [&](std::size_t c) {
+    std::vector<double> v;
+    for (const auto& r : rows) v.push_back(r[c]);
+    return v;
+  };
+  const std::vector<double> t = column(1);
+  PlotSpec d{"Densification", "time (s)", "relative density", false, false, {}};
+  d.series.push_back({"overlaps counted once", t, column(3)});
+  d.series.push_back({"from the cell, rho0 V0 / V", t, column(4)});
+  write_plot(dir + "/densification", d);
+  PlotSpec dt{"Densification against temperature", "temperature (K)", "relative density", false, false, {}};
+  dt.series.push_back({"overlaps counted once", column(2), column(3)});
+  write_plot(dir + "/densification_temperature", dt);
+  PlotSpec sh{"Linear shrinkage per cell axis", "time (s)", "shrinkage 1 - L/L0", false, false, {}};
+  sh.series.push_back({"x", t, column(6)});
+  sh.series.push_back({"y", t, column(7)});
+  sh.series.push_back({"z", t, column(8)});
+  write_plot(dir + "/shrinkage", sh);
+  PlotSpec nk{"Neck-size distribution", "neck ratio a/R (bin centre)", "fraction of necks", false, false, {}};
+  PlotSeries ns{"necks", {}, {}};
+  for (const auto& b : necks) {
+    ns.x.push_back(0.5 * (b[0] + b[1]));
+    ns.y.push_back(b[3]);
+  }
+  nk.series.push_back(ns);
+  write_plot(dir + "/necks", nk);
+}
+
 int run(int argc, char** argv) {
   CLI::App app{"tomodem-sinter: sinter a packing (scene YAML with a sintering section, docs/sintering.md)"};
   std::string scene_path, out_dir = ".", json_path;
@@ -38,6 +86,8 @@ int run(int argc, char** argv) {
   app.add_option("--json", json_path, "also write the JSON summary to this file");
   app.add_option("--threads", threads, "threads (default: the scene's, else 1)")->check(CLI::PositiveNumber);
   app.add_flag("-q,--quiet", quiet_flag, "no progress on stderr");
+  bool no_plot = false;
+  app.add_flag("--no-plot", no_plot, "no PNG/SVG plots (also output.plots: false)");
   tomodem::cli::add_version(app, "tomodem-sinter");
   if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
   if (scene_path.empty()) throw InputError("", "scene", "", "no scene file given (see --help)");
@@ -55,6 +105,9 @@ int run(int argc, char** argv) {
   std::vector<std::vector<double>> rows;
   for (const auto& r : rep.rows) rows.push_back(row(r));
   write_text_atomic(out(settings.curve), csv_table(kColumns, rows));
+  const std::vector<double> ratio = dem::neck_ratios(dem::necks_to_bonds(*scene.sim), scene.sim->particles().r);
+  const std::vector<std::vector<double>> necks = neck_histogram(ratio);
+  write_text_atomic(out(settings.necks), csv_table({"neck_ratio_lower", "neck_ratio_upper", "count", "fraction"}, necks));
 
   Packing packing = dem::to_packing(*scene.sim, scene.materials);
   packing.bonds = dem::necks_to_bond_table(*scene.sim);
@@ -76,6 +129,15 @@ int run(int argc, char** argv) {
   for (std::size_t c = 0; c < kColumns.size(); ++c)
     for (const auto& r : rows) series[kColumns[c]].push_back(r[c]);
   write_packing(out(settings.packing), packing);
+  bool plotted = false;
+  if (settings.plots && !no_plot) {
+    if (plotting_available()) {
+      plot_outputs(out_dir, rows, necks);
+      plotted = true;
+    } else {
+      warn("gnuplot not found: no plots (install Debian's gnuplot-nox); the CSV files hold the data");
+    }
+  }
 
   json j;
   j["tool"] = "tomodem-sinter";
@@ -93,13 +155,22 @@ int run(int argc, char** argv) {
   j["temperature_K"] = f.temperature;
   j["shrinkage"] = {f.shrinkage[0], f.shrinkage[1], f.shrinkage[2]};
   j["coordination"] = f.coordination;
+  {
+    std::vector<double> s = ratio;
+    std::sort(s.begin(), s.end());
+    auto q = [&](double p) { return s.empty() ? 0.0 : s[std::size_t(std::lround(p * double(s.size() - 1)))]; };
+    j["neck_ratio"] = {{"p10", q(0.1)}, {"p50", q(0.5)}, {"p90", q(0.9)}, {"max", s.empty() ? 0.0 : s.back()}};
+  }
   j["bonds"] = packing.bonds.size();
   j["wall_time_s"] = rep.wall_time_s;
   j["time_step_s"] = {{"min", rep.min_time_step}, {"max", rep.max_time_step}};
   j["max_mass_scaling"] = rep.max_mass_scaling;
   j["units"] = {{"relative_density", "1"}, {"mean_neck_ratio", "1"}, {"sintering_time_s", "s"},
                 {"temperature_K", "K"}, {"wall_time_s", "s"}, {"shrinkage", "1"}, {"time_step_s", "s"}};
-  j["outputs"] = {{"curve", out(settings.curve)}, {"packing", out(settings.packing)}};
+  j["outputs"] = {{"curve", out(settings.curve)}, {"packing", out(settings.packing)}, {"necks", out(settings.necks)}};
+  if (plotted)
+    for (const char* stem : {"densification", "densification_temperature", "shrinkage", "necks"})
+      j["outputs"]["plots"].push_back(out(std::string(stem) + ".png"));
   const std::string text = j.dump(2);
   if (!json_path.empty()) write_text_atomic(json_path, text + "\n");
   std::cout << text << std::endl;

@@ -9,7 +9,9 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <limits>
+#include <memory>
 #include <set>
 #include <sstream>
 
@@ -291,9 +293,11 @@ SinterSettings read_sinter_settings(const Scene& scene) {
   s.update_interval = int(ac.positive("update_interval", s.update_interval));
   s.conserve_volume = root.flag("conserve_volume", true);
   const Sec out = root.sec("output");
-  out.allow({"curve", "packing", "rows"});
+  out.allow({"curve", "packing", "rows", "necks", "plots"});
   s.curve = out.string("curve", s.curve);
   s.packing = out.string("packing", s.packing);
+  s.necks = out.string("necks", s.necks);
+  s.plots = out.flag("plots", s.plots);
   s.output_rows = int(out.positive("rows", s.output_rows));
 
   bool any = false;
@@ -528,8 +532,10 @@ SinterReport run_sintering(Simulation& sim, const SinterSettings& s, bool progre
       const double r = p.r[i];
       const double cur = 4.0 / 3.0 * M_PI * r * r * r - q.share[i];
       const double der = 4 * M_PI * r * r - q.dshare[i];
-      if (der <= 0) continue;
-      const double dr = (target[i] - cur) / der;
+      // A sphere almost enclosed by its necks (< 5 % of its surface exposed) cannot hold its volume
+      // by growing; and no update grows a radius by more than 1 % (a runaway guard).
+      if (der < 0.05 * 4 * M_PI * r * r) continue;
+      const double dr = std::clamp((target[i] - cur) / der, -0.01 * r, 0.01 * r);
       p.r[i] = r + dr;
       dmax = std::max(dmax, std::abs(dr));
     }
@@ -699,8 +705,17 @@ BondSet necks_to_bonds(const Simulation& sim) {
   return b;
 }
 
-BondTable necks_to_bond_table(const Simulation& sim) {
-  const BondSet b = necks_to_bonds(sim);
+std::vector<double> neck_ratios(const BondSet& b, const std::vector<double>& radius) {
+  std::vector<double> out(b.size());
+  for (std::size_t k = 0; k < b.size(); ++k) {
+    const double ri = radius[std::size_t(b.i[k])], rj = radius[std::size_t(b.j[k])];
+    out[k] = b.radius[k] / (2 * ri * rj / (ri + rj));
+  }
+  return out;
+}
+
+namespace {
+BondTable bond_table(const BondSet& b) {
   BondTable t;
   t.i = b.i;
   t.j = b.j;
@@ -709,6 +724,100 @@ BondTable necks_to_bond_table(const Simulation& sim) {
   t.state.assign(b.size(), BondTable::intact);
   t.broken_at.assign(b.size(), std::numeric_limits<double>::quiet_NaN());
   return t;
+}
+}  // namespace
+
+BondTable necks_to_bond_table(const Simulation& sim) { return bond_table(necks_to_bonds(sim)); }
+
+// ---------------------------------------------------------------- tomodem-bond's sinter method
+SinteredPacking sinter_packing(const Packing& green, const std::string& source, const std::string& settings_file,
+                               double target_density, int threads, bool progress) {
+  // The settings file: a `sintering` section and optional physics (tangential law, restitution).
+  Scene scene;
+  scene.file = settings_file;
+  {
+    std::ifstream in(settings_file);
+    if (!in) throw InputError(settings_file, "", "", "cannot open the sintering settings file");
+    std::ostringstream t;
+    t << in.rdbuf();
+    scene.text = t.str();
+  }
+  YAML::Node doc;
+  try {
+    doc = YAML::Load(scene.text);
+  } catch (const YAML::Exception& e) {
+    throw InputError(settings_file, "line " + std::to_string(e.mark.line + 1), "", "not valid YAML: " + e.msg);
+  }
+  if (!doc || !doc.IsMap()) throw InputError(settings_file, "", "", "must be a YAML mapping with a sintering section");
+  const Sec root(doc, "", settings_file);
+  root.allow({"sintering", "physics"});
+  const Sec ph = root.sec("physics");
+  ph.allow({"tangential", "restitution"});
+
+  // The green packing as a periodic sintering simulation.
+  const std::size_t n = green.particles.size();
+  if (n < 2) throw InputError(source, "/particles/radius", std::to_string(n), "needs at least two particles");
+  if (green.materials.empty())
+    throw InputError(source, "/materials", "", "sintering needs the packing's materials (density, Young's modulus)");
+  for (int k = 0; k < 3; ++k)
+    if (!green.cell.periodic[k])
+      throw InputError(source, "/cell/periodic", "axis " + std::string(1, char('x' + k)),
+                       "sintering runs in a periodic cell (stress-free or constrained axes)");
+  Particles parts;
+  for (std::size_t i = 0; i < n; ++i) {
+    const int m = green.particles.phase[i];
+    if (m < 0 || m >= int(green.materials.size()))
+      throw InputError(source, "/particles/phase", std::to_string(m), "no material with this index");
+    const double rho = green.materials[std::size_t(m)].density;
+    if (!(rho > 0))
+      throw InputError(source, "/materials/" + green.materials[std::size_t(m)].name + "/density", std::to_string(rho),
+                       "must be positive");
+    parts.add(green.particles.position[i], green.particles.radius[i], rho, m);
+  }
+  ContactModel model;
+  model.normal = NormalLaw::sintering;
+  const std::string tl = ph.string("tangential", "none");
+  if (!parse(tl, model.tangential) || (model.tangential != TangentialLaw::none && model.tangential != TangentialLaw::viscous))
+    throw InputError(settings_file, ph.where("tangential"), tl, "expected none or viscous (the sintering law has no spring)");
+  model.materials = green.materials;
+  model.n_phases = int(green.materials.size());
+  model.finalize();
+  const double e = ph.number("restitution", 1.0);
+  if (!(e > 0 && e <= 1)) throw InputError(settings_file, ph.where("restitution"), ph.text("restitution"), "must lie in (0, 1]");
+  for (auto& pp : model.pairs) pp.restitution = e;
+  model.finalize();
+  Settings set;
+  set.threads = std::max(1, threads);
+  scene.materials = green.materials;
+  scene.sim = std::make_unique<Simulation>(std::move(parts), green.cell, model, set);
+
+  SinterSettings s = read_sinter_settings(scene);
+  if (target_density > 0) {
+    scene.sim->measure();  // the neighbour list, so the density counts the overlaps once
+    const double rho0 = density_state(*scene.sim).density;
+    if (!(target_density > rho0 && target_density < 1))
+      throw InputError("", "--target-density", std::to_string(target_density),
+                       "must lie between the packing's relative density (" + std::to_string(rho0) + ") and 1");
+    s.target_density = target_density;
+  }
+  check_sinter_settings(scene, s);
+
+  SinteredPacking out;
+  out.report = run_sintering(*scene.sim, s, progress);
+  if (s.target_density > 0 && out.report.stop_reason != "target_density") {
+    std::ostringstream v;
+    v << "relative density " << out.report.final.density << " at t = " << out.report.final.time << " s";
+    throw InputError(settings_file, "sintering.temperature", v.str(),
+                     "the program ends below the target density " + std::to_string(s.target_density) +
+                         ": lengthen the hold or raise the temperature");
+  }
+  Simulation& sim = *scene.sim;
+  out.packing = to_packing(sim, green.materials);  // (may rebuild the neighbour list: before the images)
+  out.packing.contacts = ContactTable{};
+  const BondSet b = necks_to_bonds(sim);
+  out.packing.bonds = bond_table(b);
+  out.bond_image = b.image;
+  return out;
 }
 
 }  // namespace tomodem::dem

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "tomodem/core/error.hpp"
+#include "tomodem/dem/sinter.hpp"
 
 namespace tomodem::mechanics {
 
@@ -158,6 +159,33 @@ BondingReport bond_network(Network& net, const BondingOptions& o) {
   double rmin = 1e300;
   for (double r : p.particles.radius) rmin = std::min(rmin, r);
   rep.initial_relative_density = relative_density(p);
+
+  if (o.rule == NeckRule::sinter) {
+    // Sintering to the target density (docs/sintering.md); its necks become the bonds.
+    const double v0 = p.cell.volume();
+    dem::SinteredPacking s = dem::sinter_packing(p, o.source, o.sinter_file, o.target_density, o.threads);
+    p.particles.position = std::move(s.packing.particles.position);
+    p.particles.radius = std::move(s.packing.particles.radius);
+    p.particles.velocity.clear();
+    p.particles.angular_velocity.clear();
+    p.cell = s.packing.cell;
+    p.bonds = std::move(s.packing.bonds);
+    net.image.clear();
+    for (const Vec3& im : s.bond_image)
+      net.image.push_back({int32_t(std::lround(im.x)), int32_t(std::lround(im.y)), int32_t(std::lround(im.z))});
+    for (std::size_t b = 0; b < p.bonds.size(); ++b)
+      rep.neck_ratio.push_back(p.bonds.radius[b] / harmonic_radius(p.particles.radius[std::size_t(p.bonds.i[b])],
+                                                                   p.particles.radius[std::size_t(p.bonds.j[b])]));
+    rep.scale = std::cbrt(p.cell.volume() / v0);
+    rep.sintering_time_s = s.report.final.time;
+    rep.sintering_steps = s.report.steps;
+    p.contacts = ContactTable{};
+    rep.n_bonds = long(p.bonds.size());
+    rep.bonds_per_particle = n ? 2.0 * double(rep.n_bonds) / double(n) : 0;
+    rep.relative_density = relative_density(p);  // the grown radii: the sintering run's density (same lens formula)
+    rep.clusters = find_clusters(p, net.image);
+    return rep;
+  }
 
   if (o.rule == NeckRule::density) {
     // Homothetic densification: centres (and the cell) move towards each other by a factor s < 1

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <nlohmann/json.hpp>
+#include <omp.h>
 #include <sstream>
 
 #include "tomodem/core/error.hpp"
@@ -59,15 +60,22 @@ std::string run_bond(const BondConfig& c) {
     o.rule = NeckRule::overlap;
   else if (c.rule == "density")
     o.rule = NeckRule::density;
+  else if (c.rule == "sinter")
+    o.rule = NeckRule::sinter;
   else
-    throw InputError("", "--rule", c.rule, "expected ratio, overlap or density");
+    throw InputError("", "--rule", c.rule, "expected ratio, overlap, density or sinter");
   if (!(c.gap_tolerance >= 0)) throw InputError("", "--gap-tolerance", std::to_string(c.gap_tolerance), "must be >= 0");
   if (!(c.neck_ratio > 0 && c.neck_ratio <= 1))
     throw InputError("", "--neck-ratio", std::to_string(c.neck_ratio), "must lie in (0, 1]");
   if (!(c.min_neck_ratio > 0 && c.min_neck_ratio <= 1))
     throw InputError("", "--min-neck-ratio", std::to_string(c.min_neck_ratio), "must lie in (0, 1]");
-  if (o.rule == NeckRule::density && !(c.target_density > 0 && c.target_density < 1))
-    throw InputError("", "--target-density", std::to_string(c.target_density), "must lie in (0, 1) for --rule density");
+  if ((o.rule == NeckRule::density || o.rule == NeckRule::sinter) && !(c.target_density > 0 && c.target_density < 1))
+    throw InputError("", "--target-density", std::to_string(c.target_density), "must lie in (0, 1) for --rule " + c.rule);
+  if (o.rule == NeckRule::sinter && c.sinter_config.empty())
+    throw InputError("", "--sinter-config", "", "rule sinter needs a sintering settings file (docs/sintering.md)");
+  o.sinter_file = c.sinter_config;
+  o.source = c.input;
+  o.threads = std::max(1, c.threads > 0 ? c.threads : omp_get_max_threads());
   o.gap_tolerance = c.gap_tolerance;
   o.neck_ratio = c.neck_ratio;
   o.min_neck_ratio = c.min_neck_ratio;
@@ -103,6 +111,7 @@ std::string run_bond(const BondConfig& c) {
   json params = {{"rule", c.rule},          {"gap_tolerance", c.gap_tolerance}, {"neck_ratio", c.neck_ratio},
                  {"min_neck_ratio", c.min_neck_ratio}, {"target_density", c.target_density},
                  {"exclude", c.exclude},    {"pair_ratio", c.pair_ratio}};
+  if (o.rule == NeckRule::sinter) params["sinter_config"] = c.sinter_config;
   std::vector<double> hist(10, 0);
   double amin = 1e300, amax = 0, amean = 0;
   for (double a : rep.neck_ratio) {
@@ -128,6 +137,7 @@ std::string run_bond(const BondConfig& c) {
   p.provenance.version = version_string();
   p.provenance.parameters = parameters_text(params);
   p.provenance.input_hashes = {{c.input, file_hash(c.input)}};
+  if (o.rule == NeckRule::sinter) p.provenance.input_hashes[c.sinter_config] = file_hash(c.sinter_config);
   p.provenance.created_utc = utc_now();
   p.provenance.wall_time_s = wall;
   write_network(c.output, net);
@@ -162,6 +172,7 @@ std::string run_bond(const BondConfig& c) {
                 {"isolated_particles", cl.isolated},
                 {"particles_outside_main", cl.outside_main}}},
               {"wall_time_s", wall}};
+  if (o.rule == NeckRule::sinter) out["sintering"] = {{"time_s", rep.sintering_time_s}, {"steps", rep.sintering_steps}};
   const std::string text = out.dump(2) + "\n";
   if (!c.json.empty() && c.json != "-") write_text_atomic(c.json, text);
   return text;

@@ -10,14 +10,18 @@
 
 namespace tomodem::mechanics {
 
-enum class NeckRule { ratio, overlap, density };
+enum class NeckRule { ratio, overlap, density, sinter };
 
 struct BondingOptions {
   NeckRule rule = NeckRule::overlap;
   double gap_tolerance = 0;     ///< bond when gap = d − R_i − R_j ≤ tol · R̄ (R̄ = 2R_iR_j/(R_i+R_j))
   double neck_ratio = 0.1;      ///< rule ratio: a_b = ratio · R̄
   double min_neck_ratio = 0.01; ///< rules overlap/density: floor of a_b/R̄ (touching or gapped pairs)
-  double target_density = 0;    ///< rule density: union volume / cell volume after densification
+  double target_density = 0;    ///< rules density, sinter: union volume / cell volume after densification
+  /// Rule sinter (docs/sintering.md): the sintering settings file, the packing's name for messages,
+  /// threads of the sintering run.
+  std::string sinter_file, source;
+  int threads = 1;
   /// Phase pairs that get no bonds, and per-pair neck ratios (rule ratio), by phase index.
   std::vector<std::pair<int, int>> excluded;
   std::vector<std::pair<std::pair<int, int>, double>> pair_ratio;
@@ -45,6 +49,8 @@ struct BondingReport {
   double relative_density = 0;        ///< after bonding (and densification)
   double initial_relative_density = 0;
   double scale = 1;                   ///< densification: positions and cell scaled by this factor
+  double sintering_time_s = 0;        ///< rule sinter: simulated time to the target density
+  long sintering_steps = 0;
   std::vector<double> neck_ratio;     ///< a_b/R̄ per bond
   Clusters clusters;
 };
