@@ -29,13 +29,19 @@ std::string config(const std::string& name, const std::string& phases, const std
   std::ofstream(p) << "particles: 300\nphases:\n" << phases << rest;
   return p;
 }
+std::string csv(const std::string& name, const std::string& text) {
+  const std::string p = ::testing::TempDir() + name;
+  std::ofstream(p) << text;
+  return p;
+}
 const std::string kOne =
     "  - {name: a, material: {density: 1000, youngs_modulus: 1.0e8}, size_distribution: {kind: monodisperse, diameter: 1.0e-3}}\n";
 }  // namespace
 
 TEST(PackCli, BadInputExits2NamingFieldAndLeavesNoOutput) {
-  const std::string out = ::testing::TempDir() + "bad.h5";
+  const std::string out = ::testing::TempDir() + "bad.h5", js = ::testing::TempDir() + "bad.json";
   fs::remove(out);
+  fs::remove(js);
   struct Case {
     std::string phases, rest, needle;
   };
@@ -49,14 +55,32 @@ TEST(PackCli, BadInputExits2NamingFieldAndLeavesNoOutput) {
       {"  - {name: a, material: {density: 1000, youngs_modulus: 1e8}, size_distribution: {kind: tabulated, file: /nonexistent.csv}}\n",
        "target: {pressure: 100}\n", "/nonexistent.csv"},
       {kOne, "target: {pressure: 100}\nbogus: 1\n", "bogus"},
+      // zero size
+      {"  - {name: a, material: {density: 1000, youngs_modulus: 1e8}, size_distribution: {diameter: 0}}\n",
+       "target: {pressure: 100}\n", "diameter"},
+      // unreadable CSVs: a non-numeric row (named with its row), a table that does not end at 1
+      {"  - {name: a, material: {density: 1000, youngs_modulus: 1e8}, size_distribution: {kind: tabulated, file: " +
+           csv("garbled.csv", "diameter_m,cumulative\n1e-6,0.2\n2e-6,abc\n") + "}}\n",
+       "target: {pressure: 100}\n", "abc"},
+      {"  - {name: a, material: {density: 1000, youngs_modulus: 1e8}, size_distribution: {kind: tabulated, file: " +
+           csv("short.csv", "1e-6,0.2\n2e-6,0.7\n") + "}}\n",
+       "target: {pressure: 100}\n", "must be 1"},
+      // a solid fraction this distribution cannot reach: refused when the packing jams (overlaps
+      // reach 10 % of a radius), before anything is written
+      {"  - {name: a, material: {density: 1000, youngs_modulus: 1e8}, size_distribution: {kind: lognormal, diameter: 1e-3, sigma: 0.3}}\n",
+       "target: {solid_fraction: 0.97}\n", "not reachable"},
+      {kOne, "target: {solid_fraction: 1.2}\n", "1.2"},
+      {kOne, "target: {pressure: 100}\nprotocol: {method: fast}\n", "fast"},
   };
   int k = 0;
   for (const auto& c : cases) {
     const auto cfg = config("bad" + std::to_string(k++) + ".yaml", c.phases, c.rest);
-    const CliRun r = run(cfg + " -q -o " + out);
+    const CliRun r = run(cfg + " -q -o " + out + " --json " + js);
     EXPECT_EQ(r.code, 2) << r.out;
     EXPECT_NE(r.out.find(c.needle), std::string::npos) << r.out;
     EXPECT_FALSE(fs::exists(out));
+    EXPECT_FALSE(fs::exists(js));
+    EXPECT_FALSE(fs::exists(fs::path(out).replace_extension(".xdmf")));
   }
 }
 
