@@ -319,6 +319,11 @@ Result carve(const Packing& in, const Macropores& pores, const Options& opt) {
   }
   rep.target_grid = ng;
   const double rc = std::cbrt(3 * V / (4 * kPi * double(ng) * ng * ng));  // ball of one grid cell's volume
+  // A capped distance (narrow band) only says |d| >= band: for the fractions it is infinitely far.
+  const double band = mp.band();
+  const auto uncap = [band](double d) {
+    return std::abs(d) >= band * (1 - 1e-6) ? std::copysign(std::numeric_limits<double>::infinity(), d) : d;
+  };
   double sum_in = 0, sum_out = 0, sum_cov = 0;
   const Box ibox = opt.mapping.use_image_box ? opt.mapping.image_box : pores.bounds();
 #pragma omp parallel for reduction(+ : sum_in, sum_out, sum_cov) schedule(dynamic, 1)
@@ -327,7 +332,7 @@ Result carve(const Packing& in, const Macropores& pores, const Options& opt) {
       for (int i = 0; i < ng; ++i) {
         const Vec3 s{(i + 0.5) / ng, (j + 0.5) / ng, (k + 0.5) / ng};
         const Vec3 x = in.cell.origin + in.cell.h * s;
-        const double d = mp.distance(x);
+        const double d = uncap(mp.distance(x));
         sum_in += inside_fraction(d, rc, 0);
         sum_out += 1 - inside_fraction(d - rep.outside_margin, rc, 0);
         if (!opt.mapping.tile) sum_cov += box_distance(ibox, mp.to_image(x)) < 0;
@@ -348,7 +353,6 @@ Result carve(const Packing& in, const Macropores& pores, const Options& opt) {
   FractionEval frac{mp, opt.method, unit_ball_points(opt.samples_per_diameter)};
   res.removed.assign(n, 0);
   long n_cut = 0;
-  const double band = mp.band();
 #pragma omp parallel for reduction(+ : n_cut) schedule(dynamic, 1024)
   for (std::ptrdiff_t ii = 0; ii < std::ptrdiff_t(n); ++ii) {
     const std::size_t i = std::size_t(ii);
@@ -426,7 +430,7 @@ Result carve(const Packing& in, const Macropores& pores, const Options& opt) {
     const std::size_t i = std::size_t(ii);
     const double r = Q.radius[i], v = sphere_volume(r);
     vafter += v;
-    const double d = mp.distance(Q.position[i]);
+    const double d = uncap(mp.distance(Q.position[i]));
     vout += v * (1 - inside_fraction(d - rep.outside_margin, r, 0));
   }
   rep.solid_fraction_after = vafter / V;

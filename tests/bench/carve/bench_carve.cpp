@@ -85,7 +85,7 @@ TEST(BenchCarve, MillionParticlesLevelSet512) {
   t = now();
   const auto ls = load_level_set(path);
   const double t_read = now() - t;
-  const Result r = carve(p, *ls, o);
+  const Result r = tomodem::carve::carve(p, *ls, o);
   const double total = now() - t;
   const auto& rp = r.report;
   std::cout << "particles " << p.particles.size() << ", removed " << rp.n_removed << ", cut " << rp.n_cut << "\n"

@@ -116,7 +116,7 @@ TEST(CarveGeometry, LabelVolumeDistanceIsEuclidean) {
   const auto lv = load_label_volume(dir + "/labels.h5", "/volume", {2});
   const Vec3 c = ph.macropore_centres[0];
   // Exact EDT: at the centre −(R − ½ voxel) within the digitisation (one voxel).
-  EXPECT_NEAR(lv->distance(c), -R, 1.0 * h);
+  EXPECT_NEAR(lv->distance(c), -(R - 0.5 * h), 1.0 * h);
   EXPECT_NEAR(lv->distance(c + Vec3{R + 5 * h, 0, 0}), 5 * h, 1.0 * h);
   EXPECT_THROW(load_label_volume(dir + "/labels.h5", "/volume", {7}), InputError);  // no such label
 }
@@ -164,7 +164,7 @@ TEST(CarveConnectivity, LatticeOneClusterThenFloaters) {
       [&](const Vec3& x) { return std::abs(norm(x - site) - a) - 0.2 * a; },  // a spherical shell of radius a
       Box{{0, 0, 0}, {5 * a, 5 * a, 5 * a}}, a / 20);
   Options o;
-  const Result res = carve(p, *shell, o);
+  const Result res = tomodem::carve::carve(p, *shell, o);
   EXPECT_EQ(res.report.n_removed, 6u);
   EXPECT_EQ(res.report.after.n_floating_particles, 1);
   EXPECT_EQ(res.report.after.n_clusters, 2);
@@ -176,9 +176,9 @@ TEST(CarveRefuses, NoOverlapNoInteriorEverything) {
   const auto ball = make_analytic([](const Vec3& x) { return norm(x - Vec3{5e-4, 5e-4, 5e-4}) - 2e-4; }, img, 1e-5);
   Options o;
   o.mapping.offset = {5e-3, 0, 0};  // the image lies beside the packing
-  EXPECT_THROW(carve(p, *ball, o), InputError);
+  EXPECT_THROW(tomodem::carve::carve(p, *ball, o), InputError);
   const auto all = make_analytic([](const Vec3&) { return -1.0; }, img, 1e-5);
-  EXPECT_THROW(carve(p, *all, Options{}), InputError);  // every particle would go
+  EXPECT_THROW(tomodem::carve::carve(p, *all, Options{}), InputError);  // every particle would go
   const std::string dir = temp_dir("unit_refuse");
   image::Mask empty(image::Dims{16, 16, 16}, 0);
   empty.spacing = {1e-5, 1e-5, 1e-5};

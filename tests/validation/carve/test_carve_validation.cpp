@@ -35,7 +35,7 @@ TEST(CarveValidation, SpherePhantomLevelSetWithinOnePercent) {
     opt.rule = rule;
     opt.mapping.use_image_box = true;  // the phantom's voxel box (a level set stores no extent)
     opt.mapping.image_box = {{-0.5 * h, -0.5 * h, -0.5 * h}, {63.5 * h, 63.5 * h, 63.5 * h}};
-    const Result r = carve(p, *ls, opt);
+    const Result r = tomodem::carve::carve(p, *ls, opt);
     const auto& rp = r.report;
     const double analytic = sphere_volume(R) / (L * L * L);
     report(std::string(rule == Rule::centre ? "centre" : "fraction 0.5") + " rule: target", rp.macroporosity_target);
@@ -80,8 +80,8 @@ TEST(CarveValidation, LamellarPhantomLevelSetAndLabels) {
   Options opt;
   opt.mapping.use_image_box = true;  // the phantom's voxel box for both inputs
   opt.mapping.image_box = {{-0.5 * h, -0.5 * h, -0.5 * h}, {63.5 * h, 63.5 * h, 63.5 * h}};
-  const Result a = carve(p, *ls, opt);
-  const Result b = carve(p, *lv, opt);
+  const Result a = tomodem::carve::carve(p, *ls, opt);
+  const Result b = tomodem::carve::carve(p, *lv, opt);
   report("truth voxel fraction", truth);
   report("level set: target", a.report.macroporosity_target);
   report("level set: achieved", a.report.macroporosity_achieved);
@@ -125,10 +125,10 @@ TEST(CarveValidation, FractionRuleErrorShrinksWithParticleSize) {
       o.rule = Rule::fraction;
       o.fraction = 0.2;
       o.target_grid = 128;  // the smoothed-cap integral of a sphere of 38 grid cells: error < 1e-4
-      const Result r = carve(p, *ball, o);
+      const Result r = tomodem::carve::carve(p, *ball, o);
       e += (r.report.macroporosity_achieved - r.report.macroporosity_target) / reps;
       o.fraction = 0.5;
-      const Result r5 = carve(p, *ball, o);
+      const Result r5 = tomodem::carve::carve(p, *ball, o);
       e_half += (r5.report.macroporosity_achieved - r5.report.macroporosity_target) / reps;
       if (ratio >= 10) EXPECT_NEAR(r5.report.macroporosity_achieved, r5.report.macroporosity_target, 0.01);
     }
@@ -159,7 +159,7 @@ TEST(CarveValidation, MeshAndLevelSetSameRemovedSet) {
   Options o;
   o.mapping.use_image_box = true;
   o.mapping.image_box = bl;
-  const Result a = carve(p, *ls, o), b = carve(p, *mesh, o);
+  const Result a = tomodem::carve::carve(p, *ls, o), b = tomodem::carve::carve(p, *mesh, o);
   long differ = 0, differ_uncut = 0;
   for (std::size_t i = 0; i < p.particles.size(); ++i)
     if (a.removed[i] != b.removed[i]) {
@@ -212,7 +212,7 @@ TEST(CarveValidation, PoreFormerRouteEqualsCarvingTheSameSpheres) {
   Options o;
   o.mapping.fit = true;   // the pore-former cell onto the homogeneous cell (scale ≈ 1)
   o.mapping.tile = true;
-  const Result res = carve(h.packing, *spheres, o);
+  const Result res = tomodem::carve::carve(h.packing, *spheres, o);
   report("pore formers", double(c.size()));
   report("pore-former route macroporosity", m_pf);
   report("carve target", res.report.macroporosity_target);
