@@ -38,12 +38,35 @@ int lattice_basis(const std::string& a) { return a == "simple_cubic" ? 1 : (a ==
 
 /// Isotropic affine rescale of the cell and the positions about its origin to solid fraction
 /// `phi` (an isotropic compression moves contacts only along their normals: tangential springs
-/// need no increment).
-void set_solid_fraction(dem::Simulation& sim, double vsolid, double phi) {
+/// need no increment). Bonded aggregates move rigidly with their centroid, so the step does not
+/// strain their bonds.
+void set_solid_fraction(dem::Simulation& sim, double vsolid, double phi, const std::vector<std::vector<int>>& clusters) {
   const double s = std::cbrt(vsolid / phi / sim.cell().volume());
   auto& c = sim.cell();
-  for (auto& xi : sim.particles().x) xi = c.origin + s * (xi - c.origin);
+  auto& x = sim.particles().x;
+  std::vector<Vec3> before;
+  if (!clusters.empty()) before = x;
+  for (auto& xi : x) xi = c.origin + s * (xi - c.origin);
+  const Mat3 h0 = c.h, hinv = c.h.inverse();
   c.h *= s;
+  for (const auto& cl : clusters) {
+    // Members unwrapped to the first one (minimum image), their centroid scaled.
+    // Each member keeps its periodic image (the bonds' image vectors refer to it).
+    const Vec3 x0 = before[std::size_t(cl[0])];
+    std::vector<Vec3> rel, img;
+    Vec3 g;
+    for (int i : cl) {
+      Vec3 d = before[std::size_t(i)] - x0, f = hinv * d;
+      for (int k = 0; k < 3; ++k) f[k] = std::round(f[k]);
+      d -= h0 * f;
+      rel.push_back(d);
+      img.push_back(f);
+      g += d;
+    }
+    g *= 1.0 / double(cl.size());
+    const Vec3 centre = c.origin + s * (x0 + g - c.origin);
+    for (std::size_t k = 0; k < cl.size(); ++k) x[std::size_t(cl[k])] = centre + (rel[k] - g) + c.h * img[k];
+  }
   sim.invalidate_neighbors();
 }
 
@@ -67,7 +90,8 @@ struct QuasiStaticResult {
 /// energy falls below 1e-16 per particle of the law's energy scale (k d² or E* d³), and is known
 /// to be below the target once its energy is under 1 % of the target's (E ∝ q^α from the last
 /// jammed state), which ends minimisations far below the target early.
-QuasiStaticResult quasistatic(dem::Simulation& sim, const PackSpec& spec, double vsolid, double dmean, PackReport& rep,
+QuasiStaticResult quasistatic(dem::Simulation& sim, const PackSpec& spec, double vsolid, double dmean,
+                              const std::vector<std::vector<int>>& clusters, PackReport& rep,
                               const std::function<void(const std::string&)>& say) {
   QuasiStaticResult out;
   const std::size_t n = sim.particles().size();
@@ -106,7 +130,7 @@ QuasiStaticResult quasistatic(dem::Simulation& sim, const PackSpec& spec, double
     dem::FireResult r;
     do {
       phi = std::min(spec.target_solid_fraction, phi + kPhiStep);
-      set_solid_fraction(sim, vsolid, phi);
+      set_solid_fraction(sim, vsolid, phi, clusters);
       r = relax(floor0);
       if (r.last.max_overlap_ratio > 0.1) break;  // the caller refuses the target
     } while (phi < spec.target_solid_fraction && out.steps < spec.max_steps);
@@ -133,7 +157,9 @@ QuasiStaticResult quasistatic(dem::Simulation& sim, const PackSpec& spec, double
   say("compress-relax (FIRE) to pressure " + num(pt) + " Pa from solid fraction " + num(phi));
   while (out.steps < spec.max_steps) {
     double floor = floor0;
-    if (!jammed.empty() && !adhesive)
+    // Predicted downwards only (from a jammed state above the target), and not when bonds store
+    // energy of their own.
+    if (!jammed.empty() && !adhesive && sim.bonds().size() == 0 && jammed.back().q >= qt)
       floor = std::max(floor, 0.01 * jammed.back().energy * std::pow(qt / jammed.back().q, alpha));
     const dem::FireResult r = relax(floor);
     const double p = r.below_floor ? 0.0 : std::max(r.last.pressure, 0.0);
@@ -168,7 +194,7 @@ QuasiStaticResult quasistatic(dem::Simulation& sim, const PackSpec& spec, double
     next = std::clamp(next, phi - kMaxPhiStep, phi + kMaxPhiStep);
     if (std::abs(next - phi) < 1e-10 * phi) break;  // no progress left
     phi = next;
-    set_solid_fraction(sim, vsolid, phi);
+    set_solid_fraction(sim, vsolid, phi, clusters);
   }
   if (!out.converged && upper.set) {  // end on the jammed side of a collapsed bracket
     sim.particles().x = upper.x;
@@ -442,7 +468,7 @@ PackOutput make_packing(const PackSpec& spec, const std::function<void(const std
   rep.method = lattice ? "lattice" : spec.method;
   const bool quasi = !lattice && spec.method == "quasistatic";
   if (quasi) {
-    const QuasiStaticResult q = quasistatic(sim, spec, vsolid, dmean, rep, say);
+    const QuasiStaticResult q = quasistatic(sim, spec, vsolid, dmean, clusters, rep, say);
     steps = q.steps;
     m = q.last;
     if (spec.target == Target::solid_fraction) refuse_overlap(m);
