@@ -108,7 +108,7 @@ struct ExplicitOptions {
   long max_steps = 50'000'000;
   int threads = 1;
   bool quiet = true;
-  /// Run again over half the loading time; E_error = max(slope spread, |E(T) − E(T/2)| / E, largest
+  /// Run again over half the loading time; E_error = max(slope spread, 2 |E(T) − E(T/2)| / E, largest
   /// strain) (rate protocol and increments alike; costs 1.5× the single run).
   bool rate_check = true;
 };
@@ -116,7 +116,7 @@ struct ExplicitOptions {
 struct ExplicitResult {
   double E = 0, nu = 0, E_error = 0, nu_error = 0;
   double E_error_spread = 0;         ///< largest relative deviation of a segment slope from the fit
-  double E_error_rate = 0;           ///< rate check: |E(T) − E(T/2)| / E(T) (0 without it)
+  double E_error_rate = 0;           ///< rate check: 2 |E(T) − E(T/2)| / E(T) (0 without it)
   double E_error_strain = 0;         ///< finite-strain floor: the largest strain reached
   double E_half_time = 0;            ///< rate check: E over half the loading time
   double strain_rate = 0, time_step = 0, transit_time = 0;
