@@ -1,9 +1,11 @@
 // tomodem-sinter from the command line: outputs and summary keys of a small free-sintering run,
-// and bad input (exit 2 with file, field and value).
+// and bad input (exit 2 with file, field and value); tomodem-bond's sinter method (necks -> bonds).
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -97,6 +99,39 @@ TEST_F(SinterCli, FreeSinteringWritesCurvePackingWithNecksAndSummary) {
   EXPECT_GT(j["mean_neck_ratio"].get<double>(), 0.1);
   const std::string csv = slurp(dir / "out" / "densification.csv");
   EXPECT_EQ(csv.rfind("step,time_s,temperature_K,relative_density", 0), 0u) << csv.substr(0, 80);
+  // Neck-size distribution: every neck in one bin, bins 0.025 wide, fractions adding up to 1.
+  const std::string necks = slurp(dir / "out" / "necks.csv");
+  EXPECT_EQ(necks.rfind("neck_ratio_lower,neck_ratio_upper,count,fraction", 0), 0u) << necks.substr(0, 80);
+  double count = 0, fraction = 0;
+  {
+    std::istringstream in(necks);
+    std::string line;
+    std::getline(in, line);
+    while (std::getline(in, line)) {
+      double lo, hi, c, f;
+      char comma;
+      std::istringstream l(line);
+      l >> lo >> comma >> hi >> comma >> c >> comma >> f;
+      EXPECT_NEAR(hi - lo, 0.025, 1e-12);
+      count += c;
+      fraction += f;
+    }
+  }
+  EXPECT_EQ(count, j["bonds"].get<double>());
+  EXPECT_NEAR(fraction, 1.0, 1e-9);
+  const auto& q = j["neck_ratio"];
+  EXPECT_LE(q["p10"].get<double>(), q["p50"].get<double>());
+  EXPECT_LE(q["p50"].get<double>(), q["p90"].get<double>());
+  EXPECT_LE(q["p90"].get<double>(), q["max"].get<double>());
+  // A jittered lattice sinters its necks nearly alike: the median is the mean within 5 %.
+  EXPECT_NEAR(q["p50"].get<double>(), j["mean_neck_ratio"].get<double>(), 0.05 * j["mean_neck_ratio"].get<double>());
+  // Plots (PNG + SVG) when gnuplot is installed; the test run passes -q but not --no-plot.
+  if (std::system("command -v gnuplot >/dev/null 2>&1") == 0)
+    for (const char* stem : {"densification", "densification_temperature", "shrinkage", "necks"})
+      for (const char* ext : {".png", ".svg"}) {
+        const fs::path f = dir / "out" / (std::string(stem) + ext);
+        EXPECT_TRUE(fs::exists(f) && fs::file_size(f) > 1000) << f;
+      }
   const tomodem::Packing p = tomodem::read_packing((dir / "out" / "sintered.h5").string());
   EXPECT_EQ(p.particles.size(), 32u);
   ASSERT_GT(p.bonds.size(), 100u);  // 12 neighbours each: 192 necks
@@ -116,3 +151,94 @@ TEST_F(SinterCli, BadInputExitsTwoNamingFieldAndValue) {
   expect_bad(with("to: 1600", "to: 700"), "sintering.temperature", "never reaches sintering temperatures");
   expect_bad(with("{normal: sintering}", "{normal: sintering, tangential: mindlin}"), "physics.tangential", "mindlin");
 }
+
+#ifdef TOMODEM_HAVE_BOND
+namespace {
+// A perfect FCC green packing of 32 alumina spheres (2³ cells, neighbours overlapping by 0.2 % of
+// d) in a periodic cell, written in the shared data model, and the sintering settings for it.
+void write_green(const fs::path& path) {
+  tomodem::Packing g;
+  const double a = 2.82277e-6;
+  const double sites[4][3] = {{0, 0, 0}, {0.5, 0.5, 0}, {0.5, 0, 0.5}, {0, 0.5, 0.5}};
+  for (int x = 0; x < 2; ++x)
+    for (int y = 0; y < 2; ++y)
+      for (int z = 0; z < 2; ++z)
+        for (const auto& s : sites) {
+          g.particles.position.push_back({(x + s[0] + 0.25) * a, (y + s[1] + 0.25) * a, (z + s[2] + 0.25) * a});
+          g.particles.radius.push_back(1.0e-6);
+          g.particles.phase.push_back(0);
+        }
+  g.cell = tomodem::Cell::box({0, 0, 0}, {2 * a, 2 * a, 2 * a}, true);
+  tomodem::Material m;
+  m.name = "alumina";
+  m.youngs_modulus = 380e9;
+  m.poisson_ratio = 0.22;
+  m.density = 3950;
+  m.surface_energy = 1.0;
+  g.materials.push_back(m);
+  tomodem::write_packing(path.string(), g);
+}
+const std::string kSettings = R"(sintering:
+  temperature:
+    start: 300
+    segments: [{rate: 50, to: 1600}, {hold: 5000}]
+  phases:
+    - {material: alumina, atomic_volume: 8.47e-30, boundary_diffusion: 8.6e-10, activation_energy: 418.0e3, dihedral_angle: 150}
+)";
+}  // namespace
+
+TEST_F(SinterCli, BondSinterMethodTurnsTheNecksIntoBondsAtTheTargetDensity) {
+  write_green(dir / "green.h5");
+  std::ofstream(dir / "sinter.yaml") << kSettings;
+  auto bond = [&](const std::string& args) {
+    const std::string cmd = std::string(TOMODEM_BIN_DIR) + "/tomodem-bond " + (dir / "green.h5").string() + " -o " +
+                            (dir / "bonded.h5").string() + " -q " + args + " > " + (dir / "stdout.txt").string() +
+                            " 2> " + (dir / "stderr.txt").string();
+    const int status = std::system(cmd.c_str());
+    return Result{WEXITSTATUS(status), slurp(dir / "stdout.txt"), slurp(dir / "stderr.txt")};
+  };
+  const std::string settings = " --sinter-config " + (dir / "sinter.yaml").string();
+
+  // Bad input first: exit 2, the option or file named, no output.
+  Result r = bond("--rule sinter --target-density 0.78");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("--sinter-config"), std::string::npos) << r.err;
+  r = bond("--rule sinter --target-density 0.6" + settings);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("--target-density"), std::string::npos) << r.err;
+  std::ofstream(dir / "bad.yaml") << kSettings << "physics: {tangential: mindlin}\n";
+  r = bond("--rule sinter --target-density 0.78 --sinter-config " + (dir / "bad.yaml").string());
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("bad.yaml"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("mindlin"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "bonded.h5"));
+
+  r = bond("--rule sinter --target-density 0.78" + settings);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["n_bonds"].get<long>(), 192);  // 32 spheres × 12 neighbours / 2
+  // The density of the written packing (tomodem-bond's own lens sum) is at the target; the stop
+  // is checked every 10 steps, so it may pass the target by one check's densification.
+  EXPECT_GE(j["relative_density"].get<double>(), 0.78 - 1e-9);
+  EXPECT_LT(j["relative_density"].get<double>(), 0.785);
+  EXPECT_GT(j["sintering"]["time_s"].get<double>(), 0);
+  EXPECT_TRUE(j["clusters"]["main_spans_cell"].get<bool>());
+  // A perfect lattice sinters every neck alike (p10 = p90 but for round-off), and far beyond the
+  // initial neck: a/R from 0.09 (Coble's a² = 2Rδ of the green overlap) to above 0.2.
+  const double p10 = j["neck_ratio"]["p10"].get<double>(), p90 = j["neck_ratio"]["p90"].get<double>();
+  EXPECT_NEAR(p10, p90, 1e-4 * p90);
+  EXPECT_GT(p10, 0.2);
+  // Each bond's rest length is the centre distance through the periodic cell (minimum image: the
+  // bonds are shorter than half the cell).
+  const tomodem::Packing p = tomodem::read_packing((dir / "bonded.h5").string());
+  ASSERT_EQ(p.bonds.size(), 192u);
+  const double L = p.cell.h(0, 0);
+  EXPECT_NEAR(p.cell.h(1, 1), L, 1e-6 * L);  // isotropic free sintering of a cubic lattice
+  for (std::size_t b = 0; b < p.bonds.size(); ++b) {
+    tomodem::Vec3 d = p.particles.position[std::size_t(p.bonds.j[b])] - p.particles.position[std::size_t(p.bonds.i[b])];
+    for (int k = 0; k < 3; ++k) d[k] -= L * std::round(d[k] / L);
+    EXPECT_NEAR(std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z), p.bonds.rest_length[b], 1e-9 * L);
+    EXPECT_NEAR(p.bonds.radius[b] / 1.0e-6, p10, 0.02);  // radii grew by < 2 % (volume conservation)
+  }
+}
+#endif
