@@ -43,7 +43,7 @@ struct AmgOptions {
   int aggregate_radius = 1;   ///< an aggregate is a root and its free coupled nodes up to this many hops
   bool smooth = true;         ///< smoothed prolongator P = (I − ω D⁻¹A) P_tent; false: plain aggregation
   int sweeps = 2;             ///< damped block-Jacobi sweeps before and after the coarse correction
-  int coarse_size = 2000;     ///< unknowns below which a level is solved directly (dense LDLᵀ)
+  int coarse_size = 500;      ///< unknowns below which a level is solved directly (dense LDLᵀ: O(n²) per cycle)
   int max_levels = 12;
 };
 
