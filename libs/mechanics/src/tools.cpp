@@ -212,18 +212,7 @@ std::string run_young(const YoungConfig& c) {
   Packing& p = net.packing;
   if (p.bonds.size() == 0)
     throw InputError(c.input, "/bonds", "missing", "a packing without bonds: make the network with tomodem-bond first");
-  // Material overrides (every phase).
-  if (c.youngs_modulus != 0 || c.poisson_ratio > -2 || c.density != 0) {
-    if (p.materials.empty()) {
-      const int n = 1 + *std::max_element(p.particles.phase.begin(), p.particles.phase.end());
-      for (int k = 0; k < n; ++k) p.materials.push_back(Material{"phase" + std::to_string(k)});
-    }
-    for (Material& m : p.materials) {
-      if (c.youngs_modulus != 0) m.youngs_modulus = c.youngs_modulus;
-      if (c.poisson_ratio > -2) m.poisson_ratio = c.poisson_ratio;
-      if (c.density != 0) m.density = c.density;
-    }
-  }
+  override_materials(p, c.youngs_modulus, c.poisson_ratio, c.density);  // every phase
   const bool want_explicit = c.method != "implicit", want_implicit = c.method != "explicit";
   const std::vector<dem::BondLaw> laws = bond_laws(p, c.input, c.law, want_explicit);
   json out = {{"tool", "tomodem-young"}, {"version", version_string()}, {"input", c.input},

@@ -11,33 +11,19 @@
 #include <string>
 
 #include "../../validation/network/lattice.hpp"
+#include "../measure.hpp"
 #include "tomodem/network/conductivity.hpp"
 
 using namespace tomodem;
 using namespace tomodem::network;
 
+using tomodem::measure::cpu_seconds;
+using tomodem::measure::load_average;
+using tomodem::measure::peak_rss_mb;
+
 namespace {
 double seconds(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-double cpu_seconds() {
-  timespec t{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
-  return t.tv_sec + 1e-9 * t.tv_nsec;
-}
-double load_average() {
-  std::ifstream in("/proc/loadavg");
-  double l = 0;
-  in >> l;
-  return l;
-}
-long peak_rss_kb() {
-  std::ifstream in("/proc/self/status");
-  std::string key;
-  long v = 0;
-  while (in >> key)
-    if (key == "VmHWM:") { in >> v; break; }
-  return v;
 }
 const Network& million() {
   static const Network net = [] {
@@ -77,7 +63,7 @@ double bench(Preconditioner pc) {
               "peak RSS %.0f MB, sigma %.6g, conservation %.1e\n",
               to_string(pc).c_str(), s.unknowns, s.nonzeros, s.iterations, s.residual, s.assemble_time_s,
               s.setup_time_s, s.solve_time_s, s.assemble_time_s + s.setup_time_s + s.solve_time_s, wall,
-              s.memory_bytes / 1e6, peak_rss_kb() / 1e3, r.sigma_eff, r.conservation_error);
+              s.memory_bytes / 1e6, peak_rss_mb(), r.sigma_eff, r.conservation_error);
   EXPECT_TRUE(s.converged);
   EXPECT_LE(s.residual, 1.01e-8);
   EXPECT_GE(s.unknowns, 980000u);

@@ -13,6 +13,7 @@
 #include <string>
 
 #include "../../validation/fracture/samples.hpp"
+#include "../measure.hpp"
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/plot.hpp"
 
@@ -20,23 +21,9 @@ using namespace tomodem;
 using namespace tomodem::mechanics;
 using namespace tomodem::mechanics::test;
 
+using namespace tomodem::measure;
+
 namespace {
-double load_average() {
-  std::ifstream in("/proc/loadavg");
-  double l = 0;
-  in >> l;
-  return l;
-}
-double cpu_seconds() {
-  timespec t{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
-  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
-}
-double peak_rss_mb() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return double(u.ru_maxrss) / 1024.0;
-}
 std::string out_dir() {
   const char* d = std::getenv("TOMODEM_BENCH_OUT");
   return d ? std::string(d) + "/" : std::string();

@@ -12,6 +12,7 @@
 #include <fstream>
 
 #include "../../validation/mechanics/networks.hpp"
+#include "../measure.hpp"
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/plot.hpp"
 #include "tomodem/mechanics/elastic.hpp"
@@ -19,23 +20,9 @@
 using namespace tomodem;
 using namespace tomodem::mechanics;
 
+using namespace tomodem::measure;
+
 namespace {
-double load_average() {
-  std::ifstream in("/proc/loadavg");
-  double l = 0;
-  in >> l;
-  return l;
-}
-double cpu_seconds() {
-  timespec t{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
-  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
-}
-double peak_rss_mb() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return double(u.ru_maxrss) / 1024.0;
-}
 ImplicitResult implicit(const Network& net, const std::vector<dem::BondLaw>& laws, const std::string& solver,
                         double tol, bool tensor = true) {
   ImplicitOptions o;

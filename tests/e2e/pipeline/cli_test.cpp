@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "../../unit/pipeline/scratch.hpp"
+#include "sharded_pipeline.hpp"
 
 using tomodem::test::Scratch;
 
@@ -289,18 +290,7 @@ TEST(RunCli, ThreadsTakeSlots) {
 
 TEST(RunCli, ShardsThenGatherRunEachCellOnce) {
   Scratch s;
-  s.write("p.yaml", R"(steps:
-  prep:
-    cmd: echo prep > ${outs.0} && echo prep >> runs.txt
-    outs: [prep.txt]
-  cell:
-    matrix: {d: [1, 2, 3, 4]}
-    cmd: cat ${steps.prep.outs.0} > ${outs.0} && echo ${cell} >> runs.txt
-    outs: ['c${cell}.txt']
-  gather:
-    cmd: cat ${steps.cell.outs} > ${outs.0} && echo gather >> runs.txt
-    outs: [table.txt]
-)");
+  s.write("p.yaml", tomodem::pipeline::test::kShardedPipeline);
   // A shard before the shared part is refused (its input is not made yet).
   const auto early = run(s, "p.yaml --shard 1/2");
   EXPECT_EQ(early.code, 1);

@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "../../unit/pipeline/scratch.hpp"
+#include "sharded_pipeline.hpp"
 
 using tomodem::test::Scratch;
 namespace fs = std::filesystem;
@@ -18,18 +19,7 @@ TEST(Slurm, SubmittedArrayAndGatherRunEachStepOnce) {
   if (std::system("sinfo -h -o %T 2>/dev/null | grep -Eq '^(idle|mixed)'") != 0)
     GTEST_SKIP() << "no Slurm with an idle node here (sinfo); the shard logic is tested without it";
   Scratch s;
-  s.write("p.yaml", R"(steps:
-  prep:
-    cmd: echo prep > ${outs.0} && echo prep >> runs.txt
-    outs: [prep.txt]
-  cell:
-    matrix: {d: [1, 2, 3, 4]}
-    cmd: cat ${steps.prep.outs.0} > ${outs.0} && echo ${cell} >> runs.txt
-    outs: ['c${cell}.txt']
-  gather:
-    cmd: cat ${steps.cell.outs} > ${outs.0} && echo gather >> runs.txt
-    outs: [table.txt]
-)");
+  s.write("p.yaml", tomodem::pipeline::test::kShardedPipeline);
   const std::string run = std::string(TOMODEM_BIN_DIR) + "/tomodem-run";
   const std::string exp = "cd '" + s.dir + "' && '" + run + "' export slurm p.yaml --shards 2 --limit 2 --cpus 1 " +
                           "--time 00:05:00 --runner '" + run + "' 2> export.log";
