@@ -165,6 +165,7 @@ int run(int argc, char** argv) {
   j["wall_time_s"] = rep.wall_time_s;
   j["time_step_s"] = {{"min", rep.min_time_step}, {"max", rep.max_time_step}};
   j["max_mass_scaling"] = rep.max_mass_scaling;
+  j["max_viscous_step_ratio"] = rep.max_viscous_step_ratio;
   j["units"] = {{"relative_density", "1"}, {"mean_neck_ratio", "1"}, {"sintering_time_s", "s"},
                 {"temperature_K", "K"}, {"wall_time_s", "s"}, {"shrinkage", "1"}, {"time_step_s", "s"}};
   j["outputs"] = {{"curve", out(settings.curve)}, {"packing", out(settings.packing)}, {"necks", out(settings.necks)}};

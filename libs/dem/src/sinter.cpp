@@ -376,6 +376,48 @@ Scan scan(const Simulation& sim, bool per_particle) {
 
 double axis_length(const Cell& c, int k) { return norm(c.h.col(k)); }
 
+/// Scaled-mass floor of a particle on which a neck may form during the next step (a rattler of the
+/// green packing, a particle with only young necks): m = Δt c(a₁)/f with
+///  - c(a) = η_n(a) + 5η_t(a, R), the rows of Simulation::critical_time_step() (η_t/η_n = η R²/a²:
+///    the tangential rows are ≈ 5η/a_min², 2 000 for η = 1, a_min = 0.05, times η_n alone);
+///  - R = 2 r r_max/(r + r_max), the largest a partner can give, and the most viscous / strongest
+///    partner phase;
+///  - a₀ = a_min R when the contact forms, and a₁² = a₀² + 2R Δh (Coble) after the next step, in
+///    which the sintering force alone pulls the particle from rest by Δh = Δt² F_s(a₀)/m.
+/// So Δt c/m stays at f over the neck's first step too (a young neck grows fast: its quasi-static
+/// approach F_s/η_n ∝ a⁻⁴). m − Δt c(a₁(m))/f increases with m: bisection between Δt c(a₀)/f and
+/// Δt c(a₁(that))/f. Returns max(m_now, floor); m_now at or above the upper end returns at once.
+double fresh_neck_mass(const ContactModel& model, int phase, double R, double a_min, double dt, double f,
+                       double m_now) {
+  const bool tangential = model.tangential == TangentialLaw::viscous;
+  const double a0 = a_min * R;
+  double force = 0;
+  for (int b = 0; b < model.n_phases; ++b) {
+    const PairParams& pp = model.pair(phase, b);
+    if (pp.sinter_delta_b > 0) force = std::max(force, law::NormalSintering::driving_force(pp, a0, R));
+  }
+  auto c_of = [&](double a) {
+    double c = 0;
+    for (int b = 0; b < model.n_phases; ++b) {
+      const PairParams& pp = model.pair(phase, b);
+      if (!(pp.sinter_delta_b > 0)) continue;
+      double cb = law::NormalSintering::viscosity(pp, a);
+      if (tangential) cb += 5 * law::NormalSintering::tangential_viscosity(pp, a, R);
+      c = std::max(c, cb);
+    }
+    return c;
+  };
+  auto need = [&](double m) { return dt * c_of(std::sqrt(a0 * a0 + 2 * R * dt * dt * force / m)) / f; };
+  double lo = dt * c_of(a0) / f;
+  if (!(lo > 0)) return m_now;
+  double hi = need(lo);
+  if (m_now >= hi) return m_now;
+  for (int it = 0; it < 60 && hi > lo * (1 + 1e-6); ++it) {
+    const double mid = std::sqrt(lo * hi);
+    (mid >= need(mid) ? hi : lo) = mid;
+  }
+  return std::max(m_now, hi);
+}
 }  // namespace
 
 DensityState density_state(const Simulation& sim) {
@@ -455,8 +497,7 @@ SinterReport run_sintering(Simulation& sim, const SinterSettings& s, bool progre
   SinterReport rep;
 
   // Rayleigh time of the particles of phases with an elastic (non-sintering) pair, physical mass;
-  // and the viscosity of a fresh neck (a_min R_i with itself), the floor of the scaled masses, so
-  // a contact that forms between two updates is stable too.
+  // and which particles sinter (their scaled masses have the floor of a fresh neck, below).
   std::vector<double> rayleigh(n, 0.0), fresh(n, 0.0);
   {
     apply_temperature(sim.model(), s.phases, s.program.temperature(sim.time()), s.initial_neck);
@@ -546,7 +587,11 @@ SinterReport run_sintering(Simulation& sim, const SinterSettings& s, bool progre
     }
   };
 
+  // Per-particle Σ(η_n + 5η_t) of the necks, kept for the pair parameters (temperature) and radii
+  // of the next force pass; after each step it also gives the stability ratio Δt Σ/m of that step.
   std::vector<double> visc;
+  double T_visc = std::numeric_limits<double>::quiet_NaN();  // the temperature visc was summed at
+  bool visc_stale = true;                                    // radii grown since the last sum
   double dt = 0, dt_free = 0, modulus = 0, T_at_update = -1, rho_last = rho0, t_last = sim.time();
   rep.min_time_step = std::numeric_limits<double>::infinity();
   const double row_dt = (t_end - t_start) / std::max(1, s.output_rows);
@@ -560,7 +605,11 @@ SinterReport run_sintering(Simulation& sim, const SinterSettings& s, bool progre
     const double t = sim.time();
     const double T = s.program.temperature(t);
     apply_temperature(sim.model(), s.phases, T, s.initial_neck);
-    sim.viscous_sums(visc);
+    if (visc_stale || T != T_visc) {
+      sim.viscous_sums(visc);
+      T_visc = T;
+      visc_stale = false;
+    }
 
     // Automatic step (on update steps or when the temperature moved by more than 1 K).
     const bool crosses = t + dt > std::min(s.program.next_boundary(t), t_end);
@@ -593,22 +642,33 @@ SinterReport run_sintering(Simulation& sim, const SinterSettings& s, bool progre
       T_at_update = T;
       since_update = 0;
 
-      if (s.conserve_volume) grow_radii(sc);
+      if (s.conserve_volume) {
+        grow_radii(sc);
+        sim.viscous_sums(visc);  // overlaps (and contacts) changed with the radii
+      }
       (void)V;
     }
     ++since_update;
 
     // Mass scaling: m_i ≥ Σ(η_n + 5η_t) Δt / f (viscous limit) and the Rayleigh time of the
     // elastic pairs ≥ Δt/0.2; physical masses are the floor. Rotational inertia follows.
+    // The floor of a fresh neck (fresh_neck_mass: its tangential rows and its first step's growth)
+    // keeps a contact that forms during the step on a particle with no neck yet (a rattler of the
+    // green packing) stable too: with the normal η_n(a_min r_i) alone as the floor, such a particle
+    // had Δt Σ/m ≈ f (1 + 5η/a_min²) ≈ 1 000 in the step its first neck formed (issue 9's 20 000-
+    // sphere benchmark: a blow-up at step 1 058, then the cell servo and the time step collapsed).
+    double r_max = 0;
+    for (std::size_t i = 0; i < n; ++i)
+      if (fresh[i] > 0) r_max = std::max(r_max, p.r[i]);
     double msum = 0;
     for (std::size_t i = 0; i < n; ++i) {
       double m = m_phys[i];
-      double c = visc[i];
-      if (fresh[i] > 0) {
-        const PairParams& self = sim.model().pair(p.phase[i], p.phase[i]);
-        c = std::max(c, law::NormalSintering::viscosity(self, s.initial_neck * p.r[i]));
-      }
+      const double c = visc[i];
       if (c > 0) m = std::max(m, c * dt / s.viscous_fraction);
+      if (fresh[i] > 0) {
+        const double R = 2 * p.r[i] * r_max / (p.r[i] + r_max);
+        m = fresh_neck_mass(sim.model(), p.phase[i], R, s.initial_neck, dt, s.viscous_fraction, m);
+      }
       if (rayleigh[i] > 0) {
         const double need = dt / (0.2 * rayleigh[i]);
         if (need > 1) m = std::max(m, m_phys[i] * need * need);
@@ -639,12 +699,21 @@ SinterReport run_sintering(Simulation& sim, const SinterSettings& s, bool progre
 
     sim.step();
     ++rep.steps;
+    // Stability of the step just taken: Δt Σ(η_n + 5η_t)/m_i over the contacts its force pass saw
+    // (same positions, radii and pair parameters), < 2 for leapfrog's viscous rows.
+    sim.viscous_sums(visc);
+    T_visc = T;
+    for (std::size_t i = 0; i < n; ++i)
+      rep.max_viscous_step_ratio = std::max(rep.max_viscous_step_ratio, dt * visc[i] * p.inv_m[i]);
 
     const bool row_due = sim.time() >= next_row * (1 - 1e-12) || sim.time() >= t_end * (1 - 1e-12);
     const bool check = s.target_density > 0 && since_update >= s.update_interval;
     if (row_due || check) {
       // Radii brought up to date first, so the density is not late by the update interval.
-      if (s.conserve_volume) grow_radii(scan(sim, true));
+      if (s.conserve_volume) {
+        grow_radii(scan(sim, true));
+        visc_stale = true;
+      }
       const Scan q = scan(sim, false);
       const double dens = q.solid / sim.cell().volume();
       const bool reached = s.target_density > 0 && dens >= s.target_density;

@@ -89,6 +89,10 @@ struct SinterReport {
   long steps = 0;
   double wall_time_s = 0;
   double min_time_step = 0, max_time_step = 0, max_mass_scaling = 0;
+  /// Largest Δt Σ_c(η_n + 5η_t)/m_i of any particle and step, over the contacts of that step's
+  /// force pass: leapfrog's viscous rows are stable below 2; the mass scaling aims at
+  /// viscous_fraction (0.5), a fresh neck on a particle with no other neck gives up to that too.
+  double max_viscous_step_ratio = 0;
 };
 
 /// Relative density of the spheres with the overlaps counted once (pair lenses subtracted;
