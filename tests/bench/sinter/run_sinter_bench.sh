@@ -25,7 +25,7 @@ if [ ! -f "$green" ]; then
 fi
 sed -e "s/@GREEN@/$green/" -e "s/@TARGET@/$TARGET/" "$here/sinter.yaml" > sinter.yaml
 load_before=$(cut -d' ' -f1-3 /proc/loadavg)
-/usr/bin/time -f "%e %M" -o sinter_time.txt \
+/usr/bin/time -f "%e %M %U %S" -o sinter_time.txt \
   "$bin/tomodem-sinter" sinter.yaml -o out --threads "$THREADS" --json summary.json -q > /dev/null
 load_after=$(cut -d' ' -f1-3 /proc/loadavg)
 
@@ -33,7 +33,7 @@ python3 - "$N" "$TARGET" "$THREADS" "$load_before" "$load_after" <<'PY'
 import json, sys
 n, target, threads, load0, load1 = sys.argv[1], float(sys.argv[2]), int(sys.argv[3]), sys.argv[4], sys.argv[5]
 s = json.load(open("summary.json"))
-wall, rss_kb = open("sinter_time.txt").read().split()[-2:]
+wall, rss_kb, user, system = open("sinter_time.txt").read().split()[-4:]
 g = json.load(open(f"green_{n}.json"))
 rho, rho_cell = s["relative_density"], s["relative_density_cell"]
 out = {
@@ -44,14 +44,18 @@ out = {
     "mean_neck_ratio": s["mean_neck_ratio"], "neck_ratio": s.get("neck_ratio"),
     "coordination": s["coordination"], "shrinkage": s["shrinkage"], "steps": s["steps"],
     "sintering_time_s": s["sintering_time_s"], "temperature_K": s["temperature_K"],
-    "wall_time_s": s["wall_time_s"], "process_wall_s": float(wall), "max_rss_MB": int(rss_kb) / 1024,
+    "shrinkage_max_deviation": max(abs(x / (sum(s["shrinkage"]) / 3) - 1) for x in s["shrinkage"]),
+    "max_viscous_step_ratio": s.get("max_viscous_step_ratio"),
+    "wall_time_s": s["wall_time_s"], "process_wall_s": float(wall), "cpu_time_s": float(user) + float(system),
+    "max_rss_MB": int(rss_kb) / 1024,
     "loadavg_before": load0, "loadavg_after": load1, "stop_reason": s["stop_reason"],
 }
 json.dump(out, open("bench.json", "w"), indent=2)
 print(f"N={out['particles']} rho {out['initial_relative_density']:.4f} -> {rho:.4f} (cell {rho_cell:.4f}), "
-      f"{out['steps']} steps, {out['wall_time_s']:.1f} s wall on {threads} threads, "
+      f"{out['steps']} steps, {out['wall_time_s']:.1f} s wall ({out['cpu_time_s']:.1f} s CPU) on {threads} threads, "
       f"{out['max_rss_MB']:.0f} MB, a/R {out['mean_neck_ratio']:.3f}, Z {out['coordination']:.2f}, "
-      f"shrinkage {', '.join(f'{x:.4f}' for x in out['shrinkage'])}, load {load0} -> {load1}")
+      f"shrinkage {', '.join(f'{x:.4f}' for x in out['shrinkage'])} (max deviation {out['shrinkage_max_deviation']:.4f}), "
+      f"max dt*sum(eta)/m {out['max_viscous_step_ratio']:.3f}, load {load0} -> {load1}")
 ok = s["stop_reason"] == "target_density" and rho >= target and out["density_mismatch"] < 0.005
 sys.exit(0 if ok else 1)
 PY

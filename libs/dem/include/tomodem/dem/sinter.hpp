@@ -52,7 +52,7 @@ struct SinterSettings {
   double target_density = 0;        ///< stop at this relative density (0: off)
   double max_time = 0;              ///< stop at this time, s (0: end of the program)
   bool fixed[3] = {false, false, false};  ///< cell axes held (constrained sintering); others stress-free
-  double strain_per_step = 5e-6;    ///< accuracy: strain (ε̇ Δt) allowed per step (2e-5 drifts on random packings)
+  double strain_per_step = 5e-6;    ///< accuracy: strain (ε̇ Δt) allowed per step (docs/sintering.md)
   double neck_area_per_step = 1e-3; ///< accuracy: relative growth of the mean neck area a² per step
   double temperature_step = 2.0;    ///< accuracy: K allowed per step
   double viscous_fraction = 0.5;    ///< Δt / (m_i/Σ η) after mass scaling (< 1: stable)
