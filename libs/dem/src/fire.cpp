@@ -7,6 +7,72 @@
 
 namespace tomodem::dem {
 
+namespace {
+/// Stiffness-scaled masses for the minimisation; the physical ones come back on destruction.
+/// m_i = 2 f max(S_i, F_i) (Δt_max / c)², S_i = Σ_c S_c over the particle's contacts and bonds.
+/// Gershgorin on M⁻¹K: ω_i² ≤ 2 f S_i / m_i ≤ (c/Δt_max)², c = 1.4 against the Verlet limit 2
+/// (physical masses of a monodisperse Z = 6 packing ran at 1.7 by this bound); the margin covers
+/// Hertz contacts stiffening between two updates (S ∝ √δ, updates every check_interval steps).
+/// The floor F_i is three contacts at the overlap a collision can make: a particle moving at
+/// most v Δt = max_move r_min per step into a neighbour, with mass set by the stiffness at that
+/// overlap, stops within δ = √(90/8) v Δt / c (energy balance ½ m v² = (8/15) E* √R* δ^{5/2}
+/// with m = 12 E* √(R* δ) Δt²/c²), at R* = r_i; for the linear law F_i = 3 k_n. Without it an
+/// unjammed packing, whose relaxed contacts are almost unloaded (S ∝ √δ → 0), has light
+/// particles that one fast collision drives through each other (10⁶ particles at φ ≈ 0.45).
+/// f = 6 with rotations: the rotational inertia 0.4 m r² under tangential springs k_t ≤ S_n
+/// adds 5 k_t.
+class ScaledMasses {
+ public:
+  static constexpr double kMargin = 1.4;  // c
+  ScaledMasses(Simulation& sim, double dt_max, double max_move)
+      : p_(sim.particles()), sim_(sim), dt_max_(dt_max) {
+    m_ = p_.m;
+    inv_m_ = p_.inv_m;
+    if (p_.has_rotation()) inv_I_ = p_.inv_I;
+    const ContactModel& model = sim.model();
+    double e_star = 0, k_n = 0;
+    for (const auto& pp : model.pairs) e_star = std::max(e_star, pp.E_star), k_n = std::max(k_n, pp.k_n);
+    const double rmin = *std::min_element(p_.r.begin(), p_.r.end());
+    const double delta = std::sqrt(90.0 / 8.0) * max_move * rmin / kMargin;
+    floor_.resize(p_.size());
+    for (std::size_t i = 0; i < p_.size(); ++i)
+      floor_[i] = model.normal == NormalLaw::linear ? 3 * k_n : 3 * 2 * e_star * std::sqrt(p_.r[i] * delta);
+  }
+  ~ScaledMasses() { restore(); }
+  void restore() {
+    p_.m = m_;
+    p_.inv_m = inv_m_;
+    if (p_.has_rotation()) p_.inv_I = inv_I_;
+  }
+  ScaledMasses(const ScaledMasses&) = delete;
+  ScaledMasses& operator=(const ScaledMasses&) = delete;
+
+  /// From the stiffness sums of the last measurement. False (masses unchanged) when no contact
+  /// carries load.
+  bool update(const Measurements& m) {
+    const std::vector<double>& s = sim_.stiffness_sums();
+    const std::size_t n = p_.size();
+    if (s.size() != n || m.contacts + m.bonds == 0) return false;
+    const double f = p_.has_rotation() ? 6.0 : 1.0, scale = 2 * f * dt_max_ * dt_max_ / (kMargin * kMargin);
+    const bool rot = p_.has_rotation();
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!(inv_m_[i] > 0)) continue;  // fixed particles stay fixed
+      const double mi = scale * std::max(s[i], floor_[i]);
+      p_.m[i] = mi;
+      p_.inv_m[i] = 1 / mi;
+      if (rot && inv_I_[i] > 0) p_.inv_I[i] = 1 / (0.4 * mi * p_.r[i] * p_.r[i]);
+    }
+    return true;
+  }
+
+ private:
+  Particles& p_;
+  Simulation& sim_;
+  double dt_max_;
+  std::vector<double> m_, inv_m_, inv_I_, floor_;
+};
+}  // namespace
+
 FireResult minimise_fire(Simulation& sim, const FireOptions& o) {
   if (sim.cell_control().active())
     throw InputError("", "minimise", "", "FIRE minimises at a fixed cell: stop the cell's deformation and servo first");
@@ -15,11 +81,18 @@ FireResult minimise_fire(Simulation& sim, const FireOptions& o) {
   body.local_damping = 0;
   const double crit = sim.critical_time_step();
   const double dt_max = o.dt_max * crit, dt_min = o.dt_min * crit;
-  double dt = std::min(o.dt_start * crit, dt_max);
-  sim.set_time_step(dt);
   Particles& p = sim.particles();
   const std::size_t n = p.size();
   const bool rot = p.has_rotation();
+  const int threads = std::max(1, sim.settings().threads);
+  // Scaled masses: the step's limit is the network's (kept by the masses), not the Rayleigh time.
+  ScaledMasses masses(sim, dt_max, o.max_move);
+  bool scaled = false;
+  if (o.scale_masses) {
+    scaled = masses.update(sim.measure());  // the stiffness sums of the start state
+  }
+  double dt = std::min(o.dt_start * crit, dt_max);
+  sim.set_time_step(dt, !scaled);
   const auto stop_motion = [&] {
     std::fill(p.v.begin(), p.v.end(), Vec3{});
     if (rot) std::fill(p.omega.begin(), p.omega.end(), Vec3{});
@@ -28,32 +101,43 @@ FireResult minimise_fire(Simulation& sim, const FireOptions& o) {
   double alpha = o.alpha_start;
   long positive = 0;
   FireResult r;
+  const bool parallel = threads > 1 && n > 20000;
+  const double rmin = *std::min_element(p.r.begin(), p.r.end());
   while (r.steps < o.max_steps) {
     sim.step();
     ++r.steps;
-    // Power and norms over the free particles (fixed or prescribed ones keep their velocity).
-    double power = 0, vv = 0, ff = 0, ww = 0, tt = 0;
+    // Power and norms over the free particles (fixed or prescribed ones keep their velocity), in
+    // mass-weighted coordinates (u = √m v, g = F/√m): the mixing turns v towards M⁻¹F, the
+    // preconditioned descent direction, and reduces to Bitzek's rule for equal masses.
+    double power = 0, vv = 0, ff = 0, ww = 0, tt = 0, f2 = 0;
     long nfree = 0;
-    for (std::size_t i = 0; i < n; ++i) {
+#pragma omp parallel for reduction(+ : power, vv, ff, ww, tt, f2, nfree) num_threads(threads) if (parallel)
+    for (long i = 0; i < long(n); ++i) {
       if (p.motion[i] != Motion::free) continue;
       ++nfree;
       power += dot(p.f[i], p.v[i]);
-      vv += norm2(p.v[i]);
-      ff += norm2(p.f[i]);
+      vv += p.m[i] * norm2(p.v[i]);
+      ff += p.inv_m[i] * norm2(p.f[i]);
+      f2 += norm2(p.f[i]);
       if (rot) {
         power += dot(p.torque[i], p.omega[i]);
-        ww += norm2(p.omega[i]);
-        tt += norm2(p.torque[i]);
+        ww += norm2(p.omega[i]) / p.inv_I[i];
+        tt += p.inv_I[i] * norm2(p.torque[i]);
       }
     }
     const double dt_old = dt;
     if (power > 0) {
-      // Translation and rotation are mixed separately (their norms have different units).
+      // Translation and rotation are mixed separately (their norms have different units). No
+      // particle moves more than max_move of the smallest radius in a step.
       const double cv = ff > 0 ? alpha * std::sqrt(vv / ff) : 0, cw = tt > 0 ? alpha * std::sqrt(ww / tt) : 0;
-      for (std::size_t i = 0; i < n; ++i) {
+      const double vmax = o.max_move * rmin / dt;
+#pragma omp parallel for num_threads(threads) if (parallel)
+      for (long i = 0; i < long(n); ++i) {
         if (p.motion[i] != Motion::free) continue;
-        p.v[i] = (1 - alpha) * p.v[i] + cv * p.f[i];
-        if (rot) p.omega[i] = (1 - alpha) * p.omega[i] + cw * p.torque[i];
+        p.v[i] = (1 - alpha) * p.v[i] + (cv * p.inv_m[i]) * p.f[i];
+        if (rot) p.omega[i] = (1 - alpha) * p.omega[i] + (cw * p.inv_I[i]) * p.torque[i];
+        const double v2 = norm2(p.v[i]);
+        if (v2 > vmax * vmax) p.v[i] *= vmax / std::sqrt(v2);
       }
       if (++positive > o.n_min) {
         dt = std::min(dt * o.f_inc, dt_max);
@@ -65,22 +149,24 @@ FireResult minimise_fire(Simulation& sim, const FireOptions& o) {
       positive = 0;
       stop_motion();
     }
-    if (dt != dt_old) sim.set_time_step(dt);
+    if (dt != dt_old) sim.set_time_step(dt, !scaled);
     if (r.steps % o.check_interval == 0 || r.steps == o.max_steps) {
       r.last = sim.measure();
       if (r.last.contacts == 0 || r.last.elastic_energy + r.last.kinetic_energy < o.energy_floor) {
         r.below_floor = true;
         break;
       }
-      const bool balanced = o.force_tolerance > 0 ? ff < o.force_tolerance * o.force_tolerance * double(nfree)
+      const bool balanced = o.force_tolerance > 0 ? f2 < o.force_tolerance * o.force_tolerance * double(nfree)
                                                   : r.last.unbalanced_force_ratio < o.unbalanced_force_ratio;
       if (balanced) {
         r.converged = true;
         break;
       }
+      if (scaled) masses.update(r.last);
     }
   }
   stop_motion();
+  masses.restore();
   body.local_damping = damping;
   if (dt_caller > 0) sim.set_time_step(std::min(dt_caller, sim.critical_time_step()));
   return r;

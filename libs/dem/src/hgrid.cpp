@@ -1,5 +1,7 @@
 #include "hgrid.hpp"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -64,7 +66,7 @@ std::vector<double> hgrid_levels(const std::vector<double>& r) {
 
 void hgrid_half_list(const std::vector<Vec3>& x, const std::vector<double>& r, const Cell& cell, const Vec3* shift,
                      double skin, double reach, std::vector<int32_t>& start, std::vector<int32_t>& jout,
-                     std::vector<uint8_t>& image) {
+                     std::vector<uint8_t>& image, int threads) {
   const std::size_t n = r.size();
   start.assign(n + 1, 0);
   jout.clear();
@@ -131,10 +133,8 @@ void hgrid_half_list(const std::vector<Vec3>& x, const std::vector<double>& r, c
     for (int32_t i : lv.members) lv.items[std::size_t(fill[std::size_t(bin_of[i])]++)] = i;
   }
 
-  // Search: each particle looks into its own level and the levels of larger particles.
-  std::vector<Triple> found;
-  found.reserve(8 * n);
-  for (std::size_t a = 0; a < n; ++a) {
+  // Pairs of particle a with its own level and the levels of larger particles.
+  const auto search_from = [&](std::size_t a, std::vector<Triple>& found) {
     const int la = level[a];
     for (int h = la; h < L; ++h) {
       const Level& lv = lev[std::size_t(h)];
@@ -188,23 +188,44 @@ void hgrid_half_list(const std::vector<Vec3>& x, const std::vector<double>& r, c
         }
       }
     }
+  };
+
+  // Search: each particle looks into its own level and the levels of larger particles. Threads
+  // collect pairs separately; the rows are sorted at the end, so the list does not depend on
+  // the thread count or the schedule.
+  threads = std::max(1, threads);
+  std::vector<std::vector<Triple>> found_by(static_cast<std::size_t>(threads));
+#pragma omp parallel num_threads(threads) if (threads > 1)
+  {
+    std::vector<Triple>& found = found_by[std::size_t(omp_get_thread_num())];
+    found.reserve(8 * n / std::size_t(threads));
+#pragma omp for schedule(dynamic, 4096)
+    for (long ai = 0; ai < long(n); ++ai) {
+      search_from(std::size_t(ai), found);
+    }
   }
 
   // CSR by owner, each row sorted by (j, image).
-  for (const auto& t : found) ++start[std::size_t(t.owner) + 1];
+  for (const auto& found : found_by)
+    for (const auto& t : found) ++start[std::size_t(t.owner) + 1];
   for (std::size_t i = 0; i < n; ++i) start[i + 1] += start[i];
-  jout.resize(found.size());
-  image.resize(found.size());
+  jout.resize(std::size_t(start[n]));
+  image.resize(std::size_t(start[n]));
   {
     std::vector<int32_t> fill(start.begin(), start.end() - 1);
-    for (const auto& t : found) {
-      const int32_t k = fill[std::size_t(t.owner)]++;
-      jout[std::size_t(k)] = t.partner;
-      image[std::size_t(k)] = t.code;
+    for (auto& found : found_by) {
+      for (const auto& t : found) {
+        const int32_t k = fill[std::size_t(t.owner)]++;
+        jout[std::size_t(k)] = t.partner;
+        image[std::size_t(k)] = t.code;
+      }
+      std::vector<Triple>().swap(found);
     }
   }
   std::vector<std::pair<int32_t, uint8_t>> row;
-  for (std::size_t i = 0; i < n; ++i) {
+#pragma omp parallel for num_threads(threads) if (threads > 1) schedule(static) private(row)
+  for (long ii = 0; ii < long(n); ++ii) {
+    const std::size_t i = std::size_t(ii);
     const int32_t b = start[i], e = start[i + 1];
     if (e - b < 2) continue;
     row.clear();

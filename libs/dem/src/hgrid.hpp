@@ -37,10 +37,10 @@ bool use_hgrid(const std::vector<double>& r);
 /// positions must be wrapped into the periodic cell already. The cut-off of a pair is
 /// r_i + r_j + skin + reach, summed in that order (as the linked cells do, so both searches
 /// keep exactly the same pairs). Outputs are replaced; each particle's pairs come sorted by
-/// (j, image).
+/// (j, image), so the list is the same for any thread count.
 void hgrid_half_list(const std::vector<Vec3>& x, const std::vector<double>& r, const Cell& cell, const Vec3* shift,
                      double skin, double reach, std::vector<int32_t>& start, std::vector<int32_t>& j,
-                     std::vector<uint8_t>& image);
+                     std::vector<uint8_t>& image, int threads = 1);
 
 /// Levels the grid would use for these radii (reported by benchmarks): upper radius per level.
 std::vector<double> hgrid_levels(const std::vector<double>& r);

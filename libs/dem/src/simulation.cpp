@@ -316,7 +316,7 @@ struct Simulation::Impl {
     std::vector<uint8_t> new_img;
     if (use_hgrid(p.r)) {  // wide size distributions: hierarchical grid (hgrid.hpp)
       update_image_tables();
-      hgrid_half_list(p.x, p.r, cell, shift, skin, reach_max, new_start, new_j, new_img);
+      hgrid_half_list(p.x, p.r, cell, shift, skin, reach_max, new_start, new_j, new_img, threads);
     } else {
       linked_cells(new_start, new_j, new_img);
     }
@@ -772,8 +772,22 @@ struct Simulation::Impl {
     // Sintering necks interpenetrate by design (Coble's a² = 2Rh): the overlap limit is elastic.
     if (model.normal != NormalLaw::sintering && last.max_overlap_ratio > 0.5) {
       std::ostringstream s;
+      // Name the pair (a scan of the list, only on this error path).
+      std::size_t wi = 0, wj = 0;
+      double worst = -1;
+      for (std::size_t i = 0; i + 1 < start.size(); ++i)
+        for (int k = start[i]; k < start[i + 1]; ++k) {
+          const std::size_t j = std::size_t(nj[k]);
+          const double ratio = (p.r[i] + p.r[j] - norm(p.x[j] + shift[img[k]] - p.x[i])) / std::min(p.r[i], p.r[j]);
+          if (ratio > worst) worst = ratio, wi = i, wj = j;
+        }
       s << "unstable at step " << nstep << " (t = " << t << " s): a contact overlaps by "
-        << last.max_overlap_ratio << " of the smaller radius (limit 0.5). Likely cause: a time step of " << dt
+        << last.max_overlap_ratio << " of the smaller radius (limit 0.5)";
+      if (worst > 0)
+        s << " (particles " << p.id[wi] << " and " << p.id[wj] << ", radii " << p.r[wi] << " and " << p.r[wj]
+          << " m, speeds " << norm(p.v[wi]) << " and " << norm(p.v[wj]) << " m/s, masses " << p.m[wi] << " and "
+          << p.m[wj] << " kg)";
+      s << ". Likely cause: a time step of " << dt
         << " s against a critical estimate of " << network_critical_step()
         << " s, or loads far above what the stiffness can carry.";
       throw NumericalError(s.str());
@@ -1000,10 +1014,11 @@ double Simulation::critical_time_step() const {
   return best;
 }
 
-void Simulation::set_time_step(double dt) {
-  const double crit = critical_time_step();
+const std::vector<double>& Simulation::stiffness_sums() const { return impl_->stiffness; }
+void Simulation::set_time_step(double dt, bool check_limit) {
   if (!(dt > 0) || !std::isfinite(dt))
     throw InputError("", "timestep", std::to_string(dt), "the time step must be a positive number");
+  const double crit = check_limit ? critical_time_step() : dt;
   if (dt > crit) {
     std::ostringstream s;
     s << "above the stable limit " << crit << " s ("

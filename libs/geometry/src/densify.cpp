@@ -130,8 +130,11 @@ QuasiStaticResult quasistatic(dem::Simulation& sim, const PackSpec& spec, double
     dem::FireResult r;
     do {
       phi = std::min(spec.target_solid_fraction, phi + kPhiStep);
+      if (spec.target_solid_fraction - phi < 1e-9 * phi) phi = spec.target_solid_fraction;  // not a round-off step
       set_solid_fraction(sim, vsolid, phi, clusters);
       r = relax(floor0);
+      say("relaxed at phi " + num(phi) + ": p " + num(r.below_floor ? 0.0 : r.last.pressure) + " Pa, Z " +
+          num(r.last.coordination) + ", " + std::to_string(r.steps) + " steps");
       if (r.last.max_overlap_ratio > 0.1) break;  // the caller refuses the target
     } while (phi < spec.target_solid_fraction && out.steps < spec.max_steps);
     out.converged = r.converged || r.below_floor;
@@ -209,6 +212,37 @@ QuasiStaticResult quasistatic(dem::Simulation& sim, const PackSpec& spec, double
     if (b.phi != a.phi && b.q != a.q) rep.jamming_solid_fraction = b.phi - b.q * (b.phi - a.phi) / (b.q - a.q);
   }
   return out;
+}
+
+/// Spatial order of the particles: Morton (Z-order) code of a grid of about one mean diameter
+/// over the periodic box. Random insertion leaves neighbours in space far apart in memory; in
+/// this order the force loops of a large packing stay in cache. Returns new index → old index.
+std::vector<std::size_t> spatial_order(const std::vector<Vec3>& x, const Cell& cell, double dmean) {
+  const Mat3 hinv = cell.h.inverse();
+  int nb[3];
+  for (int k = 0; k < 3; ++k) {
+    const Vec3 col{cell.h(0, k), cell.h(1, k), cell.h(2, k)};
+    nb[k] = std::clamp(int(norm(col) / dmean), 1, 1024);  // 10 bits per axis
+  }
+  const auto spread = [](uint64_t v) {  // bits of v to every third bit
+    uint64_t r = 0;
+    for (int b = 0; b < 10; ++b) r |= ((v >> b) & 1u) << (3 * b);
+    return r;
+  };
+  std::vector<uint64_t> code(x.size());
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    const Vec3 f = hinv * (x[i] - cell.origin);
+    uint64_t c = 0;
+    for (int k = 0; k < 3; ++k) {
+      const double w = f[k] - std::floor(f[k]);
+      c |= spread(uint64_t(std::min(nb[k] - 1, int(w * nb[k])))) << k;
+    }
+    code[i] = c;
+  }
+  std::vector<std::size_t> order(x.size());
+  std::iota(order.begin(), order.end(), std::size_t(0));
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return code[a] < code[b]; });
+  return order;
 }
 
 /// Compact random cluster of `m` spheres (radii r): each new sphere touches a random earlier one
@@ -358,6 +392,22 @@ PackOutput make_packing(const PackSpec& spec, const std::function<void(const std
     cell = Cell::box({0, 0, 0}, {L, L, L}, true);
     say("inserting " + std::to_string(radius.size()) + " particles at solid fraction " + num(spec.initial_solid_fraction));
     pos = insert_random(radius, clusters, offsets, cell, spec.seed);
+    // Renumber in spatial order (clusters and bonds follow).
+    double dsum = 0;
+    for (double r : radius) dsum += 2 * r;
+    const std::vector<std::size_t> order = spatial_order(pos, cell, dsum / double(radius.size()));
+    std::vector<int> new_index(order.size());
+    for (std::size_t k = 0; k < order.size(); ++k) new_index[order[k]] = int(k);
+    const auto permute = [&](auto& v) {
+      auto old = v;
+      for (std::size_t k = 0; k < order.size(); ++k) v[k] = old[order[k]];
+    };
+    permute(pos);
+    permute(radius);
+    permute(phase);
+    for (auto& c : clusters)
+      for (int& i : c) i = new_index[std::size_t(i)];
+    for (auto& [a, b] : bonded) a = new_index[std::size_t(a)], b = new_index[std::size_t(b)];
   } else {
     const int basis = lattice_basis(spec.arrangement);
     const int nc = std::max(1, int(std::lround(std::cbrt(double(spec.n_particles) / basis))));

@@ -73,3 +73,58 @@ TEST(Fire, RefusesADeformingCell) {
   sim.cell_control().velocity_gradient(0, 0) = -1;
   EXPECT_ANY_THROW(dem::minimise_fire(sim, {}));
 }
+
+namespace {
+/// Compressed FCC crystal of Hertz spheres, half of them (at random) `ratio` times lighter.
+dem::Simulation light_and_heavy_fcc(double a, double d, double ratio, uint64_t seed) {
+  std::vector<Vec3> x = dem::lattice_sites("fcc", 4, a);
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-0.02 * d, 0.02 * d);
+  std::bernoulli_distribution light(0.5);
+  Material heavy;
+  heavy.density = 4000;
+  heavy.youngs_modulus = 4e11;
+  heavy.poisson_ratio = 0.2;
+  Material feather = heavy;
+  feather.density = heavy.density / ratio;
+  dem::Particles p;
+  for (auto& xi : x) {
+    const int ph = light(rng) ? 1 : 0;
+    p.add(xi + Vec3{u(rng), u(rng), u(rng)}, 0.5 * d, ph ? feather.density : heavy.density, ph);
+  }
+  dem::ContactModel m;
+  m.normal = dem::NormalLaw::hertz;
+  m.materials = {heavy, feather};
+  m.n_phases = 2;
+  m.finalize();
+  return dem::Simulation(std::move(p), Cell::box({0, 0, 0}, {4 * a, 4 * a, 4 * a}, true), m);
+}
+}  // namespace
+
+TEST(Fire, StiffnessScaledMassesReachTheSameMinimumWhateverTheDensities) {
+  // Masses change the path, not the minimum. Scaled by their contacts' stiffness, the masses no
+  // longer depend on the densities at all (only the time unit does), so the minimisation takes
+  // the same steps for densities 1:1 and 100:1; with physical masses the step is the Rayleigh
+  // time of the light spheres (10× shorter, T_R ∝ √ρ) and the heavy ones lag.
+  // Hertz lattice energy: 6N contacts of (8/15) E* √R* δ^{5/2}, E* = E / (2(1 − ν²)), R* = d/4.
+  const double d = 1e-6, delta = 2e-3 * d, a = std::sqrt(2.0) * (d - delta);
+  const double E_star = 4e11 / (2 * (1 - 0.2 * 0.2));
+  const auto relax = [&](double ratio, bool scaled) {
+    dem::Simulation sim = light_and_heavy_fcc(a, d, ratio, 11);
+    const std::vector<double> m0 = sim.particles().m;
+    dem::FireOptions o;
+    o.unbalanced_force_ratio = 1e-9;
+    o.scale_masses = scaled;
+    const dem::FireResult r = dem::minimise_fire(sim, o);
+    EXPECT_TRUE(r.converged) << "ratio " << ratio << ", scaled " << scaled << ": " << r.steps << " steps";
+    const double n = double(sim.particles().size());
+    const double expected = 6 * n * (8.0 / 15.0) * E_star * std::sqrt(0.25 * d) * std::pow(delta, 2.5);
+    // Force ratio 1e-9 at the unique lattice minimum: energy far better than 1e-6.
+    EXPECT_NEAR(r.last.elastic_energy / expected, 1, 1e-6) << "ratio " << ratio << ", scaled " << scaled;
+    EXPECT_EQ(sim.particles().m, m0);  // physical masses restored
+    return r.steps;
+  };
+  const long scaled_even = relax(1, true), scaled_mixed = relax(100, true), physical_mixed = relax(100, false);
+  EXPECT_EQ(scaled_even, scaled_mixed);
+  EXPECT_LT(scaled_mixed, physical_mixed);
+}

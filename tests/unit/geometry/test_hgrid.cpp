@@ -45,10 +45,11 @@ Particles random_particles(int n, double rmin, double ratio, const Cell& cell, u
   return p;
 }
 
-PairSet pairs_with(NeighborSearch mode, const Particles& p, const Cell& cell, double skin) {
+PairSet pairs_with(NeighborSearch mode, const Particles& p, const Cell& cell, double skin, int threads = 1) {
   set_neighbor_search(mode);
   Settings s;
   s.skin = skin;
+  s.threads = threads;
   Simulation sim(p, cell, linear_model(), s);
   sim.set_time_step(1e-12);
   sim.measure();  // builds the list
@@ -70,6 +71,8 @@ void expect_same(const Particles& p, const Cell& cell, double skin) {
   EXPECT_GT(a.size(), p.size());  // the configuration is dense enough to test something
   EXPECT_EQ(a.size(), b.size());
   EXPECT_TRUE(a == b);
+  // Threads search ranges of particles separately: the same list for any count.
+  EXPECT_TRUE(pairs_with(NeighborSearch::hgrid, p, cell, skin, 3) == b);
 }
 
 }  // namespace

@@ -26,6 +26,17 @@ struct FireOptions {
   /// reaches zero; a caller bracketing a target pressure stops early once it is clearly below).
   double energy_floor = 0;
   long max_steps = 200000;
+  /// Stiffness-scaled masses (density scaling of quasi-static DEM; a Jacobi preconditioner of
+  /// the minimisation): every free particle gets m_i ∝ Σ_c S_c of its contacts, so all particles
+  /// have the same stability margin and the step is set by the contact network instead of the
+  /// Rayleigh time of the smallest particle. The minimum does not depend on the masses; the
+  /// physical masses are restored at the end. Off: physical masses and the Rayleigh limit.
+  bool scale_masses = true;
+  /// Largest move of any particle in one step, fraction of the smallest radius (as LAMMPS's
+  /// min_modify dmax): in an unjammed packing the mixing can send a particle into its
+  /// neighbours faster than the masses (updated every check_interval steps) allow for; the cap
+  /// never binds near a minimum, where the steps are small.
+  double max_move = 0.02;
   int check_interval = 20;  ///< steps between measurements (one extra force pass each)
 };
 
@@ -37,7 +48,7 @@ struct FireResult {
 };
 
 /// Minimises at the current cell (the cell control must be inactive). Local damping is switched
-/// off during the minimisation and the caller's time step and damping are restored afterwards.
+/// off during the minimisation and the caller's time step, damping and masses are restored afterwards.
 /// Velocities are zero at the start and at a converged stop.
 FireResult minimise_fire(Simulation& sim, const FireOptions& options = {});
 

@@ -113,8 +113,13 @@ class Simulation {
   double viscous_sums(std::vector<double>& per_particle) const;
   /// Contact stress of the last tally pass (every step while the cell deforms), Pa, tension positive.
   Mat3 contact_stress() const;
-  /// Sets Δt; throws InputError when it exceeds critical_time_step().
-  void set_time_step(double dt);
+  /// Per-particle Σ S_c of the last tally pass (measure()): tangent normal stiffness of the
+  /// force-carrying contacts and intact bonds, N/m. Empty before the first measurement.
+  const std::vector<double>& stiffness_sums() const;
+  /// Sets Δt; throws InputError when it exceeds critical_time_step(). `check_limit` false is for
+  /// callers that keep the step stable by other means (FIRE with stiffness-scaled masses, whose
+  /// limit is the contact network's, not the Rayleigh time of the physical particles).
+  void set_time_step(double dt, bool check_limit = true);
   double time_step() const;
   double time() const;
   long step_count() const;
