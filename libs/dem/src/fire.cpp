@@ -24,7 +24,7 @@ namespace {
 class ScaledMasses {
  public:
   static constexpr double kMargin = 1.4;  // c
-  ScaledMasses(Simulation& sim, double dt_max, double max_move)
+  ScaledMasses(Simulation& sim, double dt_max, double max_move, double rmin)
       : p_(sim.particles()), sim_(sim), dt_max_(dt_max) {
     m_ = p_.m;
     inv_m_ = p_.inv_m;
@@ -32,7 +32,6 @@ class ScaledMasses {
     const ContactModel& model = sim.model();
     double e_star = 0, k_n = 0;
     for (const auto& pp : model.pairs) e_star = std::max(e_star, pp.E_star), k_n = std::max(k_n, pp.k_n);
-    const double rmin = *std::min_element(p_.r.begin(), p_.r.end());
     const double delta = std::sqrt(90.0 / 8.0) * max_move * rmin / kMargin;
     floor_.resize(p_.size());
     for (std::size_t i = 0; i < p_.size(); ++i)
@@ -85,12 +84,10 @@ FireResult minimise_fire(Simulation& sim, const FireOptions& o) {
   const std::size_t n = p.size();
   const bool rot = p.has_rotation();
   const int threads = std::max(1, sim.settings().threads);
+  const double rmin = *std::min_element(p.r.begin(), p.r.end());
   // Scaled masses: the step's limit is the network's (kept by the masses), not the Rayleigh time.
-  ScaledMasses masses(sim, dt_max, o.max_move);
-  bool scaled = false;
-  if (o.scale_masses) {
-    scaled = masses.update(sim.measure());  // the stiffness sums of the start state
-  }
+  ScaledMasses masses(sim, dt_max, o.max_move, rmin);
+  const bool scaled = o.scale_masses && masses.update(sim.measure());  // stiffness of the start state
   double dt = std::min(o.dt_start * crit, dt_max);
   sim.set_time_step(dt, !scaled);
   const auto stop_motion = [&] {
@@ -102,7 +99,6 @@ FireResult minimise_fire(Simulation& sim, const FireOptions& o) {
   long positive = 0;
   FireResult r;
   const bool parallel = threads > 1 && n > 20000;
-  const double rmin = *std::min_element(p.r.begin(), p.r.end());
   while (r.steps < o.max_steps) {
     sim.step();
     ++r.steps;
