@@ -1,40 +1,186 @@
 #include "tomodem/core/output.hpp"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 #include <xxhash.h>
 
+#include <atomic>
 #include <cerrno>
 #include <chrono>
+#include <climits>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <ctime>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
-#include <unistd.h>
 
 #include "tomodem/core/error.hpp"
 
 namespace tomodem {
 
+namespace {
+namespace fs = std::filesystem;
+
+// Temporaries a signal handler may have to remove. Fixed storage: the handler can neither
+// allocate nor lock. A slot is claimed by CAS on `state` (0 free, 1 being written, 2 live).
+constexpr int kSlots = 128;
+struct Slot {
+  std::atomic<int> state{0};
+  char path[PATH_MAX];
+};
+Slot g_slots[kSlots];
+
+void register_temporary(const std::string& tmp) {
+  if (tmp.size() >= PATH_MAX) return;
+  for (auto& s : g_slots)
+    if (s.state.load() == 2 && tmp == s.path) return;
+  for (auto& s : g_slots) {
+    int expected = 0;
+    if (s.state.compare_exchange_strong(expected, 1)) {
+      std::memcpy(s.path, tmp.c_str(), tmp.size() + 1);
+      s.state.store(2);
+      return;
+    }
+  }
+}
+
+void unregister_temporary(const std::string& tmp) {
+  for (auto& s : g_slots)
+    if (s.state.load() == 2 && tmp == s.path) s.state.store(0);
+}
+
+extern "C" void cleanup_and_reraise(int sig) {
+  remove_registered_temporaries();
+  std::signal(sig, SIG_DFL);
+  std::raise(sig);
+}
+
+std::string errno_text(int e) { return e == ENOSPC ? "no space left on device" : std::strerror(e); }
+}  // namespace
+
 std::string temporary_path(const std::string& final_path) {
   // Same folder as the result, so the final rename stays on one file system (atomic).
-  return final_path + ".tmp" + std::to_string(::getpid());
+  const std::string tmp = final_path + ".tmp" + std::to_string(::getpid());
+  register_temporary(tmp);
+  return tmp;
+}
+
+void remove_registered_temporaries() {
+  for (auto& s : g_slots)
+    if (s.state.load() == 2) ::unlink(s.path);
+}
+
+void install_cleanup_handlers() {
+  struct sigaction sa {};
+  sa.sa_handler = cleanup_and_reraise;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = SA_RESETHAND;
+  ::sigaction(SIGINT, &sa, nullptr);
+  ::sigaction(SIGTERM, &sa, nullptr);
+  ::sigaction(SIGHUP, &sa, nullptr);
+}
+
+void discard_output(const std::string& final_path) {
+  const std::string tmp = temporary_path(final_path);
+  ::unlink(tmp.c_str());
+  unregister_temporary(tmp);
 }
 
 void commit_output(const std::string& final_path) {
   const std::string tmp = temporary_path(final_path);
-  if (std::rename(tmp.c_str(), final_path.c_str()) != 0)
-    throw RuntimeFailure("cannot rename " + tmp + " to " + final_path + ": " + std::strerror(errno));
+  if (std::rename(tmp.c_str(), final_path.c_str()) != 0) {
+    const int e = errno;
+    ::unlink(tmp.c_str());
+    unregister_temporary(tmp);
+    throw RuntimeFailure("cannot rename " + tmp + " to " + final_path + ": " + std::strerror(e));
+  }
+  unregister_temporary(tmp);
 }
 
 void write_text_atomic(const std::string& path, const std::string& text) {
   const std::string tmp = temporary_path(path);
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    if (!out) throw RuntimeFailure("cannot write " + tmp + ": " + std::strerror(errno));
-    out << text;
-    if (!out) throw RuntimeFailure("cannot write " + tmp);
+  const auto fail = [&](int fd, int e) {
+    if (fd >= 0) ::close(fd);
+    discard_output(path);
+    throw RuntimeFailure("cannot write " + path + ": " + errno_text(e));
+  };
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) fail(-1, errno);
+  for (std::size_t done = 0; done < text.size();) {
+    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) fail(fd, n < 0 ? errno : ENOSPC);
+    done += static_cast<std::size_t>(n);
   }
+  // The data must be on disk before the rename makes it the file: a crash or a full disk
+  // after the rename would otherwise leave an empty file where a good one was.
+  if (::fdatasync(fd) != 0 && errno != EINVAL) fail(fd, errno);
+  if (::close(fd) != 0) fail(-1, errno);
   commit_output(path);
+}
+
+void refuse_output_over_input(const std::string& output, const std::string& option,
+                              const std::vector<std::string>& inputs, bool output_is_folder) {
+  if (output.empty() || output == "-") return;
+  std::error_code ec;
+  const fs::path out = fs::weakly_canonical(fs::absolute(output, ec), ec);
+  for (const auto& in : inputs) {
+    if (in.empty()) continue;
+    const fs::path inp = fs::weakly_canonical(fs::absolute(in, ec), ec);
+    bool same = out == inp || fs::equivalent(output, in, ec);
+    if (!same && output_is_folder) {
+      const auto rel = inp.lexically_relative(out);
+      same = !rel.empty() && *rel.begin() != "..";
+    }
+    if (same)
+      throw InputError("", option, output,
+                       output_is_folder ? "the output folder holds the input " + in + ": choose another folder"
+                                        : "this is the input " + in + ": writing it would destroy it; choose another name");
+  }
+}
+
+void refuse_output_outside(const std::string& path, const std::string& folder, const std::string& file,
+                           const std::string& field) {
+  const fs::path p(path);
+  const fs::path norm = p.lexically_normal();
+  if (p.is_absolute() || norm.empty() || norm == "." || *norm.begin() == "..")
+    throw InputError(file, field, path,
+                     "an output must be a file inside the output folder " + folder +
+                         " (a relative path without '..')");
+}
+
+std::uint64_t usable_memory_bytes() {
+  const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGE_SIZE);
+  std::uint64_t bytes = pages > 0 && page > 0 ? static_cast<std::uint64_t>(pages) * static_cast<std::uint64_t>(page)
+                                              : std::uint64_t(1) << 34;
+  // A container or a Slurm job may give less than the machine has.
+  for (const char* f : {"/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limit_in_bytes"}) {
+    std::ifstream in(f);
+    unsigned long long limit = 0;
+    if (in >> limit && limit > 0 && limit < bytes) bytes = limit;
+  }
+  return bytes;
+}
+
+std::string bytes_text(double bytes) {
+  const char* units[] = {"B", "kB", "MB", "GB", "TB", "PB", "EB"};
+  int u = 0;
+  while (bytes >= 1000 && u < 6) bytes /= 1000, ++u;
+  std::ostringstream s;
+  s.precision(bytes < 10 ? 2 : 3);
+  s << bytes << " " << units[u];
+  return s.str();
+}
+
+void check_memory_request(double bytes, const std::string& file, const std::string& field,
+                          const std::string& value, const std::string& what) {
+  const double have = static_cast<double>(usable_memory_bytes());
+  if (!(bytes <= have))  // also catches NaN and inf
+    throw InputError(file, field, value,
+                     what + " would need " + bytes_text(bytes) + " of memory; this machine has " + bytes_text(have));
 }
 
 std::string csv_table(const std::vector<std::string>& columns, const std::vector<std::vector<double>>& rows) {

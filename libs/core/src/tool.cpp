@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "tomodem/core/error.hpp"
+#include "tomodem/core/output.hpp"
 
 namespace tomodem {
 
@@ -24,6 +25,11 @@ void warn(const std::string& m) { std::cerr << g_tool << ": warning: " << m << '
 
 int run_tool(const std::string& tool_name, const std::function<int()>& body) {
   g_tool = tool_name;
+  install_cleanup_handlers();
+  // However the body ends, a temporary it did not commit must not stay behind.
+  struct Cleanup {
+    ~Cleanup() { remove_registered_temporaries(); }
+  } cleanup;
   try {
     return body();
   } catch (const InputError& e) {

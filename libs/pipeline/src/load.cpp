@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <climits>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -39,7 +40,11 @@ std::string scalar(const YAML::Node& n, const std::string& file, const std::stri
 
 long long integer(const std::string& text, const Location& where, const std::string& field, long long lo) {
   char* end = nullptr;
-  const long long v = std::strtoll(text.c_str(), &end, 10);
+  long long v = std::strtoll(text.c_str(), &end, 10);
+  if (!text.empty() && *end != '\0') {  // "1e9" is an integer written as a float
+    const double d = std::strtod(text.c_str(), &end);
+    if (*end == '\0' && std::isfinite(d) && d == std::floor(d) && std::fabs(d) < 9e18) v = static_cast<long long>(d);
+  }
   if (text.empty() || *end != '\0' || v < lo)
     fail(where, field, text, "expected an integer >= " + std::to_string(lo));
   return v;
@@ -74,6 +79,9 @@ struct Raw {
   std::map<std::string, Var> vars;  // dotted names: a nested map `a: {b: 1}` gives "a.b"
   std::vector<RawStep> steps;
   std::string logs;
+  std::string out;                 // `out:`, a root outside the pipeline folder outputs may use
+  Location out_where;
+  std::vector<std::string> files;  // every pipeline file read (absolute): never an output
 };
 
 void flatten_vars(const YAML::Node& n, const std::string& prefix, const std::string& file,
@@ -108,10 +116,11 @@ void read_file(const fs::path& path, const std::string& shown, const Location& f
   if (doc.IsNull()) return;
   if (!doc.IsMap()) fail({shown, 1}, "", "", "a pipeline file is a map with a 'steps:' key");
   stack.push_back(key);
+  raw.files.push_back(key);
   for (const auto& kv : doc) {
     const std::string k = kv.first.Scalar();
-    if (k != "vars" && k != "include" && k != "steps" && k != "logs")
-      fail(at(shown, kv.first), k, "", "unknown key (expected vars, include, steps, logs)");
+    if (k != "vars" && k != "include" && k != "steps" && k != "logs" && k != "out")
+      fail(at(shown, kv.first), k, "", "unknown key (expected vars, include, steps, logs, out)");
   }
   // Included files come first: their steps are declared before ours, our vars override theirs.
   if (const YAML::Node inc = doc["include"]) {
@@ -133,6 +142,10 @@ void read_file(const fs::path& path, const std::string& shown, const Location& f
     for (auto& [k, v] : mine) raw.vars[k] = v;
   }
   if (const YAML::Node logs = doc["logs"]) raw.logs = scalar(logs, shown, "logs");
+  if (const YAML::Node out = doc["out"]) {
+    raw.out = scalar(out, shown, "out");
+    raw.out_where = at(shown, out);
+  }
   if (const YAML::Node steps = doc["steps"]) {
     if (!steps.IsMap()) fail(at(shown, steps), "steps", "", "expected a map of step name: step");
     for (const auto& kv : steps) {
@@ -187,6 +200,16 @@ struct Cell {
   std::string name;
   int replica = -1;
 };
+
+// A sweep larger than this is a typo (replicas: 1000000000), not a study: refused before expansion.
+constexpr double kMaxCells = 1e6;
+
+void check_sweep_size(double cells, const Location& where, const std::string& field, const std::string& value) {
+  if (cells > kMaxCells)
+    fail(where, field, value,
+         "the sweep would make " + std::to_string(static_cast<long long>(cells)) +
+             " instances of the step; at most 1000000 per step (split the study into several pipelines)");
+}
 
 const std::set<std::string> kStepKeys = {"cmd", "tool", "args", "deps", "outs", "params", "threads", "matrix",
                                          "cases", "cell", "replicas", "seed", "version", "desc"};
@@ -257,6 +280,15 @@ std::vector<std::string> resolve_list(const std::string& text, const Scope& s, c
   }
 }
 
+// A `cmd:` line: values are substituted as shell data (quoted), never as code.
+std::string resolve_shell(const std::string& text, const Scope& s, const Location& where, const std::string& field) {
+  try {
+    return detail::substitute_shell(text, [&](const std::string& r) { return lookup(s, r); });
+  } catch (const RefError& e) {
+    fail(where, field, text, e.why);
+  }
+}
+
 std::string resolve(const std::string& text, const Scope& s, const Location& where, const std::string& field) {
   try {
     return detail::substitute(text, [&](const std::string& r) { return lookup(s, r); });
@@ -287,6 +319,8 @@ std::vector<Cell> cells_of(const RawStep& st, const Vars& vars) {
         values = resolve_list(scalar(kv.second, f, field), vs, at(f, kv.second), field);
       }
       if (values.empty()) fail(at(f, kv.second), field, "", "a matrix key needs at least one value");
+      check_sweep_size(static_cast<double>(cells.size()) * static_cast<double>(values.size()), at(f, kv.second), field,
+                       std::to_string(values.size()) + " values");
       std::vector<Cell> next;
       for (const auto& c : cells)
         for (const auto& v : values) {
@@ -315,6 +349,7 @@ std::vector<Cell> cells_of(const RawStep& st, const Vars& vars) {
   if (const YAML::Node r = st.node["replicas"]) {
     const std::string field = base + "replicas";
     const long long n = integer(resolve(scalar(r, f, field), vs, at(f, r), field), at(f, r), field, 1);
+    check_sweep_size(static_cast<double>(cells.size()) * static_cast<double>(n), at(f, r), field, std::to_string(n));
     std::vector<Cell> next;
     for (const auto& c : cells)
       for (int k = 0; k < n; ++k) {
@@ -379,22 +414,13 @@ std::string tool_version(const std::string& path) {
   static std::map<std::string, std::string> cache;  // one `--version` call per tool and process
   if (auto it = cache.find(path); it != cache.end()) return it->second;
   std::string out;
-  if (FILE* f = ::popen(("'" + path + "' --version 2>/dev/null").c_str(), "r")) {
+  if (FILE* f = ::popen((detail::shell_quote(path) + " --version 2>/dev/null").c_str(), "r")) {
     char buf[256];
     while (std::fgets(buf, sizeof buf, f)) out += buf;
     ::pclose(f);
   }
   while (!out.empty() && std::isspace(static_cast<unsigned char>(out.back()))) out.pop_back();
   return cache[path] = out.substr(0, out.find('\n'));
-}
-
-std::string shell_quote(const std::string& s) {
-  if (!s.empty() && s.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-./=:,+@%") ==
-                        std::string::npos)
-    return s;
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
 }
 
 // ---- building the instances -------------------------------------------------------------
@@ -458,16 +484,73 @@ void apply_overrides(const std::vector<std::string>& overrides, Raw& raw,
     if (key.rfind("vars.", 0) == 0) key = key.substr(5);
     const auto it = raw.vars.find(key);
     if (it == raw.vars.end()) fail(cli, key, value, "unknown variable (declare it under vars:)");
-    YAML::Node n;
-    try {
-      n = YAML::Load(value);  // so `--set densities=[0.5,0.7]` gives a list
-    } catch (const YAML::Exception&) {
-      n = YAML::Node(value);
+    // `--set densities=[0.5,0.7]` gives a list; any other value is taken verbatim (YAML would
+    // drop a " #..." as a comment or strip quotes: the user's text must arrive as typed).
+    YAML::Node n(value);
+    if (!value.empty() && value.front() == '[') {
+      try {
+        n = YAML::Load(value);
+      } catch (const YAML::Exception&) {
+        fail(cli, key, value, "a value starting with '[' is a YAML list such as [0.5, 0.7]");
+      }
+      if (!n.IsSequence()) fail(cli, key, value, "a value starting with '[' is a YAML list such as [0.5, 0.7]");
     }
-    if (!n.IsScalar() && !n.IsSequence()) n = YAML::Node(value);
     it->second = Var{n, "--set", cli};
   }
 }
+
+// ---- where outputs may go -----------------------------------------------------------------
+
+fs::path resolved(const fs::path& p) {
+  std::error_code ec;
+  const fs::path a = fs::weakly_canonical(fs::absolute(p, ec), ec);
+  return ec ? fs::absolute(p).lexically_normal() : a;
+}
+
+bool strictly_inside(const fs::path& path, const fs::path& root) {
+  const fs::path rel = path.lexically_relative(root);
+  return !rel.empty() && rel != "." && *rel.begin() != "..";
+}
+
+// The runner replaces outputs (moving the old ones aside), so an output must be strictly inside
+// the pipeline's folder or the declared `out:` root (symbolic links resolved), and never a
+// pipeline file, the lock file, the logs or a folder that holds one of them.
+class OutputRules {
+ public:
+  OutputRules(const Raw& raw, const Pipeline& p, const std::string& out_root) : dir_(p.dir) {
+    roots_.push_back(resolved(p.dir));
+    if (!out_root.empty()) {
+      const fs::path root = resolved(fs::path(p.dir) / out_root);
+      if (root == root.root_path())
+        fail(raw.out_where, "out", out_root, "the output root cannot be the file system's root");
+      roots_.push_back(root);
+    }
+    for (const auto& f : raw.files) kept_.push_back(resolved(f));
+    kept_.push_back(resolved(p.lock_file));
+    kept_.push_back(resolved(p.logs_dir));
+    lock_stem_ = resolved(p.lock_file).replace_extension("").string();  // <stem>.lock: shard locks too
+  }
+
+  void check(const std::string& path, const Location& where, const std::string& field) const {
+    const fs::path full = resolved(fs::path(dir_) / path);
+    // Inside the pipeline's folder, or inside or equal to the declared root.
+    if (!strictly_inside(full, roots_[0]) && (roots_.size() < 2 || !(full == roots_[1] || strictly_inside(full, roots_[1]))))
+      fail(where, field, path,
+           "an output must be a path inside the pipeline's folder" +
+               (roots_.size() > 1 ? " or the `out:` root " + roots_[1].string() : std::string()) + " (resolved: " +
+               full.string() + "); to write elsewhere declare `out: DIR` at the top of the pipeline file");
+    for (const auto& k : kept_)
+      if (full == k || strictly_inside(k, full) || strictly_inside(full, k))
+        fail(where, field, path, "this output would replace " + k.string() + " (a pipeline file, its lock file or logs)");
+    if (full.string().rfind(lock_stem_, 0) == 0)
+      fail(where, field, path, "this output would replace the pipeline's lock files (" + lock_stem_ + "*)");
+  }
+
+ private:
+  std::string dir_;
+  std::vector<fs::path> roots_, kept_;
+  std::string lock_stem_;
+};
 
 }  // namespace
 
@@ -486,6 +569,14 @@ Pipeline load(const std::string& file, const LoadOptions& options) {
   p.dir = fp.parent_path().empty() ? "." : fp.parent_path().string();
   p.lock_file = (fp.parent_path() / (fp.stem().string() + ".lock.json")).string();
   p.logs_dir = (fp.parent_path() / (raw.logs.empty() ? fp.stem().string() + ".logs" : raw.logs)).string();
+
+  std::string out_root;
+  if (!raw.out.empty()) {
+    Scope vs;
+    vs.vars = &vars;
+    out_root = resolve(raw.out, vs, raw.out_where, "out");
+  }
+  const OutputRules rules(raw, p, out_root);
 
   // Pass 1: cells, params and outputs of every step (outputs may not name other steps).
   std::vector<Instance> inst;
@@ -548,6 +639,7 @@ Pipeline load(const std::string& file, const LoadOptions& options) {
       for (const auto& [name, text, where] : path_items(st.node["outs"], f, base + "outs")) {
         for (auto& path : resolve_list(text, s, where, base + "outs." + name)) {
           if (path.empty()) fail(where, base + "outs." + name, text, "empty path");
+          rules.check(path, where, base + "outs." + name);
           in.outs.emplace_back(name, normal_path(path));
           pe.out_where.push_back(where);
         }
@@ -629,7 +721,7 @@ Pipeline load(const std::string& file, const LoadOptions& options) {
     }
     s.deps = &in.deps;
     if (const YAML::Node cmd = st.node["cmd"]) {
-      in.command = resolve(scalar(cmd, f, base + "cmd"), s, at(f, cmd), base + "cmd");
+      in.command = resolve_shell(scalar(cmd, f, base + "cmd"), s, at(f, cmd), base + "cmd");
       in.argv = {"/bin/sh", "-c", in.command};
       if (const YAML::Node v = st.node["version"]) in.version = resolve(scalar(v, f, base + "version"), s, at(f, v), base + "version");
     } else {
@@ -647,7 +739,7 @@ Pipeline load(const std::string& file, const LoadOptions& options) {
         for (const auto& a : args)
           for (auto& v : resolve_list(scalar(a, f, base + "args"), s, at(f, a), base + "args")) {
             in.argv.push_back(v);
-            in.command += " " + shell_quote(v);
+            in.command += " " + detail::shell_quote(v);
           }
       }
       in.version = tool_version(exe);
@@ -671,6 +763,27 @@ Pipeline load(const std::string& file, const LoadOptions& options) {
       }
     }
   }
+
+  // An output folder must not hold a file the user made (an input no step writes): the runner
+  // would move it aside with the folder.
+  std::map<std::string, std::pair<std::size_t, fs::path>> sources;  // input no step writes -> reader
+  for (std::size_t i = 0; i < inst.size(); ++i)
+    for (const auto& d : inst[i].deps)
+      if (!producer.count(d.second) && !sources.count(d.second))
+        sources.emplace(d.second, std::make_pair(i, resolved(fs::path(p.dir) / d.second)));
+  if (!sources.empty())
+    for (const auto& [path, j] : producer) {
+      const fs::path out = resolved(fs::path(p.dir) / path);
+      for (const auto& [dep, source] : sources)
+        if (strictly_inside(source.second, out)) {
+          const std::size_t i = source.first;
+          const auto& o = inst[j].outs;
+          const auto it = std::find_if(o.begin(), o.end(), [&](const auto& x) { return x.second == path; });
+          fail(pend[j].out_where[static_cast<std::size_t>(it - o.begin())], "steps." + inst[j].step + ".outs." + it->first,
+               path, "this output folder holds the input " + dep + " of '" + inst[i].id +
+                         "', which no step makes: the runner would replace it");
+        }
+    }
 
   // Topological order, stable in declaration order; a leftover means a cycle.
   const std::size_t n = inst.size();

@@ -160,8 +160,35 @@ PlotRequest parse_plot(const std::string& spec) {
   return p;
 }
 
+namespace {
+constexpr const char* kReportMarker = ".tomodem-report";
+
+// The report folder is replaced as a whole, so it must be a report folder: new, empty, or one
+// this command made (its marker, or table.csv and index.html); never ".", a folder above the
+// current one, or a folder that holds a row file.
+void refuse_report_folder(const std::string& dir, const std::vector<std::string>& row_files) {
+  std::error_code ec;
+  const fs::path d = fs::weakly_canonical(fs::absolute(dir), ec);
+  const fs::path here = fs::current_path(ec);
+  const fs::path rel = here.lexically_relative(d);
+  if (d == d.root_path() || (!rel.empty() && *rel.begin() != ".."))
+    throw InputError("", "-o", dir, "the report folder would hold the current folder; name a new folder");
+  refuse_output_over_input(dir, "-o", row_files, true);
+  if (!fs::is_directory(d, ec)) {
+    if (fs::exists(d, ec)) throw InputError("", "-o", dir, "exists and is not a folder");
+    return;
+  }
+  const bool made_here = fs::exists(d / kReportMarker, ec) || (fs::exists(d / "table.csv", ec) && fs::exists(d / "index.html", ec));
+  if (!made_here && !fs::is_empty(d, ec))
+    throw InputError("", "-o", dir,
+                     "this folder is not a tomodem report and is not empty; the report replaces its folder, so name "
+                     "a new one");
+}
+}  // namespace
+
 ReportFiles write_report(const std::string& dir, const std::vector<std::string>& row_files, const ReportOptions& o) {
   if (row_files.empty()) throw InputError("", "rows", "", "no row files given");
+  refuse_report_folder(dir, row_files);
   // ---- read the rows and add the ratios --------------------------------------------------
   std::vector<Row> rows;
   std::vector<std::string> all;  // every column, in order of first appearance
@@ -325,10 +352,14 @@ ReportFiles write_report(const std::string& dir, const std::vector<std::string>&
     h << "</body>\n</html>\n";
     write_text_atomic((tmp / "index.html").string(), h.str());
 
+    write_text_atomic((tmp / kReportMarker).string(), "made by tomodem-run report; the folder is replaced on each run\n");
+    // The old report goes only once the new one is in place.
     std::error_code ec;
-    fs::remove_all(final_dir, ec);
+    const fs::path old = final_dir.string() + ".old" + std::to_string(::getpid());
     if (!final_dir.parent_path().empty()) fs::create_directories(final_dir.parent_path());
+    if (fs::exists(final_dir, ec)) fs::rename(final_dir, old);
     fs::rename(tmp, final_dir);
+    fs::remove_all(old, ec);
   } catch (...) {
     std::error_code ec;
     fs::remove_all(tmp, ec);

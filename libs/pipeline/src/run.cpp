@@ -10,9 +10,12 @@
 #include <cerrno>
 #include <chrono>
 #include <csignal>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <memory>
 #include <optional>
 #include <ostream>
 #include <set>
@@ -33,24 +36,78 @@ namespace {
 volatile std::sig_atomic_t g_signal = 0;
 extern "C" void on_signal(int s) { g_signal = s; }
 
-// One tomodem-run per pipeline (or per shard) at a time: two would race on outputs and the lock.
-class RunGuard {
+// A plain run holds the pipeline's run lock alone; shard runs share it (shards of one sweep run
+// side by side on a cluster) and each holds its own shard lock. Every running step also holds
+// a lock of its own, so no two runners ever run one step at once.
+class FileLock {
  public:
-  explicit RunGuard(const std::string& path) {
+  FileLock(const std::string& path, int how, const std::string& busy) {
     fd_ = ::open(path.c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0644);
     if (fd_ < 0) throw RuntimeFailure("cannot open " + path + ": " + std::strerror(errno));
-    if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+    if (::flock(fd_, how | LOCK_NB) != 0) {
       ::close(fd_);
-      throw RuntimeFailure("another tomodem-run is running this pipeline (lock " + path + ")");
+      fd_ = -1;
+      if (!busy.empty()) throw RuntimeFailure(busy + " (lock " + path + ")");
     }
   }
-  ~RunGuard() { ::close(fd_); }
-  RunGuard(const RunGuard&) = delete;
-  RunGuard& operator=(const RunGuard&) = delete;
+  ~FileLock() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  bool held() const { return fd_ >= 0; }
+  FileLock(const FileLock&) = delete;
+  FileLock& operator=(const FileLock&) = delete;
 
  private:
   int fd_ = -1;
 };
+
+std::string step_lock_path(const Pipeline& p, const Instance& in) {
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016zx", std::hash<std::string>{}(in.id));
+  return (fs::path(p.logs_dir) / ".step-locks" / (std::string(hex) + ".lock")).string();
+}
+
+// A step's old outputs are moved aside while it runs (".NAME.tomodem-old" beside each): restored
+// when it fails, dropped when it succeeds. Nothing is removed that the step did not make.
+fs::path aside_path(const fs::path& out) {
+  return out.parent_path() / ("." + out.filename().string() + ".tomodem-old");
+}
+
+bool present(const fs::path& f) {
+  std::error_code ec;
+  return fs::exists(fs::symlink_status(f, ec));
+}
+
+void move_outputs_aside(const Pipeline& p, const Instance& in) {
+  for (const auto& [name, path] : in.outs) {
+    const fs::path out = fs::path(p.dir) / path, old = aside_path(out);
+    std::error_code ec;
+    if (out.has_parent_path()) fs::create_directories(out.parent_path(), ec);
+    if (present(old)) {
+      // A runner was killed while this step ran: `old` is the last good output and `out`, if
+      // any, what the killed step wrote.
+      fs::remove_all(out, ec);
+    } else if (present(out)) {
+      fs::rename(out, old, ec);
+      if (ec) throw RuntimeFailure("cannot move the old output " + out.string() + " aside: " + ec.message());
+    }
+  }
+}
+
+void settle_outputs(const Pipeline& p, const Instance& in, bool ok) {
+  for (const auto& [name, path] : in.outs) {
+    const fs::path out = fs::path(p.dir) / path, old = aside_path(out);
+    std::error_code ec;
+    if (ok) {
+      fs::remove_all(old, ec);
+    } else if (present(old)) {
+      fs::remove_all(out, ec);  // what the failed step wrote
+      fs::rename(old, out, ec);
+    } else {
+      fs::remove_all(out, ec);  // Make's .DELETE_ON_ERROR: nothing that could look finished
+    }
+  }
+}
 
 // Restores the caller's SIGINT/SIGTERM handlers however the run ends.
 class SignalScope {
@@ -74,13 +131,8 @@ class SignalScope {
 };
 
 pid_t spawn(const Pipeline& p, const Instance& in, const std::string& log) {
-  // A step starts from a clean slate: stale outputs must not survive a failed re-run.
-  for (const auto& [name, path] : in.outs) {
-    const fs::path out = fs::path(p.dir) / path;
-    std::error_code ec;
-    fs::remove_all(out, ec);
-    if (out.has_parent_path()) fs::create_directories(out.parent_path(), ec);
-  }
+  // A step starts from a clean slate; its old outputs wait aside until it has succeeded.
+  move_outputs_aside(p, in);
   const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) throw RuntimeFailure("cannot write log " + log + ": " + std::strerror(errno));
   const pid_t parent = ::getpid();
@@ -140,6 +192,7 @@ struct Running {
   std::chrono::steady_clock::time_point t0;
   std::string started;
   int slots;
+  std::shared_ptr<FileLock> step_lock;
 };
 
 RunSummary execute(const Pipeline& p, const RunOptions& o, std::ostream* progress) {
@@ -165,7 +218,7 @@ RunSummary execute(const Pipeline& p, const RunOptions& o, std::ostream* progres
   LockFile lock;
   HashCache cache;
   load_all_locks(p, lock, cache);
-  std::optional<RunGuard> guard;
+  std::optional<FileLock> guard, shard_guard;
   const bool shard_mode = o.shards > 0;
   const std::string lock_out = shard_mode ? shard_lock_file(p, o.shard) : p.lock_file;
   std::set<std::string> touched;
@@ -181,8 +234,14 @@ RunSummary execute(const Pipeline& p, const RunOptions& o, std::ostream* progres
   };
   if (!o.dry_run) {
     fs::create_directories(p.logs_dir);
-    guard.emplace((fs::path(p.logs_dir) / (shard_mode ? ".run-shard-" + std::to_string(o.shard) : std::string(".run")))
-                      .string() + ".lock");
+    fs::create_directories(fs::path(p.logs_dir) / ".step-locks");
+    const std::string run_lock = (fs::path(p.logs_dir) / ".run.lock").string();
+    guard.emplace(run_lock, shard_mode ? LOCK_SH : LOCK_EX,
+                  shard_mode ? "a plain tomodem-run is running this pipeline; shards wait until it ends"
+                             : "another tomodem-run (plain or --shard) is running this pipeline");
+    if (shard_mode)
+      shard_guard.emplace((fs::path(p.logs_dir) / (".run-shard-" + std::to_string(o.shard) + ".lock")).string(), LOCK_EX,
+                          "another tomodem-run is running shard " + std::to_string(o.shard) + " of this pipeline");
     const auto shard_files = shard_lock_files(p);
     if (!shard_mode && !shard_files.empty()) {
       save();  // fold the shards' records into the main lock, then drop them
@@ -228,6 +287,7 @@ RunSummary execute(const Pipeline& p, const RunOptions& o, std::ostream* progres
         why = "declared output " + path + " was not written";
       }
     touched.insert(in.id);
+    settle_outputs(p, in, ok);
     if (ok) {
       lock.steps[in.id] = record(in, cache, r.started, res.seconds);
       lock.failures.erase(in.id);
@@ -236,11 +296,6 @@ RunSummary execute(const Pipeline& p, const RunOptions& o, std::ostream* progres
       ++sum.ran;
       say(counter() + "done " + in.id + " in " + seconds_text(res.seconds));
     } else {
-      // Make's .DELETE_ON_ERROR: a failed step leaves no output that could look finished.
-      for (const auto& [name, path] : in.outs) {
-        std::error_code ec;
-        fs::remove_all(fs::path(p.dir) / path, ec);
-      }
       const std::string tail = last_line(res.log);
       if (!tail.empty() && why != "interrupted") why += ": " + tail;
       res.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
@@ -259,100 +314,124 @@ RunSummary execute(const Pipeline& p, const RunOptions& o, std::ostream* progres
     save();
   };
 
-  for (;;) {
-    if (g_signal && !killed) {
-      killed = stop = true;
-      stop_after = "an interrupt";
-      sum.interrupted = true;
-      for (const auto& r : running) ::kill(-r.pid, SIGTERM);
-    }
-    for (bool again = true; again;) {
-      again = false;
-      for (std::size_t i = 0; i < n; ++i) {
-        if (st[i] != St::waiting) continue;
-        const Instance& in = p.instances[i];
-        StepResult& res = sum.steps[i];
-        bool ready = true;
-        std::string blocked, upstream_runs;
-        for (const auto u : in.upstream) {
-          if (st[u] == St::waiting || st[u] == St::running) ready = false;
-          else if (st[u] == St::failed) blocked = "upstream " + p.instances[u].id + " failed";
-          else if (st[u] == St::skipped && selected[u]) blocked = "upstream " + p.instances[u].id + " did not run";
-          else if (st[u] == St::skipped)
-            blocked = "upstream " + p.instances[u].id + " is not up to date and belongs to " +
-                      (owner[u] == 0 ? "the shared part: run --shard 0/" + std::to_string(o.shards) + " first"
-                                     : "another shard");
-          if (would[u]) upstream_runs = p.instances[u].id;
-        }
-        if (!ready) continue;
-        if (!blocked.empty() || stop) {
-          again = true;
-          st[i] = St::skipped;
-          res.state = selected[i] ? "skipped" : "not-in-shard";
-          res.reason = blocked.empty() ? "not started: the run stopped after " + stop_after : blocked;
-          if (selected[i]) {
+  // However the loop ends (a lock file that cannot be written on a full disk, a failed fork),
+  // the running steps are stopped and their old outputs put back.
+  try {
+    for (;;) {
+      if (g_signal && !killed) {
+        killed = stop = true;
+        stop_after = "an interrupt";
+        sum.interrupted = true;
+        for (const auto& r : running) ::kill(-r.pid, SIGTERM);
+      }
+      for (bool again = true; again;) {
+        again = false;
+        for (std::size_t i = 0; i < n; ++i) {
+          if (st[i] != St::waiting) continue;
+          const Instance& in = p.instances[i];
+          StepResult& res = sum.steps[i];
+          bool ready = true;
+          std::string blocked, upstream_runs;
+          for (const auto u : in.upstream) {
+            if (st[u] == St::waiting || st[u] == St::running) ready = false;
+            else if (st[u] == St::failed) blocked = "upstream " + p.instances[u].id + " failed";
+            else if (st[u] == St::skipped && selected[u]) blocked = "upstream " + p.instances[u].id + " did not run";
+            else if (st[u] == St::skipped)
+              blocked = "upstream " + p.instances[u].id + " is not up to date and belongs to " +
+                        (owner[u] == 0 ? "the shared part: run --shard 0/" + std::to_string(o.shards) + " first"
+                                       : "another shard");
+            if (would[u]) upstream_runs = p.instances[u].id;
+          }
+          if (!ready) continue;
+          if (!blocked.empty() || stop) {
+            again = true;
+            st[i] = St::skipped;
+            res.state = selected[i] ? "skipped" : "not-in-shard";
+            res.reason = blocked.empty() ? "not started: the run stopped after " + stop_after : blocked;
+            if (selected[i]) {
+              ++sum.skipped;
+              say(counter() + "skipped " + in.id + ": " + res.reason);
+            }
+            continue;
+          }
+          // Decided once, when all its inputs are final: content hashes give early cut-off.
+          if (!verdicts[i]) {
+            if (forced[i]) verdicts[i] = Verdict{true, {"forced"}};
+            else if (o.dry_run && !upstream_runs.empty())
+              verdicts[i] = Verdict{true, {"upstream " + upstream_runs + " would run (its new outputs decide)"}};
+            else {
+              const auto it = lock.steps.find(in.id);
+              verdicts[i] = check(in, it == lock.steps.end() ? nullptr : &it->second, cache, false);
+            }
+          }
+          const Verdict& v = *verdicts[i];
+          if (!v.stale) {
+            again = true;
+            st[i] = St::done;
+            res.state = "up-to-date";
+            if (selected[i]) ++sum.up_to_date, ++decided;
+            continue;
+          }
+          res.reason = v.reasons.front();
+          if (!selected[i]) {
+            again = true;
+            st[i] = St::skipped;  // its dependants in this shard are blocked
+            res.state = "not-in-shard";
+            continue;
+          }
+          if (o.dry_run) {
+            again = true;
+            st[i] = St::done;
+            would[i] = 1;
+            res.state = "would-run";
+            ++sum.would_run;
+            say(counter() + "would run " + in.id + ": " + res.reason);
+            continue;
+          }
+          const int slots = std::min(in.threads, jobs);
+          if (slots > free_slots) continue;  // wait for a slot; later, smaller steps may still fit
+          auto step_lock = std::make_shared<FileLock>(step_lock_path(p, in), LOCK_EX, "");
+          if (!step_lock->held()) {
+            again = true;
+            st[i] = St::skipped;
+            res.state = "skipped";
+            res.reason = "another tomodem-run is running this step now";
             ++sum.skipped;
             say(counter() + "skipped " + in.id + ": " + res.reason);
+            continue;
           }
-          continue;
-        }
-        // Decided once, when all its inputs are final: content hashes give early cut-off.
-        if (!verdicts[i]) {
-          if (forced[i]) verdicts[i] = Verdict{true, {"forced"}};
-          else if (o.dry_run && !upstream_runs.empty())
-            verdicts[i] = Verdict{true, {"upstream " + upstream_runs + " would run (its new outputs decide)"}};
-          else {
-            const auto it = lock.steps.find(in.id);
-            verdicts[i] = check(in, it == lock.steps.end() ? nullptr : &it->second, cache, false);
-          }
-        }
-        const Verdict& v = *verdicts[i];
-        if (!v.stale) {
+          res.log = log_path(p, in);
+          say("run  " + in.id + " (" + res.reason + ")");
+          running.push_back(
+              Running{i, spawn(p, in, res.log), std::chrono::steady_clock::now(), utc_now(), slots, std::move(step_lock)});
+          free_slots -= slots;
+          st[i] = St::running;
           again = true;
-          st[i] = St::done;
-          res.state = "up-to-date";
-          if (selected[i]) ++sum.up_to_date, ++decided;
-          continue;
         }
-        res.reason = v.reasons.front();
-        if (!selected[i]) {
-          again = true;
-          st[i] = St::skipped;  // its dependants in this shard are blocked
-          res.state = "not-in-shard";
-          continue;
-        }
-        if (o.dry_run) {
-          again = true;
-          st[i] = St::done;
-          would[i] = 1;
-          res.state = "would-run";
-          ++sum.would_run;
-          say(counter() + "would run " + in.id + ": " + res.reason);
-          continue;
-        }
-        const int slots = std::min(in.threads, jobs);
-        if (slots > free_slots) continue;  // wait for a slot; later, smaller steps may still fit
-        res.log = log_path(p, in);
-        say("run  " + in.id + " (" + res.reason + ")");
-        running.push_back(Running{i, spawn(p, in, res.log), std::chrono::steady_clock::now(), utc_now(), slots});
-        free_slots -= slots;
-        st[i] = St::running;
-        again = true;
       }
+      if (running.empty()) break;
+      int status = 0;
+      const pid_t pid = ::waitpid(-1, &status, 0);
+      if (pid < 0) {
+        if (errno == EINTR) continue;
+        throw RuntimeFailure(std::string("waitpid: ") + std::strerror(errno));
+      }
+      const auto it = std::find_if(running.begin(), running.end(), [&](const Running& r) { return r.pid == pid; });
+      if (it == running.end()) continue;
+      const Running r = *it;
+      running.erase(it);
+      free_slots += r.slots;
+      finish(r, status);
     }
-    if (running.empty()) break;
-    int status = 0;
-    const pid_t pid = ::waitpid(-1, &status, 0);
-    if (pid < 0) {
-      if (errno == EINTR) continue;
-      throw RuntimeFailure(std::string("waitpid: ") + std::strerror(errno));
+  } catch (...) {
+    for (const auto& r : running) ::kill(-r.pid, SIGTERM);
+    for (const auto& r : running) {
+      int status = 0;
+      while (::waitpid(r.pid, &status, 0) < 0 && errno == EINTR) {
+      }
+      settle_outputs(p, p.instances[r.idx], false);
     }
-    const auto it = std::find_if(running.begin(), running.end(), [&](const Running& r) { return r.pid == pid; });
-    if (it == running.end()) continue;
-    const Running r = *it;
-    running.erase(it);
-    free_slots += r.slots;
-    finish(r, status);
+    throw;
   }
   sum.files_hashed = cache.files_hashed();
   sum.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();

@@ -40,6 +40,56 @@ std::string substitute(const std::string& text, const Lookup& lookup) {
   return out;
 }
 
+std::string shell_quote(const std::string& s) {
+  if (!s.empty() && s.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-./=:,+@%") ==
+                        std::string::npos)
+    return s;
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+std::string substitute_shell(const std::string& text, const Lookup& lookup) {
+  // The quoting state of the shell text written so far decides how a value is escaped.
+  enum class Quote { none, single, dbl } state = Quote::none;
+  bool escaped = false;
+  std::string out;
+  const auto on_text = [&](const std::string& t) {
+    for (const char c : t) {
+      out += c;
+      if (escaped) {
+        escaped = false;
+      } else if (state == Quote::single) {
+        if (c == '\'') state = Quote::none;
+      } else if (c == '\\') {
+        escaped = true;
+      } else if (state == Quote::dbl) {
+        if (c == '"') state = Quote::none;
+      } else if (c == '\'') {
+        state = Quote::single;
+      } else if (c == '"') {
+        state = Quote::dbl;
+      }
+    }
+  };
+  const auto on_ref = [&](const std::string& r) {
+    const std::vector<std::string> values = lookup(r);
+    if (state == Quote::none) {
+      for (std::size_t k = 0; k < values.size(); ++k) out += (k ? " " : "") + shell_quote(values[k]);
+      if (values.empty()) out += "''";
+      return;
+    }
+    for (const char c : join(values)) {
+      if (state == Quote::single)
+        out += c == '\'' ? std::string("'\\''") : std::string(1, c);  // close, escaped quote, reopen
+      else
+        out += (c == '"' || c == '\\' || c == '$' || c == '`') ? std::string("\\") + c : std::string(1, c);
+    }
+  };
+  scan(text, on_text, on_ref);
+  return out;
+}
+
 std::vector<std::string> substitute_list(const std::string& text, const Lookup& lookup) {
   const auto refs = references(text);
   if (refs.size() == 1 && text == "${" + refs[0] + "}") return lookup(refs[0]);

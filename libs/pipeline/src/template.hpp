@@ -21,6 +21,15 @@ std::string substitute(const std::string& text, const Lookup& lookup);
 /// as separate items (so `- ${steps.young.outs.result}` in deps lists every cell's file).
 std::vector<std::string> substitute_list(const std::string& text, const Lookup& lookup);
 
+/// Like substitute, for a `cmd:` shell line: every value becomes data, never code. Outside quotes
+/// each value is one shell-quoted word (a list gives one word per item); inside '...' or "..."
+/// it is escaped for that kind of quote. So `x; touch P`, `$(...)`, backticks and newlines in
+/// variables, matrix values, --set values and paths reach the command as text.
+std::string substitute_shell(const std::string& text, const Lookup& lookup);
+
+/// `s` as one POSIX shell word ('...' unless it only has safe characters).
+std::string shell_quote(const std::string& s);
+
 /// The reference names used in `text`, in order.
 std::vector<std::string> references(const std::string& text);
 

@@ -3,6 +3,13 @@
 
 #include <gtest/gtest.h>
 
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <csignal>
 #include <regex>
 
 #include "tmpdir.hpp"
@@ -76,6 +83,98 @@ TEST_F(Output, FileHashMissingFileIsInputError) {
   } catch (const InputError& e) {
     EXPECT_EQ(e.file(), file("nope"));
   }
+}
+
+// A full disk (here: a file-size limit, which fails writes past it with EFBIG the way a full
+// disk fails them with ENOSPC) never turns a good file into a short or empty one.
+TEST_F(Output, WriteFailureKeepsTheOldFileAndLeavesNoTemporary) {
+  write_text_atomic(file("lock.json"), "good\n");
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    std::signal(SIGXFSZ, SIG_IGN);
+    const rlimit lim{1024, 1024};
+    ::setrlimit(RLIMIT_FSIZE, &lim);
+    try {
+      write_text_atomic(file("lock.json"), std::string(4096, 'x'));
+    } catch (const RuntimeFailure& e) {
+      ::_exit(std::string(e.what()).find("lock.json") != std::string::npos ? 10 : 11);
+    }
+    ::_exit(12);
+  }
+  int st = 0;
+  ::waitpid(pid, &st, 0);
+  ASSERT_TRUE(WIFEXITED(st));
+  EXPECT_EQ(WEXITSTATUS(st), 10);  // a RuntimeFailure naming the file
+  EXPECT_EQ(test::slurp(file("lock.json")), "good\n");
+  EXPECT_EQ(test::entries(dir), (std::vector<std::string>{"lock.json"}));
+}
+
+TEST_F(Output, SigtermRemovesRegisteredTemporaries) {
+  for (const int sig : {SIGTERM, SIGINT}) {
+    const pid_t pid = ::fork();
+    if (pid == 0) {
+      install_cleanup_handlers();
+      const std::string tmp = temporary_path(file("big.h5"));
+      std::ofstream(tmp) << "half written";
+      ::raise(sig);
+      ::_exit(0);
+    }
+    int st = 0;
+    ::waitpid(pid, &st, 0);
+    EXPECT_TRUE(WIFSIGNALED(st) && WTERMSIG(st) == sig);  // still ends by the signal
+    EXPECT_TRUE(test::entries(dir).empty()) << "signal " << sig;
+  }
+}
+
+TEST_F(Output, DiscardRemovesTheTemporaryAndCommitFailureToo) {
+  std::ofstream(temporary_path(file("a.h5"))) << "x";
+  discard_output(file("a.h5"));
+  EXPECT_TRUE(test::entries(dir).empty());
+}
+
+TEST_F(Output, OutputOverInputIsRefused) {
+  write_text_atomic(file("in.h5"), "data");
+  const std::string via_dot = dir + "/./in.h5";
+  EXPECT_THROW(refuse_output_over_input(file("in.h5"), "--json", {file("in.h5")}), InputError);
+  EXPECT_THROW(refuse_output_over_input(via_dot, "-o", {file("in.h5")}), InputError);
+  ASSERT_EQ(::link(file("in.h5").c_str(), file("hard.h5").c_str()), 0);
+  EXPECT_THROW(refuse_output_over_input(file("hard.h5"), "-o", {file("in.h5")}), InputError);
+  ASSERT_EQ(::symlink(file("in.h5").c_str(), file("soft.h5").c_str()), 0);
+  EXPECT_THROW(refuse_output_over_input(file("soft.h5"), "-o", {file("in.h5")}), InputError);
+  EXPECT_NO_THROW(refuse_output_over_input(file("out.h5"), "-o", {file("in.h5")}));
+  // A folder output: refused when it holds an input, accepted beside it.
+  EXPECT_THROW(refuse_output_over_input(dir, "-o", {file("in.h5")}, true), InputError);
+  EXPECT_NO_THROW(refuse_output_over_input(file("out"), "-o", {file("in.h5")}, true));
+  try {
+    refuse_output_over_input(file("in.h5"), "--json", {file("in.h5")});
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "--json");
+    EXPECT_EQ(e.value(), file("in.h5"));
+  }
+}
+
+TEST(OutputsOutside, RelativeInsideOnly) {
+  EXPECT_NO_THROW(refuse_output_outside("a/b.h5", "out", "s.yaml", "output.packing"));
+  for (const char* bad : {"../x.h5", "../../x.h5", "/etc/x.h5", ".", "a/../..", ""})
+    EXPECT_THROW(refuse_output_outside(bad, "out", "s.yaml", "output.packing"), InputError) << bad;
+}
+
+TEST(MemoryRequest, RefusedWithNeedAndHave) {
+  const double have = static_cast<double>(usable_memory_bytes());
+  EXPECT_GT(have, 1e8);
+  EXPECT_NO_THROW(check_memory_request(1e6, "s.yaml", "count", "1000", "1000 particles"));
+  try {
+    check_memory_request(1e15, "s.yaml", "particles.count", "1e12", "10^12 particles");
+    FAIL() << "no exception";
+  } catch (const InputError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("s.yaml"), std::string::npos) << m;
+    EXPECT_NE(m.find("particles.count"), std::string::npos) << m;
+    EXPECT_NE(m.find("1 PB"), std::string::npos) << m;
+    EXPECT_NE(m.find("this machine has"), std::string::npos) << m;
+  }
+  EXPECT_THROW(check_memory_request(std::nan(""), "f", "x", "nan", "x"), InputError);
+  EXPECT_EQ(bytes_text(1.5e9), "1.5 GB");
 }
 
 TEST(UtcNow, Iso8601) {

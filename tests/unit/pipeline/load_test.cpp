@@ -161,6 +161,26 @@ TEST(PipelineLoad, LiteralDollarBraceIsEscapedForTheShell) {
   EXPECT_EQ(p.instances[0].command, "echo ${HOME} > a.txt");
 }
 
+TEST(PipelineLoad, CommandValuesAreShellDataInEveryQuotingContext) {
+  Scratch s;
+  tp::LoadOptions o;
+  o.overrides = {"label=a b; touch P", "list=[x y, \"it's\"]"};
+  const auto p = tp::load(s.write("p.yaml", R"(vars: {label: x, list: [a]}
+steps:
+  a:
+    cmd: echo ${vars.label} '${vars.label}' "${vars.label}" ${vars.list} > ${outs.0}
+    outs: [a.txt]
+)"),
+                          o);
+  // Outside quotes: one quoted word per value; in '...': the quote closed and reopened around
+  // an escaped one; in "...": the characters the shell would read escaped.
+  EXPECT_EQ(p.instances[0].command,
+            "echo 'a b; touch P' 'a b; touch P' \"a b; touch P\" 'x y' 'it'\\''s' > a.txt");
+  o.overrides = {"label=$(x) `y` \\ \"q\"", "list=[a]"};
+  const auto d = tp::load(s.write("d.yaml", "vars: {label: x, list: [a]}\nsteps:\n  a:\n    cmd: echo \"${vars.label}\" > ${outs.0}\n    outs: [a.txt]\n"), o);
+  EXPECT_EQ(d.instances[0].command, "echo \"\\$(x) \\`y\\` \\\\ \\\"q\\\"\" > a.txt");
+}
+
 // ---- bad input: each names the file, the line and the offending name ----------------------
 
 TEST(PipelineBadInput, CycleNamesTheStepsInIt) {

@@ -1,17 +1,49 @@
 #pragma once
 // Outputs are written under a temporary name and renamed at the end, so a failed or killed
-// run never leaves a half-written file under the real name.
+// run never leaves a half-written file under the real name. Temporaries are registered: a tool
+// stopped by SIGINT or SIGTERM removes them (run_tool installs the handlers).
+#include <cstdint>
 #include <string>
 #include <vector>
 
 namespace tomodem {
 
-/// The temporary name used for `final_path` (same folder, so rename is atomic).
+/// The temporary name used for `final_path` (same folder, so rename is atomic). Registered for
+/// removal on SIGINT/SIGTERM until commit_output or discard_output.
 std::string temporary_path(const std::string& final_path);
-/// Renames the temporary file onto `final_path` (RuntimeFailure on error).
+/// Renames the temporary file onto `final_path` (RuntimeFailure on error; the temporary is removed).
 void commit_output(const std::string& final_path);
-/// Writes `text` to `path` atomically.
+/// Removes the temporary of `final_path`, if any (after a failed write).
+void discard_output(const std::string& final_path);
+/// Writes `text` to `path` atomically: every write, the flush to disk and the close are checked;
+/// on any error the temporary is removed, the old file stays as it was, and RuntimeFailure names
+/// the file and the reason (a full disk says so).
 void write_text_atomic(const std::string& path, const std::string& text);
+/// Removes every registered temporary now (what the signal handlers do; async-signal-safe).
+void remove_registered_temporaries();
+/// Installs SIGINT/SIGTERM handlers that remove the registered temporaries, then let the signal
+/// end the process as it would have (exit status 128 + signal).
+void install_cleanup_handlers();
+
+/// Refuses (InputError, exit 2) an output that names an input: the same file, by path or by
+/// identity (hard links, symbolic links, "./x" against "x"). `option` is how the user named the
+/// output ("-o", "--json", "output.packing"); inputs are the files the tool reads. When
+/// `output_is_folder`, an output folder that contains an input, or equals one, is refused too.
+void refuse_output_over_input(const std::string& output, const std::string& option,
+                              const std::vector<std::string>& inputs, bool output_is_folder = false);
+/// Refuses (InputError) an output path that leaves `folder` (absolute, or with "..").
+void refuse_output_outside(const std::string& path, const std::string& folder, const std::string& file,
+                           const std::string& field);
+
+/// The memory this process may use: the smaller of physical memory and the cgroup limit.
+std::uint64_t usable_memory_bytes();
+/// Refuses (InputError, exit 2) a request that would need more memory than usable_memory_bytes(),
+/// before anything is allocated: the message gives what it would need and what the machine has.
+/// `what` says what is requested ("10^12 particles").
+void check_memory_request(double bytes, const std::string& file, const std::string& field,
+                          const std::string& value, const std::string& what);
+/// "1.5 GB" style text for byte counts in messages.
+std::string bytes_text(double bytes);
 
 /// A CSV time series with a header that carries the unit of each column ("time_s" style names).
 std::string csv_table(const std::vector<std::string>& columns, const std::vector<std::vector<double>>& rows);
