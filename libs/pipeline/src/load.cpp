@@ -80,7 +80,7 @@ struct Raw {
   std::vector<RawStep> steps;
   std::string logs;
   std::string out;                 // `out:`, a root outside the pipeline folder outputs may use
-  Location out_where;
+  Location out_where, logs_where;
   std::vector<std::string> files;  // every pipeline file read (absolute): never an output
 };
 
@@ -141,7 +141,10 @@ void read_file(const fs::path& path, const std::string& shown, const Location& f
     flatten_vars(vars, "", shown, mine);
     for (auto& [k, v] : mine) raw.vars[k] = v;
   }
-  if (const YAML::Node logs = doc["logs"]) raw.logs = scalar(logs, shown, "logs");
+  if (const YAML::Node logs = doc["logs"]) {
+    raw.logs = scalar(logs, shown, "logs");
+    raw.logs_where = at(shown, logs);
+  }
   if (const YAML::Node out = doc["out"]) {
     raw.out = scalar(out, shown, "out");
     raw.out_where = at(shown, out);
@@ -577,6 +580,12 @@ Pipeline load(const std::string& file, const LoadOptions& options) {
     out_root = resolve(raw.out, vs, raw.out_where, "out");
   }
   const OutputRules rules(raw, p, out_root);
+  // The logs are rewritten on every run: they follow the rules of an output.
+  if (!raw.logs.empty()) {
+    const fs::path logs = resolved(p.logs_dir);
+    if (!strictly_inside(logs, resolved(p.dir)) && !(!out_root.empty() && strictly_inside(logs, resolved(fs::path(p.dir) / out_root))))
+      fail(raw.logs_where, "logs", raw.logs, "the log folder must be inside the pipeline's folder or the `out:` root");
+  }
 
   // Pass 1: cells, params and outputs of every step (outputs may not name other steps).
   std::vector<Instance> inst;

@@ -105,6 +105,15 @@ TEST(RunSafety, OutputsOutsideThePipelineFolderAreRefusedAndNothingIsTouched) {
     EXPECT_TRUE(has(r.err, c.why)) << c.outs << "\n" << r.err;
     EXPECT_EQ(snapshot(s.dir), before) << c.outs;  // nothing ran, nothing moved
   }
+  // A log folder outside: its files are rewritten on every run.
+  for (const std::string logs : {"..", "../victim", "/tmp"}) {
+    s.write("d/pipe/p.yaml", "logs: " + logs + "\nsteps:\n  a:\n    cmd: echo > ${outs.0}\n    outs: [a.txt]\n");
+    const auto before = snapshot(s.dir);
+    const auto r = run_in(s.path("d/pipe"), "p.yaml");
+    EXPECT_EQ(r.code, 2) << logs << "\n" << r.err;
+    EXPECT_TRUE(has(r.err, "p.yaml:1")) << r.err;
+    EXPECT_EQ(snapshot(s.dir), before);
+  }
   // An absolute path too (written by the test, so the path is this scratch folder's).
   s.write("d/pipe/p.yaml", "steps:\n  a:\n    cmd: \"true\"\n    outs: {o: " + s.path("victim") + "}\n");
   const auto before = snapshot(s.dir);
