@@ -8,6 +8,10 @@
 #include "tomodem/image/segment.hpp"
 #include "tomodem/image/tools.hpp"
 
+// Unsigned options: CLI11 would wrap "-4" round to 18446744073709551612; refuse it as written.
+const CLI::Validator non_negative(
+    [](std::string& s) { return s.find('-') != std::string::npos ? "must be >= 0, not " + s : std::string(); }, "INT>=0");
+
 int main(int argc, char** argv) {
   return tomodem::run_tool("tomodem-phantom", [&]() -> int {
     tomodem::image::PhantomConfig c;
@@ -17,14 +21,15 @@ int main(int argc, char** argv) {
                    "grey volume: .mha .mhd .nrrd .nii .tif (multi-page) .h5 .raw, or DIR/ for a TIFF stack")->required();
     app.add_option("--truth", c.truth, "truth labels (.h5: /labels, /macropores); packing kind: also TRUTH.packing.h5");
     app.add_option("--kind", o.kind, "pores | lamellae | sphere | packing")->capture_default_str();
-    app.add_option("--size", o.n, "cube edge (voxels)")->capture_default_str();
+    app.add_option("--size", o.n, "cube edge (voxels)")->capture_default_str()->check(non_negative);
     app.add_option("--voxel", o.voxel, "voxel size (m)")->capture_default_str();
     app.add_option("--snr", o.snr, "contrast / noise sigma (0: no noise)")->capture_default_str();
     app.add_option("--blur", o.blur, "Gaussian blur sigma (voxels)")->capture_default_str();
     app.add_option("--rings", o.rings, "ring artefact amplitude (fraction of the contrast)")->capture_default_str();
     app.add_option("--cupping", o.cupping, "beam-hardening cupping (fraction of the contrast)")->capture_default_str();
-    app.add_option("--seed", o.seed, "random seed")->capture_default_str();
-    app.add_option("--macropores", o.n_macropores, "pores kind: number of macropores")->capture_default_str();
+    app.add_option("--seed", o.seed, "random seed")->capture_default_str()->check(non_negative);
+    auto* macropores = app.add_option("--macropores", o.n_macropores,
+                                      "pores kind: number of macropores (default: up to 6, as many as fit)");
     app.add_option("--fine-porosity", o.fine_porosity, "pores kind: fine pore volume fraction")->capture_default_str();
     app.add_option("--grains", o.n_grains, "packing kind: number of grains (at most)")->capture_default_str();
     app.add_option("--sphere-radius", o.sphere_radius, "sphere kind: radius (voxels)")->capture_default_str();
@@ -36,6 +41,7 @@ int main(int argc, char** argv) {
     app.add_flag("-q,--quiet", quiet, "no progress messages");
     tomodem::cli::add_version(app, "tomodem-phantom");
     if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
+    o.macropores_auto = macropores->count() == 0;
     tomodem::set_quiet(quiet);
     if (threads < 0) throw tomodem::InputError("", "--threads", std::to_string(threads), "must be >= 0");
     tomodem::image::set_threads(threads);

@@ -8,6 +8,10 @@
 #include "tomodem/image/segment.hpp"
 #include "tomodem/image/tools.hpp"
 
+// Unsigned options: CLI11 would wrap "-4" round to 18446744073709551612; refuse it as written.
+const CLI::Validator non_negative(
+    [](std::string& s) { return s.find('-') != std::string::npos ? "must be >= 0, not " + s : std::string(); }, "INT>=0");
+
 int main(int argc, char** argv) {
   return tomodem::run_tool("tomodem-segment", [&]() -> int {
     tomodem::image::SegmentConfig c;
@@ -21,7 +25,8 @@ int main(int argc, char** argv) {
     app.add_option("--raw-type", c.read.raw_type, "raw: uint8 | int8 | uint16 | int16 | uint32 | int32 | float32 | float64")
         ->capture_default_str();
     app.add_option("--byte-order", c.read.byte_order, "raw: little | big")->capture_default_str();
-    app.add_option("--raw-header", c.read.raw_header, "raw: bytes to skip")->capture_default_str();
+    app.add_option("--raw-header", c.read.raw_header, "raw: bytes to skip")->capture_default_str()
+        ->check(non_negative);
     app.add_option("--dataset", c.read.h5_dataset, "HDF5 dataset (z, y, x)")->capture_default_str();
     app.add_option("--roi", c.roi_text, "crop X0,Y0,Z0,NX,NY,NZ (voxels)");
     app.add_option("--downsample", c.read.downsample, "block-average by this integer factor")->capture_default_str();
@@ -35,11 +40,13 @@ int main(int argc, char** argv) {
     app.add_flag("--pores-bright", c.pores_bright, "pores are brighter than the solid");
     app.add_option("--open", c.open_r, "open the solid with a ball of this radius (voxels)")->capture_default_str();
     app.add_option("--close", c.close_r, "close the solid with a ball of this radius (voxels)")->capture_default_str();
-    app.add_option("--min-island", c.min_island, "remove solid and pore islands below this many voxels")->capture_default_str();
+    app.add_option("--min-island", c.min_island, "remove solid and pore islands below this many voxels")->capture_default_str()
+        ->check(non_negative);
     app.add_option("--connectivity", c.connectivity, "6 or 26 (islands)")->capture_default_str();
     app.add_option("--macropore-radius", c.macro_radius_text, "opening ball radius separating macropores (3vox, 50um)")
         ->capture_default_str();
-    app.add_option("--macropore-min-voxels", c.macro_min_voxels, "drop macropores smaller than this")->capture_default_str();
+    app.add_option("--macropore-min-voxels", c.macro_min_voxels, "drop macropores smaller than this")->capture_default_str()
+        ->check(non_negative);
     app.add_flag("--grains", c.grains, "separate grains (distance map + h-maxima + watershed)");
     app.add_option("--h", c.h, "h-maxima height of the distance map (voxels)")->capture_default_str();
     app.add_option("--packing", c.packing, "write the grains as a packing (.h5, implies --grains)");

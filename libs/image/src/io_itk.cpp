@@ -9,8 +9,11 @@
 #include <itkImportImageFilter.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <filesystem>
 
+#include "file_checks.hpp"
 #include "itk_bridge.hpp"
 #include "tomodem/core/error.hpp"
 
@@ -30,6 +33,30 @@ itk::ImageIOBase::Pointer probe(const std::string& path) {
     throw InputError(path, "header", "", std::string("cannot read: ") + e.GetDescription());
   }
   return io;
+}
+
+std::string lower_ext(const std::string& path) {
+  std::string e = std::filesystem::path(path).extension().string();
+  for (auto& c : e) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return e;
+}
+bool is_tiff_name(const std::string& path) { const auto e = lower_ext(path); return e == ".tif" || e == ".tiff"; }
+bool is_meta_name(const std::string& path) { const auto e = lower_ext(path); return e == ".mha" || e == ".mhd"; }
+
+std::string dims_text(const itk::ImageIOBase* io) {
+  std::string s;
+  for (unsigned k = 0; k < io->GetNumberOfDimensions(); ++k) s += (k ? "x" : "") + std::to_string(io->GetDimensions(k));
+  return s;
+}
+
+// One grey component, 3-D (or 4-D with one time point); the checks every volume file passes.
+void check_volume_header(const std::string& path, const itk::ImageIOBase* io) {
+  if (io->GetNumberOfComponents() != 1)
+    throw InputError(path, "pixel", std::to_string(io->GetNumberOfComponents()) + " components", "expected a grey volume");
+  const unsigned nd = io->GetNumberOfDimensions();
+  if (nd != 3 && !(nd == 4 && io->GetDimensions(3) == 1))
+    throw InputError(path, "dimensions", std::to_string(nd) + " (" + dims_text(io) + ")",
+                     "expected a 3-D volume (a 2-D image is one slice: give a folder or pattern of slices)");
 }
 
 std::string component_name(const itk::ImageIOBase* io) {
@@ -85,13 +112,28 @@ void write_image(const std::string& path, const Image* img) {
 
 }  // namespace
 
-Volume read_file(const std::string& path, ReadInfo* info) {
+Dims header_dims(const std::string& path) {
+  std::size_t pages = 0;
+  if (is_tiff_name(path)) pages = checks::check_tiff(path).pages;
   auto io = probe(path);
-  if (io->GetNumberOfComponents() != 1)
-    throw InputError(path, "pixel", std::to_string(io->GetNumberOfComponents()) + " components", "expected a grey volume");
-  const unsigned nd = io->GetNumberOfDimensions();
-  if (nd != 3 && !(nd == 4 && io->GetDimensions(3) == 1))
-    throw InputError(path, "dimensions", std::to_string(nd), "expected a 3-D volume");
+  check_volume_header(path, io);
+  const Dims d{io->GetDimensions(0), io->GetDimensions(1), io->GetDimensions(2)};
+  if (pages && d.nz != pages)
+    throw InputError(path, "pages", std::to_string(d.nz), "the TIFF reader sees " + std::to_string(d.nz) + " of the file's " +
+                                                            std::to_string(pages) + " pages");
+  return d;
+}
+
+Volume read_file(const std::string& path, ReadInfo* info) {
+  std::size_t pages = 0;
+  if (is_tiff_name(path)) pages = checks::check_tiff(path).pages;
+  auto io = probe(path);
+  check_volume_header(path, io);
+  if (pages && io->GetDimensions(2) != pages)
+    throw InputError(path, "pages", std::to_string(io->GetDimensions(2)),
+                     "the TIFF reader sees " + std::to_string(io->GetDimensions(2)) + " of the file's " + std::to_string(pages) + " pages");
+  // A MetaImage whose data is shorter than its header says is read by ITK without an error.
+  if (is_meta_name(path)) checks::check_metaimage(path, io->GetImageSizeInBytes(), dims_text(io));
   if (info) info->pixel_type = component_name(io);
   // Read in slabs of about 64 MiB of float straight into the volume: where the ImageIO can stream
   // (uncompressed MetaImage, NRRD, NIfTI, TIFF strips) no second full-size copy is made and the
@@ -136,9 +178,14 @@ Volume read_file(const std::string& path, ReadInfo* info) {
   return v;
 }
 
-Volume read_series(const std::vector<std::string>& files, ReadInfo* info) {
+Volume read_series(const std::vector<std::string>& files, ReadInfo* info, const std::function<void(Dims)>& before_alloc) {
   std::size_t nx = 0, ny = 0;
   for (std::size_t i = 0; i < files.size(); ++i) {
+    if (is_tiff_name(files[i])) {
+      const auto t = checks::check_tiff(files[i]);
+      if (t.pages > 1)
+        throw InputError(files[i], "pages", std::to_string(t.pages), "a stack needs single-page slices");
+    }
     auto io = probe(files[i]);
     const unsigned nd = io->GetNumberOfDimensions();
     const std::size_t sx = io->GetDimensions(0), sy = nd > 1 ? io->GetDimensions(1) : 1;
@@ -158,6 +205,7 @@ Volume read_series(const std::vector<std::string>& files, ReadInfo* info) {
   // Slice by slice into the volume (no full-size ITK image and copy). The voxel size of a stack
   // comes from --spacing (TIFF resolution tags are not one), so only the values are taken.
   using Slice = itk::Image<float, 2>;
+  if (before_alloc) before_alloc(Dims{nx, ny, files.size()});
   Volume v(Dims{nx, ny, files.size()});
   for (std::size_t i = 0; i < files.size(); ++i) {
     auto r = itk::ImageFileReader<Slice>::New();

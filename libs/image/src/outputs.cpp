@@ -1,5 +1,8 @@
 // HDF5 labels (core h5), the OpenVDB level set and OpenCV overlays.
 #include <openvdb/openvdb.h>
+#include <openvdb/io/Archive.h>
+#include <openvdb/io/GridDescriptor.h>
+#include <openvdb/io/io.h>
 #include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/ChangeBackground.h>
 #include <openvdb/tools/LevelSetRebuild.h>
@@ -100,15 +103,85 @@ void write_level_set(const std::string& path, const Mask& m, double half_width_v
   commit_output(path);
 }
 
+namespace {
+// OpenVDB reads a truncated file past its end without noticing (garbage counts, unbounded
+// allocation: a cut level set grew the process to 1.8 GB). Walk the file's table of contents
+// first with OpenVDB's own readers: header, file metadata, then each grid descriptor, whose
+// grid must end inside the file. (libs/carve's level-set reader does the same.)
+class VdbContents final : public openvdb::io::Archive {
+ public:
+  explicit VdbContents(std::string path) : path_(std::move(path)) {}
+  void check() {
+    std::ifstream is(path_, std::ios::binary);
+    if (!is) throw InputError(path_, "", "", "cannot open the file for reading");
+    is.seekg(0, std::ios::end);
+    const std::int64_t size = std::int64_t(is.tellg());
+    is.seekg(0);
+    if (size <= 0) throw InputError(path_, "size", "0 bytes", "empty file, not an OpenVDB level set");
+    try {
+      readHeader(is);
+    } catch (const std::exception& e) {
+      throw InputError(path_, "header", "", std::string("not an OpenVDB file: ") + e.what());
+    }
+    if (!is) truncated("header", size);
+    try {
+      openvdb::io::StreamMetadata::Ptr meta(new openvdb::io::StreamMetadata);
+      meta->setSeekable(true);
+      openvdb::io::setStreamMetadataPtr(is, meta, false);
+      setFormatVersion(is);
+      setLibraryVersion(is);
+      setDataCompression(is);
+      openvdb::MetaMap file_meta;
+      file_meta.readMeta(is);
+      if (!is) truncated("file metadata", size);
+      if (!inputHasGridOffsets()) return;
+      const int32_t n = readGridCount(is);
+      if (!is || n < 0) truncated("grid count", size);
+      for (int32_t k = 0; k < n; ++k) {
+        const std::int64_t here = std::int64_t(is.tellg());
+        if (!is || here < 0 || here + 12 > size) truncated("grid " + std::to_string(k) + " descriptor", size);
+        openvdb::io::GridDescriptor gd;
+        gd.read(is);
+        const std::string name = "grid '" + openvdb::io::GridDescriptor::nameAsString(gd.uniqueName()) + "'";
+        if (!is) truncated(name, size);
+        if (gd.getGridPos() < here || gd.getBlockPos() < gd.getGridPos() || gd.getEndPos() < gd.getBlockPos())
+          throw InputError(path_, name, "offsets " + std::to_string(gd.getGridPos()) + ", " + std::to_string(gd.getBlockPos()) +
+                                            ", " + std::to_string(gd.getEndPos()), "corrupt grid descriptor (offsets out of order)");
+        if (gd.getEndPos() > size)
+          throw InputError(path_, name, "ends at byte " + std::to_string(gd.getEndPos()),
+                           "the file has only " + std::to_string(size) + " bytes: it is truncated");
+        is.seekg(gd.getEndPos());
+      }
+    } catch (const InputError&) {
+      throw;
+    } catch (const std::exception& e) {
+      throw InputError(path_, "", "", std::string("corrupt OpenVDB file: ") + e.what());
+    }
+  }
+
+ private:
+  [[noreturn]] void truncated(const std::string& where, std::int64_t size) const {
+    throw InputError(path_, where, std::to_string(size) + " bytes", "the file ends inside its " + where + ": truncated");
+  }
+  std::string path_;
+};
+}  // namespace
+
 std::vector<double> sample_level_set(const std::string& path, const std::vector<Vec3>& pts) {
   openvdb::initialize();
+  VdbContents(path).check();
   openvdb::io::File file(path);
   try {
     file.open();
   } catch (const std::exception& e) {
     throw InputError(path, "", "", std::string("cannot open: ") + e.what());
   }
-  auto base = file.readGrid("macropores");
+  openvdb::GridBase::Ptr base;
+  try {
+    base = file.readGrid("macropores");
+  } catch (const std::exception& e) {
+    throw InputError(path, "macropores", "", std::string("cannot read the grid: ") + e.what());
+  }
   file.close();
   auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(base);
   if (!grid) throw InputError(path, "macropores", "", "not a float grid");

@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <sstream>
 
 #include "tomodem/core/error.hpp"
+#include "tomodem/core/output.hpp"
 #include "tomodem/image/phantom.hpp"
 #include "tomodem/image/segment.hpp"
 
@@ -21,25 +23,20 @@ struct Ellipsoid {
   double rmax() const { return std::max({a.x, a.y, a.z}); }
 };
 
-void check(const PhantomOptions& o) {
-  if (o.n < 16 || o.n > 2048) throw InputError("", "--size", std::to_string(o.n), "must be in [16, 2048]");
-  if (!(o.voxel > 0)) throw InputError("", "--voxel", std::to_string(o.voxel), "must be > 0 (m)");
-  if (o.snr < 0) throw InputError("", "--snr", std::to_string(o.snr), "must be >= 0 (0: no noise)");
-  if (o.blur < 0) throw InputError("", "--blur", std::to_string(o.blur), "must be >= 0");
-}
-
 void pores_kind(const PhantomOptions& o, std::mt19937_64& rng, Phantom& P) {
   const double n = double(o.n);
   std::uniform_real_distribution<double> U(0, 1);
   std::vector<Ellipsoid> macro;
+  const double shrink = std::min(1.0, n / 64);  // small cubes: smaller macropores (none above 64 voxels)
   for (int attempt = 0; int(macro.size()) < o.n_macropores && attempt < 20000; ++attempt) {
-    const double r = o.macro_radius_min + (o.macro_radius_max - o.macro_radius_min) * U(rng);
+    const double r = shrink * (o.macro_radius_min + (o.macro_radius_max - o.macro_radius_min) * U(rng));
     Ellipsoid e;
     e.a = (macro.size() % 2 == 0) ? Vec3{r, r, r} : Vec3{r, 0.7 * r, 1.3 * r};  // spheres and ellipsoids
     if (macro.empty()) {  // the first one is cut by the x = 0 face: a macropore open to the surface
       e.c = {0.4 * r, n / 2 + (U(rng) - 0.5) * n / 4, n / 2 + (U(rng) - 0.5) * n / 4};
     } else {
       const double m = e.rmax() + 2;
+      if (n - 2 * m <= 0) continue;  // does not fit inside the cube
       e.c = {m + (n - 2 * m) * U(rng), m + (n - 2 * m) * U(rng), m + (n - 2 * m) * U(rng)};
     }
     bool ok = true;
@@ -47,8 +44,10 @@ void pores_kind(const PhantomOptions& o, std::mt19937_64& rng, Phantom& P) {
       if (norm(e.c - f.c) < e.rmax() + f.rmax() + 6) { ok = false; break; }
     if (ok) macro.push_back(e);
   }
-  if (int(macro.size()) < o.n_macropores)
-    throw InputError("", "--macropores", std::to_string(o.n_macropores), "do not fit in the volume");
+  if (int(macro.size()) < o.n_macropores && !o.macropores_auto)
+    throw InputError("", "--macropores", std::to_string(o.n_macropores),
+                     "only " + std::to_string(macro.size()) + " fit in a " + std::to_string(o.n) +
+                         "^3 volume (6 voxels of solid between them); give at most that many or a larger --size");
   std::vector<Vec3> fine;
   const double fine_vol = 4.0 / 3.0 * M_PI * std::pow(o.fine_radius, 3);
   const std::size_t n_fine = std::size_t(o.fine_porosity * n * n * n / fine_vol);
@@ -61,6 +60,13 @@ void pores_kind(const PhantomOptions& o, std::mt19937_64& rng, Phantom& P) {
     for (std::size_t k = 0; ok && k < fine.size(); ++k)
       if (norm(c - fine[k]) < 2 * o.fine_radius + 2) ok = false;
     if (ok) fine.push_back(c);
+  }
+  if (fine.size() < n_fine) {
+    std::ostringstream got;
+    got << double(fine.size()) * fine_vol / (n * n * n);
+    throw InputError("", "--fine-porosity", [&] { std::ostringstream t; t << o.fine_porosity; return t.str(); }(),
+                     "only " + std::to_string(fine.size()) + " of the " + std::to_string(n_fine) +
+                         " fine pores fit between the macropores (fine porosity " + got.str() + "); give a smaller value");
   }
   P.macropore_voxels.assign(macro.size(), 0);
   const auto N = o.n;
@@ -192,8 +198,43 @@ void packing_kind(const PhantomOptions& o, std::mt19937_64& rng, Phantom& P) {
 
 }  // namespace
 
+void check_phantom_options(const PhantomOptions& o) {
+  const auto text = [](double x) {
+    std::ostringstream s;
+    s << x;
+    return s.str();
+  };
+  const auto finite_in = [&](const char* option, double x, double lo, double hi, const std::string& what) {
+    if (!std::isfinite(x) || x < lo || x > hi) throw InputError("", option, text(x), what);
+  };
+  if (o.kind != "pores" && o.kind != "lamellae" && o.kind != "sphere" && o.kind != "packing")
+    throw InputError("", "--kind", o.kind, "expected pores, lamellae, sphere or packing");
+  if (o.n < 16 || o.n > 2048) throw InputError("", "--size", std::to_string(o.n), "must be in [16, 2048] (voxels)");
+  if (!std::isfinite(o.voxel) || !(o.voxel > 0) || o.voxel > 1)
+    throw InputError("", "--voxel", text(o.voxel), "must be finite, > 0 and <= 1 (m)");
+  finite_in("--snr", o.snr, 0, 1e6, "must be finite and >= 0 (0: no noise)");
+  finite_in("--blur", o.blur, 0, double(o.n) / 4, "must be finite, >= 0 and <= size/4 (voxels; 0: none)");
+  finite_in("--rings", o.rings, 0, 1, "must be finite and in [0, 1] (fraction of the contrast)");
+  finite_in("--cupping", o.cupping, 0, 1, "must be finite and in [0, 1] (fraction of the contrast)");
+  if (o.n_macropores < 0 || o.n_macropores > 1000)
+    throw InputError("", "--macropores", std::to_string(o.n_macropores), "must be an integer in [0, 1000]");
+  finite_in("--fine-porosity", o.fine_porosity, 0, 0.3, "must be finite and in [0, 0.3] (volume fraction)");
+  if (o.n_grains < 1 || o.n_grains > 100000)
+    throw InputError("", "--grains", std::to_string(o.n_grains), "must be an integer in [1, 100000]");
+  if (!std::isfinite(o.sphere_radius) || !(o.sphere_radius > 0) ||
+      (o.kind == "sphere" && o.sphere_radius > double(o.n) / 2 - 1))
+    throw InputError("", "--sphere-radius", text(o.sphere_radius),
+                     "must be finite, > 0 and at most size/2 - 1 = " + text(double(o.n) / 2 - 1) + " voxels");
+  for (double x : {o.macro_radius_min, o.macro_radius_max, o.fine_radius, o.grain_radius_min, o.grain_radius_max,
+                   o.pore_value, o.solid_value})
+    if (!std::isfinite(x) || x < 0) throw InputError("", "phantom", text(x), "radii and grey values must be finite and >= 0");
+  const double n = double(o.n);
+  check_memory_request(n * n * n * kPhantomBytesPerVoxel, "", "--size", std::to_string(o.n),
+                       "a " + std::to_string(o.n) + "^3 phantom");
+}
+
 Phantom make_phantom(const PhantomOptions& o) {
-  check(o);
+  check_phantom_options(o);
   std::mt19937_64 rng(o.seed);
   Phantom P;
   const Dims d{o.n, o.n, o.n};

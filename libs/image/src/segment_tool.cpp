@@ -2,8 +2,11 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
+#include <filesystem>
 #include <cmath>
+#include <cstring>
 #include <sstream>
 #include <sys/resource.h>
 
@@ -62,6 +65,104 @@ struct StageClock {
   }
 };
 
+bool finite_nonneg(double x) { return std::isfinite(x) && x >= 0; }
+bool finite_pos(double x) { return std::isfinite(x) && x > 0; }
+std::string num_text(double x) {
+  std::ostringstream s;
+  s << x;
+  return s.str();
+}
+
+// Every option of tomodem-segment on its own, before anything is read (a typo costs nothing).
+void check_segment_options(const SegmentConfig& c) {
+  static const char* filters[] = {"none", "median", "gaussian", "cad", "nlm"};
+  if (std::find(std::begin(filters), std::end(filters), c.filter) == std::end(filters))
+    throw InputError("", "--filter", c.filter, "expected none, median, gaussian, cad or nlm");
+  static const char* methods[] = {"otsu", "peaks", "intermeans", "multiotsu2", "multiotsu3", "manual", "hysteresis"};
+  if (std::find(std::begin(methods), std::end(methods), c.method) == std::end(methods))
+    throw InputError("", "--method", c.method, "expected otsu, peaks, intermeans, multiotsu2, multiotsu3, manual or hysteresis");
+  if (c.filter_radius < 1 || c.filter_radius > 10)
+    throw InputError("", "--filter-radius", std::to_string(c.filter_radius), "must be an integer in [1, 10] (voxels)");
+  if (!finite_pos(c.sigma) || c.sigma > 100) throw InputError("", "--sigma", num_text(c.sigma), "must be finite, > 0 and <= 100 (voxels)");
+  if (c.iterations < 1 || c.iterations > 1000)
+    throw InputError("", "--iterations", std::to_string(c.iterations), "must be an integer in [1, 1000]");
+  if (!finite_pos(c.conductance)) throw InputError("", "--conductance", num_text(c.conductance), "must be finite and > 0");
+  for (double l : c.levels)
+    if (!std::isfinite(l)) throw InputError("", "--levels", num_text(l), "thresholds must be finite grey values");
+  if (c.method == "manual" && (c.levels.empty() || c.levels.size() > 2))
+    throw InputError("", "--levels", std::to_string(c.levels.size()) + " values", "manual thresholding needs one or two --levels");
+  if (c.method == "hysteresis" && c.levels.size() != 2)
+    throw InputError("", "--levels", std::to_string(c.levels.size()) + " values", "hysteresis needs --levels LOW,HIGH");
+  if (!c.levels.empty() && c.method != "manual" && c.method != "hysteresis")
+    throw InputError("", "--levels", num_text(c.levels[0]), "--levels is used by --method manual or hysteresis only, not " + c.method);
+  if (!finite_nonneg(c.open_r)) throw InputError("", "--open", num_text(c.open_r), "must be finite and >= 0 (voxels; 0: none)");
+  if (!finite_nonneg(c.close_r)) throw InputError("", "--close", num_text(c.close_r), "must be finite and >= 0 (voxels; 0: none)");
+  if (c.connectivity != 6 && c.connectivity != 26)
+    throw InputError("", "--connectivity", std::to_string(c.connectivity), "expected 6 or 26");
+  if (!finite_pos(c.h)) throw InputError("", "--h", num_text(c.h), "must be finite and > 0 (voxels)");
+  parse_length("--macropore-radius", c.macro_radius_text);
+  if (!c.mha.empty() && !(c.mha.size() > 4 && (c.mha.substr(c.mha.size() - 4) == ".mha" || c.mha.substr(c.mha.size() - 4) == ".mhd")))
+    throw InputError("", "--mha", c.mha, "MetaImage output needs a .mha or .mhd name");
+}
+
+// Memory per voxel of the volume after --roi/--downsample, measured as peak RSS over 64^3..192^3
+// phantoms (docs/segment.md, "Memory"): grey volume, filter copies, masks, distance maps, labels.
+double segment_bytes_per_voxel(const SegmentConfig& c) {
+  double b = 24;                                        // grey + masks + distance map + macropore labels
+  if (c.filter == "gaussian" || c.filter == "cad" || c.filter == "nlm") b += 12;  // ITK images in and out
+  if (c.grains) b += 28;                                // Maurer distance, markers, watershed, grain labels
+  if (!c.vdb.empty()) b += 12;                          // smoothed indicator for the level set
+  return b;
+}
+
+std::string sibling(const std::string& path, const std::string& new_ext) {
+  const auto slash = path.find_last_of('/');
+  const auto dot = path.find_last_of('.');
+  const bool has_ext = dot != std::string::npos && (slash == std::string::npos || dot > slash + 1);
+  return (has_ext ? path.substr(0, dot) : path) + new_ext;
+}
+
+// Refuses an output over an input, two outputs with one name, and an output in a missing folder.
+// The first `folders` outputs are folders (a TIFF stack): they may exist when they hold only an
+// earlier stack's slices (sliceNNNNN.tif), which the new stack replaces.
+void check_outputs(const std::vector<std::pair<std::string, std::string>>& outs, const std::vector<std::string>& inputs,
+                   std::size_t folders = 0) {
+  namespace fs = std::filesystem;
+  std::vector<std::pair<std::string, fs::path>> seen;
+  for (const auto& [option, path] : outs) {
+    if (seen.size() < folders && !path.empty()) {
+      refuse_output_over_input(path, option, inputs, true);
+      if (fs::exists(path) && !fs::is_directory(path)) throw InputError("", option, path + "/", "is a file, not a folder");
+      if (fs::is_directory(path))
+        for (const auto& e : fs::directory_iterator(path)) {
+          const std::string name = e.path().filename().string();
+          if (!(e.is_regular_file() && name.size() == 14 && name.rfind("slice", 0) == 0 &&
+                name.compare(10, 4, ".tif") == 0 && name.find_first_not_of("0123456789", 5) == 10))
+            throw InputError("", option, path + "/",
+                             "the folder holds " + name + ", which is not a slice of an earlier stack; writing the stack "
+                             "replaces the folder: choose a new or empty folder");
+        }
+      std::error_code ec;
+      seen.emplace_back(option, fs::weakly_canonical(fs::absolute(path, ec), ec));
+      const fs::path parent = fs::path(path).parent_path();
+      if (!parent.empty() && !fs::is_directory(parent))
+        throw InputError("", option, path + "/", "the folder " + parent.string() + " does not exist");
+      continue;
+    }
+    if (path.empty() || path == "-") continue;
+    refuse_output_over_input(path, option, inputs);
+    std::error_code ec;
+    const fs::path canon = fs::weakly_canonical(fs::absolute(path, ec), ec);
+    for (const auto& [o2, p2] : seen)
+      if (p2 == canon) throw InputError("", option, path, "is also the " + o2 + " output: give each output its own name");
+    seen.emplace_back(option, canon);
+    const fs::path parent = fs::path(path).parent_path();
+    if (!parent.empty() && !fs::is_directory(parent))
+      throw InputError("", option, path, "the folder " + parent.string() + " does not exist");
+    if (fs::is_directory(path)) throw InputError("", option, path, "is a folder; give a file name");
+  }
+}
+
 std::string phase_rule(const SegmentConfig& c) { return c.pores_bright ? "pores above the threshold" : "pores below the threshold"; }
 
 }  // namespace
@@ -84,10 +185,20 @@ std::string run_segment(const SegmentConfig& cfgin) {
     const auto r = parse_list("--raw-dims", cfg.raw_dims_text, 3);
     std::copy(r.begin(), r.end(), ro.raw_dims.begin());
   }
-  // Check output names before the work, so a typo costs nothing.
-  if (!cfg.mha.empty() && !(cfg.mha.size() > 4 && (cfg.mha.substr(cfg.mha.size() - 4) == ".mha" ||
-                                                   cfg.mha.substr(cfg.mha.size() - 4) == ".mhd")))
-    throw InputError("", "--mha", cfg.mha, "MetaImage output needs a .mha or .mhd name");
+  // Check options and output names before the work, so a typo costs nothing and no output
+  // overwrites an input (a .mhd's data file, a stack's slices included).
+  check_segment_options(cfg);
+  check_read_options(ro);
+  {
+    std::vector<std::pair<std::string, std::string>> outs{{"-o", cfg.output}, {"--mha", cfg.mha}, {"--vdb", cfg.vdb},
+                                                          {"--json", cfg.json}, {"--packing", cfg.packing}};
+    if (cfg.mha.size() > 4 && cfg.mha.substr(cfg.mha.size() - 4) == ".mhd") outs.push_back({"--mha", sibling(cfg.mha, ".raw")});
+    if (!cfg.packing.empty()) outs.push_back({"--packing", sibling(cfg.packing, ".xdmf")});
+    if (!cfg.overlay.empty())
+      for (const char* p : {"_xy.png", "_xz.png", "_yz.png"}) outs.push_back({"--overlay", cfg.overlay + p});
+    check_outputs(outs, input_files(cfg.input, ro));
+  }
+  ro.bytes_per_voxel = segment_bytes_per_voxel(cfg);
 
   ReadInfo rinfo;
   StageClock clock;
@@ -321,6 +432,27 @@ std::string run_segment(const SegmentConfig& cfgin) {
 std::string run_phantom(const PhantomConfig& c) {
   const auto t0 = std::chrono::steady_clock::now();
   if (c.output.empty()) throw InputError("", "--output", "", "an output volume is required");
+  // Everything checked before the work: options, the output's format, names that collide, missing
+  // folders, and a TIFF-stack folder that holds anything but an earlier stack's slices.
+  check_phantom_options(c.opt);
+  {
+    std::string l = c.output;
+    for (auto& ch : l) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+    const bool folder = !l.empty() && l.back() == '/';
+    bool known = folder;
+    for (const char* e : {".mha", ".mhd", ".nrrd", ".nii", ".nii.gz", ".tif", ".tiff", ".h5", ".raw"})
+      known = known || (l.size() > std::strlen(e) && l.compare(l.size() - std::strlen(e), std::strlen(e), e) == 0);
+    if (!known)
+      throw InputError("", "-o", c.output, "unknown volume format: give .mha .mhd .nrrd .nii .nii.gz .tif .h5 .raw, or DIR/ for a TIFF stack");
+    std::vector<std::pair<std::string, std::string>> outs{{"-o", folder ? c.output.substr(0, c.output.size() - 1) : c.output},
+                                                          {"--truth", c.truth}, {"--json", c.json}};
+    if (l.size() > 4 && l.compare(l.size() - 4, 4, ".mhd") == 0) outs.push_back({"-o", sibling(c.output, ".raw")});
+    if (!c.truth.empty() && c.opt.kind == "packing") {
+      outs.push_back({"--truth", c.truth + ".packing.h5"});
+      outs.push_back({"--truth", sibling(c.truth + ".packing.h5", ".xdmf")});
+    }
+    check_outputs(outs, {}, folder ? 1 : 0);
+  }
   const Phantom P = make_phantom(c.opt);
   json s;
   s["kind"] = c.opt.kind;

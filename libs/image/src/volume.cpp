@@ -1,12 +1,14 @@
 // Format dispatch, bare raw and HDF5 readers, crop and downsampling. No third-party headers.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fnmatch.h>
 #include <fstream>
 #include <sstream>
 
+#include "file_checks.hpp"
 #include "itk_bridge.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/h5.hpp"
@@ -60,7 +62,9 @@ std::vector<std::string> stack_files(const std::string& input) {
     if (fnmatch(pattern.c_str(), name.c_str(), 0) == 0) files.push_back(e.path().string());
   }
   std::sort(files.begin(), files.end());
-  if (files.empty()) throw InputError(input, "", "", "no TIFF slices found");
+  if (files.empty())
+    throw InputError(input, "", "", fs::is_directory(input) ? "no TIFF slices (*.tif, *.tiff) in this folder"
+                                                            : "no file matches this pattern");
   return files;
 }
 
@@ -84,15 +88,47 @@ void convert(const char* p, std::size_t n, bool swap, std::vector<float>& out) {
   }
 }
 
+std::string dims_text(const Dims& d) {
+  return std::to_string(d.nx) + "x" + std::to_string(d.ny) + "x" + std::to_string(d.nz);
+}
+
+// The memory a read of `full` voxels and the caller's pipeline need, before anything is allocated:
+// the float volume and the reader's own buffer (extra_bpv per voxel), the cropped and the
+// downsampled copies, and the pipeline on the volume it gets.
+void check_read_memory(const std::string& file, const std::string& field, const Dims& full, double extra_bpv,
+                       const ReadOptions& o) {
+  const double nfull = double(full.nx) * double(full.ny) * double(full.nz);
+  double nx = double(full.nx), ny = double(full.ny), nz = double(full.nz);
+  if (o.has_roi) {
+    nx = std::min(nx, double(o.roi[3]));
+    ny = std::min(ny, double(o.roi[4]));
+    nz = std::min(nz, double(o.roi[5]));
+  }
+  const double f = std::max(1, o.downsample);
+  const double nfinal = std::floor(nx / f) * std::floor(ny / f) * std::floor(nz / f);
+  const double need = std::max({nfull * (4 + extra_bpv), nfull * 4 + nx * ny * nz * 4, nfinal * o.bytes_per_voxel});
+  char what[200];
+  std::snprintf(what, sizeof what, "a %s volume (%.3g voxels)", dims_text(full).c_str(), nfull);
+  std::string w = what;
+  if (o.bytes_per_voxel > 0) {
+    std::snprintf(what, sizeof what, " with this pipeline (%.0f bytes per voxel", o.bytes_per_voxel);
+    w += what;
+    w += (o.has_roi || o.downsample > 1) ? " of the " + std::to_string(std::size_t(nfinal)) + " voxels after --roi/--downsample)" : ")";
+  }
+  check_memory_request(need, file, field, dims_text(full), w);
+}
+
 Volume read_raw(const std::string& path, const ReadOptions& o, ReadInfo* info) {
   const auto [nx, ny, nz] = o.raw_dims;
   if (nx == 0 || ny == 0 || nz == 0)
     throw InputError(path, "--raw-dims", "", "a raw file needs its dimensions (--raw-dims NX,NY,NZ)");
   const std::size_t bytes = type_size(o.raw_type);
+  check_read_memory(path, "--raw-dims", Dims{nx, ny, nz}, 0, o);
   const std::uintmax_t expected = o.raw_header + nx * ny * nz * bytes;
   std::error_code ec;
   const std::uintmax_t size = fs::file_size(path, ec);
   if (ec) throw InputError(path, "", "", "cannot read file size: " + ec.message());
+  if (fs::is_directory(path)) throw InputError(path, "", "", "is a folder, not a raw file");
   if (size < expected)
     throw InputError(path, "size", std::to_string(size) + " bytes",
                      "truncated: dims " + std::to_string(nx) + "x" + std::to_string(ny) + "x" + std::to_string(nz) + " " +
@@ -130,10 +166,14 @@ Volume read_raw(const std::string& path, const ReadOptions& o, ReadInfo* info) {
 
 Volume read_h5(const std::string& path, const ReadOptions& o, bool* has_spacing) {
   h5::File f(path, h5::File::Mode::read);
-  std::vector<std::size_t> d;
-  const auto data = f.read_double(o.h5_dataset, &d);
+  std::vector<std::size_t> d = f.shape(o.h5_dataset);  // InputError naming the dataset when missing
   if (d.size() != 3)
     throw InputError(path, o.h5_dataset, std::to_string(d.size()) + "-D", "expected a 3-D dataset (z, y, x)");
+  // The dataset is read as double, then converted: 8 bytes per voxel on top of the volume.
+  check_read_memory(path, o.h5_dataset, Dims{d[2], d[1], d[0]}, 8, o);
+  const auto data = f.read_double(o.h5_dataset, &d);
+  if (d.size() != 3 || data.size() != d[0] * d[1] * d[2])
+    throw InputError(path, o.h5_dataset, std::to_string(data.size()) + " values", "does not match its shape");
   Volume v(Dims{d[2], d[1], d[0]});
   for (std::size_t i = 0; i < data.size(); ++i) v.v[i] = static_cast<float>(data[i]);
   *has_spacing = false;
@@ -175,8 +215,11 @@ double parse_length(const std::string& option, const std::string& text) {
 Volume crop(const Volume& v, const std::array<std::size_t, 6>& r) {
   const Dims& d = v.dims;
   if (r[3] == 0 || r[4] == 0 || r[5] == 0 || r[0] + r[3] > d.nx || r[1] + r[4] > d.ny || r[2] + r[5] > d.nz)
-    throw InputError("", "--roi", "", "region outside the volume (" + std::to_string(d.nx) + "x" + std::to_string(d.ny) +
-                                          "x" + std::to_string(d.nz) + ") or empty");
+    throw InputError("", "--roi",
+                     std::to_string(r[0]) + "," + std::to_string(r[1]) + "," + std::to_string(r[2]) + "," +
+                         std::to_string(r[3]) + "," + std::to_string(r[4]) + "," + std::to_string(r[5]),
+                     "region outside the volume (" + std::to_string(d.nx) + "x" + std::to_string(d.ny) + "x" +
+                         std::to_string(d.nz) + ") or empty");
   Volume out(Dims{r[3], r[4], r[5]});
   out.spacing = v.spacing;
   for (int k = 0; k < 3; ++k) out.origin[k] = v.origin[k] + static_cast<double>(r[k]) * v.spacing[k];
@@ -210,19 +253,76 @@ Volume downsample(const Volume& v, int f) {
   return out;
 }
 
+void check_read_options(const ReadOptions& o) {
+  static const char* formats[] = {"auto", "tiff", "tiff-stack", "mha", "nrrd", "nifti", "raw", "h5"};
+  if (std::find(std::begin(formats), std::end(formats), o.format) == std::end(formats))
+    throw InputError("", "--format", o.format, "expected auto, tiff, mha, nrrd, nifti, raw or h5");
+  type_size(o.raw_type);
+  if (o.byte_order != "little" && o.byte_order != "big") throw InputError("", "--byte-order", o.byte_order, "expected little or big");
+  if (o.downsample < 1) throw InputError("", "--downsample", std::to_string(o.downsample), "must be an integer >= 1");
+  if (!(o.header_unit > 0) || !std::isfinite(o.header_unit))
+    throw InputError("", "--header-unit", std::to_string(o.header_unit), "must be finite and > 0 (metres per header unit, e.g. 0.001)");
+  for (double s : o.spacing)
+    if (!(s >= 0) || !std::isfinite(s)) throw InputError("", "--spacing", std::to_string(s), "must be finite and > 0");
+  if (o.has_roi && (o.roi[3] == 0 || o.roi[4] == 0 || o.roi[5] == 0))
+    throw InputError("", "--roi", std::to_string(o.roi[3]) + "x" + std::to_string(o.roi[4]) + "x" + std::to_string(o.roi[5]),
+                     "an empty region: NX, NY and NZ must be >= 1");
+  if (o.h5_dataset.empty() || o.h5_dataset[0] != '/')
+    throw InputError("", "--dataset", o.h5_dataset, "an HDF5 dataset path starts with '/' (e.g. /volume)");
+}
+
+std::vector<std::string> input_files(const std::string& input, const ReadOptions& o) {
+  std::string format = (o.format == "auto") ? detect_format(input) : o.format;
+  if (format == "tiff" && (input.find_first_of("*?") != std::string::npos || fs::is_directory(input))) format = "tiff-stack";
+  if (format == "tiff-stack") return stack_files(input);
+  std::vector<std::string> files{input};
+  if (format == "mha" && fs::is_regular_file(input)) {
+    const std::string data = checks::metaimage_data_file(input);
+    if (!data.empty()) files.push_back(data);
+  }
+  return files;
+}
+
+namespace {
+// NaN or infinite grey values break every threshold and histogram: refused with the first voxel.
+void check_finite(const Volume& v, const std::string& file, const std::string& field, bool zyx) {
+  const auto it = std::find_if(v.v.begin(), v.v.end(), [](float x) { return !std::isfinite(x); });
+  if (it == v.v.end()) return;
+  const std::size_t i = std::size_t(it - v.v.begin()), x = i % v.dims.nx, y = (i / v.dims.nx) % v.dims.ny,
+                    z = i / (v.dims.nx * v.dims.ny);
+  const std::size_t bad = std::size_t(std::count_if(v.v.begin(), v.v.end(), [](float q) { return !std::isfinite(q); }));
+  const std::string where = zyx ? "[" + std::to_string(z) + "," + std::to_string(y) + "," + std::to_string(x) + "] (z,y,x)"
+                                : "(" + std::to_string(x) + "," + std::to_string(y) + "," + std::to_string(z) + ") (x,y,z)";
+  throw InputError(file, field, std::isnan(*it) ? "NaN" : (*it > 0 ? "inf" : "-inf"),
+                   "voxel " + where + " is not a finite number (" + std::to_string(bad) +
+                       " such voxels); a grey volume must hold finite values: fill or mask them first");
+}
+}  // namespace
+
 Volume read_volume(const std::string& input, const ReadOptions& o, ReadInfo* info_out) {
+  check_read_options(o);
   ReadInfo info;
   info.format = (o.format == "auto") ? detect_format(input) : o.format;
   if (info.format == "tiff" && (input.find_first_of("*?") != std::string::npos || fs::is_directory(input)))
     info.format = "tiff-stack";
   if (info.format != "tiff-stack" && !fs::exists(input)) throw InputError(input, "", "", "no such file");
+  if (info.format != "tiff-stack" && fs::is_directory(input))
+    throw InputError(input, "", "", "is a folder; a folder is read as a stack of TIFF slices only (--format tiff or auto)");
+  if (info.format != "tiff-stack") {
+    std::ifstream probe(input, std::ios::binary);
+    if (!probe) throw InputError(input, "", "", "cannot open the file for reading (permissions?)");
+    std::error_code ec;
+    if (fs::file_size(input, ec) == 0) throw InputError(input, "size", "0 bytes", "the file is empty");
+  }
   Volume v;
   bool header_spacing = false;  // spacing present in the file, in header units (ITK) or m (h5)
+  std::string field = "data";
   if (info.format == "tiff-stack") {
     info.files = stack_files(input);
-    v = itkb::read_series(info.files, &info);
+    v = itkb::read_series(info.files, &info, [&](Dims d) { check_read_memory(input, "slices", d, 0, o); });
   } else if (info.format == "tiff" || info.format == "mha" || info.format == "nrrd" || info.format == "nifti") {
     info.files = {input};
+    check_read_memory(input, info.format == "mha" ? "DimSize" : "dims", itkb::header_dims(input), 0, o);
     v = itkb::read_file(input, &info);
     header_spacing = info.format != "tiff";  // TIFF resolution tags are not a voxel size
     if (header_spacing)
@@ -234,10 +334,12 @@ Volume read_volume(const std::string& input, const ReadOptions& o, ReadInfo* inf
     info.files = {input};
     v = read_h5(input, o, &header_spacing);
     info.pixel_type = "float64 (as read)";
+    field = o.h5_dataset;
   } else {
     throw InputError(input, "--format", o.format, "unknown format (auto, tiff, mha, nrrd, nifti, raw, h5)");
   }
   if (v.dims.count() == 0) throw InputError(input, "dims", "0", "empty volume");
+  check_finite(v, input, field, info.format == "h5");
   if (o.spacing[0] > 0) {
     v.spacing = o.spacing;
     if (!header_spacing) v.origin = {0, 0, 0};
@@ -250,7 +352,6 @@ Volume read_volume(const std::string& input, const ReadOptions& o, ReadInfo* inf
     throw InputError(input, "spacing", "", info.format + " carries no voxel size; give --spacing (e.g. 60.7um)");
   }
   if (o.has_roi) v = crop(v, o.roi);
-  if (o.downsample < 1) throw InputError("", "--downsample", std::to_string(o.downsample), "must be >= 1");
   v = downsample(v, o.downsample);
   if (info_out) *info_out = info;
   return v;
@@ -260,7 +361,18 @@ void write_volume(const std::string& path, const Volume& v, bool as_uint16) {
   const std::string l = lower(path);
   if (!path.empty() && path.back() == '/') {  // TIFF stack: write a folder under a temporary name, then rename
     const std::string dir = path.substr(0, path.size() - 1);
+    // The stack replaces the folder: only an earlier stack's slices may be in it (never a user's files).
+    if (fs::exists(dir)) {
+      if (!fs::is_directory(dir)) throw InputError("", "-o", path, "is a file, not a folder");
+      for (const auto& e : fs::directory_iterator(dir)) {
+        const std::string name = e.path().filename().string();
+        if (!(e.is_regular_file() && name.size() == 14 && name.rfind("slice", 0) == 0 && ends_with(name, ".tif")))
+          throw InputError("", "-o", path, "the folder holds " + name + ", which is not a slice of an earlier stack: "
+                                           "choose a new or empty folder");
+      }
+    }
     const std::string tmp = temporary_path(dir);
+    fs::remove_all(tmp);
     fs::create_directories(tmp);
     std::vector<std::string> files;
     for (std::size_t z = 0; z < v.dims.nz; ++z) {
@@ -268,8 +380,13 @@ void write_volume(const std::string& path, const Volume& v, bool as_uint16) {
       std::snprintf(name, sizeof name, "/slice%05zu.tif", z);
       files.push_back(tmp + name);
     }
-    itkb::write_series(files, v, as_uint16);
-    fs::remove_all(dir);
+    try {
+      itkb::write_series(files, v, as_uint16);
+    } catch (...) {
+      fs::remove_all(tmp);
+      throw;
+    }
+    fs::remove_all(dir);  // checked above: only slices of an earlier stack
     commit_output(dir);
     return;
   }
@@ -320,8 +437,14 @@ void write_volume(const std::string& path, const Volume& v, bool as_uint16) {
     return;
   }
   const std::string tmp = temporary_path(path) + ext;
-  itkb::write_file(tmp, v, as_uint16);
-  fs::rename(tmp, path);
+  try {
+    itkb::write_file(tmp, v, as_uint16);
+    fs::rename(tmp, path);
+  } catch (...) {
+    std::error_code ec;
+    fs::remove(tmp, ec);
+    throw;
+  }
 }
 
 namespace {
@@ -343,8 +466,14 @@ void write_meta(const std::string& path, const G& m) {
     return;
   }
   const std::string tmp = temporary_path(path) + ".mha";
-  itkb::write_file(tmp, m);
-  fs::rename(tmp, path);
+  try {
+    itkb::write_file(tmp, m);
+    fs::rename(tmp, path);
+  } catch (...) {
+    std::error_code ec;
+    fs::remove(tmp, ec);
+    throw;
+  }
 }
 }  // namespace
 

@@ -6,9 +6,14 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <limits>
 #include <random>
 
 #include "tomodem/core/error.hpp"
+#include "tomodem/core/h5.hpp"
+#include "tomodem/core/output.hpp"
+#include "tomodem/image/outputs.hpp"
 #include "tomodem/image/phantom.hpp"
 #include "tomodem/image/segment.hpp"
 #include "tomodem/image/volume.hpp"
@@ -332,4 +337,157 @@ TEST(Lengths, UnitsAndVoxels) {
   EXPECT_EQ(parse_length("x", "3vox"), -3.0);
   EXPECT_THROW(parse_length("x", "3 parsecs"), tomodem::InputError);
   EXPECT_THROW(parse_length("x", "-1um"), tomodem::InputError);
+}
+
+// ---- issue 16: files that lie about their size, values that are not numbers, requests too large
+namespace {
+std::string file_bytes(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+void cut_file(const fs::path& p, double fraction) {
+  const std::string b = file_bytes(p);
+  std::ofstream(p, std::ios::binary | std::ios::trunc) << b.substr(0, std::size_t(double(b.size()) * fraction));
+}
+Volume small_volume(std::size_t n) {
+  Volume v(Dims{n, n, n});
+  v.spacing = {1e-5, 1e-5, 1e-5};
+  for (std::size_t i = 0; i < v.v.size(); ++i) v.v[i] = float(100 + (i * 37) % 200);
+  return v;
+}
+template <class F>
+tomodem::InputError input_error(F&& f) {
+  try {
+    f();
+  } catch (const tomodem::InputError& e) {
+    return e;
+  }
+  ADD_FAILURE() << "no InputError";
+  return tomodem::InputError("", "", "", "none");
+}
+}  // namespace
+
+TEST(Truncated, MetaImageDataShorterThanItsHeaderIsRefused) {
+  const auto d = tmpdir("trunc_mha");
+  const Volume v = small_volume(12);
+  for (const char* name : {"v.mha", "w.mhd"}) {
+    write_volume((d / name).string(), v, true);
+    ReadOptions o;
+    EXPECT_NO_THROW(read_volume((d / name).string(), o)) << name;
+    const fs::path data = std::string(name) == "v.mha" ? d / "v.mha" : d / "w.raw";
+    cut_file(data, 0.8);
+    const auto e = input_error([&] { read_volume((d / name).string(), o); });
+    EXPECT_EQ(e.file(), data.string()) << name;
+    EXPECT_EQ(e.field(), "ElementDataFile") << name;
+    EXPECT_NE(std::string(e.what()).find("truncated"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(std::to_string(12 * 12 * 12 * 2)), std::string::npos) << e.what();
+  }
+}
+
+TEST(Truncated, MultiPageTiffWithMissingPagesIsRefused) {
+  const auto d = tmpdir("trunc_tif");
+  const Volume v = small_volume(32);
+  const std::string f = (d / "v.tif").string();
+  write_volume(f, v, true);
+  ReadOptions o;
+  o.spacing = {1e-5, 1e-5, 1e-5};
+  EXPECT_EQ(read_volume(f, o).dims, (Dims{32, 32, 32}));
+  cut_file(f, 0.45);
+  const auto e = input_error([&] { read_volume(f, o); });
+  EXPECT_EQ(e.file(), f);
+  EXPECT_EQ(e.field().rfind("page ", 0), 0u) << e.field();
+  EXPECT_NE(std::string(e.what()).find("truncated"), std::string::npos) << e.what();
+}
+
+TEST(NonFinite, NanVoxelInHdf5IsRefusedWithItsIndex) {
+  const auto d = tmpdir("nan_h5");
+  const Volume v = small_volume(8);
+  const std::string f = (d / "v.h5").string();
+  write_volume(f, v, false);
+  ReadOptions o;
+  EXPECT_NO_THROW(read_volume(f, o));
+  {
+    tomodem::h5::File h(f, tomodem::h5::File::Mode::create);
+    std::vector<double> x(v.v.begin(), v.v.end());
+    x[(1 * 8 + 2) * 8 + 3] = std::nan("");
+    x[(5 * 8 + 5) * 8 + 5] = std::numeric_limits<double>::infinity();
+    h.write("/volume", x, {8, 8, 8});
+    h.set_attr("/volume", "spacing", std::vector<double>{1e-5, 1e-5, 1e-5});
+  }
+  const auto e = input_error([&] { read_volume(f, o); });
+  EXPECT_EQ(e.file(), f);
+  EXPECT_EQ(e.field(), "/volume");
+  EXPECT_EQ(e.value(), "NaN");
+  EXPECT_NE(std::string(e.what()).find("[1,2,3] (z,y,x)"), std::string::npos) << e.what();
+  EXPECT_NE(std::string(e.what()).find("2 such voxels"), std::string::npos) << e.what();
+}
+
+TEST(Memory, HeaderDimensionsBeyondTheMachineAreRefusedBeforeReading) {
+  const auto d = tmpdir("mem");
+  ReadOptions o;
+  o.spacing = {1e-6, 1e-6, 1e-6};
+  o.raw_dims = {100000, 100000, 100000};
+  { std::ofstream(d / "v.raw") << "abcd"; }
+  auto e = input_error([&] { read_volume((d / "v.raw").string(), o); });
+  EXPECT_EQ(e.field(), "--raw-dims");
+  EXPECT_EQ(e.value(), "100000x100000x100000");
+  EXPECT_NE(std::string(e.what()).find("memory"), std::string::npos) << e.what();
+  {
+    std::ofstream m(d / "big.mha");
+    m << "ObjectType = Image\nNDims = 3\nBinaryData = True\nElementSpacing = 1 1 1\nDimSize = 100000 100000 100000\n"
+         "ElementType = MET_UCHAR\nElementDataFile = LOCAL\nxxxx";
+  }
+  e = input_error([&] { read_volume((d / "big.mha").string(), ReadOptions{}); });
+  EXPECT_EQ(e.field(), "DimSize");
+  EXPECT_NE(std::string(e.what()).find("memory"), std::string::npos) << e.what();
+  // The pipeline's bytes per voxel count: a volume that reads fits, its pipeline does not.
+  o.raw_dims = {64, 64, 64};
+  { std::ofstream w(d / "v.raw", std::ios::binary); w << std::string(64 * 64 * 64, 'a'); }
+  o.bytes_per_voxel = 2 * double(tomodem::usable_memory_bytes()) / (64.0 * 64 * 64);
+  e = input_error([&] { read_volume((d / "v.raw").string(), o); });
+  EXPECT_NE(std::string(e.what()).find("pipeline"), std::string::npos) << e.what();
+  o.bytes_per_voxel = 24;
+  EXPECT_NO_THROW(read_volume((d / "v.raw").string(), o));
+}
+
+TEST(Phantom, DefaultMacroporeCountFitsSmallSizes) {
+  for (std::size_t n : {16, 24, 32, 40}) {
+    PhantomOptions po;
+    po.n = n;
+    po.macropores_auto = true;
+    const Phantom P = make_phantom(po);
+    EXPECT_GE(P.macropore_voxels.size(), 1u) << n;
+    for (auto v : P.macropore_voxels) EXPECT_GT(v, 0u) << "a macropore outside the " << n << "^3 cube";
+    for (const auto& c : P.macropore_centres) EXPECT_LT(c.y, double(n) * po.voxel) << n;
+  }
+  PhantomOptions po;
+  po.n = 16;
+  po.n_macropores = 50;
+  EXPECT_EQ(input_error([&] { make_phantom(po); }).field(), "--macropores");
+  po.n_macropores = 1;
+  for (auto set : std::vector<std::function<void(PhantomOptions&)>>{
+           [](PhantomOptions& p) { p.blur = std::nan(""); }, [](PhantomOptions& p) { p.fine_porosity = 2; },
+           [](PhantomOptions& p) { p.voxel = INFINITY; }, [](PhantomOptions& p) { p.rings = -1; },
+           [](PhantomOptions& p) { p.kind = "nosuch"; }, [](PhantomOptions& p) { p.n = 8; }}) {
+    PhantomOptions q = po;
+    set(q);
+    EXPECT_THROW(make_phantom(q), tomodem::InputError);
+  }
+}
+
+TEST(LevelSet, TruncatedVdbIsRefusedNotRead) {
+  const auto d = tmpdir("vdb");
+  Mask m(Dims{24, 24, 24});
+  m.spacing = {1e-5, 1e-5, 1e-5};
+  for (std::size_t z = 0; z < 24; ++z)
+    for (std::size_t y = 0; y < 24; ++y)
+      for (std::size_t x = 0; x < 24; ++x)
+        m.at(x, y, z) = (double(x) - 12) * (double(x) - 12) + (double(y) - 12) * (double(y) - 12) + (double(z) - 12) * (double(z) - 12) < 36;
+  const std::string f = (d / "p.vdb").string();
+  write_level_set(f, m);
+  EXPECT_LT(sample_level_set(f, {tomodem::Vec3{1.2e-4, 1.2e-4, 1.2e-4}})[0], 0);
+  cut_file(f, 0.6);
+  const auto e = input_error([&] { sample_level_set(f, {tomodem::Vec3{1.2e-4, 1.2e-4, 1.2e-4}}); });
+  EXPECT_EQ(e.file(), f);
+  EXPECT_NE(std::string(e.what()).find("truncated"), std::string::npos) << e.what();
 }

@@ -20,6 +20,9 @@ struct PhantomOptions {
   uint64_t seed = 1;
   // pores: macropores (spheres and ellipsoids) and fine pores in a solid matrix
   int n_macropores = 6;
+  /// tomodem-phantom without --macropores: up to n_macropores, as many as fit (a small --size
+  /// holds fewer); with it, exactly n_macropores or InputError.
+  bool macropores_auto = false;
   double macro_radius_min = 9, macro_radius_max = 14;  ///< voxels
   double fine_porosity = 0.02;    ///< target volume fraction of fine pores
   double fine_radius = 3.0;       ///< voxels
@@ -43,6 +46,13 @@ struct Phantom {
   Packing packing;                             ///< packing kind: the true spheres (m)
 };
 
+/// Refuses (InputError naming the option and the value) options that are out of range, NaN or
+/// infinite, and a size whose memory (phantom_bytes_per_voxel) the machine does not have.
+void check_phantom_options(const PhantomOptions& o);
+/// Peak memory per voxel of make_phantom and the writers (truth, ids, grey, blur, HDF5 copy).
+inline constexpr double kPhantomBytesPerVoxel = 36;
+
+/// Macropore radii below --size 64 shrink with the size (a 16-voxel cube holds radii 2.25 to 3.5).
 Phantom make_phantom(const PhantomOptions& o);
 
 }  // namespace tomodem::image

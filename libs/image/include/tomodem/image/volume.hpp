@@ -52,6 +52,10 @@ struct ReadOptions {
   bool has_roi = false;
   std::array<std::size_t, 6> roi{0, 0, 0, 0, 0, 0};  ///< x0, y0, z0, nx, ny, nz
   int downsample = 1;
+  /// Memory the caller's pipeline needs per voxel of the volume it gets (after --roi and
+  /// --downsample), the grey volume included; 0: only the reader's own. Checked against the
+  /// machine's memory from the header's dimensions, before anything is allocated.
+  double bytes_per_voxel = 0;
 };
 
 /// What the reader found, for the summary's provenance.
@@ -64,8 +68,19 @@ struct ReadInfo {
 
 /// Reads a volume. `input` is a file, a folder of TIFF slices, or a pattern with * or ?
 /// (slices sorted by name). InputError (exit 2) names the file and what is wrong: unknown
-/// format, truncated or mis-sized raw, mixed slice sizes, missing voxel size, empty volume.
+/// format, truncated or mis-sized raw, truncated MetaImage or multi-page TIFF, mixed slice
+/// sizes or page types, a NaN or infinite voxel (with its index), missing voxel size, empty
+/// volume, or dimensions whose memory (opt.bytes_per_voxel) the machine does not have.
 Volume read_volume(const std::string& input, const ReadOptions& opt, ReadInfo* info = nullptr);
+
+/// The files read_volume would read for `input` (a stack's slices, a .mhd and its data file), for
+/// refusing outputs that would overwrite them. Nothing is read but headers and folder listings.
+std::vector<std::string> input_files(const std::string& input, const ReadOptions& opt);
+
+/// Refuses (InputError naming the option and the value) read options that are nonsense on their
+/// own: unknown --format, --raw-type or --byte-order, --downsample < 1, a --header-unit or
+/// spacing that is not finite and > 0, an empty --roi region, a --dataset not starting with '/'.
+void check_read_options(const ReadOptions& opt);
 
 /// Crop to [x0, x0+nx) × … and block-average by `factor` (origin and spacing follow).
 Volume crop(const Volume& v, const std::array<std::size_t, 6>& roi);
