@@ -21,42 +21,63 @@ json tensor(const Mat3& m) {
   return json::array({{m(0, 0), m(0, 1), m(0, 2)}, {m(1, 0), m(1, 1), m(1, 2)}, {m(2, 0), m(2, 1), m(2, 2)}});
 }
 
-std::vector<std::vector<double>> series_rows(const std::vector<dem::Measurements>& s) {
-  std::vector<std::vector<double>> rows;
-  for (const auto& m : s)
-    rows.push_back({double(m.step), m.time, m.kinetic_energy, m.elastic_energy, m.dissipated_energy, m.external_work,
-                    m.pressure, m.stress(0, 0), m.stress(1, 1), m.stress(2, 2), m.stress(0, 1), m.stress(0, 2),
-                    m.stress(1, 2), m.coordination, m.unbalanced_force_ratio, m.inertial_number, m.volume});
-  return rows;
-}
-const std::vector<std::string> kSeriesColumns = {
-    "step", "time_s", "kinetic_energy_J", "elastic_energy_J", "dissipated_energy_J", "external_work_J", "pressure_Pa",
-    "stress_xx_Pa", "stress_yy_Pa", "stress_zz_Pa", "stress_xy_Pa", "stress_xz_Pa", "stress_yz_Pa", "coordination",
-    "unbalanced_force_ratio", "inertial_number", "volume_m3"};
-
 int run(int argc, char** argv) {
   CLI::App app{"tomodem-dem: run a DEM scene (YAML) and print a JSON summary"};
   std::string scene_path, out_dir = ".", json_path, restart;
   int threads = 0;
   long steps = 0;
-  bool quiet_flag = false;
+  bool quiet_flag = false, changed_physics = false;
   app.add_option("scene", scene_path, "scene file (YAML, see docs/dem.md)");
   app.add_option("-o,--output-dir", out_dir, "folder for the outputs (created if missing)");
   app.add_option("--json", json_path, "also write the JSON summary to this file");
-  app.add_option("--threads", threads, "threads (default: the scene's, else 1)")->check(CLI::PositiveNumber);
+  app.add_option("--threads", threads, "threads (default: the scene's, else 1)")->check(CLI::Range(1, 4096));
   app.add_option("--steps", steps, "override the protocol's total steps")->check(CLI::PositiveNumber);
   app.add_option("--restart", restart, "continue from this checkpoint (same scene)");
+  app.add_flag("--restart-changed-physics", changed_physics,
+               "with --restart: continue even though the scene's physics differs from the checkpoint's (warns what changed)");
   app.add_flag("-q,--quiet", quiet_flag, "no progress on stderr");
   tomodem::cli::add_version(app, "tomodem-dem");
   if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
   if (scene_path.empty()) throw InputError("", "scene", "", "no scene file given (see --help)");
+  if (changed_physics && restart.empty())
+    throw InputError("", "--restart-changed-physics", "", "only means something with --restart <checkpoint>");
+  if (out_dir.empty()) throw InputError("", "-o", "", "the output folder must not be empty");
   set_quiet(quiet_flag);
 
   dem::Scene scene = dem::load_scene(scene_path, threads);
-  if (steps > 0) scene.protocol.steps = steps;
-  std::filesystem::create_directories(out_dir);
+  if (steps > 0) {
+    scene.protocol.steps = steps;
+    const double rows = double(steps / scene.protocol.output_interval + 2);
+    check_memory_request(rows * (sizeof(dem::Measurements) + 500), "", "--steps", std::to_string(steps),
+                         std::to_string(long(rows)) + " time-series rows (one per output_interval " +
+                             std::to_string(scene.protocol.output_interval) + " steps)");
+  }
   const auto out = [&](const std::string& name) { return name.empty() ? name : out_dir + "/" + name; };
-  if (!restart.empty()) dem::read_checkpoint(restart, *scene.sim);
+  // Never write over an input: the scene, the files it reads, the checkpoint restarted from (the
+  // checkpoint output may be that file: it is read whole before and written atomically after).
+  {
+    std::vector<std::string> inputs = {scene_path};
+    inputs.insert(inputs.end(), scene.inputs.begin(), scene.inputs.end());
+    std::vector<std::string> with_restart = inputs;
+    if (!restart.empty()) with_restart.push_back(restart);
+    if (std::filesystem::exists(out_dir) && !std::filesystem::is_directory(out_dir))
+      throw InputError("", "-o", out_dir, "exists and is not a folder");
+    const std::string packing = out(scene.outputs.packing);
+    const std::string sidecar = std::filesystem::path(packing).replace_extension(".xdmf").string();
+    refuse_output_over_input(packing, "output.packing", with_restart);
+    refuse_output_over_input(sidecar, "output.packing (its .xdmf sidecar)", with_restart);
+    refuse_output_over_input(out(scene.outputs.series), "output.series", with_restart);
+    if (!scene.outputs.checkpoint.empty()) refuse_output_over_input(out(scene.outputs.checkpoint), "output.checkpoint", inputs);
+    refuse_output_over_input(json_path, "--json", with_restart);
+    for (const std::string& o : {packing, sidecar, out(scene.outputs.series), out(scene.outputs.checkpoint)})
+      if (!json_path.empty() && !o.empty() && std::filesystem::path(o).lexically_normal() == std::filesystem::path(json_path).lexically_normal())
+        throw InputError("", "--json", json_path, "is also the output " + o + ": choose another name");
+  }
+  if (!restart.empty()) {
+    const dem::RestartInfo ri = dem::read_checkpoint(restart, scene, changed_physics);
+    for (const auto& c : ri.physics_changes) warn("--restart-changed-physics: continuing with changed physics: " + c);
+  }
+  std::filesystem::create_directories(out_dir);
   info(scene.sim->describe() + "; " + std::to_string(scene.sim->particles().size()) + " particles, dt " +
        std::to_string(scene.sim->time_step()) + " s");
 
@@ -77,13 +98,15 @@ int run(int argc, char** argv) {
                              {"time", m.time}};
   packing.results.units = {{"pressure", "Pa"}, {"coordination", "1"}, {"kinetic_energy", "J"},
                            {"unbalanced_force_ratio", "1"}, {"time", "s"}};
-  const auto rows = series_rows(rep.series);
+  // The whole series: the rows before a restart (from the checkpoint) and this run's.
+  const auto rows = dem::full_series(scene, rep.series);
+  const auto& kSeriesColumns = dem::series_columns();
   auto& series = packing.results.series["dem"];
   for (std::size_t c = 0; c < kSeriesColumns.size(); ++c)
     for (const auto& r : rows) series[kSeriesColumns[c]].push_back(r[c]);
   write_packing(out(scene.outputs.packing), packing);
   write_text_atomic(out(scene.outputs.series), csv_table(kSeriesColumns, rows));
-  if (!scene.outputs.checkpoint.empty()) dem::write_checkpoint(out(scene.outputs.checkpoint), *scene.sim, scene.text);
+  if (!scene.outputs.checkpoint.empty()) dem::write_checkpoint(out(scene.outputs.checkpoint), *scene.sim, scene.text, rows);
 
   json j;
   j["tool"] = "tomodem-dem";

@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <filesystem>
 #include <iostream>
 
 #include "tomodem/core/cli.hpp"
@@ -26,7 +27,7 @@ int run(int argc, char** argv) {
   app.add_option("config", config, "packing config (YAML, see docs/pack.md)");
   app.add_option("-o,--output", out, "packing file (.h5; an .xdmf sidecar is written next to it)");
   app.add_option("--json", json_path, "also write the JSON summary to this file");
-  app.add_option("--threads", threads, "threads (default: the config's, else 1)")->check(CLI::PositiveNumber);
+  app.add_option("--threads", threads, "threads (default: the config's, else 1)")->check(CLI::Range(1, 4096));
   app.add_option("--particles", particles, "override the particle count")->check(CLI::PositiveNumber);
   app.add_option("--seed", seed, "override the random seed")->check(CLI::NonNegativeNumber);
   app.add_option("--target-pressure", pressure, "override the target: pressure, Pa")->check(CLI::PositiveNumber);
@@ -47,7 +48,26 @@ int run(int argc, char** argv) {
   if (app.count("--target-solid-fraction")) s.target = geometry::Target::solid_fraction, s.target_solid_fraction = phi;
   if (friction >= 0) s.friction = friction;
   if (no_tess) s.tessellate = false;
+  // Command-line values the checks below do not cover by name: finite, and in range.
+  if (app.count("--target-pressure") && !(std::isfinite(pressure) && pressure > 0))
+    throw InputError("", "--target-pressure", std::to_string(pressure), "must be a positive finite pressure (Pa)");
+  if (app.count("--target-solid-fraction") && !(phi > 0 && phi < 1))
+    throw InputError("", "--target-solid-fraction", std::to_string(phi), "must lie in (0, 1)");
+  if (app.count("--friction") && !(std::isfinite(friction) && friction >= 0))
+    throw InputError("", "--friction", std::to_string(friction), "must be a finite number >= 0");
+  if (app.count("--particles")) geometry::check_particle_memory(std::size_t(particles), "", "--particles", std::to_string(particles));
   if (out.empty()) out = cfg.packing;
+  // Never write over an input (the config, its tables), nor two outputs onto one file.
+  {
+    std::vector<std::string> inputs = {config};
+    inputs.insert(inputs.end(), cfg.inputs.begin(), cfg.inputs.end());
+    const std::string option = app.count("--output") ? "-o" : "output.packing";
+    refuse_output_over_input(out, option, inputs);
+    refuse_output_over_input(std::filesystem::path(out).replace_extension(".xdmf").string(), option + " (its .xdmf sidecar)", inputs);
+    refuse_output_over_input(json_path, "--json", inputs);
+    if (!json_path.empty()) refuse_output_over_input(json_path, "--json", {out, std::filesystem::path(out).replace_extension(".xdmf").string()});
+    if (std::filesystem::is_directory(out)) throw InputError("", option, out, "is a folder; give the packing file's name (.h5)");
+  }
   geometry::validate(s);  // before any work: bad input exits 2 with nothing written
 
   geometry::PackOutput res = geometry::make_packing(s, [](const std::string& m) { info(m); });

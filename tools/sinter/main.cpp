@@ -84,7 +84,7 @@ int run(int argc, char** argv) {
   app.add_option("scene", scene_path, "scene file (YAML, see docs/sintering.md)");
   app.add_option("-o,--output-dir", out_dir, "folder for the outputs (created if missing)");
   app.add_option("--json", json_path, "also write the JSON summary to this file");
-  app.add_option("--threads", threads, "threads (default: the scene's, else 1)")->check(CLI::PositiveNumber);
+  app.add_option("--threads", threads, "threads (default: the scene's, else 1)")->check(CLI::Range(1, 4096));
   app.add_flag("-q,--quiet", quiet_flag, "no progress on stderr");
   bool no_plot = false;
   app.add_flag("--no-plot", no_plot, "no PNG/SVG plots (also output.plots: false)");
@@ -96,8 +96,31 @@ int run(int argc, char** argv) {
   dem::Scene scene = dem::load_scene(scene_path, threads);
   const dem::SinterSettings settings = dem::read_sinter_settings(scene);
   dem::check_sinter_settings(scene, settings);
-  std::filesystem::create_directories(out_dir);
+  if (out_dir.empty()) throw InputError("", "-o", "", "the output folder must not be empty");
   const auto out = [&](const std::string& name) { return out_dir + "/" + name; };
+  // Never write over an input (the scene, the packing it reads), nor two outputs onto one file.
+  {
+    std::vector<std::string> inputs = {scene_path};
+    inputs.insert(inputs.end(), scene.inputs.begin(), scene.inputs.end());
+    if (std::filesystem::exists(out_dir) && !std::filesystem::is_directory(out_dir))
+      throw InputError("", "-o", out_dir, "exists and is not a folder");
+    const std::string packing = out(settings.packing);
+    const std::string sidecar = std::filesystem::path(packing).replace_extension(".xdmf").string();
+    refuse_output_over_input(out(settings.curve), "sintering.output.curve", inputs);
+    refuse_output_over_input(out(settings.necks), "sintering.output.necks", inputs);
+    refuse_output_over_input(packing, "sintering.output.packing", inputs);
+    refuse_output_over_input(sidecar, "sintering.output.packing (its .xdmf sidecar)", inputs);
+    std::vector<std::string> written = {out(settings.curve), out(settings.necks), packing, sidecar};
+    if (settings.plots && !no_plot)
+      for (const char* stem : {"densification", "densification_temperature", "shrinkage", "necks"})
+        for (const char* ext : {".png", ".svg"}) {
+          written.push_back(out(std::string(stem) + ext));
+          refuse_output_over_input(written.back(), "-o (plot " + std::string(stem) + ext + ")", inputs);
+        }
+    refuse_output_over_input(json_path, "--json", inputs);
+    if (!json_path.empty()) refuse_output_over_input(json_path, "--json", written);
+  }
+  std::filesystem::create_directories(out_dir);
   info(scene.sim->describe() + "; " + std::to_string(scene.sim->particles().size()) + " particles");
 
   const dem::SinterReport rep = dem::run_sintering(*scene.sim, settings, !quiet_flag);

@@ -1,5 +1,6 @@
 // Checkpoints: everything the next step depends on, so a restart reproduces the
 // uninterrupted run bit for bit (same thread count).
+#include <cmath>
 #include <cstring>
 
 #include "tomodem/core/error.hpp"
@@ -8,6 +9,7 @@
 #include "tomodem/core/packing_io.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/dem/scene.hpp"
+#include "tomodem/dem/yaml_fields.hpp"
 
 namespace tomodem::dem {
 
@@ -36,7 +38,10 @@ void write3(h5::File& f, const std::string& name, const std::vector<Vec3>& v, co
 }
 }  // namespace
 
-void write_checkpoint(const std::string& path, const Simulation& sim, const std::string& scene_text) {
+static void read_checkpoint_checked(const std::string& path, Simulation& sim);
+
+void write_checkpoint(const std::string& path, const Simulation& sim, const std::string& scene_text,
+                      const std::vector<std::vector<double>>& series) {
   const std::string tmp = temporary_path(path);
   {
     h5::File f(tmp, h5::File::Mode::create);
@@ -99,6 +104,11 @@ void write_checkpoint(const std::string& path, const Simulation& sim, const std:
       f.write("/bonds/events/bond", eb);
       f.write("/bonds/events/mode", em);
     }
+    if (!series.empty()) {
+      std::vector<double> flat_rows;
+      for (const auto& row : series) flat_rows.insert(flat_rows.end(), row.begin(), row.end());
+      f.write("/series/rows", flat_rows, {series.size(), series_columns().size()});
+    }
     f.write("/engine/scalars",
             std::vector<double>{double(e.forces_valid), e.dt, e.time, double(e.step), double(e.builds), e.dissipated,
                                 e.external_work, e.initial_energy});
@@ -106,66 +116,196 @@ void write_checkpoint(const std::string& path, const Simulation& sim, const std:
   commit_output(path);
 }
 
-void read_checkpoint(const std::string& path, Simulation& sim) {
-  h5::File f(path, h5::File::Mode::read);
+namespace {
+/// Reads of a checkpoint that check presence, length and finiteness against what the scene
+/// expects, naming the file and the dataset: a truncated, damaged or foreign file is bad input
+/// (exit 2), never an out-of-bounds read.
+class CheckpointReader {
+ public:
+  explicit CheckpointReader(const std::string& path) : path_(path), f_(path, h5::File::Mode::read) {}
+  void need(const std::string& ds) const {
+    if (!f_.exists(ds))
+      throw InputError(path_, ds, "", "missing from the checkpoint (truncated, damaged, or not a tomodem-dem checkpoint)");
+  }
+  std::vector<double> doubles(const std::string& ds, std::size_t count) const {
+    need(ds);
+    const auto v = f_.read_double(ds);
+    size_is(ds, v.size(), count);
+    for (std::size_t k = 0; k < v.size(); ++k)
+      if (!std::isfinite(v[k])) throw InputError(path_, ds + "[" + std::to_string(k) + "]", std::to_string(v[k]), "must be finite");
+    return v;
+  }
+  std::vector<Vec3> vec3s(const std::string& ds, std::size_t count) const { return vecs(doubles(ds, 3 * count)); }
+  std::vector<double> doubles_any(const std::string& ds) const {
+    need(ds);
+    return f_.read_double(ds);
+  }
+  std::vector<int32_t> ints(const std::string& ds) const {
+    need(ds);
+    return f_.read_int32(ds);
+  }
+  std::vector<uint8_t> bytes(const std::string& ds) const {
+    need(ds);
+    return f_.read_uint8(ds);
+  }
+  std::vector<Vec3> vec3s_any(const std::string& ds) const {
+    const auto v = doubles_any(ds);
+    if (v.size() % 3) throw InputError(path_, ds, std::to_string(v.size()) + " values", "expected three per item");
+    return vecs(v);
+  }
+  void size_is(const std::string& ds, std::size_t got, std::size_t want) const {
+    if (got != want)
+      throw InputError(path_, ds, std::to_string(got) + " values",
+                       "expected " + std::to_string(want) + " (the checkpoint does not match the scene, or is damaged)");
+  }
+  const h5::File& file() const { return f_; }
+
+ private:
+  std::string path_;
+  h5::File f_;
+};
+}  // namespace
+
+std::vector<std::string> physics_changes(const std::string& before, const std::string& now) {
+  std::vector<std::string> out;
+  YAML::Node a, b;
+  try {
+    a = YAML::Load(before);
+    b = YAML::Load(now);
+  } catch (const YAML::Exception&) {
+    out.push_back("the checkpoint's scene text cannot be read");
+    return out;
+  }
+  if (!a.IsMap() || !b.IsMap()) return out;
+  for (const char* key : {"materials", "physics", "cell", "walls", "boundary", "particles", "sintering"})
+    yaml::differences(a[key], b[key], key, out);
+  for (const char* key : {"timestep", "timestep_fraction"})
+    yaml::differences(a["protocol"] ? a["protocol"][key] : YAML::Node(), b["protocol"] ? b["protocol"][key] : YAML::Node(),
+                      std::string("protocol.") + key, out);
+  return out;
+}
+
+RestartInfo read_checkpoint(const std::string& path, Scene& scene, bool allow_changed_physics) {
+  RestartInfo info;
+  try {
+    {
+      const h5::File f(path, h5::File::Mode::read);
+      if (!f.has_attr("/", "tomodem_checkpoint_format"))
+        throw InputError(path, "/tomodem_checkpoint_format", "", "not a tomodem-dem checkpoint");
+      if (f.has_attr("/", "scene")) info.physics_changes = physics_changes(f.attr_string("/", "scene"), scene.text);
+      if (!info.physics_changes.empty() && !allow_changed_physics) {
+        std::string list;
+        for (const auto& c : info.physics_changes) list += (list.empty() ? "" : "; ") + c;
+        throw InputError(path, "scene", list,
+                         "the scene " + scene.file + " changes the physics of the run this checkpoint continues (" +
+                             std::to_string(info.physics_changes.size()) +
+                             " change(s)): restore the checkpoint's values, or pass --restart-changed-physics to "
+                             "continue with the new physics anyway");
+      }
+      scene.series_before.clear();
+      if (f.exists("/series/rows")) {
+        std::vector<std::size_t> dims;
+        const auto rows = f.read_double("/series/rows", &dims);
+        const std::size_t nc = series_columns().size();
+        if (dims.size() != 2 || dims[1] != nc || rows.size() != dims[0] * nc)
+          throw InputError(path, "/series/rows", std::to_string(rows.size()) + " values",
+                           "expected rows of " + std::to_string(nc) + " columns");
+        for (std::size_t k = 0; k < dims[0]; ++k) scene.series_before.emplace_back(rows.begin() + long(k * nc), rows.begin() + long((k + 1) * nc));
+      }
+    }
+    read_checkpoint_checked(path, *scene.sim);
+  } catch (const InputError& e) {
+    if (!e.file().empty()) throw;
+    // restore() names the dataset; the file is ours to add (its message without the prefix).
+    std::string why = e.what();
+    const std::string prefix = (e.field().empty() ? "" : "field '" + e.field() + "': ") +
+                               (e.value().empty() ? "" : "value '" + e.value() + "': ");
+    if (why.rfind(prefix, 0) == 0) why = why.substr(prefix.size());
+    throw InputError(path, e.field(), e.value(), why);
+  }
+  // Rows past the checkpoint's step (a later part of the earlier run) are not part of this history.
+  const double step = double(scene.sim->step_count());
+  while (!scene.series_before.empty() && scene.series_before.back()[0] > step) scene.series_before.pop_back();
+  return info;
+}
+
+static void read_checkpoint_checked(const std::string& path, Simulation& sim) {
+  const CheckpointReader r(path);
+  const h5::File& f = r.file();
   if (!f.has_attr("/", "tomodem_checkpoint_format"))
     throw InputError(path, "/tomodem_checkpoint_format", "", "not a tomodem-dem checkpoint");
   Particles& p = sim.particles();
-  const auto x = vecs(f.read_double("/particles/position"));
-  if (x.size() != p.size())
-    throw InputError(path, "/particles/position", std::to_string(x.size()),
-                     "particle count differs from the scene's " + std::to_string(p.size()));
-  p.x = x;
-  p.v = vecs(f.read_double("/particles/velocity"));
-  if (p.has_rotation()) p.omega = vecs(f.read_double("/particles/angular_velocity"));
-  const auto motion = f.read_uint8("/particles/motion");
-  for (std::size_t i = 0; i < p.size(); ++i) p.set_motion(i, Motion(motion[i]));
-  sim.cell().h = mat(f.read_double("/cell/h"));
-  sim.cell_control().velocity_gradient = mat(f.read_double("/cell/velocity_gradient"));
-  const auto wp = vecs(f.read_double("/walls/point")), wv = vecs(f.read_double("/walls/velocity")),
-             wf = vecs(f.read_double("/walls/force"));
-  if (wp.size() != sim.walls().size())
-    throw InputError(path, "/walls/point", std::to_string(wp.size()), "wall count differs from the scene's");
-  for (std::size_t w = 0; w < wp.size(); ++w) {
-    sim.walls()[w].point = wp[w];
-    sim.walls()[w].velocity = wv[w];
-    sim.walls()[w].force = wf[w];
+  const std::size_t n = p.size();
+  r.need("/particles/position");
+  {
+    const auto shape = f.shape("/particles/position");
+    const std::size_t count = shape.size() == 2 && shape[1] == 3 ? shape[0] : f.read_double("/particles/position").size() / 3;
+    if (count != n)
+      throw InputError(path, "/particles/position", std::to_string(count) + " particles",
+                       "particle count differs from the scene's " + std::to_string(n) + ": a checkpoint of another scene");
   }
+  const auto x = r.vec3s("/particles/position", n);
+  const auto v = r.vec3s("/particles/velocity", n);
+  std::vector<Vec3> omega;
+  if (p.has_rotation()) omega = r.vec3s("/particles/angular_velocity", n);
+  const auto motion = r.bytes("/particles/motion");
+  r.size_is("/particles/motion", motion.size(), n);
+  for (std::size_t i = 0; i < n; ++i)
+    if (motion[i] > uint8_t(Motion::prescribed))
+      throw InputError(path, "/particles/motion[" + std::to_string(i) + "]", std::to_string(motion[i]), "expected 0, 1 or 2");
+  const Mat3 h = mat(r.doubles("/cell/h", 9));
+  if (!(h.det() > 0)) throw InputError(path, "/cell/h", "", "the cell matrix must have a positive volume");
+  const Mat3 grad = mat(r.doubles("/cell/velocity_gradient", 9));
+  const std::size_t nw = sim.walls().size();
+  r.need("/walls/point");
+  const auto wp_any = r.vec3s_any("/walls/point");
+  if (wp_any.size() != nw)
+    throw InputError(path, "/walls/point", std::to_string(wp_any.size()), "wall count differs from the scene's " + std::to_string(nw));
+  const auto wp = r.vec3s("/walls/point", nw), wv = r.vec3s("/walls/velocity", nw), wf = r.vec3s("/walls/force", nw);
   Simulation::EngineState e;
-  e.start = f.read_int32("/engine/start");
-  e.j = f.read_int32("/engine/j");
-  e.image = f.read_uint8("/engine/image");
-  e.touching = f.read_uint8("/engine/touching");
-  e.history = f.read_double("/engine/history");
-  e.x_at_build = vecs(f.read_double("/engine/x_at_build"));
-  e.h_at_build = mat(f.read_double("/engine/h_at_build"));
-  for (std::size_t w = 0; w < wp.size(); ++w) {
+  e.start = r.ints("/engine/start");
+  e.j = r.ints("/engine/j");
+  e.image = r.bytes("/engine/image");
+  e.touching = r.bytes("/engine/touching");
+  e.history = r.doubles_any("/engine/history");
+  e.x_at_build = r.vec3s("/engine/x_at_build", n);
+  e.h_at_build = mat(r.doubles("/engine/h_at_build", 9));
+  for (std::size_t w = 0; w < nw; ++w) {
     const std::string g = "/engine/wall" + std::to_string(w);
-    e.wall_candidates.push_back(f.read_int32(g + "/candidates"));
-    e.wall_history.push_back(f.read_double(g + "/history"));
-    e.wall_touching.push_back(f.read_uint8(g + "/touching"));
+    e.wall_candidates.push_back(r.ints(g + "/candidates"));
+    e.wall_history.push_back(r.doubles_any(g + "/history"));
+    e.wall_touching.push_back(r.bytes(g + "/touching"));
   }
-  e.wall_point_at_build = vecs(f.read_double("/engine/wall_point_at_build"));
-  e.force = vecs(f.read_double("/engine/force"));
-  e.torque = vecs(f.read_double("/engine/torque"));
+  e.wall_point_at_build = r.vec3s("/engine/wall_point_at_build", nw);
+  e.force = r.vec3s("/engine/force", n);
+  e.torque = r.vec3s_any("/engine/torque");
   e.bonds = sim.bonds();  // the scene's bonds; their state comes from the checkpoint
   if (e.bonds.size()) {
     BondSet& B = e.bonds;
-    if (!f.exists("/bonds/i") || f.read_int32("/bonds/i").size() != B.size())
-      throw InputError(path, "/bonds/i", "", "bond count differs from the scene's");
-    B.image = vecs(f.read_double("/bonds/image"));
-    B.state = f.read_uint8("/bonds/state");
-    B.mode = f.read_uint8("/bonds/mode");
-    B.broken_at = f.read_double("/bonds/broken_at");
-    B.shear_force = vecs(f.read_double("/bonds/shear_force"));
-    B.twist = f.read_double("/bonds/twist");
-    B.bend = vecs(f.read_double("/bonds/bend"));
-    const auto et = f.read_double("/bonds/events/time"), eb = f.read_double("/bonds/events/bond"),
-               em = f.read_double("/bonds/events/mode");
-    for (std::size_t k = 0; k < et.size(); ++k) e.bond_events.push_back({et[k], int32_t(eb[k]), uint8_t(em[k])});
+    const std::size_t nb = B.size();
+    if (!f.exists("/bonds/i") || f.read_int32("/bonds/i").size() != nb)
+      throw InputError(path, "/bonds/i", "", "bond count differs from the scene's " + std::to_string(nb));
+    B.image = r.vec3s("/bonds/image", nb);
+    B.state = r.bytes("/bonds/state");
+    B.mode = r.bytes("/bonds/mode");
+    B.broken_at = r.doubles_any("/bonds/broken_at");
+    B.shear_force = r.vec3s("/bonds/shear_force", nb);
+    B.twist = r.doubles("/bonds/twist", nb);
+    B.bend = r.vec3s("/bonds/bend", nb);
+    const auto et = r.doubles_any("/bonds/events/time"), eb = r.doubles_any("/bonds/events/bond"),
+               em = r.doubles_any("/bonds/events/mode");
+    if (eb.size() != et.size() || em.size() != et.size())
+      throw InputError(path, "/bonds/events", std::to_string(et.size()), "time, bond and mode differ in length");
+    for (std::size_t k = 0; k < et.size(); ++k) {
+      if (!(eb[k] >= 0 && eb[k] < double(nb)))
+        throw InputError(path, "/bonds/events/bond", std::to_string(eb[k]), "not a bond index");
+      e.bond_events.push_back({et[k], int32_t(eb[k]), uint8_t(em[k])});
+    }
   }
-  const auto s = f.read_double("/engine/scalars");
-  if (s.size() != 8) throw InputError(path, "/engine/scalars", std::to_string(s.size()), "expected 8 values");
+  const auto s = r.doubles_any("/engine/scalars");  // (the initial energy is NaN when untracked)
+  r.size_is("/engine/scalars", s.size(), 8);
+  if (!(s[3] >= 0 && s[3] <= 1e18 && s[4] >= 0 && s[4] <= 1e18))
+    throw InputError(path, "/engine/scalars", std::to_string(s[3]), "the step count must be a whole number >= 0");
   e.forces_valid = s[0] != 0;
   e.dt = s[1];
   e.time = s[2];
@@ -174,6 +314,19 @@ void read_checkpoint(const std::string& path, Simulation& sim) {
   e.dissipated = s[5];
   e.external_work = s[6];
   e.initial_energy = s[7];
+  // Everything read and checked; restore() checks the engine arrays against the scene (laws,
+  // walls, bonds). On any error the tool stops with exit 2 and this simulation is discarded.
+  p.x = x;
+  p.v = v;
+  if (p.has_rotation()) p.omega = omega;
+  for (std::size_t i = 0; i < n; ++i) p.set_motion(i, Motion(motion[i]));
+  sim.cell().h = h;
+  sim.cell_control().velocity_gradient = grad;
+  for (std::size_t w = 0; w < nw; ++w) {
+    sim.walls()[w].point = wp[w];
+    sim.walls()[w].velocity = wv[w];
+    sim.walls()[w].force = wf[w];
+  }
   sim.restore(e);
 }
 

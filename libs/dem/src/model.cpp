@@ -4,8 +4,29 @@
 #include <cmath>
 #include <map>
 #include <mutex>
+#include <sstream>
 
 namespace tomodem::dem {
+
+MaterialProblem material_problem(const Material& m, bool need_modulus) {
+  const auto txt = [](double v) {
+    std::ostringstream s;
+    s << v;
+    return s.str();
+  };
+  if (!(std::isfinite(m.density) && m.density > 0)) return {"density", txt(m.density), "must be positive (kg/m^3)"};
+  if (!(std::isfinite(m.youngs_modulus) && m.youngs_modulus >= 0))
+    return {"youngs_modulus", txt(m.youngs_modulus), "must be positive (Pa)"};
+  if (need_modulus && !(m.youngs_modulus > 0))
+    return {"youngs_modulus", txt(m.youngs_modulus), "must be positive (Pa) for the Hertz family of normal laws"};
+  if (!(m.poisson_ratio > -1 && m.poisson_ratio < 0.5))
+    return {"poisson_ratio", txt(m.poisson_ratio), "must lie in (-1, 0.5)"};
+  if (!(std::isfinite(m.surface_energy) && m.surface_energy >= 0))
+    return {"surface_energy", txt(m.surface_energy), "must be zero or positive (J/m^2)"};
+  if (!(std::isfinite(m.conductivity) && m.conductivity >= 0))
+    return {"conductivity", txt(m.conductivity), "must be zero or positive (S/m)"};
+  return {};
+}
 
 std::string to_string(NormalLaw l) {
   switch (l) {

@@ -10,6 +10,29 @@
 
 namespace tomodem::dem {
 
+const std::vector<std::string>& series_columns() {
+  static const std::vector<std::string> c = {
+      "step", "time_s", "kinetic_energy_J", "elastic_energy_J", "dissipated_energy_J", "external_work_J", "pressure_Pa",
+      "stress_xx_Pa", "stress_yy_Pa", "stress_zz_Pa", "stress_xy_Pa", "stress_xz_Pa", "stress_yz_Pa", "coordination",
+      "unbalanced_force_ratio", "inertial_number", "volume_m3"};
+  return c;
+}
+
+std::vector<double> series_row(const Measurements& m) {
+  return {double(m.step), m.time, m.kinetic_energy, m.elastic_energy, m.dissipated_energy, m.external_work,
+          m.pressure, m.stress(0, 0), m.stress(1, 1), m.stress(2, 2), m.stress(0, 1), m.stress(0, 2),
+          m.stress(1, 2), m.coordination, m.unbalanced_force_ratio, m.inertial_number, m.volume};
+}
+
+std::vector<std::vector<double>> full_series(const Scene& scene, const std::vector<Measurements>& run) {
+  std::vector<std::vector<double>> rows = scene.series_before;
+  for (const auto& m : run) {
+    if (!rows.empty() && rows.back()[0] >= double(m.step)) continue;  // the restart step, already there
+    rows.push_back(series_row(m));
+  }
+  return rows;
+}
+
 RunReport run_protocol(Scene& scene, const std::string& checkpoint_path, bool progress) {
   Simulation& sim = *scene.sim;
   const Protocol& p = scene.protocol;
@@ -39,7 +62,7 @@ RunReport run_protocol(Scene& scene, const std::string& checkpoint_path, bool pr
       }
     }
     if (p.checkpoint_interval > 0 && !checkpoint_path.empty() && sim.step_count() % p.checkpoint_interval == 0)
-      write_checkpoint(checkpoint_path, sim, scene.text);
+      write_checkpoint(checkpoint_path, sim, scene.text, full_series(scene, rep.series));
     const auto now = std::chrono::steady_clock::now();
     if (progress && std::chrono::duration<double>(now - last_print).count() > (tty ? 0.5 : 10.0)) {
       const Measurements& m = rep.series.back();

@@ -4,126 +4,33 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <climits>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <random>
 #include <set>
 #include <sstream>
 
 #include "tomodem/core/error.hpp"
+#include "tomodem/core/output.hpp"
 #include "tomodem/core/packing_io.hpp"
+#include "tomodem/dem/yaml_fields.hpp"
 
 namespace tomodem::dem {
 
+namespace fs = std::filesystem;
+
 namespace {
 
-/// A YAML map with its dotted path, that refuses unknown keys and names lines in errors.
-class Map {
- public:
-  Map(YAML::Node node, std::string path, const std::string& file) : node_(node), path_(std::move(path)), file_(file) {
-    if (node_ && !node_.IsMap()) throw error("", text(node_), "must be a mapping of keys to values");
-  }
+/// Every YAML value is read through yaml::Section (tomodem/dem/yaml_fields.hpp).
+using Map = yaml::Section;
 
-  /// Every key present must be one of `allowed`.
-  void allow(std::initializer_list<const char*> allowed) const {
-    if (!node_) return;
-    const std::set<std::string> ok(allowed.begin(), allowed.end());
-    for (const auto& kv : node_) {
-      const std::string key = kv.first.as<std::string>();
-      if (!ok.count(key)) {
-        std::string list;
-        for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
-        throw InputError(file_, at(key, kv.first), key, "unknown key; expected one of: " + list);
-      }
-    }
-  }
-
-  bool has(const std::string& key) const { return node_ && node_[key]; }
-  // An absent section reads as undefined (a default YAML::Node is a defined null, which would
-  // make every nested section of an absent one "not a mapping").
-  YAML::Node raw(const std::string& key) const { return node_ ? node_[key] : YAML::Node(YAML::NodeType::Undefined); }
-  Map map(const std::string& key) const { return Map(raw(key), join(key), file_); }
-
-  double number(const std::string& key, double fallback) const {
-    if (!has(key)) return fallback;
-    return to_number(raw(key), key);
-  }
-  double positive(const std::string& key, double fallback) const {
-    const double v = number(key, fallback);
-    if (has(key) && !(v > 0)) throw InputError(file_, at(key, raw(key)), text(raw(key)), "must be positive");
-    return v;
-  }
-  double non_negative(const std::string& key, double fallback) const {
-    const double v = number(key, fallback);
-    if (has(key) && !(v >= 0)) throw InputError(file_, at(key, raw(key)), text(raw(key)), "must be zero or positive");
-    return v;
-  }
-  long integer(const std::string& key, long fallback) const {
-    if (!has(key)) return fallback;
-    const double v = to_number(raw(key), key);
-    if (v != std::floor(v) || v < 0) throw InputError(file_, at(key, raw(key)), text(raw(key)), "must be a whole number ≥ 0");
-    return long(v);
-  }
-  std::string string(const std::string& key, const std::string& fallback) const {
-    if (!has(key)) return fallback;
-    if (!raw(key).IsScalar()) throw InputError(file_, at(key, raw(key)), "", "must be a text value");
-    return raw(key).as<std::string>();
-  }
-  bool flag(const std::string& key, bool fallback) const {
-    if (!has(key)) return fallback;
-    try {
-      return raw(key).as<bool>();
-    } catch (const YAML::Exception&) {
-      throw InputError(file_, at(key, raw(key)), text(raw(key)), "must be true or false");
-    }
-  }
-  Vec3 vec3(const std::string& key, const Vec3& fallback) const {
-    if (!has(key)) return fallback;
-    const YAML::Node n = raw(key);
-    if (!n.IsSequence() || n.size() != 3) throw InputError(file_, at(key, n), text(n), "must be a list of three numbers");
-    return {to_number(n[0], key + "[0]"), to_number(n[1], key + "[1]"), to_number(n[2], key + "[2]")};
-  }
-
-  InputError error(const std::string& key, const std::string& value, const std::string& why) const {
-    return InputError(file_, key.empty() ? path_ : at(key, raw(key)), value, why);
-  }
-  const std::string& path() const { return path_; }
-  const std::string& file() const { return file_; }
-  const YAML::Node& node() const { return node_; }
-
-  static std::string text(const YAML::Node& n) {
-    if (!n) return "";
-    if (n.IsScalar()) return n.Scalar();
-    std::ostringstream s;
-    s << YAML::Dump(n);
-    std::string t = s.str();
-    for (auto& c : t)
-      if (c == '\n') c = ' ';
-    return t;
-  }
-
- private:
-  std::string join(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
-  std::string at(const std::string& key, const YAML::Node& n) const {
-    std::string f = join(key);
-    if (n && n.Mark().line >= 0) f += " (line " + std::to_string(n.Mark().line + 1) + ")";
-    return f;
-  }
-  double to_number(const YAML::Node& n, const std::string& key) const {
-    double v;
-    try {
-      v = n.as<double>();
-    } catch (const YAML::Exception&) {
-      throw InputError(file_, at(key, n), text(n), "must be a number");
-    }
-    if (!std::isfinite(v)) throw InputError(file_, at(key, n), text(n), "must be a finite number");
-    return v;
-  }
-
-  YAML::Node node_;
-  std::string path_;
-  const std::string& file_;
-};
+/// Memory a particle costs in the engine (state, neighbour list with contact history, forces,
+/// measurement buffers), for the check made before a scene allocates anything.
+constexpr double kBytesPerParticle = 1200;
+/// A time-series row: the measurements, their CSV row and its text.
+constexpr double kBytesPerSeriesRow = sizeof(Measurements) + 17 * 8 + 300;
 
 int phase_index(const Map& where, const std::string& key, const std::string& name, const std::vector<Material>& mats) {
   for (std::size_t k = 0; k < mats.size(); ++k)
@@ -135,35 +42,32 @@ int phase_index(const Map& where, const std::string& key, const std::string& nam
 
 std::vector<Material> read_materials(const Map& root) {
   std::vector<Material> mats;
-  const YAML::Node list = root.raw("materials");
-  if (!list) return mats;
-  if (!list.IsSequence()) throw root.error("materials", Map::text(list), "must be a list of materials");
+  const YAML::Node list = root.list("materials");
   for (std::size_t k = 0; k < list.size(); ++k) {
-    Map m(list[k], "materials[" + std::to_string(k) + "]", root.file());
+    const Map m = root.item("materials", k);
     m.allow({"name", "youngs_modulus", "poisson_ratio", "density", "surface_energy", "conductivity"});
     Material mat;
     mat.name = m.string("name", "phase" + std::to_string(k));
-    mat.youngs_modulus = m.positive("youngs_modulus", 0);
-    mat.poisson_ratio = m.number("poisson_ratio", 0.25);
-    if (mat.poisson_ratio <= -1 || mat.poisson_ratio >= 0.5)
-      throw m.error("poisson_ratio", std::to_string(mat.poisson_ratio), "must lie in (-1, 0.5)");
-    mat.density = m.positive("density", 0);
     if (!m.has("density")) throw m.error("", "", "needs a density (kg/m^3)");
-    mat.surface_energy = m.non_negative("surface_energy", 0);
-    mat.conductivity = m.non_negative("conductivity", 0);
+    mat.youngs_modulus = m.number("youngs_modulus", 0);
+    mat.poisson_ratio = m.number("poisson_ratio", 0.25);
+    mat.density = m.number("density", 0);
+    mat.surface_energy = m.number("surface_energy", 0);
+    mat.conductivity = m.number("conductivity", 0);
+    // The same check as tomodem-pack's (material_problem, model.hpp); E = 0 means "not given"
+    // here: the Hertz family asks for it later, naming the law.
+    const MaterialProblem bad = material_problem(mat, false);
+    if (!bad.key.empty() || (m.has("youngs_modulus") && !(mat.youngs_modulus > 0)))
+      throw m.error(bad.key.empty() ? "youngs_modulus" : bad.key, m.text(bad.key.empty() ? "youngs_modulus" : bad.key),
+                    bad.key.empty() ? "must be positive (Pa)" : bad.why);
     mats.push_back(mat);
   }
   return mats;
 }
 
 void read_pair_keys(const Map& m, PairParams& pp) {
-  if (m.has("restitution")) {
-    pp.restitution = m.number("restitution", 1);
-    if (!(pp.restitution > 0 && pp.restitution <= 1))
-      throw m.error("restitution", Map::text(m.raw("restitution")), "must lie in (0, 1]");
-  }
-  pp.damping_ratio = m.non_negative("damping_ratio", pp.damping_ratio);
-  if (pp.damping_ratio >= 1) throw m.error("damping_ratio", Map::text(m.raw("damping_ratio")), "must be below 1");
+  pp.restitution = m.in_range("restitution", pp.restitution, 0, 1, true, false);
+  pp.damping_ratio = m.in_range("damping_ratio", pp.damping_ratio, 0, 1, false, true);
   pp.friction = m.non_negative("friction", pp.friction);
   pp.rolling_friction = m.non_negative("rolling_friction", pp.rolling_friction);
   pp.work_of_adhesion = m.non_negative("work_of_adhesion", pp.work_of_adhesion);
@@ -191,16 +95,14 @@ ContactModel read_physics(const Map& ph, const std::vector<Material>& mats) {
   read_pair_keys(ph, defaults);
   for (auto& pp : model.pairs) pp = defaults;
   if (ph.has("pairs")) {
-    const YAML::Node list = ph.raw("pairs");
-    if (!list.IsSequence()) throw ph.error("pairs", Map::text(list), "must be a list");
+    const YAML::Node list = ph.list("pairs");
     for (std::size_t k = 0; k < list.size(); ++k) {
-      Map pm(list[k], ph.path() + ".pairs[" + std::to_string(k) + "]", ph.file());
+      const Map pm = ph.item("pairs", k);
       pm.allow({"phases", PAIR_KEYS});
-      const YAML::Node names = pm.raw("phases");
-      if (!names || !names.IsSequence() || names.size() != 2)
-        throw pm.error("phases", Map::text(names), "must name two materials, e.g. [glass, steel]");
-      const int a = phase_index(pm, "phases", names[0].as<std::string>(), mats);
-      const int b = phase_index(pm, "phases", names[1].as<std::string>(), mats);
+      const std::vector<std::string> names = pm.strings("phases");
+      if (names.size() != 2) throw pm.error("phases", pm.text("phases"), "must name two materials, e.g. [glass, steel]");
+      const int a = phase_index(pm, "phases", names[0], mats);
+      const int b = phase_index(pm, "phases", names[1], mats);
       PairParams pp = defaults;
       read_pair_keys(pm, pp);
       model.pair(a, b) = pp;
@@ -304,6 +206,10 @@ std::vector<Vec3> random_sites(int count, double r, const Vec3& lo, const Vec3& 
   return sites;
 }
 
+namespace {
+void read_scene(Scene& scene, const YAML::Node& doc, const std::string& path, int threads);
+}
+
 Scene load_scene(const std::string& path, int threads) {
   Scene scene;
   scene.file = path;
@@ -314,13 +220,18 @@ Scene load_scene(const std::string& path, int threads) {
     s << in.rdbuf();
     scene.text = s.str();
   }
-  YAML::Node doc;
+  const YAML::Node doc = yaml::load(scene.text, path);
+  if (!doc || !doc.IsMap()) throw InputError(path, "", yaml::text(doc), "the scene must be a YAML mapping of sections");
   try {
-    doc = YAML::Load(scene.text);
+    read_scene(scene, doc, path, threads);
   } catch (const YAML::Exception& e) {
-    throw InputError(path, "line " + std::to_string(e.mark.line + 1), "", "not valid YAML: " + e.msg);
+    throw yaml::as_input_error(e, path);  // a conversion that bypassed yaml::Section
   }
-  if (!doc || !doc.IsMap()) throw InputError(path, "", "", "the scene must be a YAML mapping");
+  return scene;
+}
+
+namespace {
+void read_scene(Scene& scene, const YAML::Node& doc, const std::string& path, int threads) {
   const std::string& file = scene.file;
   const Map root(doc, "", file);
   // `sintering` is read by the sintering driver (tomodem-sinter, docs/sintering.md) from scene.text.
@@ -351,14 +262,18 @@ Scene load_scene(const std::string& path, int threads) {
     const std::string arr = g.string("arrangement", "fcc");
     const double r = g.positive("radius", 0);
     if (!g.has("radius")) throw g.error("", "", "needs a radius (m)");
-    const double phi = g.positive("solid_fraction", 0.5);
+    const double phi = g.in_range("solid_fraction", 0.5, 0, 1, true, true);
     const double jitter = g.non_negative("jitter", 0);
     const double vmax = g.non_negative("velocity", 0);
-    const unsigned seed = unsigned(g.integer("seed", 1));
+    const unsigned seed = unsigned(g.integer("seed", 1, 0, 4294967295L));
     std::vector<Vec3> sites;
     if (arr == "random") {
-      const long count = g.integer("count", 0);
-      if (count <= 0) throw g.error("count", Map::text(g.raw("count")), "random arrangement needs a positive count");
+      if (!g.has("count")) throw g.error("count", "", "the random arrangement needs a count of particles");
+      const long count = g.integer("count", 0, 1);
+      // Before anything is allocated: the particles, and the index (int) that numbers them.
+      check_memory_request(double(count) * kBytesPerParticle, file, g.where("count"), g.text("count"),
+                           g.text("count") + " particles");
+      if (count > INT_MAX) throw g.error("count", g.text("count"), "at most 2147483647 particles");
       const Map cm = root.map("cell");
       Vec3 lo{0, 0, 0}, hi;
       if (root.has("cell")) {
@@ -372,18 +287,21 @@ Scene load_scene(const std::string& path, int threads) {
       }
       bool per = !root.has("cell");
       if (root.has("cell")) {
-        const YAML::Node pn = cm.raw("periodic");
-        per = pn && pn.IsSequence() ? (pn.size() == 3 && pn[0].as<bool>() && pn[1].as<bool>() && pn[2].as<bool>())
-                                    : cm.flag("periodic", false);
+        const auto pn = cm.flags3("periodic", false);
+        per = pn[0] && pn[1] && pn[2];
       }
       sites = random_sites(int(count), r, lo, hi, per, seed);
       if (long(sites.size()) < count)
         throw g.error("count", std::to_string(count),
                       "only " + std::to_string(sites.size()) + " spheres fit by random insertion; lower the solid fraction");
     } else if (arr == "simple_cubic" || arr == "bcc" || arr == "fcc") {
-      const long n = g.integer("cells", 0);
-      if (n <= 0) throw g.error("cells", Map::text(g.raw("cells")), "lattice arrangements need cells > 0");
+      if (!g.has("cells")) throw g.error("cells", "", "lattice arrangements need cells (per side) > 0");
+      const long n = g.integer("cells", 0, 1);
       const int per_cell = arr == "simple_cubic" ? 1 : (arr == "bcc" ? 2 : 4);
+      const double sites_wanted = double(per_cell) * double(n) * double(n) * double(n);
+      check_memory_request(sites_wanted * kBytesPerParticle, file, g.where("cells"), g.text("cells"),
+                           g.text("cells") + "^3 " + arr + " cells (" + yaml::number_text(sites_wanted) + " particles)");
+      if (sites_wanted > INT_MAX) throw g.error("cells", g.text("cells"), "at most 2147483647 particles in all");
       double a = g.has("spacing") ? g.positive("spacing", 0)
                                   : std::cbrt(per_cell * 4.0 / 3.0 * M_PI * r * r * r / phi);
       sites = lattice_sites(arr, int(n), a);
@@ -434,15 +352,10 @@ Scene load_scene(const std::string& path, int threads) {
     const Vec3 lo = cm.vec3("lower", {0, 0, 0});
     const Vec3 hi = cm.vec3("upper", {0, 0, 0});
     if (!(hi.x > lo.x && hi.y > lo.y && hi.z > lo.z))
-      throw cm.error("upper", Map::text(cm.raw("upper")), "must exceed lower in every direction");
+      throw cm.error("upper", yaml::text(cm.raw("upper")), "must exceed lower in every direction");
     cell = Cell::box(lo, hi, false);
-    const YAML::Node per = cm.raw("periodic");
-    if (per && per.IsSequence() && per.size() == 3) {
-      for (int k = 0; k < 3; ++k) cell.periodic[k] = per[k].as<bool>();
-    } else {
-      const bool all = cm.flag("periodic", false);
-      cell.periodic[0] = cell.periodic[1] = cell.periodic[2] = all;
-    }
+    const auto per = cm.flags3("periodic", false);
+    for (int k = 0; k < 3; ++k) cell.periodic[k] = per[std::size_t(k)];
   } else if (!have_cell) {
     throw root.error("cell", "", "the scene needs a cell (lower, upper, periodic)");
   }
@@ -455,29 +368,28 @@ Scene load_scene(const std::string& path, int threads) {
   const Map sm = root.map("settings");
   sm.allow({"skin", "threads", "track_energy", "check_interval"});
   settings.skin = sm.positive("skin", 0);
-  settings.threads = int(sm.integer("threads", 1));
+  settings.threads = int(sm.integer("threads", 1, 1, 4096));
   if (threads > 0) settings.threads = threads;
   settings.track_energy = sm.flag("track_energy", false);
-  settings.check_interval = int(sm.integer("check_interval", 100));
+  // 0 would silently turn the stability checks off (the run could blow up unnoticed).
+  settings.check_interval = int(sm.integer("check_interval", 100, 1, INT_MAX));
   scene.sim = std::make_unique<Simulation>(std::move(particles), cell, model, settings);
   Simulation& sim = *scene.sim;
   sim.body_forces().gravity = ph.vec3("gravity", {0, 0, 0});
-  sim.body_forces().local_damping = ph.non_negative("local_damping", 0);
-  if (sim.body_forces().local_damping >= 1)
-    throw ph.error("local_damping", Map::text(ph.raw("local_damping")), "must be below 1");
+  sim.body_forces().local_damping = ph.in_range("local_damping", 0, 0, 1, false, true);
   sim.body_forces().fluid_viscosity = ph.non_negative("fluid_viscosity", 0);
 
   // ---- walls
   if (root.has("walls")) {
     const YAML::Node list = root.raw("walls");
-    if (!list.IsSequence()) throw root.error("walls", Map::text(list), "must be a list of walls");
+    if (!list.IsSequence()) throw root.error("walls", yaml::text(list), "must be a list of walls");
     for (std::size_t k = 0; k < list.size(); ++k) {
       Map wm(list[k], "walls[" + std::to_string(k) + "]", file);
       wm.allow({"point", "normal", "velocity", "force", "material"});
       Wall w;
       w.point = wm.vec3("point", {0, 0, 0});
       w.normal = wm.vec3("normal", {0, 0, 1});
-      if (norm(w.normal) == 0) throw wm.error("normal", Map::text(wm.raw("normal")), "must not be zero");
+      if (norm(w.normal) == 0) throw wm.error("normal", yaml::text(wm.raw("normal")), "must not be zero");
       w.velocity = wm.vec3("velocity", {0, 0, 0});
       if (wm.has("force")) {
         w.force_controlled = true;
@@ -486,7 +398,7 @@ Scene load_scene(const std::string& path, int threads) {
       w.phase = wm.has("material") ? phase_index(wm, "material", wm.string("material", ""), scene.materials) : 0;
       for (int d = 0; d < 3; ++d)
         if (std::abs(w.normal[d]) > 0 && cell.periodic[d])
-          throw wm.error("normal", Map::text(wm.raw("normal")), "a wall cannot face a periodic direction");
+          throw wm.error("normal", yaml::text(wm.raw("normal")), "a wall cannot face a periodic direction");
       sim.add_wall(w);
     }
   }
@@ -510,10 +422,11 @@ Scene load_scene(const std::string& path, int threads) {
   const Map pr = root.map("protocol");
   pr.allow({"timestep", "timestep_fraction", "steps", "duration", "output_interval", "stop", "checkpoint_interval"});
   Protocol& p = scene.protocol;
-  p.timestep_fraction = pr.positive("timestep_fraction", 0.2);
-  if (p.timestep_fraction > 1) throw pr.error("timestep_fraction", std::to_string(p.timestep_fraction), "must not exceed 1");
+  p.timestep_fraction = pr.in_range("timestep_fraction", 0.2, 0, 1, true, false);
   const std::string ts = pr.string("timestep", "auto");
   const double crit = sim.critical_time_step();
+  if (!(std::isfinite(crit) && crit > 0))
+    throw InputError(file, "physics", std::to_string(crit), "the critical time step is not a positive finite number");
   if (ts == "auto") {
     p.auto_timestep = true;
     p.timestep = p.timestep_fraction * crit;
@@ -528,13 +441,23 @@ Scene load_scene(const std::string& path, int threads) {
   }
   if (pr.has("duration")) {
     if (pr.has("steps")) throw pr.error("duration", "", "give steps or duration, not both");
-    p.steps = long(std::ceil(pr.positive("duration", 0) / p.timestep));
+    const double steps = std::ceil(pr.positive("duration", 0) / p.timestep);
+    if (!(steps <= 1e15))
+      throw pr.error("duration", pr.text("duration"),
+                     "needs " + yaml::number_text(steps) + " steps of " + yaml::number_text(p.timestep) + " s (at most 10^15)");
+    p.steps = long(steps);
   } else {
-    p.steps = pr.integer("steps", 0);
+    p.steps = pr.integer("steps", 0, 0, 1000000000000000L);
   }
-  if (p.steps <= 0 && !root.has("sintering")) throw pr.error("steps", Map::text(pr.raw("steps")), "the protocol needs steps or duration > 0");
+  if (p.steps <= 0 && !root.has("sintering")) throw pr.error("steps", yaml::text(pr.raw("steps")), "the protocol needs steps or duration > 0");
   p.output_interval = pr.integer("output_interval", std::max(1L, p.steps / 100));
   if (p.output_interval == 0) p.output_interval = std::max(1L, p.steps / 100);
+  // Every row of the time series is kept in memory until the end (and in the checkpoints).
+  if (p.steps > 0)
+    check_memory_request(double(p.steps / p.output_interval + 2) * kBytesPerSeriesRow, file,
+                         pr.has("output_interval") ? pr.where("output_interval") : pr.where("steps"),
+                         pr.has("output_interval") ? pr.text("output_interval") : pr.text("steps"),
+                         yaml::number_text(double(p.steps / p.output_interval + 2)) + " time-series rows");
   const Map stop = pr.map("stop");
   stop.allow({"unbalanced_force_ratio", "kinetic_energy"});
   p.stop_unbalanced_force = stop.positive("unbalanced_force_ratio", 0);
@@ -546,6 +469,14 @@ Scene load_scene(const std::string& path, int threads) {
   scene.outputs.packing = om.string("packing", "packing.h5");
   scene.outputs.series = om.string("series", "series.csv");
   scene.outputs.checkpoint = om.string("checkpoint", "");
+  // Outputs are written into the -o folder, and nowhere else.
+  for (const char* key : {"packing", "series", "checkpoint"})
+    if (om.has(key)) refuse_output_outside(om.string(key, ""), "given by -o", file, om.where(key));
+  const std::vector<std::string> names = {scene.outputs.packing, scene.outputs.series, scene.outputs.checkpoint};
+  for (std::size_t a = 0; a < names.size(); ++a)
+    for (std::size_t b = a + 1; b < names.size(); ++b)
+      if (!names[a].empty() && fs::path(names[a]).lexically_normal() == fs::path(names[b]).lexically_normal())
+        throw om.error(a == 0 ? "packing" : "series", names[a], "two outputs have the same name; one would overwrite the other");
 
   // Overlaps above half the smaller radius at start are bad input (the packing is broken).
   const ContactTable ct = sim.contacts();
@@ -559,7 +490,7 @@ Scene load_scene(const std::string& path, int threads) {
       throw InputError(scene.inputs.empty() ? file : scene.inputs[0], "particles.position", std::to_string(ratio), s.str());
     }
   }
-  return scene;
 }
+}  // namespace
 
 }  // namespace tomodem::dem

@@ -1116,9 +1116,59 @@ Simulation::EngineState Simulation::engine_state() const {
 void Simulation::restore(const EngineState& e) {
   Impl& s = *impl_;
   const std::size_t n = s.p.size();
-  if (e.start.size() != n + 1 || e.x_at_build.size() != n || e.force.size() != n ||
-      e.history.size() != e.j.size() * std::size_t(s.stride) || e.wall_candidates.size() != s.walls.size())
-    throw InputError("", "engine state", "", "does not match the scene (particle count, laws or walls differ)");
+  // Every array is checked against the scene before anything is replaced: a damaged checkpoint,
+  // or one of another scene, must never index out of bounds. The field names the dataset of the
+  // checkpoint file (the caller adds the file).
+  const std::string mismatch = " (the checkpoint does not match the scene: particle count, laws or walls differ, or it is damaged)";
+  const auto size_is = [&](const std::string& ds, std::size_t got, std::size_t want) {
+    if (got != want)
+      throw InputError("", ds, std::to_string(got) + " values", "expected " + std::to_string(want) + mismatch);
+  };
+  size_is("/engine/start", e.start.size(), n + 1);
+  if (e.start[0] != 0 || std::size_t(e.start[n]) != e.j.size())
+    throw InputError("", "/engine/start", std::to_string(e.start[0]) + " .. " + std::to_string(e.start[n]),
+                     "must run from 0 to the length of /engine/j (" + std::to_string(e.j.size()) + ")" + mismatch);
+  for (std::size_t i = 0; i < n; ++i)
+    if (e.start[i] > e.start[i + 1])
+      throw InputError("", "/engine/start[" + std::to_string(i) + "]", std::to_string(e.start[i]), "must not decrease" + mismatch);
+  for (std::size_t k = 0; k < e.j.size(); ++k)
+    if (e.j[k] < 0 || std::size_t(e.j[k]) >= n)
+      throw InputError("", "/engine/j[" + std::to_string(k) + "]", std::to_string(e.j[k]),
+                       "not a particle index in [0, " + std::to_string(n) + ")" + mismatch);
+  size_is("/engine/image", e.image.size(), e.j.size());
+  for (std::size_t k = 0; k < e.image.size(); ++k)
+    if (e.image[k] >= 27) throw InputError("", "/engine/image[" + std::to_string(k) + "]", std::to_string(e.image[k]), "must be below 27" + mismatch);
+  size_is("/engine/touching", e.touching.size(), s.kern.touch_flag ? e.j.size() : 0);
+  size_is("/engine/history", e.history.size(), e.j.size() * std::size_t(s.stride));
+  size_is("/engine/x_at_build", e.x_at_build.size(), n);
+  size_is("/engine/force", e.force.size(), n);
+  if (s.p.has_rotation()) size_is("/engine/torque", e.torque.size(), n);
+  size_is("/walls/point", e.wall_candidates.size(), s.walls.size());
+  size_is("/engine/wall_point_at_build", e.wall_point_at_build.size(), s.walls.size());
+  for (std::size_t w = 0; w < s.walls.size(); ++w) {
+    const std::string g = "/engine/wall" + std::to_string(w);
+    for (int32_t i : e.wall_candidates[w])
+      if (i < 0 || std::size_t(i) >= n) throw InputError("", g + "/candidates", std::to_string(i), "not a particle index" + mismatch);
+    size_is(g + "/history", e.wall_history[w].size(), n * std::size_t(s.stride));
+    size_is(g + "/touching", e.wall_touching[w].size(), s.kern.touch_flag ? n : 0);
+  }
+  if (!(std::isfinite(e.dt) && e.dt > 0)) throw InputError("", "/engine/scalars[1]", std::to_string(e.dt), "the time step must be positive" + mismatch);
+  if (!std::isfinite(e.time) || e.step < 0) throw InputError("", "/engine/scalars", std::to_string(e.step), "time and step must be finite and >= 0" + mismatch);
+  size_is("/bonds/i", e.bonds.size(), s.bonds.size());
+  {
+    const BondSet& B = e.bonds;
+    const std::size_t nb = B.size();
+    size_is("/bonds/image", B.image.size(), nb);
+    size_is("/bonds/state", B.state.size(), nb);
+    size_is("/bonds/mode", B.mode.size(), nb);
+    size_is("/bonds/broken_at", B.broken_at.size(), nb);
+    size_is("/bonds/shear_force", B.shear_force.size(), nb);
+    size_is("/bonds/twist", B.twist.size(), nb);
+    size_is("/bonds/bend", B.bend.size(), nb);
+    for (const auto& ev : e.bond_events)
+      if (ev.bond < 0 || std::size_t(ev.bond) >= nb)
+        throw InputError("", "/bonds/events/bond", std::to_string(ev.bond), "not a bond index" + mismatch);
+  }
   s.start = e.start;
   s.nj = e.j;
   s.img = e.image;
@@ -1144,8 +1194,6 @@ void Simulation::restore(const EngineState& e) {
   s.dissipated = e.dissipated;
   s.ext_work = e.external_work;
   s.e0 = e.initial_energy;
-  if (e.bonds.size() != s.bonds.size())
-    throw InputError("", "engine state", "", "bond count differs from the scene's");
   s.bonds = e.bonds;
   s.bond_events = e.bond_events;
   s.partition_threads();

@@ -6,6 +6,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <climits>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -17,6 +18,8 @@
 
 #include "sinter_law.hpp"
 #include "tomodem/core/error.hpp"
+#include "tomodem/core/output.hpp"
+#include "tomodem/dem/yaml_fields.hpp"
 
 namespace tomodem::dem {
 
@@ -96,96 +99,28 @@ void apply_temperature(ContactModel& model, const std::vector<SinterPhase>& phas
 // ---------------------------------------------------------------- reading the settings
 namespace {
 
-class Sec {
- public:
-  Sec(YAML::Node n, std::string path, const std::string& file) : n_(n), path_(std::move(path)), file_(file) {
-    if (n_ && !n_.IsMap()) throw InputError(file_, where(""), "", "must be a mapping of keys to values");
-  }
-  void allow(std::initializer_list<const char*> keys) const {
-    if (!n_) return;
-    const std::set<std::string> ok(keys.begin(), keys.end());
-    for (const auto& kv : n_) {
-      const std::string k = kv.first.as<std::string>();
-      if (!ok.count(k)) {
-        std::string list;
-        for (const auto* a : keys) list += (list.empty() ? "" : ", ") + std::string(a);
-        throw InputError(file_, where(k), k, "unknown key; expected one of: " + list);
-      }
-    }
-  }
-  bool has(const std::string& k) const { return n_ && n_[k]; }
-  YAML::Node raw(const std::string& k) const { return n_ ? n_[k] : YAML::Node(YAML::NodeType::Undefined); }
-  Sec sec(const std::string& k) const { return Sec(raw(k), join(k), file_); }
-  double number(const std::string& k, double fallback) const {
-    if (!has(k)) return fallback;
-    double v;
-    try {
-      v = raw(k).as<double>();
-    } catch (const YAML::Exception&) {
-      throw InputError(file_, where(k), text(k), "must be a number");
-    }
-    if (!std::isfinite(v)) throw InputError(file_, where(k), text(k), "must be a finite number");
-    return v;
-  }
-  double positive(const std::string& k, double fallback) const {
-    const double v = number(k, fallback);
-    if (has(k) && !(v > 0)) throw InputError(file_, where(k), text(k), "must be positive");
-    return v;
-  }
-  double required_positive(const std::string& k, const std::string& what) const {
-    if (!has(k)) throw InputError(file_, where(k), "", "missing: " + what);
-    return positive(k, 0);
-  }
-  double non_negative(const std::string& k, double fallback) const {
-    const double v = number(k, fallback);
-    if (has(k) && !(v >= 0)) throw InputError(file_, where(k), text(k), "must be zero or positive");
-    return v;
-  }
-  std::string string(const std::string& k, const std::string& fallback) const {
-    if (!has(k)) return fallback;
-    if (!raw(k).IsScalar()) throw InputError(file_, where(k), "", "must be a text value");
-    return raw(k).as<std::string>();
-  }
-  bool flag(const std::string& k, bool fallback) const {
-    if (!has(k)) return fallback;
-    try {
-      return raw(k).as<bool>();
-    } catch (const YAML::Exception&) {
-      throw InputError(file_, where(k), text(k), "must be true or false");
-    }
-  }
-  std::string where(const std::string& k) const {
-    std::string f = k.empty() ? path_ : join(k);
-    const YAML::Node n = k.empty() ? n_ : raw(k);
-    if (n && n.Mark().line >= 0) f += " (line " + std::to_string(n.Mark().line + 1) + ")";
-    return f;
-  }
-  std::string text(const std::string& k) const {
-    const YAML::Node n = raw(k);
-    if (!n) return "";
-    if (n.IsScalar()) return n.Scalar();
-    std::ostringstream s;
-    s << YAML::Dump(n);
-    std::string t = s.str();
-    std::replace(t.begin(), t.end(), '\n', ' ');
-    return t;
-  }
-  const YAML::Node& node() const { return n_; }
-  const std::string& path() const { return path_; }
-  const std::string& file() const { return file_; }
-
- private:
-  std::string join(const std::string& k) const { return path_.empty() ? k : path_ + "." + k; }
-  YAML::Node n_;
-  std::string path_;
-  const std::string& file_;
-};
+/// Every YAML value is read through yaml::Section (tomodem/dem/yaml_fields.hpp).
+using Sec = yaml::Section;
 
 }  // namespace
 
+namespace {
+SinterSettings read_sinter_section(const Scene& scene, const YAML::Node& doc);
+}
+
 SinterSettings read_sinter_settings(const Scene& scene) {
   const std::string& file = scene.file;
-  const YAML::Node doc = YAML::Load(scene.text);
+  const YAML::Node doc = yaml::load(scene.text, file);
+  try {
+    return read_sinter_section(scene, doc);
+  } catch (const YAML::Exception& e) {
+    throw yaml::as_input_error(e, file);  // a conversion that bypassed yaml::Section
+  }
+}
+
+namespace {
+SinterSettings read_sinter_section(const Scene& scene, const YAML::Node& doc) {
+  const std::string& file = scene.file;
   if (!doc["sintering"]) throw InputError(file, "sintering", "", "the scene has no sintering section (docs/sintering.md)");
   if (scene.sim->model().normal != NormalLaw::sintering)
     throw InputError(file, "physics.normal", to_string(scene.sim->model().normal),
@@ -196,7 +131,7 @@ SinterSettings read_sinter_settings(const Scene& scene) {
   SinterSettings s;
 
   // Temperature program.
-  const Sec tp = root.sec("temperature");
+  const Sec tp = root.map("temperature");
   if (!root.has("temperature")) throw InputError(file, "sintering.temperature", "", "missing: the temperature program");
   tp.allow({"start", "segments"});
   s.program.start = tp.required_positive("start", "the start temperature (K)");
@@ -206,7 +141,7 @@ SinterSettings read_sinter_settings(const Scene& scene) {
                      "needs a list of segments, e.g. [{rate: 0.1667, to: 1600}, {hold: 3600}] (K/s, K, s)");
   double T = s.program.start;
   for (std::size_t k = 0; k < segs.size(); ++k) {
-    const Sec g(segs[k], tp.path() + ".segments[" + std::to_string(k) + "]", file);
+    const Sec g = tp.item("segments", k);
     g.allow({"rate", "to", "hold"});
     TemperatureProgram::Segment seg;
     if (g.has("hold")) {
@@ -229,7 +164,7 @@ SinterSettings read_sinter_settings(const Scene& scene) {
     throw InputError(file, root.where("phases"), root.text("phases"),
                      "needs a list of sintering phases with their diffusion parameters");
   for (std::size_t k = 0; k < ph.size(); ++k) {
-    const Sec g(ph[k], root.path() + ".phases[" + std::to_string(k) + "]", file);
+    const Sec g = root.item("phases", k);
     g.allow({"material", "atomic_volume", "boundary_diffusion", "activation_energy", "surface_energy", "dihedral_angle",
              "tangential_viscosity"});
     const std::string name = g.string("material", "");
@@ -266,23 +201,20 @@ SinterSettings read_sinter_settings(const Scene& scene) {
   s.initial_neck = root.positive("initial_neck_ratio", s.initial_neck);
   if (s.initial_neck >= 1)
     throw InputError(file, root.where("initial_neck_ratio"), root.text("initial_neck_ratio"), "must be below 1");
-  const Sec st = root.sec("stop");
+  const Sec st = root.map("stop");
   st.allow({"relative_density", "time"});
   s.target_density = st.positive("relative_density", 0);
   if (s.target_density >= 1)
     throw InputError(file, st.where("relative_density"), st.text("relative_density"), "must be below 1");
   s.max_time = st.positive("time", 0);
   if (root.has("constrained")) {
-    const YAML::Node c = root.raw("constrained");
-    if (!c.IsSequence()) throw InputError(file, root.where("constrained"), root.text("constrained"), "must be a list of axes, e.g. [x, y]");
-    for (const auto& a : c) {
-      const std::string ax = a.as<std::string>();
+    for (const std::string& ax : root.strings("constrained")) {
       if (ax != "x" && ax != "y" && ax != "z")
         throw InputError(file, root.where("constrained"), ax, "unknown axis; expected x, y or z");
       s.fixed[ax[0] - 'x'] = true;
     }
   }
-  const Sec ac = root.sec("accuracy");
+  const Sec ac = root.map("accuracy");
   ac.allow({"strain_per_step", "neck_area_per_step", "temperature_per_step", "viscous_fraction", "update_interval"});
   s.strain_per_step = ac.positive("strain_per_step", s.strain_per_step);
   s.neck_area_per_step = ac.positive("neck_area_per_step", s.neck_area_per_step);
@@ -290,21 +222,30 @@ SinterSettings read_sinter_settings(const Scene& scene) {
   s.viscous_fraction = ac.positive("viscous_fraction", s.viscous_fraction);
   if (s.viscous_fraction >= 1)
     throw InputError(file, ac.where("viscous_fraction"), ac.text("viscous_fraction"), "must be below 1 (stability)");
-  s.update_interval = int(ac.positive("update_interval", s.update_interval));
+  s.update_interval = int(ac.integer("update_interval", s.update_interval, 1, INT_MAX));
   s.conserve_volume = root.flag("conserve_volume", true);
-  const Sec out = root.sec("output");
+  const Sec out = root.map("output");
   out.allow({"curve", "packing", "rows", "necks", "plots"});
   s.curve = out.string("curve", s.curve);
   s.packing = out.string("packing", s.packing);
   s.necks = out.string("necks", s.necks);
   s.plots = out.flag("plots", s.plots);
-  s.output_rows = int(out.positive("rows", s.output_rows));
+  s.output_rows = int(out.integer("rows", s.output_rows, 1, INT_MAX));
+  // The curve is kept in memory until the end: refuse what cannot fit before the run.
+  check_memory_request(double(s.output_rows) * 400, file, out.where("rows"), out.text("rows"),
+                       out.text("rows") + " rows of the densification curve");
+  // Outputs are written into the -o folder, and nowhere else; no two share a name.
+  for (const char* key : {"curve", "packing", "necks"})
+    if (out.has(key)) refuse_output_outside(out.string(key, ""), "given by -o", file, out.where(key));
+  if (s.curve == s.packing || s.curve == s.necks || s.packing == s.necks)
+    throw InputError(file, out.where(""), out.text(""), "two outputs have the same name; one would overwrite the other");
 
   bool any = false;
   for (const auto& p : s.phases) any = any || p.sinters;
   if (!any) throw InputError(file, "sintering.phases", "", "no phase sinters");
   return s;
 }
+}  // namespace
 
 // ---------------------------------------------------------------- geometry
 double lens_volume(double r1, double r2, double d) {
@@ -811,16 +752,11 @@ SinteredPacking sinter_packing(const Packing& green, const std::string& source, 
     t << in.rdbuf();
     scene.text = t.str();
   }
-  YAML::Node doc;
-  try {
-    doc = YAML::Load(scene.text);
-  } catch (const YAML::Exception& e) {
-    throw InputError(settings_file, "line " + std::to_string(e.mark.line + 1), "", "not valid YAML: " + e.msg);
-  }
+  const YAML::Node doc = yaml::load(scene.text, settings_file);
   if (!doc || !doc.IsMap()) throw InputError(settings_file, "", "", "must be a YAML mapping with a sintering section");
   const Sec root(doc, "", settings_file);
   root.allow({"sintering", "physics"});
-  const Sec ph = root.sec("physics");
+  const Sec ph = root.map("physics");
   ph.allow({"tangential", "restitution"});
 
   // The green packing as a periodic sintering simulation.

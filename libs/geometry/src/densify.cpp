@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <climits>
 #include <cmath>
 #include <numeric>
 #include <random>
@@ -11,6 +12,7 @@
 
 #include "../../dem/src/hgrid.hpp"
 #include "tomodem/core/error.hpp"
+#include "tomodem/core/output.hpp"
 #include "tomodem/dem/fire.hpp"
 #include "tomodem/dem/scene.hpp"
 #include "tomodem/dem/simulation.hpp"
@@ -277,6 +279,13 @@ std::vector<Vec3> cluster_offsets(const std::vector<double>& r, std::mt19937_64&
 }
 }  // namespace
 
+void check_particle_memory(std::size_t n, const std::string& file, const std::string& field, const std::string& value) {
+  // Engine state, neighbour lists with history, FIRE buffers and the Laguerre tessellation.
+  constexpr double kBytesPerParticle = 3000;
+  check_memory_request(double(n) * kBytesPerParticle, file, field, value, std::to_string(n) + " particles");
+  if (n > std::size_t(INT_MAX)) throw InputError(file, field, value, "at most 2147483647 particles");
+}
+
 void validate(const PackSpec& s) {
   const std::string& f = s.source;
   if (s.phases.empty()) throw InputError(f, "phases", "", "at least one phase is needed");
@@ -288,10 +297,9 @@ void validate(const PackSpec& s) {
       throw InputError(f, field + ".volume_fraction", num(ph.volume_fraction), "must lie in [0, 1]");
     sum += ph.volume_fraction;
     ph.psd.validate(f, field + ".size_distribution");
-    if (!(ph.material.density > 0)) throw InputError(f, field + ".material.density", num(ph.material.density), "must be > 0 (kg/m^3)");
-    if (s.normal != dem::NormalLaw::linear && !(ph.material.youngs_modulus > 0))
-      throw InputError(f, field + ".material.youngs_modulus", num(ph.material.youngs_modulus),
-                       "must be > 0 for the Hertz family of normal laws");
+    // The same material check as a tomodem-dem scene's (dem::material_problem).
+    const dem::MaterialProblem bad = dem::material_problem(ph.material, s.normal != dem::NormalLaw::linear);
+    if (!bad.key.empty()) throw InputError(f, field + ".material." + bad.key, bad.value, bad.why);
     if (ph.aggregate_size < 1) throw InputError(f, field + ".aggregate_size", std::to_string(ph.aggregate_size), "must be >= 1");
     if (ph.aggregate_size > 1 && !(ph.material.youngs_modulus > 0))
       throw InputError(f, field + ".material.youngs_modulus", num(ph.material.youngs_modulus),
@@ -300,6 +308,22 @@ void validate(const PackSpec& s) {
   if (std::abs(sum - 1) > 1e-6)
     throw InputError(f, "phases[*].volume_fraction", num(sum), "volume fractions must add up to 1");
   if (s.n_particles < 1) throw InputError(f, "particles", std::to_string(s.n_particles), "must be >= 1");
+  check_particle_memory(s.n_particles, f, "particles", std::to_string(s.n_particles));
+  if (s.threads < 1) throw InputError(f, "threads", std::to_string(s.threads), "must be >= 1");
+  if (!(s.restitution > 0 && s.restitution <= 1)) throw InputError(f, "contact.restitution", num(s.restitution), "must lie in (0, 1]");
+  if (!(s.work_of_adhesion >= 0 && std::isfinite(s.work_of_adhesion)))
+    throw InputError(f, "contact.work_of_adhesion", num(s.work_of_adhesion), "must be >= 0 (J/m^2)");
+  if (!(s.normal_stiffness >= 0 && std::isfinite(s.normal_stiffness)))
+    throw InputError(f, "contact.normal_stiffness", num(s.normal_stiffness), "must be >= 0 (N/m)");
+  if (!(s.local_damping >= 0 && s.local_damping < 1)) throw InputError(f, "protocol.local_damping", num(s.local_damping), "must lie in [0, 1)");
+  if (!(s.timestep_fraction > 0 && s.timestep_fraction <= 1))
+    throw InputError(f, "protocol.timestep_fraction", num(s.timestep_fraction), "must lie in (0, 1]");
+  if (!(s.unbalanced_force_ratio > 0 && s.unbalanced_force_ratio < 1))
+    throw InputError(f, "protocol.unbalanced_force_ratio", num(s.unbalanced_force_ratio), "must lie in (0, 1)");
+  if (!(s.strain_rate >= 0 && std::isfinite(s.strain_rate))) throw InputError(f, "protocol.strain_rate", num(s.strain_rate), "must be >= 0 (1/s)");
+  if (!(s.final_strain_rate >= 0 && std::isfinite(s.final_strain_rate)))
+    throw InputError(f, "protocol.final_strain_rate", num(s.final_strain_rate), "must be >= 0 (1/s)");
+  if (s.max_steps < 1) throw InputError(f, "protocol.max_steps", std::to_string(s.max_steps), "must be >= 1");
   if (!(s.initial_solid_fraction > 0 && s.initial_solid_fraction < 0.4))
     throw InputError(f, "initial_solid_fraction", num(s.initial_solid_fraction),
                      "must lie in (0, 0.4): random sequential insertion jams near 0.38");
@@ -326,7 +350,7 @@ void validate(const PackSpec& s) {
   }
   if (s.arrangement != "random" && (s.phases.size() != 1 || s.phases[0].psd.kind != PsdKind::monodisperse))
     throw InputError(f, "arrangement", s.arrangement, "lattices need one monodisperse phase");
-  if (!(s.friction >= 0)) throw InputError(f, "contact.friction", num(s.friction), "must be >= 0");
+  if (!(s.friction >= 0 && std::isfinite(s.friction))) throw InputError(f, "contact.friction", num(s.friction), "must be >= 0");
   if (!(s.rolling_friction >= 0)) throw InputError(f, "contact.rolling_friction", num(s.rolling_friction), "must be >= 0");
 }
 

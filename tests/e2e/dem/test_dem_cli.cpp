@@ -138,7 +138,7 @@ TEST_F(DemCli, BadInputExitsWithCode2AndLeavesNoOutput) {
                                      "velocity: 0.05, seed: 3, phase: glass}",
                                "file: nowhere.h5"),
        "nowhere.h5", ""},
-      {"overlap", replace(base, "solid_fraction: 0.76", "solid_fraction: 2.5"), "particles.position", ""},
+      {"overlap", replace(base, "solid_fraction: 0.76", "solid_fraction: 0.76, spacing: 0.4e-3"), "particles.position", ""},
       {"timestep_too_large", replace(base, "timestep: auto", "timestep: 1.0"), "protocol.timestep", "1.0"},
   };
   for (const auto& c : cases) {

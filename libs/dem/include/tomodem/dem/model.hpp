@@ -68,6 +68,15 @@ bool parse(const std::string& s, NormalLaw& out);
 bool parse(const std::string& s, TangentialLaw& out);
 bool parse(const std::string& s, RollingLaw& out);
 
+/// What is wrong with a material's values, shared by scenes (tomodem-dem, tomodem-sinter) and pack
+/// configs (tomodem-pack) so that both refuse the same values: the key at fault ("poisson_ratio"),
+/// the value and why; an empty key when the material is sound. `need_modulus`: the normal law
+/// needs youngs_modulus > 0 (the Hertz family).
+struct MaterialProblem {
+  std::string key, value, why;
+};
+MaterialProblem material_problem(const Material& m, bool need_modulus);
+
 /// Dimensionless damping c of η_n = c sqrt(m* S_n) that makes a Hertz collision rebound at
 /// restitution e, for every impact speed (the Hertz–Tsuji model is self-similar in the speed).
 /// Found by integrating the dimensionless collision once and solving for c (bisection).

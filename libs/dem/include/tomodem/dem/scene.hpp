@@ -35,7 +35,16 @@ struct Scene {
   Protocol protocol;
   SceneOutputs outputs;
   std::vector<std::string> inputs;  ///< files the scene read (hashed into provenance)
+  /// Time-series rows (series_columns()) of the runs before a restart, from the checkpoint: the
+  /// series continues instead of starting again.
+  std::vector<std::vector<double>> series_before;
 };
+
+/// The columns of the time series (CSV header and /results/series/dem), with their units.
+const std::vector<std::string>& series_columns();
+std::vector<double> series_row(const Measurements& m);
+/// series_before followed by this run's rows (the row at the restart step once).
+std::vector<std::vector<double>> full_series(const Scene& scene, const std::vector<Measurements>& run);
 
 /// Reads and validates a scene. Every problem is an InputError naming the file, the field
 /// (with its line) and the value. `threads` > 0 overrides the scene's setting.
@@ -65,10 +74,24 @@ struct RunReport {
 /// output_interval steps; checkpoints if asked (`checkpoint_path`, written atomically).
 RunReport run_protocol(Scene& scene, const std::string& checkpoint_path, bool progress);
 
-/// Checkpoint: particles, cell, walls, cell control and the engine state, bit-exact.
-void write_checkpoint(const std::string& path, const Simulation& sim, const std::string& scene_text);
-/// Restores a checkpoint into a simulation built from the same scene.
-void read_checkpoint(const std::string& path, Simulation& sim);
+/// Checkpoint: particles, cell, walls, cell control and the engine state, bit-exact, and the time
+/// series so far (`series`, rows of series_columns()).
+void write_checkpoint(const std::string& path, const Simulation& sim, const std::string& scene_text,
+                      const std::vector<std::vector<double>>& series = {});
+/// What a restart found in the checkpoint besides the state.
+struct RestartInfo {
+  std::vector<std::string> physics_changes;  ///< "materials[0].density: 2500 -> 2600", ...
+};
+/// Restores a checkpoint into the simulation built from `scene`. Every dataset is checked
+/// (presence, length, finite values, indices) before use: a damaged or foreign checkpoint is an
+/// InputError naming the file and the dataset. The scene the checkpoint was written with is
+/// compared with this one: a change of physics (materials, laws, time step, cell, walls,
+/// boundary, particles) is refused naming what changed, unless `allow_changed_physics`, when the
+/// changes are returned for the caller to warn about. The checkpoint's time series goes into
+/// scene.series_before.
+RestartInfo read_checkpoint(const std::string& path, Scene& scene, bool allow_changed_physics = false);
+/// The physics fields that differ between two scene texts (empty when the same physics).
+std::vector<std::string> physics_changes(const std::string& before, const std::string& now);
 
 /// The shared data model of the final state (particles, cell, contacts, materials, results).
 Packing to_packing(Simulation& sim, const std::vector<Material>& materials);

@@ -107,6 +107,10 @@ struct PackOutput {
 /// Checks a spec (fractions add to 1, positive sizes, reachable target...). InputError on failure.
 void validate(const PackSpec& spec);
 /// Generates and densifies. `progress` gets one line per stage (may be empty).
+/// Refuses (InputError, exit 2) a particle count whose packing would not fit in memory, before
+/// anything is allocated; the message gives the need and what the machine has.
+void check_particle_memory(std::size_t n, const std::string& file, const std::string& field, const std::string& value);
+
 PackOutput make_packing(const PackSpec& spec, const std::function<void(const std::string&)>& progress = {});
 
 /// Random insertion of non-overlapping spheres (largest first, hierarchical bins) into a
