@@ -10,12 +10,14 @@
 #include <sys/stat.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <functional>
 #include <sstream>
 
 #include "tomodem/core/error.hpp"
+#include "tomodem/core/output.hpp"
 
 namespace tomodem::h5 {
 
@@ -67,9 +69,14 @@ std::string shape_text(const std::vector<std::size_t>& dims) {
 // "particles/radius" and "/particles/radius" name the same object.
 std::string absolute(const std::string& p) { return (p.empty() || p[0] != '/') ? "/" + p : p; }
 
-bool regular_file(const std::string& path) {
+// Why `path` cannot be opened for reading ("" when it is a regular file).
+std::string not_a_file(const std::string& path) {
   struct stat st {};
-  return ::stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
+  if (::stat(path.c_str(), &st) != 0) return std::string("cannot open: ") + std::strerror(errno);
+  if (S_ISDIR(st.st_mode)) return "is a directory, not an HDF5 file";
+  if (!S_ISREG(st.st_mode)) return "not a regular file (an HDF5 file is expected)";
+  if (st.st_size == 0) return "empty file (0 bytes), not an HDF5 file";
+  return "";
 }
 
 // The HDF5 memory type for each element type we expose.
@@ -188,6 +195,12 @@ struct File::Impl {
     if (rank < 0) read_error(a, "", "cannot read the shape: " + last_error());
     std::vector<hsize_t> hd(static_cast<std::size_t>(rank));
     H5Sget_simple_extent_dims(space, hd.data(), nullptr);
+    // The shape comes from the file: check what it would take before allocating (a corrupt or
+    // hostile header claiming 10^12 rows must not end in bad_alloc or the OOM killer).
+    double want = 1;
+    for (auto d : hd) want *= static_cast<double>(d);
+    check_memory_request(want * sizeof(T), path, a, shape_text(std::vector<std::size_t>(hd.begin(), hd.end())),
+                         shape_text(std::vector<std::size_t>(hd.begin(), hd.end())) + " values of " + type_name<T>());
     std::size_t count = 1;
     for (auto d : hd) count *= static_cast<std::size_t>(d);
     std::vector<T> out(count);
@@ -239,8 +252,9 @@ File::File(const std::string& path, Mode mode) : impl_(std::make_unique<Impl>())
   silence();
   impl_->path = path;
   if (mode == Mode::read) {
-    if (!regular_file(path)) throw InputError(path, "", "", "cannot open: no such file");
-    if (H5Fis_hdf5(path.c_str()) <= 0) throw InputError(path, "", "", "not an HDF5 file");
+    if (const std::string why = not_a_file(path); !why.empty()) throw InputError(path, "", "", why);
+    if (H5Fis_hdf5(path.c_str()) <= 0)
+      throw InputError(path, "", "", "not an HDF5 file (no HDF5 signature: a text file, random bytes or cut before it)");
     impl_->file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
     if (impl_->file < 0) throw InputError(path, "", "", "cannot open: " + last_error());
   } else {
@@ -261,6 +275,19 @@ File::File(File&&) noexcept = default;
 File& File::operator=(File&&) noexcept = default;
 
 const std::string& File::path() const { return impl_->path; }
+
+void File::close() {
+  if (!impl_ || impl_->file < 0) return;
+  silence();
+  const hid_t id = impl_->file;
+  impl_->file = H5I_INVALID_HID;  // closed (or given up) either way: the destructor must not retry
+  std::string why;
+  if (impl_->writable && H5Fflush(id, H5F_SCOPE_LOCAL) < 0) why = last_error();
+  if (H5Fclose(id) < 0 && why.empty()) why = last_error();
+  if (!why.empty())
+    throw RuntimeFailure(impl_->path + ": cannot " + (impl_->writable ? "finish writing" : "close") +
+                         " the HDF5 file (disk full or a file-size limit?): " + why);
+}
 
 bool File::exists(const std::string& object) const {
   silence();

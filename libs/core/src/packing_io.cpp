@@ -261,6 +261,24 @@ struct Reader {
             "particle index outside [0, " + std::to_string(n) + ")");
   }
 
+  // The cell vectors (columns of h) must span a volume: a zero vector or three coplanar vectors
+  // make every per-volume quantity (stress, E, sigma, densities) 0, infinite or NaN.
+  void check_cell_matrix(const Mat3& h) const {
+    double len[3];
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 v = h.col(k);
+      len[k] = std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
+      if (!(len[k] > 0))
+        bad("/cell/h", "column " + std::to_string(k) + " = (" + num(v.x) + ", " + num(v.y) + ", " + num(v.z) + ")",
+            "cell vector " + std::to_string(k) + " has zero length: the cell has no volume (the columns of "
+            "/cell/h are the three cell vectors, in m)");
+    }
+    const double det = h.det();
+    if (!(std::fabs(det) > 1e-12 * len[0] * len[1] * len[2]))
+      bad("/cell/h", "det = " + num(det),
+          "the cell vectors are coplanar (singular matrix): the cell has no volume");
+  }
+
   void header() const {
     if (!f.has_attr("/", "tomodem_format")) bad("/@tomodem_format", "", "not a tomodem file (attribute missing)");
     const int64_t v = f.attr_int("/", "tomodem_format");
@@ -346,6 +364,7 @@ struct Reader {
       if (!std::isfinite(h[k])) bad("/cell/h", num(h[k]), "must be finite");
     c.origin = {o[0], o[1], o[2]};
     std::copy(h.begin(), h.end(), &c.h.a[0][0]);
+    check_cell_matrix(c.h);
     for (int k = 0; k < 3; ++k) {
       if (per[k] > 1) bad("/cell/periodic", std::to_string(per[k]), "flags must be 0 or 1");
       c.periodic[k] = per[k] != 0;
@@ -368,6 +387,16 @@ struct Reader {
     indices("/bonds/i", b.i, n);
     indices("/bonds/j", b.j, n);
     for (std::size_t k = 0; k < m; ++k)
+      if (b.i[k] == b.j[k])
+        bad("/bonds/j[" + std::to_string(k) + "]", std::to_string(b.j[k]),
+            "a bond joins particle " + std::to_string(b.i[k]) + " to itself (i = j); a bond needs two particles");
+    for (std::size_t k = 0; k < m; ++k)
+      if (!std::isfinite(b.radius[k]) || b.radius[k] <= 0)
+        bad("/bonds/radius[" + std::to_string(k) + "]", num(b.radius[k]), "bond (neck) radius must be finite and > 0");
+    for (std::size_t k = 0; k < m; ++k)
+      if (!std::isfinite(b.rest_length[k]) || b.rest_length[k] < 0)
+        bad("/bonds/rest_length[" + std::to_string(k) + "]", num(b.rest_length[k]), "rest length must be finite and >= 0");
+    for (std::size_t k = 0; k < m; ++k)
       if (b.state[k] > BondTable::broken)
         bad("/bonds/state[" + std::to_string(k) + "]", std::to_string(b.state[k]), "must be 0 (intact) or 1 (broken)");
     return b;
@@ -387,6 +416,19 @@ struct Reader {
     c.tangential_force = col3("/contacts/tangential_force", m, ref);
     indices("/contacts/i", c.i, n);
     indices("/contacts/j", c.j, n);
+    for (std::size_t k = 0; k < m; ++k)
+      if (c.i[k] == c.j[k])
+        bad("/contacts/j[" + std::to_string(k) + "]", std::to_string(c.j[k]),
+            "a contact of particle " + std::to_string(c.i[k]) + " with itself (i = j)");
+    for (std::size_t k = 0; k < m; ++k)
+      if (!std::isfinite(c.overlap[k]))
+        bad("/contacts/overlap[" + std::to_string(k) + "]", num(c.overlap[k]), "must be finite");
+    for (const auto* col : {&c.normal_force, &c.tangential_force})
+      for (std::size_t k = 0; k < m; ++k)
+        if (!std::isfinite((*col)[k].x) || !std::isfinite((*col)[k].y) || !std::isfinite((*col)[k].z))
+          bad(std::string(col == &c.normal_force ? "/contacts/normal_force[" : "/contacts/tangential_force[") +
+                  std::to_string(k) + "]",
+              num((*col)[k].x) + " " + num((*col)[k].y) + " " + num((*col)[k].z), "forces must be finite");
     return c;
   }
 
@@ -499,8 +541,9 @@ void write_packing(const std::string& path, const Packing& p) {
   try {
     h5::File f(tmp, h5::File::Mode::create);
     write_packing_groups(f, p);
+    f.close();  // checked: a full disk shows here, before the rename
   } catch (...) {
-    std::remove(tmp.c_str());  // a failed write leaves neither the final nor the temporary file
+    discard_output(path);  // a failed write leaves neither the final nor the temporary file
     throw;
   }
   commit_output(path);

@@ -3,6 +3,11 @@
 
 #include <gtest/gtest.h>
 
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <cmath>
 #include <cstring>
 #include <functional>
@@ -390,6 +395,124 @@ TEST_F(PackingIo, WriterRefusesBadTables) {
   refuses([](Packing& p) { p.bonds.state.clear(); });
   refuses([](Packing& p) { p.results.scalars["a/b"] = 1; });
   refuses([](Packing& p) { p.results.series["thermo"]["time_s"].push_back(1); });
+}
+
+// Issue 16: bond and contact tables whose values would feed NaN or nonsense into the mechanics
+// and network tools are refused at read time, naming the dataset and the first bad row.
+TEST_F(PackingIo, BadBondValuesNameTheFirstBadRow) {
+  auto path = corrupted([](File& f) { f.write("/bonds/radius", std::vector<double>{1e-7, kNaN, -1.0}); });
+  expect_input_error([&] { read_packing(path); }, path, "/bonds/radius[1]", "nan");
+  path = corrupted([](File& f) { f.write("/bonds/radius", std::vector<double>{1e-7, 2e-7, -0.5}); });
+  expect_input_error([&] { read_packing(path); }, path, "/bonds/radius[2]", "-0.5");
+  path = corrupted([](File& f) { f.write("/bonds/radius", std::vector<double>{0.0, 2e-7, 3e-7}); });
+  expect_input_error([&] { read_packing(path); }, path, "/bonds/radius[0]", "0");
+  path = corrupted([](File& f) { f.write("/bonds/rest_length", std::vector<double>{2e-6, 2e-6, kNaN}); });
+  expect_input_error([&] { read_packing(path); }, path, "/bonds/rest_length[2]", "nan");
+  // A self-bond (i = j) and the first of several.
+  path = corrupted([](File& f) { f.write("/bonds/j", std::vector<int32_t>{1, 1, 3}); });
+  expect_input_error([&] { read_packing(path); }, path, "/bonds/j[1]", "itself");
+  path = corrupted([](File& f) { f.write("/bonds/i", std::vector<int32_t>{0, -7, 3}); });
+  expect_input_error([&] { read_packing(path); }, path, "/bonds/i[1]", "-7");
+}
+
+TEST_F(PackingIo, BadContactValuesRefused) {
+  auto path = corrupted([](File& f) { f.write("/contacts/overlap", std::vector<double>{kNaN, 0}); });
+  expect_input_error([&] { read_packing(path); }, path, "/contacts/overlap[0]", "nan");
+  path = corrupted([](File& f) { f.write("/contacts/j", std::vector<int32_t>{4, 2}); });
+  expect_input_error([&] { read_packing(path); }, path, "/contacts/j[1]", "itself");
+  path = corrupted([](File& f) {
+    f.write("/contacts/normal_force", std::vector<double>{1, 2, 3, 4, std::numeric_limits<double>::infinity(), 6},
+            {2, 3});
+  });
+  expect_input_error([&] { read_packing(path); }, path, "/contacts/normal_force[1]", "inf");
+}
+
+// A cell without volume (a zero cell vector, or three coplanar ones) made E = null and sigma = 0
+// with exit 0 downstream: it is refused where it is read.
+TEST_F(PackingIo, DegenerateCellRefused) {
+  auto path = corrupted([](File& f) { f.write("/cell/h", std::vector<double>(9, 0.0), {3, 3}); });
+  expect_input_error([&] { read_packing(path); }, path, "/cell/h", "column 0");
+  path = corrupted([](File& f) {
+    f.write("/cell/h", std::vector<double>{1e-3, 0, 0, 0, 2e-3, 0, 0, 0, 0}, {3, 3});  // third vector zero
+  });
+  expect_input_error([&] { read_packing(path); }, path, "/cell/h", "column 2");
+  path = corrupted([](File& f) {
+    // Columns (1,0,0), (0,1,0), (1,1,0): coplanar, det = 0.
+    f.write("/cell/h", std::vector<double>{1e-3, 0, 1e-3, 0, 1e-3, 1e-3, 0, 0, 0}, {3, 3});
+  });
+  expect_input_error([&] { read_packing(path); }, path, "/cell/h", "det = 0");
+  try {
+    read_packing(path);
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("coplanar"), std::string::npos) << e.what();
+  }
+  // A sheared but regular cell still reads, and so does a left-handed one.
+  path = corrupted([](File& f) { f.write("/cell/h", std::vector<double>{-1e-3, 0, 0, 0, 1e-3, 0, 0, 0, 1e-3}, {3, 3}); });
+  EXPECT_NO_THROW(read_packing(path));
+}
+
+// A full disk (here: a file-size limit, EFBIG) while HDF5 writes its metadata at close must fail
+// the write, remove the temporary and keep the previous file. Before h5::File::close() the error
+// of H5Fclose was ignored and the cut file renamed over the good one.
+TEST_F(PackingIo, FullDiskAtCloseKeepsThePreviousFileAndLeavesNoTemporary) {
+  const Packing good = full_packing();
+  write_packing(file("p.h5"), good);
+  const std::string before = test::slurp(file("p.h5"));
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    ::signal(SIGXFSZ, SIG_IGN);  // writes past the limit fail with EFBIG instead of killing
+    rlimit lim{};
+    lim.rlim_cur = lim.rlim_max = 2048;  // the small datasets are cached: they reach the disk at close
+    ::setrlimit(RLIMIT_FSIZE, &lim);
+    int code = 10;
+    try {
+      write_packing(file("p.h5"), good);
+      code = 11;  // the failure went unnoticed
+    } catch (const RuntimeFailure& e) {
+      code = std::string(e.what()).find(file("p.h5")) != std::string::npos ? 0 : 12;
+    } catch (...) {
+      code = 13;
+    }
+    ::_exit(code);
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0) << "10: none, 11: no error, 12: message without the file, 13: other exception";
+  EXPECT_TRUE(test::slurp(file("p.h5")) == before) << "the previous p.h5 was overwritten";
+  EXPECT_EQ(test::entries(dir), (std::vector<std::string>{"p.h5", "p.xdmf"}));
+  expect_equal(good, read_packing(file("p.h5")));
+}
+
+TEST_F(PackingIo, CloseIsCheckedAndIdempotent) {
+  File f(file("c.h5"), File::Mode::create);
+  f.write("/x", std::vector<double>{1, 2, 3});
+  f.close();
+  EXPECT_NO_THROW(f.close());
+  const File g(file("c.h5"), File::Mode::read);
+  EXPECT_EQ(g.read_double("/x"), (std::vector<double>{1, 2, 3}));
+}
+
+// Inputs that are not HDF5 packings at all: each is an InputError naming the file.
+TEST_F(PackingIo, NotAPackingFileNamesTheFileAndWhy) {
+  const std::string d = file("folder.h5");
+  ASSERT_EQ(::mkdir(d.c_str(), 0755), 0);
+  expect_input_error([&] { read_packing(d); }, d, "");
+  try {
+    read_packing(d);
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("directory"), std::string::npos) << e.what();
+  }
+  { std::ofstream(file("empty.h5")); }
+  expect_input_error([&] { read_packing(file("empty.h5")); }, file("empty.h5"), "");
+  { std::ofstream(file("text.h5")) << "particles: 5\nradius: 1e-6\n"; }
+  expect_input_error([&] { read_packing(file("text.h5")); }, file("text.h5"), "");
+  // Cut in half: the superblock is there, the rest is not.
+  write_packing(file("whole.h5"), full_packing());
+  const std::string whole = test::slurp(file("whole.h5"));
+  { std::ofstream(file("half.h5"), std::ios::binary) << whole.substr(0, whole.size() / 2); }
+  expect_input_error([&] { read_packing(file("half.h5")); }, file("half.h5"), "");
 }
 
 // XDMF: the sidecar names datasets that exist, with their true dimensions.

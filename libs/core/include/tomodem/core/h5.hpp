@@ -20,6 +20,11 @@ class File {
   File& operator=(const File&) = delete;
 
   const std::string& path() const;
+  /// Flushes and closes the file now, checking every step: a write that HDF5 could only finish
+  /// here (its metadata cache, a full disk, a file-size limit) is a RuntimeFailure naming the
+  /// file and the reason. Writers call it before renaming a temporary onto the real name; the
+  /// destructor closes silently. Nothing happens when the file is already closed.
+  void close();
   bool exists(const std::string& object) const;  ///< a group or dataset
   std::vector<std::string> children(const std::string& group) const;  ///< names, sorted
   /// The shape of a dataset (InputError when missing); {} for a scalar dataset.
@@ -37,7 +42,9 @@ class File {
   /// The space is not reclaimed inside the file (HDF5 limitation); fine for small metadata.
   void remove(const std::string& object);
 
-  /// Reads convert from any stored numeric type; `dims` (if given) receives the shape.
+  /// Reads convert from any stored numeric type; `dims` (if given) receives the shape. A dataset
+  /// that would need more memory than the machine has (a corrupt or hostile shape) is refused
+  /// before anything is allocated (InputError naming the dataset, with need vs have).
   std::vector<double> read_double(const std::string& dataset, std::vector<std::size_t>* dims = nullptr) const;
   std::vector<int32_t> read_int32(const std::string& dataset, std::vector<std::size_t>* dims = nullptr) const;
   std::vector<int64_t> read_int64(const std::string& dataset, std::vector<std::size_t>* dims = nullptr) const;
