@@ -32,7 +32,8 @@ int main(int argc, char** argv) {
     if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
     c.allow_disconnected = !require;
     tomodem::set_quiet(quiet);
-    if (threads < 0) throw tomodem::InputError("", "--threads", std::to_string(threads), "must be >= 0");
+    if (threads < 0 || threads > 4096)
+      throw tomodem::InputError("", "--threads", std::to_string(threads), "must lie in [0, 4096] (0: OpenMP's default)");
     if (threads > 0) omp_set_num_threads(threads);
     c.threads = threads;
     tomodem::info("reading " + c.input);

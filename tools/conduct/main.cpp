@@ -47,7 +47,8 @@ int main(int argc, char** argv) {
     c.bonds = !no_bonds;
     c.contacts = !no_contacts;
     tomodem::set_quiet(quiet);
-    if (threads < 0) throw tomodem::InputError("", "--threads", std::to_string(threads), "must be >= 0");
+    if (threads < 0 || threads > 4096)
+      throw tomodem::InputError("", "--threads", std::to_string(threads), "must lie in [0, 4096] (0: OpenMP's default)");
     if (threads > 0) omp_set_num_threads(threads);
     tomodem::info("reading " + c.input);
     const std::string summary = tomodem::network::run_conduct(c);

@@ -33,9 +33,11 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     app.add_option("--stop-fraction", c.stop_fraction, "stop after the peak once the load is below this x peak (0: cut through)")
         ->capture_default_str();
-    app.add_option("--youngs-modulus", c.youngs_modulus, "override E of every phase (Pa)");
-    app.add_option("--poisson-ratio", c.poisson_ratio, "override nu of every phase");
-    app.add_option("--density", c.density, "override the density of every phase (kg/m^3)");
+    // Overrides: set when given (any value, checked in the library: 0 is refused, not "unset").
+    double youngs_modulus = 0, poisson_ratio = 0, density = 0;
+    auto* e_opt = app.add_option("--youngs-modulus", youngs_modulus, "override E of every phase (Pa)");
+    auto* nu_opt = app.add_option("--poisson-ratio", poisson_ratio, "override nu of every phase");
+    auto* rho_opt = app.add_option("--density", density, "override the density of every phase (kg/m^3)");
     app.add_option("--gn-coefficient", c.law.g_n_coefficient, "g_n = 1 + c (a/R)^2")->capture_default_str();
     app.add_option("--gt-coefficient", c.law.g_t_coefficient, "g_t = 1 + c (a/R)^2")->capture_default_str();
     bool normal_only = false, no_elastic = false, quiet = false, no_energy = false;
@@ -60,11 +62,15 @@ int main(int argc, char** argv) {
     app.add_flag("-q,--quiet", quiet, "no progress messages");
     tomodem::cli::add_version(app, "tomodem-fracture");
     if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
+    if (e_opt->count()) c.youngs_modulus = youngs_modulus;
+    if (nu_opt->count()) c.poisson_ratio = poisson_ratio;
+    if (rho_opt->count()) c.density = density;
     c.law.shear = !normal_only;
     c.elastic = !no_elastic;
     ex.track_energy = !no_energy;
     tomodem::set_quiet(quiet);
-    if (threads < 0) throw tomodem::InputError("", "--threads", std::to_string(threads), "must be >= 0");
+    if (threads < 0 || threads > 4096)
+      throw tomodem::InputError("", "--threads", std::to_string(threads), "must lie in [0, 4096] (0: OpenMP's default)");
     if (threads > 0) omp_set_num_threads(threads);
     ex.threads = threads > 0 ? threads : omp_get_max_threads();
     tomodem::info("reading " + c.input);

@@ -3,12 +3,18 @@
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Interpolation.h>
 
+#include <sys/stat.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
+#include <fstream>
 #include <limits>
 
 #include "tomodem/carve/carve.hpp"
 #include "tomodem/core/error.hpp"
+#include "tomodem/core/output.hpp"
 #include "tomodem/core/tool.hpp"
 
 namespace tomodem::carve {
@@ -55,6 +61,75 @@ class LevelSet final : public Macropores {
   double voxel_ = 0, band_ = 0;
 };
 
+// OpenVDB reads a truncated file past its end without noticing: counts read from the failed
+// stream are garbage, and it loops and allocates without bound (a cut 60 kB level set grew to
+// 1.8 GB). So the file's own table of contents is walked first, with OpenVDB's readers for the
+// header, the file metadata and each grid descriptor: every grid must end inside the file.
+class TableOfContents final : public openvdb::io::Archive {
+ public:
+  explicit TableOfContents(std::string path) : path_(std::move(path)) {}
+
+  void check() {
+    struct stat st {};
+    if (::stat(path_.c_str(), &st) != 0) throw InputError(path_, "", "", std::string("cannot open: ") + std::strerror(errno));
+    if (S_ISDIR(st.st_mode)) throw InputError(path_, "", "", "is a folder, not an OpenVDB level set (.vdb)");
+    std::ifstream is(path_, std::ios::binary);
+    if (!is) throw InputError(path_, "", "", std::string("cannot open: ") + std::strerror(errno));
+    is.seekg(0, std::ios::end);
+    const std::int64_t size = std::int64_t(is.tellg());
+    is.seekg(0);
+    if (size <= 0) throw InputError(path_, "", "0 bytes", "empty file, not an OpenVDB level set");
+    try {
+      readHeader(is);
+    } catch (const std::exception& e) {
+      throw InputError(path_, "header", "", std::string("not an OpenVDB file: ") + e.what());
+    }
+    if (!is) truncated("header", size);
+    try {
+      openvdb::io::StreamMetadata::Ptr meta(new openvdb::io::StreamMetadata);
+      meta->setSeekable(true);
+      openvdb::io::setStreamMetadataPtr(is, meta, /*transfer=*/false);
+      setFormatVersion(is);
+      setLibraryVersion(is);
+      setDataCompression(is);
+      openvdb::MetaMap file_meta;
+      file_meta.readMeta(is);
+      if (!is) truncated("file metadata", size);
+      if (!inputHasGridOffsets()) return;  // very old files: no offsets to check
+      const int32_t n = readGridCount(is);
+      if (!is || n < 0) truncated("grid count", size);
+      for (int32_t k = 0; k < n; ++k) {
+        const std::int64_t here = std::int64_t(is.tellg());
+        if (!is || here < 0 || here + 12 > size) truncated("grid " + std::to_string(k) + " descriptor", size);
+        openvdb::io::GridDescriptor gd;
+        gd.read(is);
+        const std::string name = "grid '" + openvdb::io::GridDescriptor::nameAsString(gd.uniqueName()) + "'";
+        if (!is) truncated(name, size);
+        if (gd.getGridPos() < here || gd.getBlockPos() < gd.getGridPos() || gd.getEndPos() < gd.getBlockPos())
+          throw InputError(path_, name, "offsets " + std::to_string(gd.getGridPos()) + ", " +
+                                            std::to_string(gd.getBlockPos()) + ", " + std::to_string(gd.getEndPos()),
+                           "corrupt grid descriptor (offsets out of order)");
+        if (gd.getEndPos() > size)
+          throw InputError(path_, name, "ends at byte " + std::to_string(gd.getEndPos()),
+                           "the file has only " + std::to_string(size) +
+                               " bytes: it is truncated (an interrupted copy or write?)");
+        is.seekg(gd.getEndPos());
+      }
+    } catch (const InputError&) {
+      throw;
+    } catch (const std::exception& e) {
+      throw InputError(path_, "", "", std::string("corrupt OpenVDB file: ") + e.what());
+    }
+  }
+
+ private:
+  [[noreturn]] void truncated(const std::string& where, std::int64_t size) const {
+    throw InputError(path_, where, std::to_string(size) + " bytes",
+                     "the file ends inside its " + where + ": truncated or not an OpenVDB file");
+  }
+  std::string path_;
+};
+
 double unit_from_metadata(const openvdb::GridBase& g, const std::string& path) {
   if (auto m = g.getMetadata<openvdb::DoubleMetadata>("metres_per_unit")) return m->value();
   if (auto m = g.getMetadata<openvdb::FloatMetadata>("metres_per_unit")) return double(m->value());
@@ -75,6 +150,7 @@ double Macropores::band() const { return std::numeric_limits<double>::infinity()
 
 std::unique_ptr<Macropores> load_level_set(const std::string& path, const std::string& name, double metres_per_unit) {
   openvdb::initialize();
+  TableOfContents(path).check();
   openvdb::io::File file(path);
   try {
     file.open();
@@ -84,7 +160,19 @@ std::unique_ptr<Macropores> load_level_set(const std::string& path, const std::s
   openvdb::FloatGrid::Ptr grid;
   std::vector<std::string> names;
   for (auto it = file.beginName(); it != file.endName(); ++it) names.push_back(it.gridName());
-  const auto pick = [&](const std::string& n) { return openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid(n)); };
+  const auto pick = [&](const std::string& n) {
+    // The grid's own statistics (written by OpenVDB with every grid) say what it needs in memory:
+    // refuse before the tree is read rather than after the machine runs out.
+    const openvdb::GridBase::Ptr head = file.readGridMetadata(n);
+    if (const auto bytes = head->getMetadata<openvdb::Int64Metadata>(openvdb::GridBase::META_FILE_MEM_BYTES))
+      check_memory_request(double(bytes->value()), path, "grid '" + n + "'", std::to_string(bytes->value()) + " bytes",
+                           "the level set '" + n + "' (its file_mem_bytes metadata)");
+    try {
+      return openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid(n));
+    } catch (const openvdb::Exception& e) {
+      throw InputError(path, "grid '" + n + "'", "", std::string("cannot read the grid (corrupt file?): ") + e.what());
+    }
+  };
   if (!name.empty()) {
     if (std::find(names.begin(), names.end(), name) == names.end())
       throw InputError(path, "grid", name, "no grid of that name in the file");

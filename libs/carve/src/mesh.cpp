@@ -11,7 +11,13 @@
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/boost/graph/helpers.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <sstream>
 
 #include "tomodem/carve/carve.hpp"
@@ -61,10 +67,86 @@ class ClosedMesh final : public Macropores {
   Box box_;
   double edge_ = 0;
 };
+// Cut files: a binary STL says how many triangles it holds (84 + 50 N bytes): a file of another size is cut
+// or corrupt, and CGAL would read what is there (an open mesh at best) or trust the count.
+void check_mesh_size(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  if (ext == ".off") {
+    // OFF: "OFF" then "V F E"; every vertex takes at least 6 characters ("0 0 0\n"), every face
+    // at least 8 ("3 0 1 2\n"): fewer bytes than that is a cut file (and no count is trusted).
+    std::ifstream in(path);
+    std::string word;
+    in >> word;
+    if (word.size() < 3 || word.compare(word.size() - 3, 3, "OFF") != 0) return;  // CGAL says why
+    auto next_number = [&](double& v) {
+      std::string tok;
+      while (in >> tok) {
+        if (tok[0] == '#') {
+          std::getline(in, tok);
+          continue;
+        }
+        try {
+          v = std::stod(tok);
+          return true;
+        } catch (const std::exception&) {
+          return false;
+        }
+      }
+      return false;
+    };
+    double nv = 0, nf = 0;
+    if (!next_number(nv) || !next_number(nf)) return;
+    std::error_code ec;
+    const double size = double(std::filesystem::file_size(path, ec));
+    if (!ec && (nv < 0 || nf < 0 || 6 * nv + 8 * nf > size))
+      throw InputError(path, "OFF header", std::to_string((long long)nv) + " vertices, " + std::to_string((long long)nf) + " faces",
+                       "needs at least " + std::to_string((long long)(6 * nv + 8 * nf)) + " bytes; the file has " +
+                           std::to_string((long long)size) + ": truncated or corrupt");
+    return;
+  }
+  if (ext != ".stl") return;
+  std::ifstream in(path, std::ios::binary);
+  char head[84] = {};
+  in.read(head, 84);
+  const std::streamsize got = in.gcount();
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  if (ec) return;  // the reader says why
+  bool ascii = got >= 5 && std::string(head, 5) == "solid";
+  if (got < 84) {
+    if (!ascii) throw InputError(path, "", std::to_string(size) + " bytes", "too short for an STL file (a binary STL has an 84-byte header)");
+    return;
+  }
+  uint32_t n = 0;
+  std::memcpy(&n, head + 80, 4);
+  const std::uint64_t want = 84 + 50 * std::uint64_t(n);
+  if (want == size) return;  // a consistent binary STL (even if its header starts with "solid")
+  if (ascii) {
+    // ASCII STL: it must end with "endsolid" (a cut file does not).
+    std::ifstream tail(path, std::ios::binary);
+    const std::uint64_t k = std::min<std::uint64_t>(size, 256);
+    tail.seekg(std::streamoff(size - k));
+    std::string t(k, '\0');
+    tail.read(t.data(), std::streamsize(k));
+    if (t.find("endsolid") == std::string::npos)
+      throw InputError(path, "endsolid", "missing", "the ASCII STL file does not end with 'endsolid': it is truncated");
+    return;
+  }
+  throw InputError(path, "triangle count", std::to_string(n),
+                   "a binary STL of " + std::to_string(n) + " triangles has " + std::to_string(want) +
+                       " bytes; the file has " + std::to_string(size) + ": truncated or corrupt");
+}
 }  // namespace
 
 std::unique_ptr<Macropores> load_mesh(const std::string& path, double unit) {
   if (!(unit > 0)) throw InputError(path, "--image-unit", std::to_string(unit), "must be > 0");
+  {
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec)) throw InputError(path, "", "", "is a folder, not a mesh file");
+    if (!std::filesystem::exists(path, ec)) throw InputError(path, "", "", "cannot open: no such file");
+  }
+  check_mesh_size(path);
   Mesh mesh;
   bool ok = false;
   try {

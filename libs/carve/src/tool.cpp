@@ -9,6 +9,7 @@
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/packing_io.hpp"
 #include "tomodem/core/tool.hpp"
+#include "tomodem/mechanics/checks.hpp"
 
 namespace tomodem::carve {
 
@@ -38,10 +39,50 @@ std::unique_ptr<Macropores> load_macropores(const CarveConfig& cfg) {
   return load_spheres(cfg.spheres);
 }
 
+void check_config(const CarveConfig& cfg) {
+  using mechanics::require_range;
+  const Options& o = cfg.options;
+  const Mapping& m = o.mapping;
+  for (int k = 0; k < 3; ++k) {
+    const char* axis[3] = {"x", "y", "z"};
+    require_range("--offset", m.offset[k], -INFINITY, false, INFINITY, false, std::string(axis[k]) + " shift in m");
+    require_range("--rotate", m.rotation_deg[k], -INFINITY, false, INFINITY, false, "degrees");
+    if (m.use_image_box) {
+      require_range("--image-box", m.image_box.lo[k], -INFINITY, false, INFINITY, false, "m");
+      require_range("--image-box", m.image_box.hi[k], -INFINITY, false, INFINITY, false, "m");
+    }
+  }
+  if (!m.fit) mechanics::require_positive("--scale", m.scale, "packing length per image length");
+  require_range("--fraction", o.fraction, 0, false, 1, true, "volume fraction inside");
+  if (o.samples_per_diameter < 2 || o.samples_per_diameter > 1024)
+    throw InputError("", "--samples", std::to_string(o.samples_per_diameter),
+                     "must lie in [2, 1024] grid points per diameter (n^3 samples for every cut particle)");
+  // ~0.52 n^3 points of 24 bytes each, per thread at most once: check before the table is built.
+  const double n = o.samples_per_diameter;
+  check_memory_request(0.53 * n * n * n * 24, "", "--samples", std::to_string(o.samples_per_diameter),
+                       "the sample points of one particle");
+  if (o.target_grid < 0 || o.target_grid > 2048 || o.target_grid == 1)
+    throw InputError("", "--target-grid", std::to_string(o.target_grid),
+                     "must be 0 (from the image resolution) or lie in [2, 2048] cells per axis "
+                     "(2048^3 = 8.6e9 distance evaluations)");
+  if (o.relax_steps < 0) throw InputError("", "--relax", std::to_string(o.relax_steps), "must be >= 0");
+  require_range("--contact-gap", o.contact_gap, 0, false, 1, false, "fraction of the mean radius");
+  require_range("--margin", o.outside_margin, 0, false, INFINITY, true, "m; 0: 2 r_max");
+  if (o.threads < 0 || o.threads > 4096)
+    throw InputError("", "--threads", std::to_string(o.threads), "must lie in [0, 4096] (0: OpenMP's default)");
+  // Outputs before any work: none may overwrite an input, nor two share a file.
+  mechanics::check_outputs({cfg.packing, cfg.level_set, cfg.labels, cfg.mesh, cfg.spheres},
+                           {{"-o", cfg.output},
+                            {"-o (its .xdmf sidecar)", mechanics::xdmf_sidecar_of(cfg.output)},
+                            {"--json", cfg.json},
+                            {"--picture", cfg.picture}});
+}
+
 std::string run_carve(const CarveConfig& cfg) {
   const auto t0 = std::chrono::steady_clock::now();
   if (cfg.packing.empty()) throw InputError("", "packing", "", "no packing file given (see --help)");
   if (cfg.output.empty()) throw InputError("", "--output", "", "no output packing given (-o carved.h5)");
+  check_config(cfg);
   Packing in = read_packing(cfg.packing);
   const auto pores = load_macropores(cfg);
   Options opt = cfg.options;

@@ -12,6 +12,7 @@
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/core/plot.hpp"
+#include "tomodem/mechanics/checks.hpp"
 #include "tomodem/mechanics/fracture.hpp"
 
 namespace tomodem::mechanics {
@@ -84,8 +85,9 @@ void write_map(const std::string& path, const FractureSample& s, const FractureR
     f.set_attr("/bonds", "state_codes", "0 intact, 1 broken in tension, 2 broken in shear, 3 pre-crack");
     f.set_attr("/particles", "role_codes", "0 free, 1 bottom grip, 2 top grip, 3 not connected to a grip");
     f.set_attr("/", "method", r.method);
+    f.close();  // checked: a full disk shows here, before the rename
   } catch (...) {
-    std::remove(tmp.c_str());
+    discard_output(path);
     throw;
   }
   commit_output(path);
@@ -171,17 +173,51 @@ std::string run_fracture(const FractureConfig& c) {
   if (c.criterion == "lefm") fo.criterion = dem::BondFailure::lefm;
   else if (c.criterion == "stress") fo.criterion = dem::BondFailure::stress;
   else throw InputError("", "--criterion", c.criterion, "expected lefm or stress");
-  if (!(c.stop_fraction >= 0 && c.stop_fraction < 1))
-    throw InputError("", "--stop-fraction", std::to_string(c.stop_fraction), "must lie in [0, 1)");
+  require_range("--stop-fraction", c.stop_fraction, 0, false, 1, true, "of the peak load");
   const bool want_sla = c.method != "explicit", want_explicit = c.method != "sla";
-  if (want_explicit) {
-    if (!(c.explicit_.transits > 0)) throw InputError("", "--transits", std::to_string(c.explicit_.transits), "must be > 0");
-    if (!(c.explicit_.damping_ratio >= 0))
-      throw InputError("", "--damping-ratio", std::to_string(c.explicit_.damping_ratio), "must be >= 0");
-    if (!(c.explicit_.local_damping >= 0 && c.explicit_.local_damping < 1))
-      throw InputError("", "--local-damping", std::to_string(c.explicit_.local_damping), "must lie in [0, 1)");
-    if (!(c.explicit_.timestep_fraction > 0 && c.explicit_.timestep_fraction <= 1))
-      throw InputError("", "--timestep-fraction", std::to_string(c.explicit_.timestep_fraction), "must lie in (0, 1]");
+  // Every option is checked whatever the method and criterion: out of range is refused, never ignored.
+  require_non_negative("--fracture-energy", fo.fracture_energy, "J/m^2; 0: from the materials");
+  require_non_negative("--tensile-strength", fo.tensile_strength, "Pa");
+  require_non_negative("--shear-strength", fo.shear_strength, "Pa");
+  require_non_negative("--friction", fo.friction, "Coulomb friction coefficient");
+  if (c.crack.geometry != "centre" && c.crack.geometry != "edge")
+    throw InputError("", "--geometry", c.crack.geometry, "expected centre (crack 2a in the middle) or edge (notch a at x = 0)");
+  {
+    const bool centre = c.crack.geometry == "centre";
+    const double a = c.crack.a_over_w, amax = centre ? 0.5 : 1;
+    if (!(std::isfinite(a) && a > 0 && a < amax))
+      throw InputError("", "--a-over-w", option_text(a),
+                       std::string(a >= amax ? "the crack is longer than the sample: " : "") + "a/W must lie in (0, " +
+                           option_text(amax) + ") for " + (centre ? "a centre crack of length 2a" : "an edge notch"));
+  }
+  require_non_negative("--grip", c.crack.grip, "m; 0: one mean diameter");
+  require_range("--crack-offset", c.crack.plane_offset, -0.5, true, 0.5, true, "fraction of the grip distance");
+  if (c.sla.woodbury_bonds < 0)
+    throw InputError("", "--woodbury-bonds", std::to_string(c.sla.woodbury_bonds), "must be >= 0");
+  if (c.sla.max_breaks < 1) throw InputError("", "--max-breaks", std::to_string(c.sla.max_breaks), "must be >= 1");
+  require_positive("--transits", c.explicit_.transits, "elastic-wave transits");
+  require_non_negative("--strain-rate", c.explicit_.strain_rate, "1/s; 0: from --transits");
+  require_non_negative("--damping-ratio", c.explicit_.damping_ratio, "bond dashpot ratio");
+  require_range("--local-damping", c.explicit_.local_damping, 0, false, 1, true, "Cundall local damping");
+  require_range("--timestep-fraction", c.explicit_.timestep_fraction, 0, true, 1, false, "of the critical step");
+  if (c.explicit_.max_steps < 1)
+    throw InputError("", "--max-steps", std::to_string(c.explicit_.max_steps), "must be >= 1");
+  check_material_overrides(c.youngs_modulus, c.poisson_ratio, c.density);
+  check_law_options(c.law);
+  // Outputs before any work: none may overwrite the input, nor two share a file.
+  {
+    std::vector<OutputName> outs = {{"--json", c.json}, {"--curve", c.curve_csv}};
+    if (!c.curve_csv.empty() && want_sla && want_explicit)
+      outs.push_back({"--curve (its _explicit.csv)", stem_of(c.curve_csv) + "_explicit.csv"});
+    if (!c.plot.empty()) {
+      outs.push_back({"--plot (its .png)", c.plot + ".png"});
+      outs.push_back({"--plot (its .svg)", c.plot + ".svg"});
+    }
+    if (!c.map.empty()) {
+      outs.push_back({"--map", c.map});
+      outs.push_back({"--map (its .xdmf sidecar)", stem_of(c.map) + ".xdmf"});
+    }
+    check_outputs({c.input}, outs);
   }
 
   Network net = read_network(c.input);

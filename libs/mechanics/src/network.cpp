@@ -10,6 +10,7 @@
 #include "tomodem/core/h5.hpp"
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/packing_io.hpp"
+#include "tomodem/mechanics/checks.hpp"
 
 namespace tomodem::mechanics {
 
@@ -74,8 +75,9 @@ void write_network(const std::string& path, const Network& net) {
       f.set_attr("/bonds/image", "units", "1");
       f.set_attr("/bonds/image", "meaning", "periodic image of j seen from i: x_j + h·image - x_i");
     }
+    f.close();  // checked: a full disk shows here, before the rename
   } catch (...) {
-    std::remove(tmp.c_str());
+    discard_output(path);
     throw;
   }
   commit_output(path);
@@ -119,16 +121,30 @@ std::vector<dem::BondLaw> bond_laws(const Packing& p, const std::string& file, c
   return laws;
 }
 
-void override_materials(Packing& p, double youngs_modulus, double poisson_ratio, double density) {
-  if (youngs_modulus == 0 && !(poisson_ratio > -2) && density == 0) return;
+void check_material_overrides(const std::optional<double>& youngs_modulus, const std::optional<double>& poisson_ratio,
+                              const std::optional<double>& density) {
+  if (youngs_modulus) require_positive("--youngs-modulus", *youngs_modulus, "Young's modulus in Pa");
+  if (poisson_ratio) require_range("--poisson-ratio", *poisson_ratio, -1, true, 0.5, true, "Poisson's ratio");
+  if (density) require_positive("--density", *density, "kg/m^3");
+}
+
+void check_law_options(const LawOptions& o) {
+  require_non_negative("--gn-coefficient", o.g_n_coefficient, "g_n = 1 + c (a/R)^2");
+  require_non_negative("--gt-coefficient", o.g_t_coefficient, "g_t = 1 + c (a/R)^2");
+}
+
+void override_materials(Packing& p, const std::optional<double>& youngs_modulus,
+                        const std::optional<double>& poisson_ratio, const std::optional<double>& density) {
+  check_material_overrides(youngs_modulus, poisson_ratio, density);
+  if (!youngs_modulus && !poisson_ratio && !density) return;
   if (p.materials.empty() && p.particles.size()) {
     const int n = 1 + *std::max_element(p.particles.phase.begin(), p.particles.phase.end());
     for (int k = 0; k < n; ++k) p.materials.push_back(Material{"phase" + std::to_string(k)});
   }
   for (Material& m : p.materials) {
-    if (youngs_modulus != 0) m.youngs_modulus = youngs_modulus;
-    if (poisson_ratio > -2) m.poisson_ratio = poisson_ratio;
-    if (density != 0) m.density = density;
+    if (youngs_modulus) m.youngs_modulus = *youngs_modulus;
+    if (poisson_ratio) m.poisson_ratio = *poisson_ratio;
+    if (density) m.density = *density;
   }
 }
 

@@ -11,6 +11,7 @@
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/tool.hpp"
+#include "tomodem/mechanics/checks.hpp"
 
 namespace tomodem::mechanics {
 
@@ -64,13 +65,19 @@ std::string run_bond(const BondConfig& c) {
     o.rule = NeckRule::sinter;
   else
     throw InputError("", "--rule", c.rule, "expected ratio, overlap, density or sinter");
-  if (!(c.gap_tolerance >= 0)) throw InputError("", "--gap-tolerance", std::to_string(c.gap_tolerance), "must be >= 0");
-  if (!(c.neck_ratio > 0 && c.neck_ratio <= 1))
-    throw InputError("", "--neck-ratio", std::to_string(c.neck_ratio), "must lie in (0, 1]");
-  if (!(c.min_neck_ratio > 0 && c.min_neck_ratio <= 1))
-    throw InputError("", "--min-neck-ratio", std::to_string(c.min_neck_ratio), "must lie in (0, 1]");
-  if ((o.rule == NeckRule::density || o.rule == NeckRule::sinter) && !(c.target_density > 0 && c.target_density < 1))
-    throw InputError("", "--target-density", std::to_string(c.target_density), "must lie in (0, 1) for --rule " + c.rule);
+  require_range("--gap-tolerance", c.gap_tolerance, 0, false, 1, false,
+                "gap / mean radius; a gap wider than a radius is no neck");
+  require_range("--neck-ratio", c.neck_ratio, 0, true, 1, false, "a_b / R");
+  require_range("--min-neck-ratio", c.min_neck_ratio, 0, true, 1, false, "a_b / R");
+  if (o.rule == NeckRule::density || o.rule == NeckRule::sinter)
+    require_range("--target-density", c.target_density, 0, true, 1, true, "relative density, for --rule " + c.rule);
+  else if (c.target_density != 0)
+    require_range("--target-density", c.target_density, 0, true, 1, true, "relative density");
+  if (c.threads < 0) throw InputError("", "--threads", std::to_string(c.threads), "must be >= 0");
+  // Outputs before any work: none may overwrite an input, nor two share a file.
+  check_outputs({c.input, c.sinter_config}, {{"-o", c.output},
+                                             {"-o (its .xdmf sidecar)", xdmf_sidecar_of(c.output)},
+                                             {"--json", c.json}});
   if (o.rule == NeckRule::sinter && c.sinter_config.empty())
     throw InputError("", "--sinter-config", "", "rule sinter needs a sintering settings file (docs/sintering.md)");
   o.sinter_file = c.sinter_config;
@@ -199,14 +206,30 @@ std::string run_young(const YoungConfig& c) {
   if (c.implicit.solver != "auto" && c.implicit.solver != "ldlt" && c.implicit.solver != "amg" &&
       c.implicit.solver != "cg" && c.implicit.solver != "cg-ic")
     throw InputError("", "--solver", c.implicit.solver, "expected auto, ldlt, amg, cg or cg-ic");
-  if (!(c.implicit.tolerance > 0 && c.implicit.tolerance < 1))
-    throw InputError("", "--tolerance", std::to_string(c.implicit.tolerance), "must lie in (0, 1)");
-  if (!(c.explicit_.strain > 0 && c.explicit_.strain < 0.05))
-    throw InputError("", "--strain", std::to_string(c.explicit_.strain), "must lie in (0, 0.05): a small-strain test");
-  if (!(c.explicit_.transits > 0)) throw InputError("", "--transits", std::to_string(c.explicit_.transits), "must be > 0");
-  if (!(c.explicit_.damping_ratio >= 0)) throw InputError("", "--damping-ratio", std::to_string(c.explicit_.damping_ratio), "must be >= 0");
-  if (!(c.explicit_.local_damping >= 0 && c.explicit_.local_damping < 1))
-    throw InputError("", "--local-damping", std::to_string(c.explicit_.local_damping), "must lie in [0, 1)");
+  // Every option is checked here, whatever the method: a value that is out of range is refused,
+  // never ignored.
+  require_range("--tolerance", c.implicit.tolerance, 0, true, 1, true, "relative residual");
+  if (c.implicit.max_iterations < 0)
+    throw InputError("", "--max-iterations", std::to_string(c.implicit.max_iterations), "must be >= 0 (0: automatic)");
+  require_range("--strain", c.explicit_.strain, 0, true, 0.05, true, "a small-strain test");
+  require_positive("--transits", c.explicit_.transits, "elastic-wave transits of the cell");
+  require_non_negative("--damping-ratio", c.explicit_.damping_ratio, "bond dashpot ratio");
+  require_range("--local-damping", c.explicit_.local_damping, 0, false, 1, true, "Cundall local damping");
+  require_range("--relax-ratio", c.explicit_.relax_ratio, 0, true, 1, true, "unbalanced-force ratio");
+  require_range("--timestep-fraction", c.explicit_.timestep_fraction, 0, true, 1, false, "of the critical step");
+  if (c.explicit_.loading != "stress" && c.explicit_.loading != "strain")
+    throw InputError("", "--loading", c.explicit_.loading, "expected 'stress' or 'strain'");
+  if (c.explicit_.protocol != "rate" && c.explicit_.protocol != "increments")
+    throw InputError("", "--protocol", c.explicit_.protocol, "expected 'rate' or 'increments'");
+  if (c.explicit_.points < 2)
+    throw InputError("", "--points", std::to_string(c.explicit_.points), "at least 2 measurements are needed");
+  if (c.explicit_.max_steps < 1)
+    throw InputError("", "--max-steps", std::to_string(c.explicit_.max_steps), "must be >= 1");
+  check_material_overrides(c.youngs_modulus, c.poisson_ratio, c.density);
+  check_law_options(c.law);
+  if (!c.output_csv.empty() && c.method == "implicit")
+    throw InputError("", "--curve", c.output_csv, "the stress-strain curve comes from --method explicit or both");
+  check_outputs({c.input}, {{"--json", c.json}, {"--curve", c.output_csv}});
 
   Network net = read_network(c.input);
   Packing& p = net.packing;

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -46,6 +47,54 @@ json axis_json(const AxisResult& a) {
           {"solver", solver_json(a.solver)},    {"wall_time_s", a.wall_time_s}};
 }
 
+std::string text(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+// Options: NaN and infinities are always refused; the message names the option and the value.
+void require_range(const std::string& option, double v, double lo, bool lo_open, double hi, bool hi_open,
+                   const std::string& meaning) {
+  if (std::isfinite(v) && (lo_open ? v > lo : v >= lo) && (hi_open ? v < hi : v <= hi)) return;
+  const std::string range =
+      std::isinf(hi) ? std::string("must be finite and ") + (lo_open ? "> " : ">= ") + text(lo)
+                     : std::string("must lie in ") + (lo_open ? "(" : "[") + text(lo) + ", " + text(hi) + (hi_open ? ")" : "]");
+  throw InputError("", option, text(v), range + " (" + meaning + ")");
+}
+
+std::string sidecar_of(const std::string& path) {
+  const auto s = path.find_last_of('/'), d = path.find_last_of('.');
+  return ((d == std::string::npos || (s != std::string::npos && d < s)) ? path : path.substr(0, d)) + ".xdmf";
+}
+
+// Outputs: none may name the input, an existing folder or a missing folder; no two one file.
+void check_outputs(const std::string& input, const std::vector<std::pair<std::string, std::string>>& outputs) {
+  namespace fs = std::filesystem;
+  const auto is_file = [](const std::string& p) { return !p.empty() && p != "-"; };
+  for (const auto& [option, path] : outputs) {
+    if (!is_file(path)) continue;
+    refuse_output_over_input(path, option, {input});
+    std::error_code ec;
+    if (fs::is_directory(path, ec)) throw InputError("", option, path, "is a folder; give the name of a file to write");
+    const fs::path parent = fs::path(path).parent_path();
+    if (!parent.empty() && !fs::is_directory(parent, ec))
+      throw InputError("", option, path, "the folder " + parent.string() + " does not exist");
+  }
+  for (std::size_t a = 0; a < outputs.size(); ++a)
+    for (std::size_t b = a + 1; b < outputs.size(); ++b) {
+      if (!is_file(outputs[a].second) || !is_file(outputs[b].second)) continue;
+      std::error_code ec;
+      const bool same = fs::weakly_canonical(fs::absolute(outputs[a].second, ec), ec) ==
+                            fs::weakly_canonical(fs::absolute(outputs[b].second, ec), ec) ||
+                        fs::equivalent(outputs[a].second, outputs[b].second, ec);
+      if (same)
+        throw InputError("", outputs[b].first, outputs[b].second,
+                         "the same file as " + outputs[a].first + " " + outputs[a].second +
+                             ": two outputs cannot share one file; choose another name");
+    }
+}
+
 std::string join(const std::vector<std::string>& v) {
   std::string s;
   for (const auto& x : v) s += (s.empty() ? "" : ",") + x;
@@ -64,8 +113,23 @@ std::string run_conduct(const ConductConfig& c) {
     axes.push_back(ch - 'x');
   }
   if (axes.empty()) throw InputError("", "--axis", c.axes, "no axis given");
-  if (!(c.tolerance > 0 && c.tolerance < 1)) throw InputError("", "--tolerance", std::to_string(c.tolerance), "must be in (0, 1)");
-  if (!(c.voltage > 0)) throw InputError("", "--voltage", std::to_string(c.voltage), "must be positive");
+  // Every option is checked here, before the packing is read: out of range is refused, never ignored.
+  require_range("--tolerance", c.tolerance, 0, true, 1, true, "relative residual of the CG solve");
+  require_range("--voltage", c.voltage, 0, true, INFINITY, true, "V");
+  require_range("--gap-tolerance", c.gap_tolerance, 0, false, 1, false,
+                "gap / R*; a gap wider than the contact radius scale is no contact");
+  require_range("--min-contact-ratio", c.min_contact_ratio, 0, false, 1, false, "a / R*");
+  require_range("--electrode-tolerance", c.electrode_tolerance, 0, false, 1, false, "of the particle radius");
+  require_range("--charge-transfer", c.charge_transfer, 0, false, INFINITY, true, "S/m per metre of TPB");
+  if (c.max_iterations < 0)
+    throw InputError("", "--max-iterations", std::to_string(c.max_iterations), "must be >= 0 (0: automatic)");
+  if (c.charge_transfer != 0 && c.electronic.empty() && c.ionic.empty())
+    throw InputError("", "--charge-transfer", text(c.charge_transfer),
+                     "applies to a composite electrode: give --electronic and --ionic too");
+  for (int res : c.voxel)
+    if (res < 2) throw InputError("", "--voxel", std::to_string(res), "need at least 2 voxels along the longest edge");
+  check_outputs(c.input, {{"-o", c.output}, {"-o (its .xdmf sidecar)", c.output.empty() ? "" : sidecar_of(c.output)},
+                          {"--json", c.json}});
   NetworkOptions no;
   no.phases = c.phases;
   no.use_bonds = c.bonds;
@@ -82,6 +146,12 @@ std::string run_conduct(const ConductConfig& c) {
   co.solver.preconditioner = parse_preconditioner(c.preconditioner);
 
   const Packing pk = read_packing(c.input);
+  for (int res : c.voxel) {  // before the network solve: an impossible grid stops the run now
+    VoxelOptions vo;
+    vo.resolution = res;
+    vo.source = c.input;
+    check_voxel_grid(pk, vo);
+  }
   const Network net = build_network(pk, no);
   if (net.n_edges() == 0)
     throw InputError(c.input, "/bonds", "0 edges",

@@ -22,7 +22,7 @@ std::string strip_ext(const std::string& p) {
 void write_fields(const std::string& path, const Network& net, const std::vector<FieldSet>& fields,
                   const std::string& parameters) {
   const std::size_t n = net.n_nodes(), m = net.n_edges();
-  {
+  try {
     h5::File f(temporary_path(path), h5::File::Mode::create);
     f.set_attr("/", "tool", "tomodem-conduct");
     f.set_attr("/", "parameters", parameters);
@@ -53,6 +53,10 @@ void write_fields(const std::string& path, const Network& net, const std::vector
       if (!fs.potential.empty()) f.write("/fields/" + fs.name + "/potential", fs.potential, {}, "V");
       if (!fs.edge_current.empty()) f.write("/fields/" + fs.name + "/current", fs.edge_current, {}, "A");
     }
+    f.close();  // checked: a full disk shows here, before the rename
+  } catch (...) {
+    discard_output(path);
+    throw;
   }
   // XDMF: nodes as a polyvertex grid, edges as a polyline grid sharing the node positions.
   const std::string h5 = base_name(path);

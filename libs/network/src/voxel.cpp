@@ -3,20 +3,50 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 
 #include "tomodem/core/error.hpp"
+#include "tomodem/core/output.hpp"
 #include "tomodem/network/graph.hpp"
 
 namespace tomodem::network {
 
-VoxelResult voxel_conductivity(const Packing& pk, const VoxelOptions& opt) {
-  const auto t0 = std::chrono::steady_clock::now();
+namespace {
+// Bytes per voxel of the cross-check: conductivity (4), up to four edges of the graph (i, j, g:
+// 16 each), the percolation and solver vectors and the CSR matrix of the Kirchhoff solve (~100).
+constexpr double kBytesPerVoxel = 200;
+}  // namespace
+
+void check_voxel_grid(const Packing& pk, const VoxelOptions& opt) {
   const Mat3& h = pk.cell.h;
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c)
       if (r != c && h(r, c) != 0)
-        throw InputError(opt.source, "/cell", "non-rectangular", "the voxel cross-check needs a rectangular cell");
-  if (opt.resolution < 2) throw InputError("", "--voxel", std::to_string(opt.resolution), "need at least 2 voxels");
+        throw InputError(opt.source, "/cell/h", "non-rectangular", "the voxel cross-check (--voxel) needs a rectangular cell");
+  const std::string res = std::to_string(opt.resolution);
+  if (opt.resolution < 2) throw InputError("", "--voxel", res, "need at least 2 voxels along the longest edge");
+  const double L[3] = {h(0, 0), h(1, 1), h(2, 2)};
+  if (!(L[0] > 0 && L[1] > 0 && L[2] > 0))
+    throw InputError(opt.source, "/cell/h", "diagonal " + std::to_string(L[0]) + " " + std::to_string(L[1]) + " " +
+                                                std::to_string(L[2]),
+                     "the voxel cross-check needs positive cell lengths");
+  const double vs = std::max({L[0], L[1], L[2]}) / opt.resolution;
+  double nv = 1;
+  for (double l : L) nv *= std::max(1.0, std::round(l / vs));
+  char count[32];
+  std::snprintf(count, sizeof count, "%.3g", nv);
+  check_memory_request(nv * kBytesPerVoxel, "", "--voxel", res,
+                       "the voxel cross-check at " + res + " voxels along the longest edge (" + count + " voxels)");
+  if (nv > 2147483645.0)
+    throw InputError("", "--voxel", res,
+                     std::string("a grid of ") + count + " voxels: more than the solver's 2^31 - 3 nodes; "
+                     "choose a coarser resolution");
+}
+
+VoxelResult voxel_conductivity(const Packing& pk, const VoxelOptions& opt) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const Mat3& h = pk.cell.h;
+  check_voxel_grid(pk, opt);
   const std::size_t nm = pk.materials.size();
   std::vector<double> sigma_of(nm, opt.phases.empty() ? 1.0 : 0.0);
   for (std::size_t m = 0; m < nm; ++m) sigma_of[m] *= pk.materials[m].conductivity;

@@ -28,6 +28,10 @@ struct CarveConfig {
 /// Loads the macropores named by the config (InputError: none or several given).
 std::unique_ptr<Macropores> load_macropores(const CarveConfig& cfg);
 
+/// Refuses (InputError naming the option and the value) options out of range and outputs that
+/// name an input or each other; run_carve calls it before reading anything.
+void check_config(const CarveConfig& cfg);
+
 /// Reads, carves, writes (packing, picture, JSON: all after the work, atomically); returns the
 /// JSON summary.
 std::string run_carve(const CarveConfig& cfg);

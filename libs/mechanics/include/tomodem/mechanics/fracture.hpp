@@ -5,6 +5,7 @@
 // ways: an explicit quasi-static DEM test with bond failure, and the sequentially linear analysis
 // (SLA) with the direct solver (break the most critical bond, rescale the load, re-solve).
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -138,7 +139,7 @@ struct FractureConfig {
   ExplicitFractureOptions explicit_;
   double stop_fraction = 0.2;
   bool elastic = true;                   ///< compute E, ν of the periodic network (G = K²(1−ν²)/E check)
-  double youngs_modulus = 0, poisson_ratio = -2, density = 0;
+  std::optional<double> youngs_modulus, poisson_ratio, density;  ///< overrides for every phase (unset: file)
 };
 /// Returns the JSON summary (also written to `json` when set).
 std::string run_fracture(const FractureConfig& c);

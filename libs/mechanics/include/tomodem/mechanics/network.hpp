@@ -4,6 +4,7 @@
 // laws from the materials, and the load-bearing part of the network.
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -42,9 +43,16 @@ struct LawOptions {
 std::vector<dem::BondLaw> bond_laws(const Packing& p, const std::string& file, const LawOptions& o,
                                     bool need_density);
 
-/// Command-line material overrides for every phase (E > 0 unless 0, ν unless ≤ −2, density
-/// unless 0); a packing without materials gets one per phase index ("phase0", ...).
-void override_materials(Packing& p, double youngs_modulus, double poisson_ratio, double density);
+/// Command-line material overrides for every phase (each when given); a packing without
+/// materials gets one per phase index ("phase0", ...).
+void override_materials(Packing& p, const std::optional<double>& youngs_modulus,
+                        const std::optional<double>& poisson_ratio, const std::optional<double>& density);
+/// Refuses (InputError naming the option) overrides outside their range, whatever the method:
+/// --youngs-modulus finite > 0, --poisson-ratio in (−1, 0.5), --density finite > 0.
+void check_material_overrides(const std::optional<double>& youngs_modulus, const std::optional<double>& poisson_ratio,
+                              const std::optional<double>& density);
+/// Refuses --gn-coefficient / --gt-coefficient that are not finite and >= 0.
+void check_law_options(const LawOptions& o);
 
 /// Per-bond stiffnesses (dem::bond_stiffness, the formula of the DEM bond loop).
 struct BondStiffnesses {

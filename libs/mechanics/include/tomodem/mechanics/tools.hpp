@@ -1,5 +1,6 @@
 #pragma once
 // The bodies of tomodem-bond and tomodem-young (main.cpp only parses the command line).
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -28,7 +29,7 @@ struct YoungConfig {
   LawOptions law;
   ImplicitOptions implicit;
   ExplicitOptions explicit_;
-  double youngs_modulus = 0, poisson_ratio = -2, density = 0;  ///< overrides for every phase (unset: file)
+  std::optional<double> youngs_modulus, poisson_ratio, density;  ///< overrides for every phase (unset: file)
 };
 std::string run_young(const YoungConfig& c);
 

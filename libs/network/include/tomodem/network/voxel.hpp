@@ -33,6 +33,11 @@ struct VoxelResult {
   double wall_time_s = 0;
 };
 
+/// Refuses (InputError naming --voxel and the resolution) a grid that cannot be built: a cell
+/// that is not rectangular, fewer than 2 voxels, more voxels than the solver's 32-bit node
+/// indices hold, or more memory than the machine has (need vs have). Called before any work.
+void check_voxel_grid(const Packing& packing, const VoxelOptions& options);
+
 /// Needs a rectangular (diagonal h) cell. Periodic directions other than `axis` wrap.
 VoxelResult voxel_conductivity(const Packing& packing, const VoxelOptions& options);
 

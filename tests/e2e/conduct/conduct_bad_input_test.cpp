@@ -1,0 +1,96 @@
+// tomodem-conduct on bad input (issue 16): every row exits 2 naming the file or option and the
+// value, writes nothing and leaves its inputs as they were (../young/bad_input.hpp).
+#include "../../validation/network/lattice.hpp"
+#include "../young/bad_input.hpp"
+
+using namespace tomodem;
+using namespace tomodem::bad_input;
+
+namespace {
+
+void make_inputs(const fs::path& d) {
+  // 5×4×4 spheres R = 5 µm with bonds a = 1 µm, sigma = 1e4 S/m (σ_eff = 2000 S/m along x).
+  Packing p = network::test::sc_lattice(5, 4, 4, 5e-6, 1e-6, true);
+  p.materials[0].conductivity = 1e4;
+  write_packing((d / "lattice.h5").string(), p);
+  const std::size_t m = p.bonds.size();
+  write_damaged(d / "cell_zero.h5", p, [](h5::File& f) {
+    f.write("/cell/h", std::vector<double>{5e-5, 0, 0, 0, 4e-5, 0, 0, 0, 0}, {3, 3});
+  });
+  write_damaged(d / "cell_singular.h5", p, [](h5::File& f) {
+    f.write("/cell/h", std::vector<double>{5e-5, 0, 5e-5, 0, 4e-5, 4e-5, 0, 0, 0}, {3, 3});
+  });
+  write_damaged(d / "bond_range.h5", p, [&](h5::File& f) {
+    auto i = p.bonds.i;
+    i[m - 1] = -3;
+    f.write("/bonds/i", i);
+  });
+  write_damaged(d / "bond_nan.h5", p, [&](h5::File& f) {
+    auto a = p.bonds.radius;
+    a[5] = NAN;
+    f.write("/bonds/radius", a);
+  });
+  write_damaged(d / "bond_zero.h5", p, [&](h5::File& f) {
+    auto a = p.bonds.radius;
+    a[6] = 0;
+    f.write("/bonds/radius", a);
+  });
+  write_not_packings(d, d / "lattice.h5", p);
+}
+
+const InputCache& inputs() {
+  static const InputCache cache("conduct", make_inputs);
+  return cache;
+}
+
+const std::string L = "{D}/lattice.h5";
+
+const std::vector<Case> kCases = {
+    // ---- inputs (a zero or singular cell gave sigma_eff = 0 with exit 0)
+    {"zero_cell_vector", "conduct", "{D}/cell_zero.h5", 2, {"cell_zero.h5", "/cell/h", "column 2"}},
+    {"singular_cell", "conduct", "{D}/cell_singular.h5", 2, {"cell_singular.h5", "/cell/h", "coplanar"}},
+    {"bond_index_negative", "conduct", "{D}/bond_range.h5", 2, {"bond_range.h5", "/bonds/i[", "-3"}},
+    {"bond_radius_nan", "conduct", "{D}/bond_nan.h5", 2, {"bond_nan.h5", "/bonds/radius[5]", "nan"}},
+    {"bond_radius_zero", "conduct", "{D}/bond_zero.h5", 2, {"bond_zero.h5", "/bonds/radius[6]"}},
+    {"half_file", "conduct", "{D}/half.h5", 2, {"half.h5"}},
+    {"random_bytes", "conduct", "{D}/random.h5", 2, {"random.h5", "not an HDF5 file"}},
+    {"empty_file", "conduct", "{D}/empty.h5", 2, {"empty.h5", "empty"}},
+    {"text_file", "conduct", "{D}/text.h5", 2, {"text.h5"}},
+    {"folder", "conduct", "{D}/folder.h5", 2, {"folder.h5", "directory"}},
+    {"hdf5_not_a_packing", "conduct", "{D}/plain.h5", 2, {"plain.h5", "tomodem_format"}},
+    {"missing_radius", "conduct", "{D}/noradius.h5", 2, {"noradius.h5", "/particles/radius"}},
+    {"wrong_shape", "conduct", "{D}/shape.h5", 2, {"shape.h5", "/particles/position"}},
+    // ---- options
+    {"voxel_resolution_huge", "conduct", L + " --voxel 100000", 2, {"--voxel", "100000", "would need", "this machine has"}},
+    {"voxel_resolution_one", "conduct", L + " --voxel 1", 2, {"--voxel", "1"}},
+    {"electrode_tolerance_nan", "conduct", L + " --electrode-tolerance nan", 2, {"--electrode-tolerance", "nan"}},
+    {"gap_tolerance_negative", "conduct", L + " --gap-tolerance -0.5", 2, {"--gap-tolerance", "-0.5"}},
+    {"min_contact_ratio_two", "conduct", L + " --min-contact-ratio 2", 2, {"--min-contact-ratio", "2"}},
+    {"charge_transfer_negative", "conduct", L + " --electronic A --ionic B --charge-transfer -1", 2,
+     {"--charge-transfer", "-1"}},
+    {"charge_transfer_without_composite", "conduct", L + " --charge-transfer 5", 2, {"--charge-transfer", "5"}},
+    {"max_iterations_negative", "conduct", L + " --max-iterations -1", 2, {"--max-iterations", "-1"}},
+    {"voltage_zero", "conduct", L + " --voltage 0", 2, {"--voltage", "0"}},
+    // ---- outputs
+    {"output_is_input", "conduct", L + " -o {D}/lattice.h5", 2, {"-o", "lattice.h5"}},
+    {"json_is_input", "conduct", L + " --json {D}/lattice.h5", 2, {"--json", "lattice.h5"}},
+    {"json_is_output", "conduct", L + " -o {D}/f.h5 --json {D}/f.h5", 2, {"--json", "f.h5", "same file"}},
+    {"json_is_output_sidecar", "conduct", L + " -o {D}/f.h5 --json {D}/f.xdmf", 2, {"--json", "f.xdmf", "same file"}},
+    {"output_is_folder", "conduct", L + " -o {D}/folder.h5", 2, {"-o", "folder.h5", "folder"}},
+    {"output_folder_missing", "conduct", L + " -o {D}/nowhere/f.h5", 2, {"-o", "nowhere", "does not exist"}},
+};
+
+class ConductBadInput : public ::testing::TestWithParam<Case> {};
+
+TEST_P(ConductBadInput, ExitsTwoNamesTheValueAndWritesNothing) { run_case(GetParam(), inputs().dir()); }
+
+INSTANTIATE_TEST_SUITE_P(Rows, ConductBadInput, ::testing::ValuesIn(kCases), case_name);
+
+// The valid input runs (exit 0), so the rows above fail for their defect only.
+TEST(ConductBadInputControl, TheValidInputRuns) {
+  const std::string cmd = std::string(TOMODEM_BIN_DIR) + "/tomodem-conduct " +
+                          (inputs().dir() / "lattice.h5").string() + " -q > /dev/null 2>&1";
+  EXPECT_EQ(std::system(cmd.c_str()), 0);
+}
+
+}  // namespace
