@@ -17,6 +17,7 @@ InputError::InputError(std::string file, std::string field, std::string value, c
     : std::runtime_error(describe(file, field, value, why)),
       file_(std::move(file)),
       field_(std::move(field)),
-      value_(std::move(value)) {}
+      value_(std::move(value)),
+      why_(why) {}
 
 }  // namespace tomodem

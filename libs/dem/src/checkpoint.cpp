@@ -216,12 +216,8 @@ RestartInfo read_checkpoint(const std::string& path, Scene& scene, bool allow_ch
     read_checkpoint_checked(path, *scene.sim);
   } catch (const InputError& e) {
     if (!e.file().empty()) throw;
-    // restore() names the dataset; the file is ours to add (its message without the prefix).
-    std::string why = e.what();
-    const std::string prefix = (e.field().empty() ? "" : "field '" + e.field() + "': ") +
-                               (e.value().empty() ? "" : "value '" + e.value() + "': ");
-    if (why.rfind(prefix, 0) == 0) why = why.substr(prefix.size());
-    throw InputError(path, e.field(), e.value(), why);
+    // restore() names the dataset; the file is ours to add.
+    throw InputError(path, e.field(), e.value(), e.why());
   }
   // Rows past the checkpoint's step (a later part of the earlier run) are not part of this history.
   const double step = double(scene.sim->step_count());

@@ -437,7 +437,7 @@ void read_scene(Scene& scene, const YAML::Node& doc, const std::string& path, in
   try {
     sim.set_time_step(p.timestep);
   } catch (const InputError& e) {
-    throw InputError(file, "protocol.timestep", ts, e.what());
+    throw InputError(file, "protocol.timestep", ts, e.why());
   }
   if (pr.has("duration")) {
     if (pr.has("steps")) throw pr.error("duration", "", "give steps or duration, not both");

@@ -16,9 +16,11 @@ class InputError : public std::runtime_error {
   const std::string& file() const { return file_; }
   const std::string& field() const { return field_; }
   const std::string& value() const { return value_; }
+  /// The reason alone, without file, field and value (to re-throw with another location).
+  const std::string& why() const { return why_; }
 
  private:
-  std::string file_, field_, value_;
+  std::string file_, field_, value_, why_;
 };
 
 class RuntimeFailure : public std::runtime_error {
