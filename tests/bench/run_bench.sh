@@ -2,13 +2,14 @@
 # Scene A benchmark of issue 2, side by side with the peers in the same run:
 # LAMMPS (pair granular and gran/hertz/history), LIGGGHTS and tomodem (1 thread, 2 threads, and
 # the frictionless linear variant) on the dense periodic Hertz–Mindlin scene and its gas variant.
-# Yade is skipped: it is 8–10× slower than the others (~4 min per run at N=64000, RESULTS.md of
-# ../shared/peers) and would dominate the run; its figures are in ../shared/peers/RESULTS.md.
+# Yade is skipped: it is 8–10× slower than the others (~4 min per run at N=64000) and would
+# dominate the run; its figures are in docs/benchmarks.md ("Peer codes"), its inputs in
+# tests/bench/peers (bench_sceneA.sh runs it).
 #
 # usage: tests/bench/run_bench.sh            (from anywhere; ~15 min on an idle 2-core machine)
 # env:   NS="8000 64000"  VARIANTS="scene gas"  REPEATS=3  WARM=500  STEPS=2000
 #        BUILD=<build dir with bin/tomodem-bench-sceneA> (default <repo>/build-bench, built if missing)
-#        PEERS=<peers folder> (default <repo>/../shared/peers)   PIN="taskset -c 0" (optional)
+#        PEERS=<peer inputs> (default <repo>/tests/bench/peers)   PIN="taskset -c 0" (optional)
 #        DOC=<markdown to update> (default <repo>/docs/benchmarks.md)   KEEP=1 keeps the temp folder
 #        COMMIT=<label of the tomodem build> (default: the repository HEAD)
 #        REPEATS_LARGE=<repeats for N >= 50000> (default REPEATS)   TMO=<seconds per single run, default 900>
@@ -28,7 +29,7 @@ want() { [[ " $CONFIGS " == *" $1 "* ]]; }
 WARM=${WARM:-500}
 STEPS=${STEPS:-2000}
 BUILD=${BUILD:-$REPO/build-bench}
-PEERS=${PEERS:-$REPO/../shared/peers}
+PEERS=${PEERS:-$REPO/tests/bench/peers}
 DOC=${DOC:-$REPO/docs/benchmarks.md}
 PIN=${PIN:-}
 export OMP_NUM_THREADS=1
@@ -38,7 +39,7 @@ BENCH=$BUILD/bin/tomodem-bench-sceneA
 need=""
 command -v lmp >/dev/null || need="$need lammps"
 command -v liggghts >/dev/null || need="$need liggghts"
-/usr/bin/python3 -c 'import numpy' 2>/dev/null || need="$need python3-numpy"
+command -v python3 >/dev/null || need="$need python3"
 [ -x /usr/bin/time ] || need="$need time"
 if [ -n "$need" ]; then
   echo "installing:$need"
@@ -53,11 +54,12 @@ if [ ! -x "$BENCH" ]; then
     cmake --build "$BUILD" --target tomodem-bench-sceneA -j2 || exit 1
 fi
 
+[ -f "$PEERS/lammps/in.sceneA" ] && [ -f "$PEERS/common/make_state.py" ] ||
+  { echo "error: $PEERS does not hold the peer inputs (lammps/in.sceneA, common/make_state.py)" >&2; exit 2; }
 TMP=$(mktemp -d /tmp/tomodem-bench.XXXXXX)
 [ "${KEEP:-0}" = 1 ] || trap 'rm -rf "$TMP"' EXIT
-cp -r "$PEERS" "$TMP/peers"
-P=$TMP/peers
-mkdir -p "$P/logs"
+P=$TMP   # states/ (initial states) and logs/ of this run; the inputs stay in $PEERS
+mkdir -p "$P/logs" "$P/states"
 CSV=$TMP/runs.csv
 echo "variant,N,code,config,repeat,loop_s,pps,rss_MB,pressure_Pa,Z,KE_J,rebuilds" > "$CSV"
 LV=$(dpkg-query -W -f='${Version}' lammps); GV=$(dpkg-query -W -f='${Version}' liggghts)
@@ -68,8 +70,8 @@ echo "load average before: $LOAD0"
 run_peer() {  # exe input variant N tag config log-prefix
   local exe=$1 dir=$2 variant=$3 N=$4 tag=$5 config=$6 rep=$7 extra=$8
   local log=$P/logs/${tag}_${config}_N${N}_r$rep
-  ( cd "$P/$dir" && timeout "$TMO" $PIN /usr/bin/time -v -o "$log.time" $exe -in in.sceneA -var N "$N" -var TAG "$tag" $extra \
-      -var WARM "$WARM" -var STEPS "$STEPS" -log "$log.log" -screen none ) || { echo "  $config failed" >&2; return; }
+  ( cd "$P" && timeout "$TMO" $PIN /usr/bin/time -v -o "$log.time" $exe -in "$PEERS/$dir/in.sceneA" -var N "$N" -var TAG "$tag" $extra \
+      -var WARM "$WARM" -var STEPS "$STEPS" -var STATES "$P/states" -log "$log.log" -screen none ) || { echo "  $config failed" >&2; return; }
   local loop last ke z pr nb rss pps
   loop=$(grep 'Loop time' "$log.log" | tail -1 | awk '{print $4}')
   last=$(grep -B1 'Loop time' "$log.log" | tail -2 | head -1)
@@ -84,7 +86,7 @@ run_tomodem() {  # variant N tag config rep threads law
   local variant=$1 N=$2 tag=$3 config=$4 rep=$5 threads=$6 law=$7
   local log=$P/logs/${tag}_${config}_N${N}_r$rep.txt pin=$PIN
   [ "$threads" -gt 1 ] && pin=""
-  timeout "$TMO" $pin "$BENCH" "$P/common/${tag}_n$N.txt" --threads "$threads" --law "$law" --warm "$WARM" --steps "$STEPS" > "$log" ||
+  timeout "$TMO" $pin "$BENCH" "$P/states/${tag}_n$N.txt" --threads "$threads" --law "$law" --warm "$WARM" --steps "$STEPS" > "$log" ||
     { echo "  $config failed" >&2; return; }
   g() { awk -v k="$1" '$1==k{print $2}' "$log"; }
   echo "$variant,$N,tomodem,$config,$rep,$(g loop_wall_s),$(g particle_steps_per_second),$(g peak_rss_MB),$(g pressure_Pa),$(g coordination),$(g kinetic_energy_J),$(g neighbor_rebuilds)" | tee -a "$CSV"
@@ -94,10 +96,10 @@ for variant in $VARIANTS; do
   for N0 in $NS; do
     if [ "$variant" = scene ]; then
       n=$(python3 -c "print(round($N0**(1/3)))"); N=$((n * n * n)); tag=scene
-      [ -f "$P/common/scene_n$N.txt" ] || /usr/bin/python3 "$P/common/gen_lattice.py" $n "$P/common" > /dev/null
+      [ -f "$P/states/scene_n$N.txt" ] || python3 "$PEERS/common/make_state.py" scene $n "$P/states" > /dev/null || exit 1
     else
       n=$(python3 -c "print(round(($N0/4)**(1/3)))"); N=$((4 * n * n * n)); tag=gas
-      [ -f "$P/common/gas_n$N.txt" ] || /usr/bin/python3 "$P/common/gen_fcc_gas.py" $n "$P/common" > /dev/null
+      [ -f "$P/states/gas_n$N.txt" ] || python3 "$PEERS/common/make_state.py" gas $n "$P/states" > /dev/null || exit 1
     fi
     reps=$REPEATS; [ "$N" -ge 50000 ] && reps=$REPEATS_LARGE
     for rep in $(seq 1 "$reps"); do

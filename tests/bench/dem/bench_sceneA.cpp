@@ -1,13 +1,13 @@
-// Benchmark scene A of ../shared/peers (dense periodic Hertz–Mindlin) and its gas variant in
+// Benchmark scene A of tests/bench/peers (dense periodic Hertz–Mindlin) and its gas variant in
 // tomodem's DEM engine, with the same initial state files, parameters and timing protocol as
 // the LAMMPS/LIGGGHTS/Yade runs (see docs/benchmarks.md).
 //
 //   tomodem-bench-sceneA FILE|--lattice n|--fcc n [--threads N] [--law hertz-mindlin|linear-frictionless]
 //                        [--steps 2000] [--warm 500] [--check]
 //
-// FILE is a peers' `<tag>_n<N>.txt` (line 1 "L d rho", then "x y z vx vy vz" per sphere, SI).
+// FILE is a `<tag>_n<N>.txt` of tests/bench/peers/common/make_state.py (line 1 "L d rho", then "x y z vx vy vz" per sphere, SI).
 // --lattice n / --fcc n build an equivalent state in memory (same geometry and velocity
-// amplitudes as gen_lattice.py / gen_fcc_gas.py, but a different random stream), so the smoke
+// amplitudes as make_state.py scene / gas, but a different random stream), so the smoke
 // test needs neither Python nor the peers' folder.
 //
 // Prints one `key value` per line: particle_steps_per_second (N × timed steps / loop wall
@@ -71,7 +71,7 @@ void remove_drift(State& s) {
 }
 
 /// Simple cubic lattice of n³ spheres at solid fraction 0.55, jitter ±0.015 d, velocities
-/// uniform in ±0.1 m/s (as gen_lattice.py, own random stream).
+/// uniform in ±0.1 m/s (as make_state.py scene, own random stream).
 State make_lattice(int n, unsigned seed = 12345) {
   State s;
   s.d = 1e-3;
@@ -90,7 +90,7 @@ State make_lattice(int n, unsigned seed = 12345) {
   return s;
 }
 
-/// FCC lattice of 4n³ spheres at solid fraction 0.55, velocities uniform in ±1 m/s (as gen_fcc_gas.py).
+/// FCC lattice of 4n³ spheres at solid fraction 0.55, velocities uniform in ±1 m/s (as make_state.py gas).
 State make_fcc(int n, unsigned seed = 4242) {
   State s;
   s.d = 1e-3;

@@ -1,5 +1,5 @@
 // tomodem-fracture from the command line: outputs and summary keys, K_IC from the peak with the
-// geometry factor of PHYSICS.md, and bad input (exit 2, no output at all).
+// geometry factor of docs/physics.md#fracture-toughness, and bad input (exit 2, no output at all).
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -60,7 +60,7 @@ TEST_F(FractureCli, SlaAndExplicitWriteCurveMapAndSummary) {
   const auto j = nlohmann::json::parse(js);
   for (const char* key : {"K_IC", "K_IC_error", "peak_stress", "crack_length", "broken_bonds", "wall_time_s"})
     EXPECT_TRUE(j.contains(key)) << key;
-  // K_IC = Y σ sqrt(πa), Y = sqrt(sec(πa/W)) (PHYSICS.md, centre crack), σ = peak force / (W B).
+  // K_IC = Y σ sqrt(πa), Y = sqrt(sec(πa/W)) (docs/physics.md#fracture-toughness, centre crack), σ = peak force / (W B).
   const double a = j["crack_length"], W = j["width"], B = j["thickness"];
   const double sigma = j["peak_force"].get<double>() / (W * B);
   EXPECT_NEAR(j["peak_stress"].get<double>() / sigma, 1.0, 1e-12);

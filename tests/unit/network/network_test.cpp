@@ -88,7 +88,7 @@ TEST(Network, GeometricAndHertzContactRadius) {
 }
 
 // Hertz radius from the packing's contact force: a = (3 F R* / 4 E*)^(1/3), 1/E* = Σ (1 − ν²)/E
-// (PHYSICS.md), conductance 2σa for like phases (σ = 1 S/m here).
+// (docs/physics.md#resistor-networks), conductance 2σa for like phases (σ = 1 S/m here).
 TEST(Network, HertzRadiusFromContactForce) {
   Packing p = test::sc_lattice(2, 1, 1, 1.0, 0.1, false);
   p.bonds = BondTable{};

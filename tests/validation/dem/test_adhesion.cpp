@@ -1,6 +1,6 @@
 // Adhesive normal laws measured in the engine: two spheres, one fixed and one moved by
 // prescribed motion, are pressed together and then pulled apart slowly; the force on the fixed
-// sphere is recorded along the way (../shared/PHYSICS.md; JKR 1971, DMT 1975).
+// sphere is recorded along the way (docs/physics.md#adhesion; JKR 1971, DMT 1975).
 //   JKR: pull-off under load control = minimum of the force curve = −1.5 π w R*;
 //        the contact breaks at δ_c = −(3/4)(π² w² R*/E*²)^{1/3}; it forms at δ = 0 (hysteresis).
 //   DMT: pull-off = 2 π w R*, reached at δ = 0⁺.

@@ -68,7 +68,7 @@ TEST(Bonds, LatticeBondCountAndStiffTimeStep) {
 // Uniaxial stress along z (lateral stresses servo-held at zero), quasi-static: bond dashpots
 // ζ = 0.3, strain rate chosen so the loading takes ~50 elastic-wave transits. E is the slope
 // between two strain levels (the constant viscous stress cancels), ν the lateral strain ratio.
-// The SC lattice with normal bonds: E = k_n/(2R), ν = 0 (PHYSICS.md). Tolerance 0.5% (issue 5):
+// The SC lattice with normal bonds: E = k_n/(2R), ν = 0 (docs/physics.md#elastic-constants). Tolerance 0.5% (issue 5):
 // the dynamic error at ~50 transits is below 1e-3.
 TEST(Bonds, SimpleCubicLatticeUnderUniaxialStressHasKnOver2R) {
   BondedLattice L;

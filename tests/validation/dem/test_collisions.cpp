@@ -1,4 +1,4 @@
-// Binary collisions against closed forms (../shared/PHYSICS.md, Johnson 1985).
+// Binary collisions against closed forms (docs/physics.md#hertz, Johnson 1985).
 #include <gtest/gtest.h>
 
 #include <cmath>

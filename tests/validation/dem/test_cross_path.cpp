@@ -1,4 +1,4 @@
-// Cross-path check (STYLE P9): the wall kernel and the pair kernel must give the same contact
+// Cross-path check (P9 of docs/architecture.md#code-conventions): the wall kernel and the pair kernel must give the same contact
 // mechanics in the limit where they describe the same thing. A wall uses R* = R and m* = m; a
 // fixed sphere of radius R_b = 1e5 R gives R* = R(1 − 1e-5) and m* = m exactly (fixed: infinite
 // mass), and its surface departs from a plane by s²/(2R_b) over the contact patch.

@@ -1,5 +1,5 @@
 // Tangential contact: Mindlin stiffness k_t = 8 G* a below the Coulomb limit (stick) and
-// |F_t| = μ F_n above it (slip) (../shared/PHYSICS.md; Johnson 1985, Mindlin 1949).
+// |F_t| = μ F_n above it (slip) (docs/physics.md#tangential-law; Johnson 1985, Mindlin 1949).
 #include <gtest/gtest.h>
 
 #include <algorithm>

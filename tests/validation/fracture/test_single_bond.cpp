@@ -3,7 +3,7 @@
 // (Potyondy & Cundall 2004) and the LEFM (Jauffrès et al. 2012) criteria; afterwards the pair is
 // an ordinary contact of its fracture faces (compression and Coulomb friction only).
 //
-// Expected values are written from PHYSICS.md here, not taken from the library: k_n = E a g_n/(1−ν²),
+// Expected values are written from docs/physics.md#bond-failure here, not taken from the library: k_n = E a g_n/(1−ν²),
 // k_t = 2E a g_t/((1+ν)(2−ν)), k_twist = ½ k_t a², k_bend = ¼ k_n a², g_n = 1 + 4(a/R)², g_t = 1 + 1.2(a/R)²
 // (equal spheres: R̄ = R), σ = F_n/(πa²) + 4|M_b|/(πa³), τ = |F_t|/(πa²) + 2|M_t|/(πa³),
 // LEFM σ_c = 2 sqrt(E Γ g_n/(π(1−ν²) a)), τ_c = 2 sqrt(2 E Γ g_t/(π(1+ν)(2−ν) a)).

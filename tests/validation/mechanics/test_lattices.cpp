@@ -27,7 +27,7 @@ struct Sc {
 };
 }  // namespace
 
-// E = k_n/(2R), ν = 0 along a lattice axis (PHYSICS.md). The implicit answer is exact up to the
+// E = k_n/(2R), ν = 0 along a lattice axis (docs/physics.md#elastic-constants). The implicit answer is exact up to the
 // regularising shift (1e-12) and round-off: tolerance 0.5% (issue 5), met by ~1e-10.
 TEST(ImplicitLattice, SimpleCubicNormalBondsHasKnOver2R) {
   for (bool shear : {false, true}) {

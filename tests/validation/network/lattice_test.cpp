@@ -1,4 +1,4 @@
-// Effective conductivity of lattices against closed forms (PHYSICS.md, "Resistor networks").
+// Effective conductivity of lattices against closed forms (docs/physics.md#resistor-networks).
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -1,4 +1,4 @@
-// Bond percolation on the simple cubic lattice (PHYSICS.md): threshold p_c = 0.2488 and the
+// Bond percolation on the simple cubic lattice (docs/physics.md#percolation): threshold p_c = 0.2488 and the
 // conductivity exponent t ≈ 2.0, σ ∝ (p − p_c)^t. Small lattices and few replicas keep it fast;
 // the tolerances below come from the statistics of those choices.
 #include <gtest/gtest.h>
