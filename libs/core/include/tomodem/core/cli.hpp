@@ -1,5 +1,5 @@
 #pragma once
-// Command-line pieces every tomodem tool shares (CONVENTIONS.md): --version, and a parse step
+// Command-line pieces every tomodem tool shares (docs/architecture.md#conventions): --version, and a parse step
 // that maps CLI11's outcomes onto the documented exit codes. CLI11 is header-only and every
 // tool includes it anyway; the libraries never do.
 #include <CLI/CLI.hpp>

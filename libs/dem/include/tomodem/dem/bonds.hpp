@@ -20,7 +20,7 @@ enum class BondFailure { none, stress, lefm };
 struct BondLaw {
   double E_star = 0, G_star = 0;      ///< Pa, from the materials
   /// Large-neck corrections g = 1 + c (a/R)², R = 2R_iR_j/(R_i+R_j); the defaults pass through
-  /// g_n = 2 and g_t = 1.3 at a/R = 0.5 (ν = 0.2, PHYSICS.md; the exact interpolation of
+  /// g_n = 2 and g_t = 1.3 at a/R = 0.5 (ν = 0.2, docs/physics.md#bond-stiffness; the exact interpolation of
   /// Jauffrès et al. 2012 is not verified here: set c = 0 to use the small-neck limit).
   double g_n_coefficient = 4.0, g_t_coefficient = 1.2;
   double damping_ratio = 0;           ///< ζ of normal and tangential bond dashpots
@@ -30,7 +30,7 @@ struct BondLaw {
   double friction = 0;                ///< Coulomb μ between the faces of a broken bond
 };
 
-/// Stiffnesses of one bond (PHYSICS.md, bonded-particle model); shared by the DEM bond loop and
+/// Stiffnesses of one bond (docs/physics.md#bonded-particles); shared by the DEM bond loop and
 /// the stiffness matrix of libs/mechanics, so both use one formula.
 struct BondStiffness {
   double kn, kt, ktwist, kbend, gn, gt;

@@ -1,5 +1,5 @@
 #pragma once
-// Segmentation building blocks as free functions over tomodem::image grids (STYLE.md P7).
+// Segmentation building blocks as free functions over tomodem::image grids (docs/architecture.md#code-conventions, P7).
 // Lengths are in voxels unless a name says otherwise; all filters are 3-D and use OpenMP/ITK threads.
 #include <string>
 #include <vector>

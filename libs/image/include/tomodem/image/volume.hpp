@@ -1,5 +1,5 @@
 #pragma once
-// Volumes as plain tomodem types (no ITK/OpenCV/OpenVDB here: STYLE.md P7).
+// Volumes as plain tomodem types (no ITK/OpenCV/OpenVDB here: docs/architecture.md#code-conventions, P7).
 // Index order: x fastest, then y, then z (ITK, MetaImage, TIFF stacks with z = slice);
 // HDF5 datasets are (z, y, x). Physical position of voxel (i,j,k) = origin + (i,j,k)*spacing,
 // in metres (ITK convention: the origin is the centre of the first voxel).

@@ -47,7 +47,7 @@ struct FractureSample {
 /// crack longer than the sample, no intact bond across the crack path, grips not connected.
 FractureSample make_sample(const Network& net, const CrackOptions& o, const std::string& file = "");
 
-/// Geometry factor Y(a/W) of PHYSICS.md (Tada, Paris & Irwin): centre crack sqrt(sec(π a/W)),
+/// Geometry factor Y(a/W) of docs/physics.md#fracture-toughness (Tada, Paris & Irwin): centre crack sqrt(sec(π a/W)),
 /// edge notch 1.12 − 0.231 α + 10.55 α² − 21.72 α³ + 30.39 α⁴.
 double geometry_factor(const std::string& geometry, double a_over_w);
 /// d ln(K)/d a at fixed stress (for the crack-length uncertainty of K_IC).

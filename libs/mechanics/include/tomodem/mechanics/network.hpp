@@ -37,7 +37,7 @@ struct LawOptions {
   bool shear = true;             ///< false: normal bonds (G* = 0: no shear force, no twist)
   double damping_ratio = 0;      ///< ζ of the bond dashpots (explicit runs)
 };
-/// One law per phase pair (n×n): 1/E* = Σ(1−ν²)/E, 1/G* = Σ(2−ν)/G (PHYSICS.md). Materials must
+/// One law per phase pair (n×n): 1/E* = Σ(1−ν²)/E, 1/G* = Σ(2−ν)/G (docs/physics.md#notation). Materials must
 /// be present with E > 0, −1 < ν < 0.5 and, when `need_density`, density > 0: InputError
 /// naming the file, the material and the value otherwise.
 std::vector<dem::BondLaw> bond_laws(const Packing& p, const std::string& file, const LawOptions& o,

@@ -1,7 +1,7 @@
 #pragma once
 // The resistor network of a packing: nodes are the particles of the conducting phases, edges are
 // intact bonds (radius a_b) and contacts (contact radius a) with the Holm constriction
-// conductance (PHYSICS.md, "Resistor networks"):
+// conductance (docs/physics.md#resistor-networks):
 //   R_ij = 1/(4 σ_i a) + 1/(4 σ_j a)      (one half-space constriction per side, in series)
 #include <array>
 #include <cstdint>
@@ -15,7 +15,7 @@ namespace tomodem::network {
 
 enum class ContactRadius {
   geometric,  ///< radius of the circle where the two spheres intersect
-  hertz,      ///< a = sqrt(R* δ) (Hertz, PHYSICS.md): √2 smaller than geometric for small δ
+  hertz,      ///< a = sqrt(R* δ) (Hertz, docs/physics.md#resistor-networks): √2 smaller than geometric for small δ
   hertz_force,  ///< a = (3 F R* / 4 E*)^(1/3) from the packing's contact forces (/contacts/normal_force)
 };
 ContactRadius parse_contact_radius(const std::string& name);  ///< "geometric" | "hertz" | "hertz-force"
