@@ -3,7 +3,13 @@
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Interpolation.h>
 
+#include <sys/resource.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <csignal>
+#include <cstdio>
 
 #include <algorithm>
 #include <cerrno>
@@ -130,6 +136,47 @@ class TableOfContents final : public openvdb::io::Archive {
   std::string path_;
 };
 
+// A grid whose bytes are damaged (not cut: the table of contents is intact) can crash OpenVDB
+// while it reads the tree (SIGSEGV, a failed free) or make it allocate without bound. So the grid
+// is read once in a child process, with the machine's memory as its address-space limit and a
+// time limit; only when the child read it cleanly does this process read it. OpenVDB's own
+// exceptions are left to the real read, which reports them.
+void trial_read(const std::string& path, const std::string& name) {
+  std::fflush(nullptr);
+  const pid_t pid = ::fork();
+  if (pid < 0) return;  // no child: read as before
+  if (pid == 0) {
+    rlimit lim{};
+    lim.rlim_cur = lim.rlim_max = rlim_t(usable_memory_bytes());
+    ::setrlimit(RLIMIT_AS, &lim);
+    ::alarm(300);
+    int code = 0;
+    try {
+      openvdb::io::File f(path);
+      f.open(false);  // no delayed loading: every leaf buffer is read now
+      f.readGrid(name);
+      f.close();
+    } catch (const std::bad_alloc&) {
+      code = 4;
+    } catch (...) {
+    }
+    ::_exit(code);
+  }
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  const std::string grid = "grid '" + name + "'";
+  if (WIFSIGNALED(status)) {
+    const int sig = WTERMSIG(status);
+    throw InputError(path, grid, "", sig == SIGALRM ? "reading the grid did not finish within 300 s: the file is corrupt"
+                                                    : "the grid is corrupt: reading it crashed OpenVDB (" +
+                                                          std::string(::strsignal(sig)) + ")");
+  }
+  if (WIFEXITED(status) && WEXITSTATUS(status) == 4)
+    throw InputError(path, grid, "", "the grid is corrupt: reading it would need more memory than this machine has (" +
+                                         bytes_text(double(usable_memory_bytes())) + ")");
+}
+
 double unit_from_metadata(const openvdb::GridBase& g, const std::string& path) {
   if (auto m = g.getMetadata<openvdb::DoubleMetadata>("metres_per_unit")) return m->value();
   if (auto m = g.getMetadata<openvdb::FloatMetadata>("metres_per_unit")) return double(m->value());
@@ -153,7 +200,7 @@ std::unique_ptr<Macropores> load_level_set(const std::string& path, const std::s
   TableOfContents(path).check();
   openvdb::io::File file(path);
   try {
-    file.open();
+    file.open(false);  // no delayed loading: the whole grid is read (and checked) here, not while sampling
   } catch (const std::exception& e) {
     throw InputError(path, "", "", std::string("cannot open as an OpenVDB file: ") + e.what());
   }
@@ -167,6 +214,7 @@ std::unique_ptr<Macropores> load_level_set(const std::string& path, const std::s
     if (const auto bytes = head->getMetadata<openvdb::Int64Metadata>(openvdb::GridBase::META_FILE_MEM_BYTES))
       check_memory_request(double(bytes->value()), path, "grid '" + n + "'", std::to_string(bytes->value()) + " bytes",
                            "the level set '" + n + "' (its file_mem_bytes metadata)");
+    trial_read(path, n);
     try {
       return openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid(n));
     } catch (const openvdb::Exception& e) {

@@ -46,6 +46,14 @@ void make_inputs(const fs::path& d) {
   cut_copy(d / "pores.vdb", d / "half.vdb", 0.5);
   cut_copy(d / "pores.vdb", d / "cut90.vdb", 0.9);
   random_bytes(d / "random.vdb", 8192);
+  {
+    // Damaged, not cut: 64 bytes of the compressed leaf data overwritten (the table of contents
+    // stays intact). OpenVDB's delayed loading crashed on such files (SIGSEGV) while sampling.
+    std::string v = slurp(d / "pores.vdb");
+    for (const double at : {0.6, 0.75})
+      for (std::size_t k = 0; k < 64; ++k) v[std::size_t(at * double(v.size())) + k] = char(0xff);
+    spit(d / "damaged.vdb", v);
+  }
   spit(d / "empty.vdb", "");
   spit(d / "text.vdb", "macropores: a sphere of radius 8 voxels\n");
   write_icosphere_off((d / "pore.off").string(), ph.macropore_centres[0], 8e-5, 2);
@@ -80,6 +88,7 @@ const std::vector<Case> kCases = {
     // ---- level sets: cut, random, empty, text (the cut ones used to hang)
     {"vdb_cut_in_half", "carve", G + " --level-set {D}/half.vdb" + O, 2, {"half.vdb", "truncated"}},
     {"vdb_cut_at_90_percent", "carve", G + " --level-set {D}/cut90.vdb" + O, 2, {"cut90.vdb", "truncated"}},
+    {"vdb_damaged_leaf_data", "carve", G + " --level-set {D}/damaged.vdb" + O, 2, {"damaged.vdb", "grid 'macropores'"}},
     {"vdb_random_bytes", "carve", G + " --level-set {D}/random.vdb" + O, 2, {"random.vdb"}},
     {"vdb_empty_file", "carve", G + " --level-set {D}/empty.vdb" + O, 2, {"empty.vdb"}},
     {"vdb_text_file", "carve", G + " --level-set {D}/text.vdb" + O, 2, {"text.vdb"}},

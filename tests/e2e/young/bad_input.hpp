@@ -127,6 +127,7 @@ inline void run_case(const Case& c, const fs::path& inputs) {
   const std::string msg = slurp(err);
   ASSERT_TRUE(WIFEXITED(st)) << cmd << "\nended by a signal\n" << msg;
   EXPECT_NE(WEXITSTATUS(st), 124) << cmd << "\ndid not finish within 120 s\n" << msg;
+  EXPECT_LE(WEXITSTATUS(st), 128) << cmd << "\nkilled by signal " << WEXITSTATUS(st) - 128 << "\n" << msg;
   EXPECT_EQ(WEXITSTATUS(st), c.code) << cmd << "\n" << msg;
   for (const auto& n : c.names) EXPECT_NE(msg.find(n), std::string::npos) << "stderr lacks '" << n << "':\n" << msg;
   const auto after = snapshot(work);
