@@ -215,7 +215,8 @@ MetaHeader parse_meta(const std::string& path) {
 }
 
 // Bytes that inflate from `len` bytes of `path` at `off` (zlib or gzip); *complete: the stream ended.
-std::uint64_t inflated_size(const std::string& path, std::uint64_t off, std::uint64_t len, bool* complete, bool* corrupt) {
+std::uint64_t inflated_size(const std::string& path, std::uint64_t off, std::uint64_t len, bool* complete, bool* corrupt,
+                            std::vector<unsigned char>* head = nullptr, std::size_t head_bytes = 0) {
   std::ifstream in(path, std::ios::binary);
   in.seekg(static_cast<std::streamoff>(off));
   z_stream s{};
@@ -236,7 +237,10 @@ std::uint64_t inflated_size(const std::string& path, std::uint64_t off, std::uin
       s.avail_out = unsigned(ob.size());
       rc = inflate(&s, Z_NO_FLUSH);
       if (rc == Z_DATA_ERROR || rc == Z_NEED_DICT || rc == Z_MEM_ERROR) { *corrupt = true; inflateEnd(&s); return out; }
-      out += ob.size() - s.avail_out;
+      const std::size_t produced = ob.size() - s.avail_out;
+      if (head && head->size() < head_bytes)
+        head->insert(head->end(), ob.begin(), ob.begin() + std::ptrdiff_t(std::min(produced, head_bytes - head->size())));
+      out += produced;
     } while (s.avail_out == 0 && rc != Z_STREAM_END);
   }
   *complete = rc == Z_STREAM_END;
@@ -284,6 +288,50 @@ std::string check_metaimage(const std::string& path, std::uint64_t needed, const
                          (corrupt ? "fails to inflate after " + num(n) + " bytes" : complete ? "ends early" : "is cut short") +
                          "; the header's " + need);
   return local ? "" : data;
+}
+
+void check_nifti(const std::string& path, std::uint64_t needed, const std::string& dims_text) {
+  const std::string l = lower(path);
+  const bool gz = l.size() > 3 && l.compare(l.size() - 3, 3, ".gz") == 0;
+  std::vector<unsigned char> head;
+  std::uint64_t total = 0;
+  bool complete = true, corrupt = false;
+  if (gz) {
+    total = inflated_size(path, 0, file_size_of(path), &complete, &corrupt, &head, 544);
+  } else {
+    total = file_size_of(path);
+    std::ifstream in(path, std::ios::binary);
+    head.resize(std::size_t(std::min<std::uint64_t>(544, total)));
+    in.read(reinterpret_cast<char*>(head.data()), std::streamsize(head.size()));
+  }
+  if (head.size() < 348) return;  // ITK says what is wrong with the header
+  const auto le = [&](std::size_t at, std::size_t n, bool swap) {
+    std::uint64_t v = 0;
+    for (std::size_t i = 0; i < n; ++i) v |= std::uint64_t(head[at + (swap ? n - 1 - i : i)]) << (8 * i);
+    return v;
+  };
+  bool swap = false;
+  std::uint64_t sizeof_hdr = le(0, 4, false);
+  if (sizeof_hdr != 348 && sizeof_hdr != 540) { swap = true; sizeof_hdr = le(0, 4, true); }
+  double vox_offset = 0;
+  if (sizeof_hdr == 348) {
+    const auto bits = std::uint32_t(le(108, 4, swap));
+    float f;
+    std::memcpy(&f, &bits, 4);
+    vox_offset = f;
+  } else if (sizeof_hdr == 540 && head.size() >= 176) {
+    vox_offset = double(le(168, 8, swap));
+  } else {
+    return;
+  }
+  if (!(vox_offset >= 0)) vox_offset = 0;
+  const std::uint64_t off = std::uint64_t(vox_offset);
+  const std::uint64_t have = total > off ? total - off : 0;
+  if (corrupt || !complete || have < needed)
+    throw InputError(path, "data", num(have) + " bytes" + (gz ? " inflated" : ""),
+                     std::string(corrupt ? "corrupt" : "truncated") + ": the header's dims " + dims_text + " need " +
+                         num(needed) + " bytes of data after vox_offset " + num(off) +
+                         (gz && !complete ? "; the compressed stream is cut short" : ""));
 }
 
 }  // namespace tomodem::image::checks

@@ -25,4 +25,8 @@ std::string check_metaimage(const std::string& path, std::uint64_t needed, const
 /// The data file a MetaImage header names ("" for LOCAL, LIST or a pattern).
 std::string metaimage_data_file(const std::string& path);
 
+/// NIfTI-1/2 (.nii, .nii.gz): refuses data shorter than vox_offset + `needed` bytes (ITK reads a
+/// truncated NIfTI without an error), and a gzip stream that is cut short or corrupt.
+void check_nifti(const std::string& path, std::uint64_t needed, const std::string& dims_text);
+
 }  // namespace tomodem::image::checks

@@ -134,6 +134,12 @@ Volume read_file(const std::string& path, ReadInfo* info) {
                      "the TIFF reader sees " + std::to_string(io->GetDimensions(2)) + " of the file's " + std::to_string(pages) + " pages");
   // A MetaImage whose data is shorter than its header says is read by ITK without an error.
   if (is_meta_name(path)) checks::check_metaimage(path, io->GetImageSizeInBytes(), dims_text(io));
+  {  // and so is a truncated NIfTI
+    std::string l = path;
+    for (auto& c : l) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (l.size() > 4 && (l.compare(l.size() - 4, 4, ".nii") == 0 || (l.size() > 7 && l.compare(l.size() - 7, 7, ".nii.gz") == 0)))
+      checks::check_nifti(path, io->GetImageSizeInBytes(), dims_text(io));
+  }
   if (info) info->pixel_type = component_name(io);
   // Read in slabs of about 64 MiB of float straight into the volume: where the ImageIO can stream
   // (uncompressed MetaImage, NRRD, NIfTI, TIFF strips) no second full-size copy is made and the

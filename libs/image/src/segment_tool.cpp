@@ -105,13 +105,15 @@ void check_segment_options(const SegmentConfig& c) {
     throw InputError("", "--mha", c.mha, "MetaImage output needs a .mha or .mhd name");
 }
 
-// Memory per voxel of the volume after --roi/--downsample, measured as peak RSS over 64^3..192^3
-// phantoms (docs/segment.md, "Memory"): grey volume, filter copies, masks, distance maps, labels.
+// Memory per voxel of the volume after --roi/--downsample: peak RSS above the bare process for a
+// 128^3 phantom on one thread, plus 10-20 %: 10 B/voxel measured for the default pipeline (grey,
+// masks, distance map, macropore labels), 16 with a Gaussian filter, 42 with --grains, 27 with
+// --vdb, 58 with all three. The reader's own buffers (HDF5: 8 B/voxel) are counted by read_volume.
 double segment_bytes_per_voxel(const SegmentConfig& c) {
-  double b = 24;                                        // grey + masks + distance map + macropore labels
-  if (c.filter == "gaussian" || c.filter == "cad" || c.filter == "nlm") b += 12;  // ITK images in and out
-  if (c.grains) b += 28;                                // Maurer distance, markers, watershed, grain labels
-  if (!c.vdb.empty()) b += 12;                          // smoothed indicator for the level set
+  double b = 12;
+  if (c.filter == "gaussian" || c.filter == "cad" || c.filter == "nlm") b += 8;  // ITK images in and out
+  if (c.grains) b += 32;                                                        // Maurer distance, markers, watershed, labels
+  if (!c.vdb.empty()) b += 18;                                                  // smoothed indicator, fog and level-set grids
   return b;
 }
 
