@@ -41,6 +41,7 @@ int main(int argc, char** argv) {
     app.add_flag("-q,--quiet", quiet, "no progress messages");
     tomodem::cli::add_version(app, "tomodem-phantom");
     if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
+    o.as_written = tomodem::image::options_as_written(app);
     o.macropores_auto = macropores->count() == 0;
     tomodem::set_quiet(quiet);
     if (threads < 0) throw tomodem::InputError("", "--threads", std::to_string(threads), "must be >= 0");

@@ -61,6 +61,7 @@ int main(int argc, char** argv) {
     app.add_flag("-q,--quiet", quiet, "no progress messages");
     tomodem::cli::add_version(app, "tomodem-segment");
     if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
+    c.as_written = tomodem::image::options_as_written(app);
     tomodem::set_quiet(quiet);
     if (threads < 0) throw tomodem::InputError("", "--threads", std::to_string(threads), "must be >= 0");
     tomodem::image::set_threads(threads);

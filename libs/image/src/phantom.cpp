@@ -64,7 +64,10 @@ void pores_kind(const PhantomOptions& o, std::mt19937_64& rng, Phantom& P) {
   if (fine.size() < n_fine) {
     std::ostringstream got;
     got << double(fine.size()) * fine_vol / (n * n * n);
-    throw InputError("", "--fine-porosity", [&] { std::ostringstream t; t << o.fine_porosity; return t.str(); }(),
+    const auto w = o.as_written.find("--fine-porosity");
+    std::ostringstream t;
+    t << o.fine_porosity;
+    throw InputError("", "--fine-porosity", w != o.as_written.end() ? w->second : t.str(),
                      "only " + std::to_string(fine.size()) + " of the " + std::to_string(n_fine) +
                          " fine pores fit between the macropores (fine porosity " + got.str() + "); give a smaller value");
   }
@@ -204,14 +207,18 @@ void check_phantom_options(const PhantomOptions& o) {
     s << x;
     return s.str();
   };
+  const auto as_written = [&](const char* option, double x) {  // the value as the user typed it
+    const auto it = o.as_written.find(option);
+    return it != o.as_written.end() ? it->second : text(x);
+  };
   const auto finite_in = [&](const char* option, double x, double lo, double hi, const std::string& what) {
-    if (!std::isfinite(x) || x < lo || x > hi) throw InputError("", option, text(x), what);
+    if (!std::isfinite(x) || x < lo || x > hi) throw InputError("", option, as_written(option, x), what);
   };
   if (o.kind != "pores" && o.kind != "lamellae" && o.kind != "sphere" && o.kind != "packing")
     throw InputError("", "--kind", o.kind, "expected pores, lamellae, sphere or packing");
   if (o.n < 16 || o.n > 2048) throw InputError("", "--size", std::to_string(o.n), "must be in [16, 2048] (voxels)");
   if (!std::isfinite(o.voxel) || !(o.voxel > 0) || o.voxel > 1)
-    throw InputError("", "--voxel", text(o.voxel), "must be finite, > 0 and <= 1 (m)");
+    throw InputError("", "--voxel", as_written("--voxel", o.voxel), "must be finite, > 0 and <= 1 (m)");
   finite_in("--snr", o.snr, 0, 1e6, "must be finite and >= 0 (0: no noise)");
   finite_in("--blur", o.blur, 0, double(o.n) / 4, "must be finite, >= 0 and <= size/4 (voxels; 0: none)");
   finite_in("--rings", o.rings, 0, 1, "must be finite and in [0, 1] (fraction of the contrast)");
@@ -223,7 +230,7 @@ void check_phantom_options(const PhantomOptions& o) {
     throw InputError("", "--grains", std::to_string(o.n_grains), "must be an integer in [1, 100000]");
   if (!std::isfinite(o.sphere_radius) || !(o.sphere_radius > 0) ||
       (o.kind == "sphere" && o.sphere_radius > double(o.n) / 2 - 1))
-    throw InputError("", "--sphere-radius", text(o.sphere_radius),
+    throw InputError("", "--sphere-radius", as_written("--sphere-radius", o.sphere_radius),
                      "must be finite, > 0 and at most size/2 - 1 = " + text(double(o.n) / 2 - 1) + " voxels");
   for (double x : {o.macro_radius_min, o.macro_radius_max, o.fine_radius, o.grain_radius_min, o.grain_radius_max,
                    o.pore_value, o.solid_value})

@@ -75,6 +75,13 @@ std::string num_text(double x) {
 
 // Every option of tomodem-segment on its own, before anything is read (a typo costs nothing).
 void check_segment_options(const SegmentConfig& c) {
+  const auto num_text = [&c](double x, const char* option = nullptr) {  // as typed, where known
+    if (option) {
+      const auto it = c.as_written.find(option);
+      if (it != c.as_written.end() && it->second.find(',') == std::string::npos) return it->second;
+    }
+    return tomodem::image::num_text(x);
+  };
   static const char* filters[] = {"none", "median", "gaussian", "cad", "nlm"};
   if (std::find(std::begin(filters), std::end(filters), c.filter) == std::end(filters))
     throw InputError("", "--filter", c.filter, "expected none, median, gaussian, cad or nlm");
@@ -83,23 +90,28 @@ void check_segment_options(const SegmentConfig& c) {
     throw InputError("", "--method", c.method, "expected otsu, peaks, intermeans, multiotsu2, multiotsu3, manual or hysteresis");
   if (c.filter_radius < 1 || c.filter_radius > 10)
     throw InputError("", "--filter-radius", std::to_string(c.filter_radius), "must be an integer in [1, 10] (voxels)");
-  if (!finite_pos(c.sigma) || c.sigma > 100) throw InputError("", "--sigma", num_text(c.sigma), "must be finite, > 0 and <= 100 (voxels)");
+  if (!finite_pos(c.sigma) || c.sigma > 100) throw InputError("", "--sigma", num_text(c.sigma, "--sigma"), "must be finite, > 0 and <= 100 (voxels)");
   if (c.iterations < 1 || c.iterations > 1000)
     throw InputError("", "--iterations", std::to_string(c.iterations), "must be an integer in [1, 1000]");
-  if (!finite_pos(c.conductance)) throw InputError("", "--conductance", num_text(c.conductance), "must be finite and > 0");
+  if (!finite_pos(c.conductance)) throw InputError("", "--conductance", num_text(c.conductance, "--conductance"), "must be finite and > 0");
   for (double l : c.levels)
-    if (!std::isfinite(l)) throw InputError("", "--levels", num_text(l), "thresholds must be finite grey values");
+    if (!std::isfinite(l))
+      throw InputError("", "--levels", c.as_written.count("--levels") ? c.as_written.at("--levels") : num_text(l),
+                       "thresholds must be finite grey values");
   if (c.method == "manual" && (c.levels.empty() || c.levels.size() > 2))
     throw InputError("", "--levels", std::to_string(c.levels.size()) + " values", "manual thresholding needs one or two --levels");
   if (c.method == "hysteresis" && c.levels.size() != 2)
     throw InputError("", "--levels", std::to_string(c.levels.size()) + " values", "hysteresis needs --levels LOW,HIGH");
   if (!c.levels.empty() && c.method != "manual" && c.method != "hysteresis")
     throw InputError("", "--levels", num_text(c.levels[0]), "--levels is used by --method manual or hysteresis only, not " + c.method);
-  if (!finite_nonneg(c.open_r)) throw InputError("", "--open", num_text(c.open_r), "must be finite and >= 0 (voxels; 0: none)");
-  if (!finite_nonneg(c.close_r)) throw InputError("", "--close", num_text(c.close_r), "must be finite and >= 0 (voxels; 0: none)");
+  if (!finite_nonneg(c.open_r)) throw InputError("", "--open", num_text(c.open_r, "--open"), "must be finite and >= 0 (voxels; 0: none)");
+  if (!finite_nonneg(c.close_r)) throw InputError("", "--close", num_text(c.close_r, "--close"), "must be finite and >= 0 (voxels; 0: none)");
   if (c.connectivity != 6 && c.connectivity != 26)
     throw InputError("", "--connectivity", std::to_string(c.connectivity), "expected 6 or 26");
-  if (!finite_pos(c.h)) throw InputError("", "--h", num_text(c.h), "must be finite and > 0 (voxels)");
+  if (!finite_pos(c.read.header_unit))
+    throw InputError("", "--header-unit", num_text(c.read.header_unit, "--header-unit"),
+                     "must be finite and > 0 (metres per header unit, e.g. 0.001)");
+  if (!finite_pos(c.h)) throw InputError("", "--h", num_text(c.h, "--h"), "must be finite and > 0 (voxels)");
   parse_length("--macropore-radius", c.macro_radius_text);
   if (!c.mha.empty() && !(c.mha.size() > 4 && (c.mha.substr(c.mha.size() - 4) == ".mha" || c.mha.substr(c.mha.size() - 4) == ".mhd")))
     throw InputError("", "--mha", c.mha, "MetaImage output needs a .mha or .mhd name");

@@ -1,6 +1,7 @@
 #pragma once
 // Synthetic volumes with ground truth (docs/segment.md, "Phantoms").
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -33,6 +34,8 @@ struct PhantomOptions {
   double sphere_radius = 15.3;
   // intensities (before blur and noise)
   double pore_value = 10000, solid_value = 30000;
+  /// Option values as the user typed them ("--voxel" -> "-1e-5"), for messages that echo them.
+  std::map<std::string, std::string> as_written;
 };
 
 /// Truth labels: 0 solid, 1 fine pore, 2 macropore (pores, lamellae, sphere); for packing:

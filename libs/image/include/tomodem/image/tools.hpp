@@ -1,11 +1,25 @@
 #pragma once
 // The two tools' configurations and drivers (tools/segment, tools/phantom stay thin).
+#include <map>
 #include <string>
 
 #include "tomodem/image/phantom.hpp"
 #include "tomodem/image/volume.hpp"
 
 namespace tomodem::image {
+
+/// Every option given on the command line, as typed (long name -> values joined by ',').
+template <class App>
+std::map<std::string, std::string> options_as_written(const App& app) {
+  std::map<std::string, std::string> m;
+  for (const auto* opt : app.get_options()) {
+    if (opt->count() == 0 || opt->get_lnames().empty()) continue;
+    std::string v;
+    for (const auto& r : opt->results()) v += (v.empty() ? "" : ",") + r;
+    m["--" + opt->get_lnames().front()] = v;
+  }
+  return m;
+}
 
 struct SegmentConfig {
   std::string input;
@@ -37,6 +51,8 @@ struct SegmentConfig {
   std::string vdb;                    ///< macropores level set
   std::string overlay;                ///< PNG prefix: <prefix>_xy.png, _xz, _yz
   std::string json;                   ///< "" or "-": stdout
+  /// Option values as the user typed them ("--sigma" -> "1e-0"), for messages that echo them.
+  std::map<std::string, std::string> as_written;
 };
 
 /// Runs the whole segmentation; returns the JSON summary (also written to cfg.json when set).
