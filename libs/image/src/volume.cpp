@@ -429,7 +429,13 @@ void write_volume(const std::string& path, const Volume& v, bool as_uint16) {
     const std::string tmpdir = temporary_path(path) + ".d";
     fs::create_directories(tmpdir);
     const std::string stem = p.stem().string();
-    itkb::write_file(tmpdir + "/" + stem + ".mhd", v, as_uint16);
+    try {
+      itkb::write_file(tmpdir + "/" + stem + ".mhd", v, as_uint16);
+    } catch (...) {
+      std::error_code ec;
+      fs::remove_all(tmpdir, ec);
+      throw;
+    }
     const fs::path dir = p.parent_path().empty() ? fs::path(".") : p.parent_path();
     fs::rename(tmpdir + "/" + stem + ".raw", dir / (stem + ".raw"));
     fs::rename(tmpdir + "/" + stem + ".mhd", path);
@@ -458,7 +464,13 @@ void write_meta(const std::string& path, const G& m) {
     const std::string tmpdir = temporary_path(path) + ".d";
     fs::create_directories(tmpdir);
     const std::string stem = p.stem().string();
-    itkb::write_file(tmpdir + "/" + stem + ".mhd", m);
+    try {
+      itkb::write_file(tmpdir + "/" + stem + ".mhd", m);
+    } catch (...) {
+      std::error_code ec;
+      fs::remove_all(tmpdir, ec);
+      throw;
+    }
     const fs::path dir = p.parent_path().empty() ? fs::path(".") : p.parent_path();
     fs::rename(tmpdir + "/" + stem + ".raw", dir / (stem + ".raw"));
     fs::rename(tmpdir + "/" + stem + ".mhd", path);

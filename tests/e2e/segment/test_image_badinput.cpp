@@ -132,6 +132,13 @@ void phantom_file(const fs::path& p, const std::string& ext, double f) {
 using Maker = std::function<void(const fs::path&)>;
 const std::map<std::string, Maker> kMakers = {
     {"mha", [](const fs::path& p) { put(p, mha()); }},
+    {"mha_nan", [](const fs::path& p) {  // float32 with a NaN at (x, y, z) = (4, 3, 2)
+       std::vector<float> f(N * N * N);
+       const auto v = volume_u8();
+       for (std::size_t i = 0; i < f.size(); ++i) f[i] = float(v[i]);
+       f[(2 * N + 3) * N + 4] = std::nanf("");
+       put(p, meta_header("16 16 16", "MET_FLOAT", "LOCAL") + std::string(reinterpret_cast<const char*>(f.data()), f.size() * 4));
+     }},
     {"mha_cut", [](const fs::path& p) { put(p, cut(mha(), 0.6)); }},  // data cut short: header + 1/2 of it
     {"mha_huge", [](const fs::path& p) { put(p, meta_header("100000 100000 100000", "MET_UCHAR", "LOCAL") + "xxxx"); }},
     {"mha_2d", [](const fs::path& p) { put(p, meta_header("16 16", "MET_UCHAR", "LOCAL") + std::string(256, 'a')); }},
@@ -213,6 +220,7 @@ const std::vector<Row> kRows = {
     {"SegTiffPagesDifferInType", "segment", "{W}/g.tif --spacing 1um", {"g.tif=tif_types"}, 2, {"g.tif", "page 6", "16 bit", "differs"}},
     {"SegTruncatedSliceInStack", "segment", "{W}/s --spacing 1um", {"s=stack", "s/slice00007.tif=tif_cut"}, 2, {"slice00007.tif", "truncated"}},
     {"SegNanVoxelInHdf5", "segment", "{W}/g.h5", {"g.h5=h5_nan"}, 2, {"g.h5", "/volume", "NaN", "[2,3,4]"}},
+    {"SegNanVoxelInMha", "segment", "{W}/g.mha", {"g.mha=mha_nan"}, 2, {"g.mha", "data", "NaN", "(4,3,2) (x,y,z)"}},
     {"SegInfVoxelInHdf5", "segment", "{W}/g.h5", {"g.h5=h5_inf"}, 2, {"g.h5", "/volume", "inf", "[2,3,4]"}},
     {"SegHdf5TwoDimensional", "segment", "{W}/g.h5", {"g.h5=h5_2d"}, 2, {"g.h5", "/volume", "2-D"}},
     {"SegHdf5MissingDataset", "segment", "{W}/g.h5 --dataset /nosuch", {"g.h5=h5"}, 2, {"g.h5", "/nosuch"}},
