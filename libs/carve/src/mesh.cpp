@@ -156,6 +156,14 @@ std::unique_ptr<Macropores> load_mesh(const std::string& path, double unit) {
   }
   if (!ok || mesh.number_of_faces() == 0)
     throw InputError(path, "", "", "cannot read a polygon mesh (STL, OFF, PLY or OBJ; empty or malformed)");
+  for (auto v : mesh.vertices()) {
+    const Point& q = mesh.point(v);
+    if (!std::isfinite(q.x()) || !std::isfinite(q.y()) || !std::isfinite(q.z())) {
+      std::ostringstream t;
+      t << q.x() << " " << q.y() << " " << q.z();
+      throw InputError(path, "vertex " + std::to_string(std::size_t(v)), t.str(), "vertex coordinates must be finite");
+    }
+  }
   if (!CGAL::is_triangle_mesh(mesh)) PMP::triangulate_faces(mesh);
   if (!CGAL::is_closed(mesh)) {
     std::size_t border = 0;

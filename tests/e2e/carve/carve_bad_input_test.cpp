@@ -38,6 +38,26 @@ void write_cube_stl(const fs::path& binary, const fs::path& ascii, double s) {
   spit(ascii, a.str());
 }
 
+// The same cube as a binary PLY whose vertex 1 has y = NaN (a float format can hold one).
+void write_nan_ply(const fs::path& p, double s) {
+  std::string b =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 8\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 12\nproperty list uchar int vertex_indices\nend_header\n";
+  const double v[8][3] = {{0, 0, 0}, {s, 0, 0}, {s, s, 0}, {0, s, 0}, {0, 0, s}, {s, 0, s}, {s, s, s}, {0, s, s}};
+  const int t[12][3] = {{0, 2, 1}, {0, 3, 2}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
+                        {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}};
+  for (int k = 0; k < 8; ++k) {
+    float q[3] = {float(v[k][0]), float(v[k][1]), float(v[k][2])};
+    if (k == 1) q[1] = NAN;
+    b.append(reinterpret_cast<const char*>(q), 12);
+  }
+  for (const auto& tri : t) {
+    b.push_back(char(3));
+    b.append(reinterpret_cast<const char*>(tri), 12);
+  }
+  spit(p, b);
+}
+
 void make_inputs(const fs::path& d) {
   const auto ph = sphere_phantom(32, 8.0);
   image::write_level_set((d / "pores.vdb").string(), macropore_mask(ph));
@@ -66,6 +86,7 @@ void make_inputs(const fs::path& d) {
     spit(d / "lie.off", off);
   }
   write_cube_stl(d / "cube.stl", d / "cube_ascii.stl", 1e-4);
+  write_nan_ply(d / "nan_vertex.ply", 1e-4);
   cut_copy(d / "cube.stl", d / "cut.stl", 0.6);
   cut_copy(d / "cube_ascii.stl", d / "cut_ascii.stl", 0.6);
   write_damaged(d / "cell_zero.h5", green, [](h5::File& f) { f.write("/cell/h", std::vector<double>(9, 0.0), {3, 3}); });
@@ -98,6 +119,7 @@ const std::vector<Case> kCases = {
     {"stl_ascii_cut", "carve", G + " --mesh {D}/cut_ascii.stl" + O, 2, {"cut_ascii.stl", "endsolid"}},
     {"off_header_claims_1e9_faces", "carve", G + " --mesh {D}/lie.off" + O, 2, {"lie.off", "1000000000"}},
     {"off_cut", "carve", G + " --mesh {D}/cut.off" + O, 2, {"cut.off"}},
+    {"ply_nan_vertex", "carve", G + " --mesh {D}/nan_vertex.ply" + O, 2, {"nan_vertex.ply", "vertex 1", "nan", "finite"}},
     {"off_open_mesh", "carve", G + " --mesh {D}/open.off" + O, 2, {"open.off", "open"}},
     // ---- packings
     {"packing_zero_cell", "carve", "{D}/cell_zero.h5" + V + O, 2, {"cell_zero.h5", "/cell/h"}},
