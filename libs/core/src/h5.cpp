@@ -23,6 +23,16 @@ namespace tomodem::h5 {
 
 namespace {
 
+// HDF5 closes every file still open again in its atexit handler. After a close that failed (a
+// full disk, a file-size limit) HDF5 1.10 crashes there (SIGSEGV in H5F__close_cb), which turned
+// an honest "cannot write" (exit 1) into a signal. Every File closes itself (close() or its
+// destructor), so the handler is not needed; H5dont_atexit only works before the library starts,
+// hence a static initializer.
+const bool kNoAtexitHandler = [] {
+  H5dont_atexit();
+  return true;
+}();
+
 // HDF5 keeps the automatic printer per thread in thread-safe builds, so install it once per thread.
 void silence() {
   thread_local bool done = false;

@@ -93,4 +93,19 @@ TEST(ConductBadInputControl, TheValidInputRuns) {
   EXPECT_EQ(std::system(cmd.c_str()), 0);
 }
 
+// A full disk while tomodem-conduct writes its fields: exit 1, the previous fields file kept, no
+// temporary left (the close of the HDF5 file was not checked).
+TEST(ConductBadInputFullDisk, FieldsWriteFailsAndKeepsThePreviousOutput) {
+  const fs::path d = fs::temp_directory_path() / ("tomodem-bad-fulldisk-" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  fs::copy(inputs().dir(), d, fs::copy_options::recursive);
+  spit(d / "f.h5", "previous fields\n");
+  const auto before = snapshot(d);
+  const auto [code, err] = run_with_full_disk("conduct", "lattice.h5 -o f.h5 -q", d, 8);
+  EXPECT_EQ(code, 1) << err;
+  EXPECT_NE(err.find("f.h5"), std::string::npos) << err;
+  EXPECT_EQ(snapshot(d), before) << "an output changed or a temporary was left:\n" << err;
+  fs::remove_all(d);
+}
+
 }  // namespace

@@ -142,6 +142,21 @@ inline void run_case(const Case& c, const fs::path& inputs) {
   fs::remove(err);
 }
 
+/// Runs `tomodem-<tool> args` in `dir` with a file-size limit of `limit_kb` KiB and SIGXFSZ
+/// ignored, so that writes past the limit fail with EFBIG as on a full disk. Returns the exit
+/// code and stderr.
+inline std::pair<int, std::string> run_with_full_disk(const std::string& tool, const std::string& args,
+                                                      const fs::path& dir, int limit_kb) {
+  const fs::path err = dir.string() + ".stderr";
+  const std::string cmd = "cd '" + dir.string() + "' && OMP_NUM_THREADS=1 bash -c \"trap '' XFSZ; ulimit -f " +
+                          std::to_string(limit_kb) + "; exec " + std::string(TOMODEM_BIN_DIR) + "/tomodem-" + tool +
+                          " " + args + "\" > /dev/null 2> '" + err.string() + "'";
+  const int st = std::system(cmd.c_str());
+  const std::string msg = slurp(err);
+  fs::remove(err);
+  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, msg};
+}
+
 /// A folder of prepared inputs, made once per test program by `make` and removed at exit.
 class InputCache {
  public:

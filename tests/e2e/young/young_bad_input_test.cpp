@@ -173,4 +173,21 @@ TEST(YoungBadInputControl, TheValidInputsRun) {
   fs::remove_all(d);
 }
 
+// A full disk while tomodem-bond writes its network: exit 1 naming the file, the previous output
+// and its sidecar unchanged, no temporary left. The close of the HDF5 file was not checked, so
+// the cut file replaced the old one with exit 0.
+TEST(YoungBadInputFullDisk, BondWriteFailsAndKeepsThePreviousOutput) {
+  const fs::path d = fs::temp_directory_path() / ("tomodem-bad-fulldisk-" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  fs::copy(inputs().dir(), d, fs::copy_options::recursive);
+  fs::copy_file(d / "bonded.h5", d / "out.h5");
+  spit(d / "out.xdmf", "<old sidecar/>\n");
+  const auto before = snapshot(d);
+  const auto [code, err] = run_with_full_disk("bond", "lattice.h5 -o out.h5 --rule ratio --gap-tolerance 1e-6 -q", d, 8);
+  EXPECT_EQ(code, 1) << err;
+  EXPECT_NE(err.find("out.h5"), std::string::npos) << err;
+  EXPECT_EQ(snapshot(d), before) << "an output changed or a temporary was left:\n" << err;
+  fs::remove_all(d);
+}
+
 }  // namespace
