@@ -304,7 +304,9 @@ struct Reader {
       const std::string p = "/materials/" + g;
       auto need_attr = [&](const char* a) {
         if (!f.has_attr(p, a)) bad(p + "@" + a, "", "missing material attribute");
-        return f.attr_double(p, a);
+        const double v = f.attr_double(p, a);
+        if (!std::isfinite(v)) bad(p + "@" + a, num(v), "material properties must be finite (0 when unknown)");
+        return v;
       };
       Material& m = ms[k];
       if (!f.has_attr(p, "name")) bad(p + "@name", "", "missing material attribute");

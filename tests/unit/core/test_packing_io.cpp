@@ -415,6 +415,13 @@ TEST_F(PackingIo, BadBondValuesNameTheFirstBadRow) {
   expect_input_error([&] { read_packing(path); }, path, "/bonds/i[1]", "-7");
 }
 
+TEST_F(PackingIo, NonFiniteMaterialPropertyRefused) {
+  auto path = corrupted([](File& f) { f.set_attr("/materials/1", "youngs_modulus_Pa", kNaN); });
+  expect_input_error([&] { read_packing(path); }, path, "/materials/1@youngs_modulus_Pa", "nan");
+  path = corrupted([](File& f) { f.set_attr("/materials/0", "conductivity_S_per_m", -std::numeric_limits<double>::infinity()); });
+  expect_input_error([&] { read_packing(path); }, path, "/materials/0@conductivity_S_per_m", "-inf");
+}
+
 TEST_F(PackingIo, BadContactValuesRefused) {
   auto path = corrupted([](File& f) { f.write("/contacts/overlap", std::vector<double>{kNaN, 0}); });
   expect_input_error([&] { read_packing(path); }, path, "/contacts/overlap[0]", "nan");
