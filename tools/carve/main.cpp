@@ -19,6 +19,12 @@ double length(const std::string& option, const std::string& text) {
   if (!(v > 0)) throw InputError("", option, text, "expected a length such as 1mm, 60.7um or 1e-3 (m)");
   return v;
 }
+// The value of an option as the user wrote it (several values joined by ',').
+std::string given(const CLI::App& app, const std::string& name) {
+  std::string s;
+  for (const auto& r : app.get_option(name)->results()) s += (s.empty() ? "" : ",") + r;
+  return s;
+}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -77,8 +83,8 @@ int main(int argc, char** argv) {
       o.mapping.image_box = {{image_box[0], image_box[1], image_box[2]}, {image_box[3], image_box[4], image_box[5]}};
       for (int k = 0; k < 3; ++k)
         if (!(o.mapping.image_box.hi[k] > o.mapping.image_box.lo[k]))
-          throw InputError("", "--image-box", std::to_string(image_box[k]) + "," + std::to_string(image_box[k + 3]),
-                           "each upper bound must exceed the lower one");
+          throw InputError("", "--image-box", given(app, "--image-box"),
+                           "each upper bound must exceed the lower one (X0,Y0,Z0,X1,Y1,Z1)");
     }
     if (rotate.size() == 3) o.mapping.rotation_deg = {rotate[0], rotate[1], rotate[2]};
     if (rule == "centre" || rule == "center") o.rule = carve::Rule::centre;
@@ -92,7 +98,8 @@ int main(int argc, char** argv) {
     else if (method == "sample") o.method = carve::FractionMethod::sample;
     else throw InputError("", "--fraction-method", method, "expected exact or sample");
     if (o.mapping.fit && app.count("--scale")) throw InputError("", "--fit", "", "give either --fit or --scale");
-    if (!(o.mapping.scale > 0)) throw InputError("", "--scale", std::to_string(o.mapping.scale), "must be > 0");
+    if (!(o.mapping.scale > 0))
+      throw InputError("", "--scale", given(app, "--scale"), "must be > 0 (packing length per image length)");
     if (o.threads < 0) throw InputError("", "--threads", std::to_string(o.threads), "must be >= 0");
     if (o.relax_steps < 0) throw InputError("", "--relax", std::to_string(o.relax_steps), "must be >= 0");
     const std::string summary = carve::run_carve(c);

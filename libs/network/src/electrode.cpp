@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <sstream>
 
 #include "tomodem/core/error.hpp"
 
@@ -21,7 +22,11 @@ CompositeResult solve_composite(const Packing& pk, const CompositeOptions& opt) 
     if (std::find(opt.ionic.begin(), opt.ionic.end(), e) != opt.ionic.end())
       throw InputError("", "--ionic", e, "a phase cannot be both electronic and ionic");
   if (!(opt.charge_transfer > 0 && std::isfinite(opt.charge_transfer)))
-    throw InputError("", "--charge-transfer", std::to_string(opt.charge_transfer),
+    throw InputError("", "--charge-transfer", [&] {
+      std::ostringstream t;
+      t << opt.charge_transfer;
+      return t.str();
+    }(),
                      "the charge-transfer conductance per TPB length must be positive (S/m)");
   NetworkOptions no = opt.network;
   no.phases = opt.electronic;

@@ -2,12 +2,21 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <unordered_map>
 #include <unordered_set>
 
 #include "tomodem/core/error.hpp"
 
 namespace tomodem::network {
+
+namespace {
+std::string value_text(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+}  // namespace
 
 ContactRadius parse_contact_radius(const std::string& name) {
   if (name == "geometric") return ContactRadius::geometric;
@@ -132,9 +141,9 @@ Network build_network(const Packing& pk, const NetworkOptions& opt) {
       throw InputError(src, "/materials/" + std::to_string(m) + "/conductivity_S_per_m", std::to_string(s),
                        "conducting phase '" + pk.materials[m].name + "' needs a positive, finite conductivity (S/m)");
   }
-  if (!(opt.gap_tolerance >= 0)) throw InputError("", "--gap-tolerance", std::to_string(opt.gap_tolerance), "must be >= 0");
+  if (!(opt.gap_tolerance >= 0)) throw InputError("", "--gap-tolerance", value_text(opt.gap_tolerance), "must be >= 0");
   if (!(opt.min_contact_ratio >= 0))
-    throw InputError("", "--min-contact-ratio", std::to_string(opt.min_contact_ratio), "must be >= 0");
+    throw InputError("", "--min-contact-ratio", value_text(opt.min_contact_ratio), "must be >= 0");
 
   std::vector<int32_t> node_of(n, -1);
   for (std::size_t p = 0; p < n; ++p) {

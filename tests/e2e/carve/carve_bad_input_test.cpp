@@ -134,6 +134,9 @@ const std::vector<Case> kCases = {
     {"contact_gap_negative", "carve", G + V + O + " --contact-gap -1", 2, {"--contact-gap", "-1"}},
     {"fraction_one", "carve", G + V + O + " --rule fraction --fraction 1", 2, {"--fraction", "1"}},
     {"scale_inf", "carve", G + V + O + " --scale inf", 2, {"--scale", "inf"}},
+    {"scale_negative_as_written", "carve", G + V + O + " --scale -1", 2, {"--scale", "value '-1'"}},
+    {"image_box_inverted", "carve", G + V + O + " --image-box 0,0,0,1e-4,-1e-4,1e-4", 2,
+     {"--image-box", "value '0,0,0,1e-4,-1e-4,1e-4'"}},
     // ---- outputs
     {"output_is_packing", "carve", G + V + " -o {D}/green.h5", 2, {"-o", "green.h5"}},
     {"output_is_level_set", "carve", G + V + " -o {D}/pores.vdb", 2, {"-o", "pores.vdb"}},
