@@ -266,7 +266,13 @@ File::File(const std::string& path, Mode mode) : impl_(std::make_unique<Impl>())
     if (H5Fis_hdf5(path.c_str()) <= 0)
       throw InputError(path, "", "", "not an HDF5 file (no HDF5 signature: a text file, random bytes or cut before it)");
     impl_->file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
-    if (impl_->file < 0) throw InputError(path, "", "", "cannot open: " + last_error());
+    if (impl_->file < 0) {
+      const std::string why = last_error();
+      throw InputError(path, "", "",
+                       why.find("truncated file") != std::string::npos
+                           ? "the file is cut short (an interrupted copy or write?): " + why
+                           : "cannot open: " + why);
+    }
   } else {
     impl_->file = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
     if (impl_->file < 0) throw RuntimeFailure(path + ": cannot create HDF5 file: " + last_error());

@@ -519,7 +519,7 @@ TEST_F(PackingIo, NotAPackingFileNamesTheFileAndWhy) {
   write_packing(file("whole.h5"), full_packing());
   const std::string whole = test::slurp(file("whole.h5"));
   { std::ofstream(file("half.h5"), std::ios::binary) << whole.substr(0, whole.size() / 2); }
-  expect_input_error([&] { read_packing(file("half.h5")); }, file("half.h5"), "");
+  expect_input_error([&] { read_packing(file("half.h5")); }, file("half.h5"), "", "cut short");
 }
 
 // XDMF: the sidecar names datasets that exist, with their true dimensions.
