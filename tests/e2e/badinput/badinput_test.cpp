@@ -18,6 +18,7 @@
 //   {dir:NAME}        an (empty) folder            {text:NAME}   plain text, not the expected format
 //   {bin:NAME}        binary bytes (NULs, 0xFF)    {half:NAME}   the cached NAME cut at 50 % (mid-line)
 //   {edit:NAME:FROM=>TO}  the cached NAME with the first FROM replaced by TO
+//   {link:NAME}       W/link-NAME, a symbolic link to NAME (made by another placeholder)
 //   {!KIND:NAME...}   the same, but stands for nothing (a file the input refers to)
 //   {W}               the work folder
 #include <fcntl.h>
@@ -76,6 +77,7 @@ const std::vector<Row> kRows = {
     {"pack", "{pack.yaml} -o {W}/p.h5 --no-such-option", 2, {"--no-such-option"}},
     {"pack", "{pack.yaml} -o {pack.yaml}", 2, {"-o", "pack.yaml"}},
     {"pack", "{pack.yaml} -o {W}/p.h5 --json {pack.yaml}", 2, {"--json", "pack.yaml"}},
+    {"pack", "{pack.yaml} -o {link:pack.yaml}", 2, {"-o", "link-pack.yaml"}},
     {"pack", "{pack.yaml} --no-tessellation -o {text:notadir}/p.h5", 2, {"-o", "notadir/p.h5"},
      "exit 1 after the whole packing is made: 'notadir/p.h5.tmpNNN: cannot create HDF5 file' (names the temporary; no check of -o before the work)"},
     {"pack", "{edit:pack.yaml:diameter: 5.0e-5=>diameter: .nan} -o {W}/p.h5", 2, {"pack.yaml", "diameter", "nan"}},
@@ -88,8 +90,7 @@ const std::vector<Row> kRows = {
     {"phantom", "-o {W}/g.mha --voxel nan", 2, {"--voxel", "nan"}},
     {"phantom", "-o {W}/g.mha --voxel inf", 2, {"--voxel", "inf"}},
     {"phantom", "-o {W}/g.mha --voxel 0", 2, {"--voxel", "0"}},
-    {"phantom", "-o {W}/g.mha --voxel -1e-5", 2, {"--voxel", "'-1e-5'"},
-     "the value is echoed as '-1e-05' (reformatted), not as the user wrote it"},
+    {"phantom", "-o {W}/g.mha --voxel -1e-5", 2, {"--voxel", "'-1e-5'"}},
     {"phantom", "-o {W}/g.mha --snr nan", 2, {"--snr", "nan"}},
     {"phantom", "-o {W}/g.mha --blur -1", 2, {"--blur", "-1"}},
     {"phantom", "-o {W}/g.mha --kind nosuch", 2, {"--kind", "nosuch"}},
@@ -103,6 +104,7 @@ const std::vector<Row> kRows = {
     {"phantom", "-o {W}/g.mha --kind pores --macropores -1", 2, {"--macropores", "-1"}},
     {"phantom", "-o {W}/g.mha --kind pores --fine-porosity 2", 2, {"--fine-porosity", "2"}},
     {"phantom", "-o {W}/g.h5 --truth {W}/g.h5 --size 16", 2, {"g.h5"}},
+    {"phantom", "-o {W}/g.h5 --truth {W}/./g.h5 --size 16", 2, {"--truth", "g.h5"}},
 
     // ---- tomodem-segment: volume -> labels
     {"segment", "{missing:grey.mha} -o {W}/l.h5", 2, {"grey.mha"}},
@@ -127,6 +129,7 @@ const std::vector<Row> kRows = {
     {"segment", "{grey.mha} -o {W}/l.h5 --mha {grey.mha}", 2, {"--mha", "grey.mha"}},
     {"segment", "{grey.mha} -o {grey.mha}", 2, {"-o", "grey.mha"}},
     {"segment", "{grey.mha} -o {text:notadir}/l.h5", 2, {"notadir/l.h5"}},
+    {"segment", "{grey.mha} -o {W}/l.h5 --mha {link:grey.mha}", 2, {"--mha", "link-grey.mha"}},
     {"segment", "{grey.mha} --format raw --raw-dims 100000,100000,100000 -o {W}/l.h5", 2, {"100000"}},
 
     // ---- tomodem-bond: packing -> bonded packing
@@ -149,6 +152,8 @@ const std::vector<Row> kRows = {
     {"bond", "{packing.h5} -o {packing.h5}", 2, {"-o", "packing.h5"}},
     {"bond", "{packing.h5} -o {W}/b.h5 --json {packing.h5}", 2, {"--json", "packing.h5"}},
     {"bond", "{packing.h5} -o {text:notadir}/b.h5", 2, {"notadir/b.h5"}},
+    {"bond", "{packing.h5} -o {link:packing.h5}", 2, {"-o", "link-packing.h5"}},
+    {"bond", "{packing.h5} -o {W}/./packing.h5", 2, {"-o", "packing.h5"}},
 
     // ---- tomodem-young: bonded packing -> E, nu
     {"young", "{missing:bonded.h5}", 2, {"bonded.h5"}},
@@ -171,6 +176,7 @@ const std::vector<Row> kRows = {
     {"young", "{bonded.h5} --json {bonded.h5}", 2, {"--json", "bonded.h5"}},
     {"young", "{bonded.h5} --method explicit --curve {bonded.h5}", 2, {"--curve", "bonded.h5"}},
     {"young", "{bonded.h5} --json {text:notadir}/y.json", 2, {"notadir/y.json"}},
+    {"young", "{bonded.h5} --json {W}/./bonded.h5", 2, {"--json", "bonded.h5"}},
 
     // ---- tomodem-fracture: bonded packing -> K_IC
     {"fracture", "{missing:bonded.h5}", 2, {"bonded.h5"}},
@@ -193,6 +199,7 @@ const std::vector<Row> kRows = {
     {"fracture", "{bonded.h5} --json {bonded.h5}", 2, {"--json", "bonded.h5"}},
     {"fracture", "{bonded.h5} --map {bonded.h5}", 2, {"--map", "bonded.h5"}},
     {"fracture", "{bonded.h5} --curve {text:notadir}/c.csv", 2, {"notadir/c.csv"}},
+    {"fracture", "{bonded.h5} --curve {link:bonded.h5}", 2, {"--curve", "link-bonded.h5"}},
 
     // ---- tomodem-conduct: packing -> effective conductivity
     {"conduct", "{missing:bonded.h5}", 2, {"bonded.h5"}},
@@ -214,6 +221,7 @@ const std::vector<Row> kRows = {
     {"conduct", "{bonded.h5} -o {bonded.h5}", 2, {"-o", "bonded.h5"}},
     {"conduct", "{bonded.h5} --json {bonded.h5}", 2, {"--json", "bonded.h5"}},
     {"conduct", "{bonded.h5} -o {text:notadir}/c.h5", 2, {"notadir/c.h5"}},
+    {"conduct", "{bonded.h5} --json {link:bonded.h5}", 2, {"--json", "link-bonded.h5"}},
 
     // ---- tomodem-carve: packing + macropores -> carved packing
     {"carve", "{missing:packing.h5} --level-set {pores.vdb} -o {W}/c.h5", 2, {"packing.h5"}},
@@ -230,8 +238,7 @@ const std::vector<Row> kRows = {
     {"carve", "{packing.h5} --mesh {half:pore.off} -o {W}/c.h5", 2, {"pore.off"}},
     {"carve", "{packing.h5} -o {W}/c.h5", 2, {"--level-set"}},
     {"carve", "{packing.h5} --level-set {pores.vdb} -o {W}/c.h5 --scale nan", 2, {"--scale", "nan"}},
-    {"carve", "{packing.h5} --level-set {pores.vdb} -o {W}/c.h5 --scale -1", 2, {"--scale", "'-1'"},
-     "the value is echoed as '-1.000000' (std::to_string in tools/carve/main.cpp), not as the user wrote it"},
+    {"carve", "{packing.h5} --level-set {pores.vdb} -o {W}/c.h5 --scale -1", 2, {"--scale", "'-1'"}},
     {"carve", "{packing.h5} --level-set {pores.vdb} -o {W}/c.h5 --rule fraction --fraction nan", 2, {"--fraction", "nan"}},
     {"carve", "{packing.h5} --level-set {pores.vdb} -o {W}/c.h5 --offset nan,0,0", 2, {"--offset", "nan"}},
     {"carve", "{packing.h5} --level-set {pores.vdb} -o {W}/c.h5 --image-unit -1mm", 2, {"--image-unit", "-1mm"}},
@@ -241,6 +248,7 @@ const std::vector<Row> kRows = {
     {"carve", "{packing.h5} --level-set {pores.vdb} -o {packing.h5}", 2, {"-o", "packing.h5"}},
     {"carve", "{packing.h5} --level-set {pores.vdb} -o {W}/c.h5 --json {pores.vdb}", 2, {"--json", "pores.vdb"}},
     {"carve", "{packing.h5} --level-set {pores.vdb} -o {text:notadir}/c.h5", 2, {"notadir/c.h5"}},
+    {"carve", "{packing.h5} --level-set {pores.vdb} -o {link:pores.vdb}", 2, {"-o", "link-pores.vdb"}},
 
     // ---- tomodem-dem: scene YAML -> packing, series
     {"dem", "{missing:scene.yaml} -o {W}/out", 2, {"scene.yaml"}},
@@ -259,6 +267,10 @@ const std::vector<Row> kRows = {
     {"dem", "{scene_file.yaml} {!half:packing.h5} -o {W}/out", 2, {"packing.h5"}},
     {"dem", "{scene_file.yaml} {!text:packing.h5} -o {W}/out", 2, {"packing.h5"}},
     {"dem", "{edit:scene.yaml:packing: out.h5=>packing: ../scene.yaml} -o {W}/out", 2, {"scene.yaml"}},
+    {"dem", "{edit:scene_random.yaml:radius: 1.0e-4=>radius: 1.0e-12} -o {W}/out", 2, {"scene_random.yaml", "radius", "1.0e-12"},
+     "exit 1: 'cannot create std::vector larger than max_size()' (random_sites sizes its bin grid by the radius), no file or field"},
+    {"dem", "{edit:scene_random.yaml:count: 50=>count: 1000000000000} -o {W}/out", 2, {"scene_random.yaml", "count", "1000000000000"}},
+    {"dem", "{edit:scene_random.yaml:upper: [2.0e-3=>upper: [-2.0e-3} -o {W}/out", 2, {"scene_random.yaml", "cell", "-2.0e-3"}},
     {"dem", "{scene.yaml} -o {W}/out --steps 0", 2, {"--steps", "0"}},
     {"dem", "{scene.yaml} -o {W}/out --threads nan", 2, {"--threads", "nan"}},
     {"dem", "{scene.yaml} -o {W}/out --restart {text:ck.h5}", 2, {"ck.h5"}},
@@ -266,6 +278,7 @@ const std::vector<Row> kRows = {
     {"dem", "{scene.yaml} -o {W}/out --no-such-option", 2, {"--no-such-option"}},
     {"dem", "{scene.yaml} -o {W}/out --json {scene.yaml}", 2, {"--json", "scene.yaml"}},
     {"dem", "{scene.yaml} -o {text:notadir}", 2, {"notadir"}},
+    {"dem", "{scene.yaml} -o {W}/out --json {link:scene.yaml}", 2, {"--json", "link-scene.yaml"}},
 
     // ---- tomodem-sinter: sintering scene YAML
     {"sinter", "{missing:sinter.yaml} -o {W}/out", 2, {"sinter.yaml"}},
@@ -287,6 +300,7 @@ const std::vector<Row> kRows = {
     {"sinter", "{sinter.yaml} -o {W}/out --no-such-option", 2, {"--no-such-option"}},
     {"sinter", "{sinter.yaml} -o {W}/out --json {sinter.yaml}", 2, {"--json", "sinter.yaml"}},
     {"sinter", "{sinter.yaml} -o {text:notadir}", 2, {"notadir"}},
+    {"sinter", "{sinter.yaml} -o {W}/out --json {link:sinter.yaml}", 2, {"--json", "link-sinter.yaml"}},
 
     // ---- tomodem-run: pipeline YAML
     {"run", "{missing:pipe.yaml}", 2, {"pipe.yaml"}},
@@ -307,6 +321,7 @@ const std::vector<Row> kRows = {
     {"run", "{pipe.yaml} --set nosuch=1", 2, {"nosuch"}},
     {"run", "{pipe.yaml} --no-such-option", 2, {"--no-such-option"}},
     {"run", "{pipe.yaml} --json {pipe.yaml}", 2, {"--json", "pipe.yaml"}},
+    {"run", "{pipe.yaml} --json {link:pipe.yaml}", 2, {"--json", "link-pipe.yaml"}},
     {"run", "{pipe.yaml} --json {text:notadir}/s.json", 2, {"--json", "notadir/s.json"},
      "runs the whole pipeline (out.txt, pipe.lock.json, pipe.logs/ written), then exits 1 writing the summary"},
     {"run", "explain {pipe.yaml} nosuch", 2, {"nosuch"}},
@@ -352,6 +367,19 @@ materials:
 particles: {file: packing.h5}
 physics: {normal: hertz}
 protocol: {timestep: auto, steps: 20}
+output: {packing: out.h5, series: series.csv}
+)";
+
+const char* kSceneRandomYaml = R"(# random sequential insertion in a box between walls (docs/dem.md)
+materials:
+  - {name: sand, youngs_modulus: 7.0e10, poisson_ratio: 0.2, density: 2650}
+particles:
+  generate: {arrangement: random, count: 50, radius: 1.0e-4, seed: 7, phase: sand}
+cell: {lower: [0, 0, 0], upper: [2.0e-3, 2.0e-3, 2.0e-3], periodic: [true, true, false]}
+physics: {normal: linear, normal_stiffness: 1.0e4, restitution: 0.3, gravity: [0, 0, -9.81]}
+walls:
+  - {point: [0, 0, 0], normal: [0, 0, 1]}
+protocol: {timestep: 1.0e-7, steps: 20}
 output: {packing: out.h5, series: series.csv}
 )";
 
@@ -448,6 +476,7 @@ std::string make_cache() {
     spit(c / "pack.yaml", kPackYaml);
     spit(c / "scene.yaml", kSceneYaml);
     spit(c / "scene_file.yaml", kSceneFileYaml);
+    spit(c / "scene_random.yaml", kSceneRandomYaml);
     spit(c / "sinter.yaml", kSinterYaml);
     spit(c / "pipe.yaml", kPipeYaml);
     spit(c / "pore.off", kPoreOff);
@@ -516,6 +545,10 @@ std::string make_input(const fs::path& w, const std::string& kind, const std::st
   if (kind == "edit") name = spec.substr(0, spec.find(':'));
   const fs::path dst = w / name;
   const fs::path src = fs::path(kCache) / name;
+  if (kind == "link") {  // link-NAME -> NAME (made by another placeholder)
+    if (!fs::exists(w / ("link-" + name))) fs::create_symlink(name, w / ("link-" + name));
+    return fs::exists(dst) ? "" : "link to " + name + ", which no placeholder before it made";
+  }
   if (fs::exists(dst) || kind == "missing") return "";
   if (kind == "empty") spit(dst, "");
   else if (kind == "dir") fs::create_directories(dst);
@@ -568,7 +601,8 @@ std::string expand(const std::string& args, const fs::path& w, std::string* erro
     if (colon != std::string::npos) kind = p.substr(0, colon), spec = p.substr(colon + 1);
     const std::string e = make_input(w, kind, spec);
     if (!e.empty()) *error += e + "\n";
-    if (!silent) out += (w / (kind == "edit" ? spec.substr(0, spec.find(':')) : spec)).string();
+    if (!silent)
+      out += (w / (kind == "edit" ? spec.substr(0, spec.find(':')) : kind == "link" ? "link-" + spec : spec)).string();
   }
   return out;
 }
