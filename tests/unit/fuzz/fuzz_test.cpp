@@ -3,14 +3,16 @@
 // corpus/ (byte flips, truncation, duplicated/removed lines, swapped values, numbers replaced by
 // NaN/-1/1e300/huge integers, nested structures). A parser may refuse an input only with
 // tomodem::InputError, RuntimeFailure or NumericalError; any other exception, a crash (the forked
-// worker dies) or a hang (no progress for TOMODEM_FUZZ_HANG_SECONDS) fails the test.
+// worker dies) or a hang (no end within TOMODEM_FUZZ_SLOW_SECONDS) fails the test.
 //
 // Every input is made from one seed alone (base seed + execution index), so a failure reproduces:
 // the seed is printed, and the input is saved under corpus/crashes/ (commit it with a row in
 // kKnownCrashes while the defect is open). Environment:
 //   TOMODEM_FUZZ_SECONDS       time budget per parser (default 15)
 //   TOMODEM_FUZZ_SEED          base seed (default 20261201)
-//   TOMODEM_FUZZ_HANG_SECONDS  a single input running longer is a hang (default 5)
+//   TOMODEM_FUZZ_HANG_SECONDS  a single input running longer is looked at (default 5): it is run
+//                              again alone; ending within TOMODEM_FUZZ_SLOW_SECONDS (default 60)
+//                              it is a slow input (printed with its seed), else a hang
 //   TOMODEM_FUZZ_MEMORY_MB     address-space cap of the worker (default 4096): a std::bad_alloc
 //                              under it is counted apart (a valid but large request), not a failure
 //   TOMODEM_FUZZ_REPLAY=FILE   run FILE once through the parser named by its prefix (debugging)
@@ -335,6 +337,15 @@ const std::vector<KnownCrash> kKnownCrashes = {
     {"scene", "hertz_restitution_for_damping", "scene-20261801.yaml",
      "restitution 1e-5 (values swapped by the mutator) makes load_scene take 7 s: hertz_damping_for_restitution "
      "integrates up to ~100 collisions of up to 10^7 RK4 steps each (libs/dem/src/model.cpp; e = 1e-8: 16 s)"},
+    {"scene", "linked_cells", "scene-4076.yaml",
+     "cells: 150 (13.5 million particles, under the memory check) past the worker's 4 GB: std::bad_alloc is thrown "
+     "inside the OpenMP region of Simulation::Impl::linked_cells (vector::reserve) and std::terminate aborts the "
+     "process (SIGABRT, no message) instead of exit 1 (libs/dem/src/simulation.cpp, via Simulation::contacts in "
+     "read_scene)"},
+    {"scene", "std::vector larger than max_size", "scene-17254.yaml",
+     "radius 1e-12 in a 2 mm cell (arrangement random): random_sites (libs/dem/src/scene.cpp) sizes its bin grid by "
+     "the radius and throws std::length_error; tomodem-dem exits 1 'cannot create std::vector larger than max_size()' "
+     "instead of 2 naming particles.generate.radius"},
 };
 
 const KnownCrash* known_class(const std::string& target, const std::string& stack) {
@@ -371,6 +382,45 @@ void install_stack_dump(const std::string& path) {
   for (int sig : {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT, SIGUSR1}) ::sigaction(sig, &sa, nullptr);
 }
 
+/// How one input ended when run alone in a fresh worker.
+struct Alone {
+  double seconds = 0;
+  bool timed_out = false;
+  int status = 0;  // waitpid status
+  bool clean() const { return !timed_out && WIFEXITED(status) && WEXITSTATUS(status) == 0; }
+};
+
+/// Runs one input in a fresh worker (the same memory cap, its stack dumped on a crash).
+Alone run_alone(const Target& t, const std::string& path, const std::string& data, double memory_mb, double limit,
+                const std::string& stack_file) {
+  spit(path, data);
+  const auto t0 = std::chrono::steady_clock::now();
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    rlimit lim{rlim_t(memory_mb * 1048576.0), rlim_t(memory_mb * 1048576.0)};
+    ::setrlimit(RLIMIT_AS, &lim);
+    if (::chdir(fs::path(path).parent_path().c_str()) != 0) ::_exit(12);
+    install_stack_dump(stack_file);
+    std::string what;
+    const Outcome o = run_one(t, path, &what);
+    ::_exit(o == Outcome::unexpected ? 10 : 0);
+  }
+  Alone a;
+  while (::waitpid(pid, &a.status, WNOHANG) == 0) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > limit) {
+      ::kill(pid, SIGUSR1);
+      std::this_thread::sleep_for(std::chrono::milliseconds(500));
+      ::kill(pid, SIGKILL);
+      ::waitpid(pid, &a.status, 0);
+      a.timed_out = true;
+      break;
+    }
+  }
+  a.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return a;
+}
+
 void fuzz(const Target& t) {
   const auto files = corpus_of(t);
   ASSERT_FALSE(files.empty()) << "no corpus files " << t.name << "_*." << t.ext << " in " << kCorpus;
@@ -378,6 +428,7 @@ void fuzz(const Target& t) {
   for (const auto& f : files) corpus.push_back(slurp(f));
   const double budget = env_number("TOMODEM_FUZZ_SECONDS", 15);
   const double hang = env_number("TOMODEM_FUZZ_HANG_SECONDS", 5);
+  const double slow = env_number("TOMODEM_FUZZ_SLOW_SECONDS", 60);
   const double memory_mb = env_number("TOMODEM_FUZZ_MEMORY_MB", 4096);
   const auto base = std::uint64_t(env_number("TOMODEM_FUZZ_SEED", 20261201));
   const fs::path dir = fs::temp_directory_path() / ("tomodem-fuzz-" + t.name + "-" + std::to_string(::getpid()));
@@ -393,7 +444,7 @@ void fuzz(const Target& t) {
   const auto start = std::chrono::steady_clock::now();
   const auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
   std::uint64_t next = 0, executions = 0, refused = 0, bad_alloc = 0, known_hits = 0;
-  std::vector<std::string> findings;
+  std::vector<std::string> findings, slow_inputs;
   const std::string stack_file = (dir / "stack.txt").string();
 
   while (elapsed() < budget) {
@@ -458,13 +509,35 @@ void fuzz(const Target& t) {
     ++executions;
     next = i + 1;  // go on past the finding
     const std::uint64_t seed = base + i;
-    const std::string stack = slurp(stack_file);
+    std::string stack = slurp(stack_file);
     fs::remove(stack_file);
+    if (stack.empty()) stack = kind;  // an unexpected exception: its type and message
     if (const KnownCrash* k = known_class(t.name, stack)) {
       ++known_hits;
       std::cout << "[ fuzz ] " << t.name << " seed " << seed << ": " << kind << " of the known class " << k->frame
                 << " (" << k->file << ")" << std::endl;
       continue;
+    }
+    if (hung) {  // slow or stuck? Run the input alone, with a long limit: a slow end is no hang.
+      const Alone a = run_alone(t, input, input_of(t, corpus, seed), memory_mb, slow, stack_file);
+      if (a.clean()) {
+        slow_inputs.push_back(t.name + " seed " + std::to_string(seed) + ": " + std::to_string(a.seconds) + " s");
+        std::cout << "[ fuzz ] " << t.name << " seed " << seed << ": slow, not stuck (" << a.seconds << " s alone)"
+                  << std::endl;
+        continue;
+      }
+      if (a.timed_out) kind = "hang (no end within " + std::to_string(int(slow)) + " s)";
+      else if (WIFSIGNALED(a.status)) kind = std::string("crash when run alone: ") + strsignal(WTERMSIG(a.status));
+      else kind = "unexpected exception when run alone";
+      const std::string again = slurp(stack_file);
+      fs::remove(stack_file);
+      if (!again.empty()) stack = again;
+      if (const KnownCrash* k = known_class(t.name, stack)) {
+        ++known_hits;
+        std::cout << "[ fuzz ] " << t.name << " seed " << seed << ": " << kind << " of the known class " << k->frame
+                  << " (" << k->file << ")" << std::endl;
+        continue;
+      }
     }
     const fs::path crashes = kCorpus / "crashes";
     fs::create_directories(crashes);
@@ -477,7 +550,8 @@ void fuzz(const Target& t) {
   fs::remove_all(dir);
   std::cout << "[ fuzz ] " << t.name << ": " << executions << " executions in " << elapsed() << " s (budget " << budget
             << " s, base seed " << base << "), " << refused << " refused with a tomodem error, " << bad_alloc
-            << " over the " << memory_mb << " MB worker cap, " << known_hits << " of a known open class, "
+            << " over the " << memory_mb << " MB worker cap, " << slow_inputs.size() << " slow (valid but large), "
+            << known_hits << " of a known open class, "
             << findings.size() << " failures" << std::endl;
   for (const auto& f : findings) ADD_FAILURE() << f;
   EXPECT_GT(executions, 0u);
@@ -533,8 +607,8 @@ TEST(Fuzz, CorpusLoads) {
   fs::remove_all(dir);
 }
 
-// Known crashes: each reproducer runs in a forked worker and must end in a tomodem error or in
-// success; the row is skipped (with its reason) while the defect is open.
+// Known crashes: each reproducer runs in a forked worker (the fuzzer's memory cap and time limit)
+// and must end in a tomodem error or in success; the row is skipped (with its reason) while open.
 class FuzzKnownCrash : public ::testing::TestWithParam<std::size_t> {};
 TEST_P(FuzzKnownCrash, Replay) {
   if (GetParam() >= kKnownCrashes.size()) GTEST_SKIP() << "no known crashes";
@@ -542,14 +616,15 @@ TEST_P(FuzzKnownCrash, Replay) {
   if (*k.open) GTEST_SKIP() << "open: " << k.file << ": " << k.open;
   const Target* t = target_named(k.target);
   if (!t) GTEST_SKIP() << "no parser " << k.target << " in this build";
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    std::string what;
-    ::_exit(run_one(*t, (kCorpus / "crashes" / k.file).string(), &what) == Outcome::unexpected ? 10 : 0);
-  }
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << k.file;
+  const fs::path dir = fs::temp_directory_path() / ("tomodem-fuzz-replay-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  stage_side_files(dir);
+  const std::string input = (dir / ("input." + t->ext)).string();
+  const Alone a = run_alone(*t, input, slurp(kCorpus / "crashes" / k.file), env_number("TOMODEM_FUZZ_MEMORY_MB", 4096),
+                            env_number("TOMODEM_FUZZ_SLOW_SECONDS", 60), (dir / "stack.txt").string());
+  EXPECT_TRUE(a.clean()) << k.file << (a.timed_out ? ": still running after the time limit" : ": did not end cleanly")
+                         << "\n" << slurp(dir / "stack.txt");
+  fs::remove_all(dir);
 }
 INSTANTIATE_TEST_SUITE_P(Fuzz, FuzzKnownCrash, ::testing::Range<std::size_t>(0, std::max<std::size_t>(1, kKnownCrashes.size())));
 
