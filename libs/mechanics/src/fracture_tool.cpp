@@ -192,8 +192,9 @@ std::string run_fracture(const FractureConfig& c) {
   }
   require_non_negative("--grip", c.crack.grip, "m; 0: one mean diameter");
   require_range("--crack-offset", c.crack.plane_offset, -0.5, true, 0.5, true, "fraction of the grip distance");
-  if (c.sla.woodbury_bonds < 0)
-    throw InputError("", "--woodbury-bonds", std::to_string(c.sla.woodbury_bonds), "must be >= 0");
+  if (c.sla.woodbury_bonds < 0 || c.sla.woodbury_bonds > 100000)
+    throw InputError("", "--woodbury-bonds", std::to_string(c.sla.woodbury_bonds),
+                     "must lie in [0, 100000] (breaks between factorisations)");
   if (c.sla.max_breaks < 1) throw InputError("", "--max-breaks", std::to_string(c.sla.max_breaks), "must be >= 1");
   require_positive("--transits", c.explicit_.transits, "elastic-wave transits");
   require_non_negative("--strain-rate", c.explicit_.strain_rate, "1/s; 0: from --transits");
@@ -228,6 +229,10 @@ std::string run_fracture(const FractureConfig& c) {
   std::vector<dem::BondLaw> laws = bond_laws(p, c.input, c.law, want_explicit);
   set_failure(laws, p, fo, c.input);
   const FractureSample s = make_sample(net, c.crack, c.input);
+  if (want_sla)  // the Woodbury block K0^-1 U: 6 dofs per particle x 6 columns per broken bond, float64
+    check_memory_request(6.0 * double(s.packing.particles.size()) * 6.0 * std::max(1, c.sla.woodbury_bonds) * 8.0, "",
+                         "--woodbury-bonds", std::to_string(c.sla.woodbury_bonds),
+                         "the low-rank update block for " + std::to_string(s.packing.particles.size()) + " particles");
   info("sample " + std::to_string(s.W) + " x " + std::to_string(s.B) + " x " + std::to_string(s.H) + " m, " +
        std::to_string(s.precrack_bonds) + " bonds removed for the crack, " + std::to_string(s.ligament_bonds) +
        " across the ligament");

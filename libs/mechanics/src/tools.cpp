@@ -221,8 +221,9 @@ std::string run_young(const YoungConfig& c) {
     throw InputError("", "--loading", c.explicit_.loading, "expected 'stress' or 'strain'");
   if (c.explicit_.protocol != "rate" && c.explicit_.protocol != "increments")
     throw InputError("", "--protocol", c.explicit_.protocol, "expected 'rate' or 'increments'");
-  if (c.explicit_.points < 2)
-    throw InputError("", "--points", std::to_string(c.explicit_.points), "at least 2 measurements are needed");
+  if (c.explicit_.points < 2 || c.explicit_.points > 100000)
+    throw InputError("", "--points", std::to_string(c.explicit_.points),
+                     "must lie in [2, 100000] (at least 2 measurements are needed)");
   if (c.explicit_.max_steps < 1)
     throw InputError("", "--max-steps", std::to_string(c.explicit_.max_steps), "must be >= 1");
   check_material_overrides(c.youngs_modulus, c.poisson_ratio, c.density);

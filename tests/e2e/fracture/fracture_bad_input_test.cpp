@@ -68,6 +68,7 @@ const std::vector<Case> kCases = {
     {"density_negative_sla", "fracture", B + " --density -2500", 2, {"--density", "-2500"}},
     {"strain_rate_negative", "fracture", B + " --strain-rate -1", 2, {"--strain-rate", "-1"}},
     {"woodbury_negative", "fracture", B + " --woodbury-bonds -2", 2, {"--woodbury-bonds", "-2"}},
+    {"woodbury_overflows_int", "fracture", B + " --woodbury-bonds 1000000000", 2, {"--woodbury-bonds", "1000000000"}},
     {"max_breaks_zero", "fracture", B + " --max-breaks 0", 2, {"--max-breaks", "0"}},
     {"timestep_fraction_sla", "fracture", B + " --timestep-fraction 2", 2, {"--timestep-fraction", "2"}},
     {"geometry_unknown", "fracture", B + " --geometry middle", 2, {"--geometry", "middle"}},

@@ -137,6 +137,7 @@ const std::vector<Case> kCases = {
     {"young_gn_coefficient_nan", "young", "{D}/bonded.h5 --gn-coefficient nan", 2, {"--gn-coefficient", "nan"}},
     {"young_gt_coefficient_negative", "young", "{D}/bonded.h5 --gt-coefficient -3", 2, {"--gt-coefficient", "-3"}},
     {"young_points_one", "young", "{D}/bonded.h5 --points 1", 2, {"--points", "1"}},
+    {"young_points_huge", "young", "{D}/bonded.h5 --method explicit --points 2000000000", 2, {"--points", "2000000000"}},
     {"young_max_iterations_negative", "young", "{D}/bonded.h5 --max-iterations -4", 2, {"--max-iterations", "-4"}},
     {"young_relax_ratio_two", "young", "{D}/bonded.h5 --relax-ratio 2", 2, {"--relax-ratio", "2"}},
     {"young_timestep_fraction_zero", "young", "{D}/bonded.h5 --timestep-fraction 0", 2, {"--timestep-fraction", "0"}},
