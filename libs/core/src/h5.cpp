@@ -52,6 +52,13 @@ std::string last_error() {
         return 0;
       },
       &msg);
+  // The file drivers' messages carry the time, a buffer address and byte counts over several
+  // lines; keep what failed and the system's reason ("file write failed: No space left on device").
+  const auto k = msg.find("error message = '");
+  if (k != std::string::npos) {
+    const auto end = msg.find('\'', k + 17);
+    msg = msg.substr(0, msg.find(':')) + ": " + msg.substr(k + 17, end == std::string::npos ? end : end - (k + 17));
+  }
   return msg.empty() ? "HDF5 error" : "HDF5: " + msg;
 }
 

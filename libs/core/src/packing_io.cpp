@@ -545,8 +545,7 @@ void write_packing(const std::string& path, const Packing& p) {
     write_packing_groups(f, p);
     f.close();  // checked: a full disk shows here, before the rename
   } catch (...) {
-    discard_output(path);  // a failed write leaves neither the final nor the temporary file
-    throw;
+    discard_and_rethrow(path, tmp);  // a failed write leaves neither the final nor the temporary file
   }
   commit_output(path);
   // The sidecar follows the data: a stale sidecar from an earlier run must not survive a failure.
@@ -556,6 +555,17 @@ void write_packing(const std::string& path, const Packing& p) {
     std::remove(sidecar_path(path).c_str());
     std::remove(temporary_path(sidecar_path(path)).c_str());
     throw;
+  }
+}
+
+void discard_and_rethrow(const std::string& path, const std::string& tmp) {
+  discard_output(path);
+  try {
+    throw;
+  } catch (const RuntimeFailure& e) {
+    std::string m = e.what();
+    for (auto k = m.find(tmp); k != std::string::npos; k = m.find(tmp, k + path.size())) m.replace(k, tmp.size(), path);
+    throw RuntimeFailure(m);
   }
 }
 

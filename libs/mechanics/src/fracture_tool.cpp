@@ -10,6 +10,7 @@
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/h5.hpp"
 #include "tomodem/core/output.hpp"
+#include "tomodem/core/packing_io.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/core/plot.hpp"
 #include "tomodem/mechanics/checks.hpp"
@@ -87,8 +88,7 @@ void write_map(const std::string& path, const FractureSample& s, const FractureR
     f.set_attr("/", "method", r.method);
     f.close();  // checked: a full disk shows here, before the rename
   } catch (...) {
-    discard_output(path);
-    throw;
+    discard_and_rethrow(path, tmp);
   }
   commit_output(path);
   const auto slash = path.find_last_of('/');

@@ -77,8 +77,7 @@ void write_network(const std::string& path, const Network& net) {
     }
     f.close();  // checked: a full disk shows here, before the rename
   } catch (...) {
-    discard_output(path);
-    throw;
+    discard_and_rethrow(path, tmp);
   }
   commit_output(path);
   write_xdmf_sidecar(path, net.packing.particles.size(), !net.packing.particles.velocity.empty());

@@ -5,6 +5,7 @@
 
 #include "tomodem/core/h5.hpp"
 #include "tomodem/core/output.hpp"
+#include "tomodem/core/packing_io.hpp"
 
 namespace tomodem::network {
 
@@ -22,8 +23,9 @@ std::string strip_ext(const std::string& p) {
 void write_fields(const std::string& path, const Network& net, const std::vector<FieldSet>& fields,
                   const std::string& parameters) {
   const std::size_t n = net.n_nodes(), m = net.n_edges();
+  const std::string tmp = temporary_path(path);
   try {
-    h5::File f(temporary_path(path), h5::File::Mode::create);
+    h5::File f(tmp, h5::File::Mode::create);
     f.set_attr("/", "tool", "tomodem-conduct");
     f.set_attr("/", "parameters", parameters);
     f.set_attr("/", "created_utc", utc_now());
@@ -55,8 +57,7 @@ void write_fields(const std::string& path, const Network& net, const std::vector
     }
     f.close();  // checked: a full disk shows here, before the rename
   } catch (...) {
-    discard_output(path);
-    throw;
+    discard_and_rethrow(path, tmp);
   }
   // XDMF: nodes as a polyvertex grid, edges as a polyline grid sharing the node positions.
   const std::string h5 = base_name(path);

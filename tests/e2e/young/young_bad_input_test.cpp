@@ -186,7 +186,8 @@ TEST(YoungBadInputFullDisk, BondWriteFailsAndKeepsThePreviousOutput) {
   const auto before = snapshot(d);
   const auto [code, err] = run_with_full_disk("bond", "lattice.h5 -o out.h5 --rule ratio --gap-tolerance 1e-6 -q", d, 8);
   EXPECT_EQ(code, 1) << err;
-  EXPECT_NE(err.find("out.h5"), std::string::npos) << err;
+  EXPECT_NE(err.find("out.h5: cannot finish writing"), std::string::npos) << err;
+  EXPECT_EQ(err.find(".tmp"), std::string::npos) << "the message names the temporary:\n" << err;
   EXPECT_EQ(snapshot(d), before) << "an output changed or a temporary was left:\n" << err;
   fs::remove_all(d);
 }

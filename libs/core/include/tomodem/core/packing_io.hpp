@@ -20,6 +20,11 @@ Packing read_packing(const std::string& path);
 void write_packing_groups(h5::File& f, const Packing& p);
 Packing read_packing_groups(const h5::File& f);
 
+/// For HDF5 writers, inside their catch block: removes the temporary `tmp` of `path` and
+/// rethrows the current exception; a RuntimeFailure names `path` (what the user asked for)
+/// wherever it named the temporary.
+[[noreturn]] void discard_and_rethrow(const std::string& path, const std::string& tmp);
+
 /// Writes the XDMF sidecar that indexes the particle datasets of an HDF5 file.
 void write_xdmf_sidecar(const std::string& h5_path, std::size_t n_particles, bool has_velocity);
 
