@@ -647,9 +647,16 @@ TEST_P(CrossToolBadInput, Row) {
   (void)cache_failures();
 
   std::string error, cmd = "cd " + quote(w.string()) + " && OMP_NUM_THREADS=1 timeout 120 " + quote(exe);
-  for (const auto& word : words(row.args)) {
-    const std::string arg = expand(word, w, &error);
-    if (!(arg.empty() && word.rfind("{!", 0) == 0)) cmd += " " + quote(arg);  // {!..} stands for nothing
+  {
+    // Copy under a shared lock: another ctest process may be remaking a stale cache.
+    const int lock = ::open((fs::path(kCache) / ".lock").c_str(), O_CREAT | O_RDWR, 0644);
+    ::flock(lock, LOCK_SH);
+    for (const auto& word : words(row.args)) {
+      const std::string arg = expand(word, w, &error);
+      if (!(arg.empty() && word.rfind("{!", 0) == 0)) cmd += " " + quote(arg);  // {!..} stands for nothing
+    }
+    ::flock(lock, LOCK_UN);
+    ::close(lock);
   }
   ASSERT_TRUE(error.empty()) << error;
   const auto before = snapshot(w);
