@@ -1,6 +1,7 @@
 #include "tomodem/core/output.hpp"
 
 #include <fcntl.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
 #include <xxhash.h>
@@ -161,6 +162,11 @@ std::uint64_t usable_memory_bytes() {
     std::ifstream in(f);
     unsigned long long limit = 0;
     if (in >> limit && limit > 0 && limit < bytes) bytes = limit;
+  }
+  // So may `ulimit -v` / `ulimit -d` (a batch system's per-process limits).
+  for (const int which : {RLIMIT_AS, RLIMIT_DATA}) {
+    rlimit lim{};
+    if (::getrlimit(which, &lim) == 0 && lim.rlim_cur != RLIM_INFINITY && lim.rlim_cur < bytes) bytes = lim.rlim_cur;
   }
   return bytes;
 }

@@ -135,8 +135,11 @@ double hertz_restitution_for_damping(double c) {
     return -xp * std::sqrt(xp) - alpha * std::sqrt(std::sqrt(xp)) * v;
   };
   double x = 0, v = 1;
-  const double h = 2e-5;
-  for (int k = 0; k < 10000000; ++k) {
+  // RK4 at h = 1e-4 (the collision lasts 3.4 to 14 time units for e = 0.6 to 0.001): the kink of
+  // x^(1/4) at contact limits the error to first order, 3e-7 relative in e (h = 2e-5 gives 6e-8
+  // at five times the cost; the validation asks for 1 %).
+  const double h = 1e-4;
+  for (int k = 0; k < 2000000; ++k) {
     const double k1x = v, k1v = acc(x, v);
     const double k2x = v + 0.5 * h * k1v, k2v = acc(x + 0.5 * h * k1x, v + 0.5 * h * k1v);
     const double k3x = v + 0.5 * h * k2v, k3v = acc(x + 0.5 * h * k2x, v + 0.5 * h * k2v);

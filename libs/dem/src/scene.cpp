@@ -66,7 +66,9 @@ std::vector<Material> read_materials(const Map& root) {
 }
 
 void read_pair_keys(const Map& m, PairParams& pp) {
-  pp.restitution = m.in_range("restitution", pp.restitution, 0, 1, true, false);
+  // Below 1e-3 the damped Hertz contact barely separates: its damping is ill-conditioned and
+  // costs seconds to find (kMinRestitution in model.hpp).
+  pp.restitution = m.in_range("restitution", pp.restitution, kMinRestitution, 1, false, false);
   pp.damping_ratio = m.in_range("damping_ratio", pp.damping_ratio, 0, 1, false, true);
   pp.friction = m.non_negative("friction", pp.friction);
   pp.rolling_friction = m.non_negative("rolling_friction", pp.rolling_friction);
@@ -161,8 +163,17 @@ std::vector<Vec3> random_sites(int count, double r, const Vec3& lo, const Vec3& 
   const Vec3 size = hi - lo;
   Vec3 inner_lo = lo, inner = size;
   if (!periodic) inner_lo = lo + Vec3{r, r, r}, inner = size - Vec3{2 * r, 2 * r, 2 * r};
+  // Cells of side ≥ 2r, but no more cells than a few per site: particles far smaller than the
+  // box would otherwise ask for a grid larger than memory.
+  double side = 2 * r;
+  const auto cells_for = [&](double h) {
+    double n = 1;
+    for (int k = 0; k < 3; ++k) n *= std::max(1.0, std::floor(size[k] / h));
+    return n;
+  };
+  while (cells_for(side) > 4.0 * count + 64) side *= 1.25;
   int nc[3];
-  for (int k = 0; k < 3; ++k) nc[k] = std::max(1, int(size[k] / (2 * r)));
+  for (int k = 0; k < 3; ++k) nc[k] = int(std::max(1.0, std::floor(size[k] / side)));
   std::vector<std::vector<int>> grid(std::size_t(nc[0]) * nc[1] * nc[2]);
   auto cell_of = [&](const Vec3& x, int c[3]) {
     for (int k = 0; k < 3; ++k) c[k] = std::clamp(int((x[k] - lo[k]) / size[k] * nc[k]), 0, nc[k] - 1);

@@ -9,6 +9,7 @@
 
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
+#include "tomodem/dem/model.hpp"
 #include "tomodem/dem/yaml_fields.hpp"
 
 namespace tomodem::geometry {
@@ -118,7 +119,7 @@ void read_config(PackConfig& cfg, const YAML::Node& root, const std::string& pat
   if (s.normal == dem::NormalLaw::sintering) throw c.error("normal", law, "expected linear, hertz, dmt or jkr");
   s.friction = c.non_negative("friction", 0);
   s.rolling_friction = c.non_negative("rolling_friction", 0);
-  s.restitution = c.in_range("restitution", s.restitution, 0, 1, true, false);
+  s.restitution = c.in_range("restitution", s.restitution, dem::kMinRestitution, 1, false, false);
   s.work_of_adhesion = c.non_negative("work_of_adhesion", 0);
   s.normal_stiffness = c.non_negative("normal_stiffness", 0);
   s.aggregate_bond_radius = c.in_range("aggregate_bond_radius", s.aggregate_bond_radius, 0, 1, true, false);

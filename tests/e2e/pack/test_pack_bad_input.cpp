@@ -60,7 +60,7 @@ TEST(PackBadInput, EveryRowExits2NamingFileFieldAndValueAndWritesNothing) {
       // Contact, target and protocol keys: NaN, Inf, negative, zero where invalid.
       row("friction_negative", "friction: 0.1", "friction: -0.1", {"contact.friction", "-0.1"}),
       row("friction_inf", "friction: 0.1", "friction: .inf", {"contact.friction", ".inf", "finite"}),
-      row("restitution_zero", "restitution: 0.5", "restitution: 0", {"contact.restitution", "(0, 1]"}),
+      row("restitution_zero", "restitution: 0.5", "restitution: 0", {"contact.restitution", "[0.001, 1]"}),
       row("restitution_above_one", "restitution: 0.5", "restitution: 1.5", {"contact.restitution", "1.5"}),
       row("work_of_adhesion_negative", "restitution: 0.5}", "restitution: 0.5, work_of_adhesion: -1}",
           {"contact.work_of_adhesion", "-1"}),

@@ -81,6 +81,8 @@ MaterialProblem material_problem(const Material& m, bool need_modulus);
 /// restitution e, for every impact speed (the Hertz–Tsuji model is self-similar in the speed).
 /// Found by integrating the dimensionless collision once and solving for c (bisection).
 double hertz_damping_for_restitution(double e);
+/// The smallest restitution a scene may ask for (refused below: see hertz_damping_for_restitution).
+inline constexpr double kMinRestitution = 1e-3;
 /// Restitution of the dimensionless Hertz collision with damping c (the inverse map).
 double hertz_restitution_for_damping(double c);
 /// Linear spring–dashpot: ζ = -ln e / sqrt(π² + ln² e).
