@@ -7,7 +7,11 @@
 
 #include <hdf5.h>
 
+#include <poll.h>
+#include <signal.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -121,6 +125,122 @@ H5T_conv_ret_t strict_conversion(H5T_conv_except_t except, hid_t, hid_t, void*, 
 }
 
 bool numeric_class(H5T_class_t c) { return c == H5T_INTEGER || c == H5T_FLOAT; }
+
+// ---------------------------------------------------------------- variable-length strings
+//
+// Variable-length strings (the tool, parameters and material names, written by every tomodem
+// writer) live in the file's global heap. libhdf5 1.10 dies (SIGSEGV in H5HG_read) or loops for
+// ever (H5C_protect) on a corrupt global-heap reference, and nothing before the read can tell.
+// So a file opened for reading has every variable-length string attribute read once by a child
+// process first. The child names each attribute on a pipe before it reads it; when the child
+// dies, or names nothing new for kQuietSeconds, the file is refused naming that attribute.
+constexpr int kQuietSeconds = 3;
+
+void say(int fd, const std::string& s) {
+  const std::string line = s + "\n";
+  if (::write(fd, line.data(), line.size()) < 0) ::_exit(3);
+}
+
+herr_t read_string_attr(hid_t loc, const char* name, const H5A_info_t*, void* data) {
+  const auto& [fd, object] = *static_cast<std::pair<int, std::string>*>(data);
+  const hid_t attr = H5Aopen(loc, name, H5P_DEFAULT);
+  if (attr < 0) return 0;
+  const hid_t type = H5Aget_type(attr);
+  if (type >= 0 && H5Tget_class(type) == H5T_STRING && H5Tis_variable_str(type) > 0) {
+    say(fd, object + "@" + name);
+    const hid_t space = H5Aget_space(attr);
+    const hssize_t n = H5Sget_simple_extent_npoints(space);
+    if (n > 0 && n < (1 << 20)) {
+      const hid_t mem = H5Tcopy(H5T_C_S1);
+      H5Tset_size(mem, H5T_VARIABLE);
+      H5Tset_cset(mem, H5Tget_cset(type));
+      std::vector<char*> p(static_cast<std::size_t>(n), nullptr);
+      if (H5Aread(attr, mem, p.data()) >= 0) H5Dvlen_reclaim(mem, space, H5P_DEFAULT, p.data());
+      H5Tclose(mem);
+    }
+    H5Sclose(space);
+  }
+  if (type >= 0) H5Tclose(type);
+  H5Aclose(attr);
+  return 0;
+}
+
+void read_string_attrs_of(hid_t file, const std::string& object, int fd) {
+  const hid_t obj = H5Oopen(file, object.c_str(), H5P_DEFAULT);
+  if (obj < 0) return;
+  std::pair<int, std::string> data{fd, object};
+  hsize_t idx = 0;
+  H5Aiterate2(obj, H5_INDEX_NAME, H5_ITER_NATIVE, &idx, read_string_attr, &data);
+  H5Oclose(obj);
+}
+
+herr_t visit_link(hid_t, const char* name, const H5L_info_t* info, void* data) {
+  if (info->type == H5L_TYPE_HARD) {
+    const auto& [file, fd] = *static_cast<std::pair<hid_t, int>*>(data);
+    read_string_attrs_of(file, "/" + std::string(name), fd);
+  }
+  return 0;
+}
+
+void check_strings_in_child(hid_t file, const std::string& path) {
+  int fds[2];
+  if (::pipe(fds) != 0) return;  // cannot check: read as before
+  std::fflush(nullptr);
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    ::close(fds[0]);
+    ::close(fds[1]);
+    return;
+  }
+  if (pid == 0) {  // the child: read them all, then leave without running any exit handler
+    ::close(fds[0]);
+    ::signal(SIGPIPE, SIG_DFL);
+    read_string_attrs_of(file, "/", fds[1]);
+    std::pair<hid_t, int> data{file, fds[1]};
+    H5Lvisit(file, H5_INDEX_NAME, H5_ITER_NATIVE, visit_link, &data);
+    say(fds[1], "");
+    ::_exit(0);
+  }
+  ::close(fds[1]);
+  std::string said;
+  bool hung = false;
+  for (;;) {
+    pollfd p{fds[0], POLLIN, 0};
+    const int r = ::poll(&p, 1, kQuietSeconds * 1000);
+    if (r == 0) {
+      hung = true;
+      ::kill(pid, SIGKILL);
+      break;
+    }
+    if (r < 0) {
+      if (errno == EINTR) continue;
+      break;
+    }
+    char buf[4096];
+    const ssize_t n = ::read(fds[0], buf, sizeof buf);
+    if (n <= 0) break;
+    said.append(buf, static_cast<std::size_t>(n));
+  }
+  ::close(fds[0]);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (!hung && WIFEXITED(status) && WEXITSTATUS(status) == 0) return;
+  // The attribute named last is the one being read when the child died or stalled.
+  std::string last;
+  if (!said.empty()) {
+    const auto end = said.back() == '\n' ? said.size() - 1 : said.size();
+    const auto start = said.rfind('\n', end == 0 ? 0 : end - 1);
+    last = said.substr(start == std::string::npos ? 0 : start + 1, end - (start == std::string::npos ? 0 : start + 1));
+  }
+  if (hung)
+    throw InputError(path, last, "", "corrupt file: the HDF5 library does not finish reading this string attribute");
+  if (WIFSIGNALED(status))
+    throw InputError(path, last, "",
+                     std::string("corrupt file: reading this string attribute crashes the HDF5 library (") +
+                         ::strsignal(WTERMSIG(status)) + ")");
+  // Any other end of the child (no pipe, a write error): no verdict, read as before.
+}
 
 }  // namespace
 
@@ -279,6 +399,13 @@ File::File(const std::string& path, Mode mode) : impl_(std::make_unique<Impl>())
                        why.find("truncated file") != std::string::npos
                            ? "the file is cut short (an interrupted copy or write?): " + why
                            : "cannot open: " + why);
+    }
+    try {
+      check_strings_in_child(impl_->file, path);
+    } catch (...) {
+      H5Fclose(impl_->file);
+      impl_->file = H5I_INVALID_HID;
+      throw;
     }
   } else {
     impl_->file = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -220,6 +221,38 @@ TEST_F(H5, MoveKeepsTheFileOpen) {
   b.write("/x", std::vector<double>{4});
   EXPECT_EQ(b.read_double("/x"), (std::vector<double>{4}));
   EXPECT_EQ(b.path(), file("mv.h5"));
+}
+
+// libhdf5 1.10 dies (SIGSEGV in H5HG_read) or loops for ever reading a variable-length string
+// whose global-heap reference is corrupt (the fuzzer's reproducers). Opening such a file is an
+// InputError naming the attribute, within seconds, and the process goes on.
+TEST_F(H5, CorruptGlobalHeapStringIsAnInputErrorNotACrash) {
+  for (const char* name : {"packing-20261259.h5", "packing-20261292.h5"}) {
+    const std::string path = std::string(TOMODEM_SOURCE_DIR) + "/tests/unit/fuzz/corpus/crashes/" + name;
+    if (!test::file_exists(path)) GTEST_SKIP() << "no reproducer " << path;
+    const auto t0 = std::chrono::steady_clock::now();
+    try {
+      File f(path, File::Mode::read);
+      (void)f.attr_string("/", "tool");
+      ADD_FAILURE() << name << ": no InputError";
+    } catch (const InputError& e) {
+      const std::string m = e.what();
+      EXPECT_NE(m.find(path), std::string::npos) << m;
+      EXPECT_NE(m.find("/@tool"), std::string::npos) << m;
+      EXPECT_NE(m.find("corrupt file"), std::string::npos) << m;
+    }
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 10.0) << name;
+  }
+  // A sound file with strings still opens and reads (the check runs on every read).
+  {
+    File f(file("ok.h5"), File::Mode::create);
+    f.set_attr("/", "tool", "tomodem-test");
+    f.set_attr("/group/sub", "name", "alumina");
+    f.close();
+  }
+  const File g(file("ok.h5"), File::Mode::read);
+  EXPECT_EQ(g.attr_string("/", "tool"), "tomodem-test");
+  EXPECT_EQ(g.attr_string("/group/sub", "name"), "alumina");
 }
 
 }  // namespace
