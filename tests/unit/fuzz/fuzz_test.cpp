@@ -335,6 +335,15 @@ const std::vector<KnownCrash> kKnownCrashes = {
     {"packing", "H5HG_read", "packing-20261292.h5",
      "libhdf5 1.10 loops for ever (H5C_protect <- H5HG_read) on a corrupt global-heap reference of a "
      "variable-length string attribute: tomodem::h5::File::attr_string <- Reader::materials (libs/core/src/h5.cpp)"},
+    {"packing", "H5T__conv_vlen", "packing-1235.h5",
+     "libhdf5 1.10 dies (SIGSEGV in H5FL_blk_free <- H5T__conv_vlen) converting a damaged variable-length string "
+     "attribute: tomodem::h5::File::attr_string <- read_packing_groups (libs/core/src/h5.cpp)"},
+    {"packing", "H5G__stab_iterate", "packing-1683.h5",
+     "libhdf5 1.10 dies (SIGSEGV in H5F__accum_read <- H5HL_protect <- H5G__stab_iterate) listing a group whose "
+     "local heap is damaged: tomodem::h5::File::children <- read_packing_groups (libs/core/src/h5.cpp)"},
+    {"packing", "H5F__dest", "packing-1685.h5",
+     "libhdf5 1.10 aborts ('double free or corruption', SIGABRT in H5MM_xfree <- H5C__flush_single_entry <- "
+     "H5F__dest) closing a damaged file: tomodem::h5::File::~File <- read_packing; tomodem-conduct exits 134"},
     {"scene", "hertz_restitution_for_damping", "scene-20261801.yaml",
      "restitution 1e-5 (values swapped by the mutator) makes load_scene take 7 s: hertz_damping_for_restitution "
      "integrates up to ~100 collisions of up to 10^7 RK4 steps each (libs/dem/src/model.cpp; e = 1e-8: 16 s)"},
