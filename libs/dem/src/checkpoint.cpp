@@ -112,6 +112,7 @@ void write_checkpoint(const std::string& path, const Simulation& sim, const std:
     f.write("/engine/scalars",
             std::vector<double>{double(e.forces_valid), e.dt, e.time, double(e.step), double(e.builds), e.dissipated,
                                 e.external_work, e.initial_energy});
+    f.close();  // a full disk is found here, before the rename
   }
   commit_output(path);
 }

@@ -44,6 +44,7 @@ void write_labels_h5(const std::string& path, const Mask& phases, const Labels& 
       f.write("/grains", grains->v, dims);
       geom("/grains");
     }
+    f.close();  // a full disk is found here, before the rename
   } catch (...) {
     std::remove(tmp.c_str());
     throw;

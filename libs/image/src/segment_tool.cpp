@@ -494,6 +494,7 @@ std::string run_phantom(const PhantomConfig& c) {
                                                                             : "0:solid,1:fine_pore,2:macropore"));
       f.write("/macropores", P.macropore_ids.v, dims);
       f.set_attr("/labels", "spacing", std::vector<double>(3, c.opt.voxel));
+      f.close();  // a full disk is found here, before the rename
     }
     commit_output(c.truth);
     s["truth"] = c.truth;

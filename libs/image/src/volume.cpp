@@ -400,6 +400,7 @@ void write_volume(const std::string& path, const Volume& v, bool as_uint16) {
       f.write("/volume", d, {v.dims.nz, v.dims.ny, v.dims.nx});
       f.set_attr("/volume", "spacing", std::vector<double>(v.spacing.begin(), v.spacing.end()));
       f.set_attr("/volume", "origin", std::vector<double>(v.origin.begin(), v.origin.end()));
+      f.close();  // a full disk is found here, before the rename
     }
     commit_output(path);
     return;
