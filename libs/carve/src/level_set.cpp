@@ -22,6 +22,7 @@
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/tool.hpp"
+#include "tomodem/image/outputs.hpp"
 
 namespace tomodem::carve {
 
@@ -65,75 +66,6 @@ class LevelSet final : public Macropores {
   std::string file_;
   Box box_;
   double voxel_ = 0, band_ = 0;
-};
-
-// OpenVDB reads a truncated file past its end without noticing: counts read from the failed
-// stream are garbage, and it loops and allocates without bound (a cut 60 kB level set grew to
-// 1.8 GB). So the file's own table of contents is walked first, with OpenVDB's readers for the
-// header, the file metadata and each grid descriptor: every grid must end inside the file.
-class TableOfContents final : public openvdb::io::Archive {
- public:
-  explicit TableOfContents(std::string path) : path_(std::move(path)) {}
-
-  void check() {
-    struct stat st {};
-    if (::stat(path_.c_str(), &st) != 0) throw InputError(path_, "", "", std::string("cannot open: ") + std::strerror(errno));
-    if (S_ISDIR(st.st_mode)) throw InputError(path_, "", "", "is a folder, not an OpenVDB level set (.vdb)");
-    std::ifstream is(path_, std::ios::binary);
-    if (!is) throw InputError(path_, "", "", std::string("cannot open: ") + std::strerror(errno));
-    is.seekg(0, std::ios::end);
-    const std::int64_t size = std::int64_t(is.tellg());
-    is.seekg(0);
-    if (size <= 0) throw InputError(path_, "", "0 bytes", "empty file, not an OpenVDB level set");
-    try {
-      readHeader(is);
-    } catch (const std::exception& e) {
-      throw InputError(path_, "header", "", std::string("not an OpenVDB file: ") + e.what());
-    }
-    if (!is) truncated("header", size);
-    try {
-      openvdb::io::StreamMetadata::Ptr meta(new openvdb::io::StreamMetadata);
-      meta->setSeekable(true);
-      openvdb::io::setStreamMetadataPtr(is, meta, /*transfer=*/false);
-      setFormatVersion(is);
-      setLibraryVersion(is);
-      setDataCompression(is);
-      openvdb::MetaMap file_meta;
-      file_meta.readMeta(is);
-      if (!is) truncated("file metadata", size);
-      if (!inputHasGridOffsets()) return;  // very old files: no offsets to check
-      const int32_t n = readGridCount(is);
-      if (!is || n < 0) truncated("grid count", size);
-      for (int32_t k = 0; k < n; ++k) {
-        const std::int64_t here = std::int64_t(is.tellg());
-        if (!is || here < 0 || here + 12 > size) truncated("grid " + std::to_string(k) + " descriptor", size);
-        openvdb::io::GridDescriptor gd;
-        gd.read(is);
-        const std::string name = "grid '" + openvdb::io::GridDescriptor::nameAsString(gd.uniqueName()) + "'";
-        if (!is) truncated(name, size);
-        if (gd.getGridPos() < here || gd.getBlockPos() < gd.getGridPos() || gd.getEndPos() < gd.getBlockPos())
-          throw InputError(path_, name, "offsets " + std::to_string(gd.getGridPos()) + ", " +
-                                            std::to_string(gd.getBlockPos()) + ", " + std::to_string(gd.getEndPos()),
-                           "corrupt grid descriptor (offsets out of order)");
-        if (gd.getEndPos() > size)
-          throw InputError(path_, name, "ends at byte " + std::to_string(gd.getEndPos()),
-                           "the file has only " + std::to_string(size) +
-                               " bytes: it is truncated (an interrupted copy or write?)");
-        is.seekg(gd.getEndPos());
-      }
-    } catch (const InputError&) {
-      throw;
-    } catch (const std::exception& e) {
-      throw InputError(path_, "", "", std::string("corrupt OpenVDB file: ") + e.what());
-    }
-  }
-
- private:
-  [[noreturn]] void truncated(const std::string& where, std::int64_t size) const {
-    throw InputError(path_, where, std::to_string(size) + " bytes",
-                     "the file ends inside its " + where + ": truncated or not an OpenVDB file");
-  }
-  std::string path_;
 };
 
 // A grid whose bytes are damaged (not cut: the table of contents is intact) can crash OpenVDB
@@ -197,7 +129,7 @@ double Macropores::band() const { return std::numeric_limits<double>::infinity()
 
 std::unique_ptr<Macropores> load_level_set(const std::string& path, const std::string& name, double metres_per_unit) {
   openvdb::initialize();
-  TableOfContents(path).check();
+  image::check_vdb_file(path);
   openvdb::io::File file(path);
   try {
     file.open(false);  // no delayed loading: the whole grid is read (and checked) here, not while sampling

@@ -10,6 +10,9 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <sys/stat.h>
+#include <cerrno>
+#include <cstring>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -105,20 +108,24 @@ void write_level_set(const std::string& path, const Mask& m, double half_width_v
 }
 
 namespace {
-// OpenVDB reads a truncated file past its end without noticing (garbage counts, unbounded
-// allocation: a cut level set grew the process to 1.8 GB). Walk the file's table of contents
-// first with OpenVDB's own readers: header, file metadata, then each grid descriptor, whose
-// grid must end inside the file. (libs/carve's level-set reader does the same.)
-class VdbContents final : public openvdb::io::Archive {
+// OpenVDB reads a truncated file past its end without noticing: counts read from the failed
+// stream are garbage, and it loops and allocates without bound (a cut 60 kB level set grew to
+// 1.8 GB). So the file's own table of contents is walked first, with OpenVDB's readers for the
+// header, the file metadata and each grid descriptor: every grid must end inside the file.
+class TableOfContents final : public openvdb::io::Archive {
  public:
-  explicit VdbContents(std::string path) : path_(std::move(path)) {}
+  explicit TableOfContents(std::string path) : path_(std::move(path)) {}
+
   void check() {
+    struct stat st {};
+    if (::stat(path_.c_str(), &st) != 0) throw InputError(path_, "", "", std::string("cannot open: ") + std::strerror(errno));
+    if (S_ISDIR(st.st_mode)) throw InputError(path_, "", "", "is a folder, not an OpenVDB level set (.vdb)");
     std::ifstream is(path_, std::ios::binary);
-    if (!is) throw InputError(path_, "", "", "cannot open the file for reading");
+    if (!is) throw InputError(path_, "", "", std::string("cannot open: ") + std::strerror(errno));
     is.seekg(0, std::ios::end);
     const std::int64_t size = std::int64_t(is.tellg());
     is.seekg(0);
-    if (size <= 0) throw InputError(path_, "size", "0 bytes", "empty file, not an OpenVDB level set");
+    if (size <= 0) throw InputError(path_, "", "0 bytes", "empty file, not an OpenVDB level set");
     try {
       readHeader(is);
     } catch (const std::exception& e) {
@@ -128,14 +135,14 @@ class VdbContents final : public openvdb::io::Archive {
     try {
       openvdb::io::StreamMetadata::Ptr meta(new openvdb::io::StreamMetadata);
       meta->setSeekable(true);
-      openvdb::io::setStreamMetadataPtr(is, meta, false);
+      openvdb::io::setStreamMetadataPtr(is, meta, /*transfer=*/false);
       setFormatVersion(is);
       setLibraryVersion(is);
       setDataCompression(is);
       openvdb::MetaMap file_meta;
       file_meta.readMeta(is);
       if (!is) truncated("file metadata", size);
-      if (!inputHasGridOffsets()) return;
+      if (!inputHasGridOffsets()) return;  // very old files: no offsets to check
       const int32_t n = readGridCount(is);
       if (!is || n < 0) truncated("grid count", size);
       for (int32_t k = 0; k < n; ++k) {
@@ -146,11 +153,13 @@ class VdbContents final : public openvdb::io::Archive {
         const std::string name = "grid '" + openvdb::io::GridDescriptor::nameAsString(gd.uniqueName()) + "'";
         if (!is) truncated(name, size);
         if (gd.getGridPos() < here || gd.getBlockPos() < gd.getGridPos() || gd.getEndPos() < gd.getBlockPos())
-          throw InputError(path_, name, "offsets " + std::to_string(gd.getGridPos()) + ", " + std::to_string(gd.getBlockPos()) +
-                                            ", " + std::to_string(gd.getEndPos()), "corrupt grid descriptor (offsets out of order)");
+          throw InputError(path_, name, "offsets " + std::to_string(gd.getGridPos()) + ", " +
+                                            std::to_string(gd.getBlockPos()) + ", " + std::to_string(gd.getEndPos()),
+                           "corrupt grid descriptor (offsets out of order)");
         if (gd.getEndPos() > size)
           throw InputError(path_, name, "ends at byte " + std::to_string(gd.getEndPos()),
-                           "the file has only " + std::to_string(size) + " bytes: it is truncated");
+                           "the file has only " + std::to_string(size) +
+                               " bytes: it is truncated (an interrupted copy or write?)");
         is.seekg(gd.getEndPos());
       }
     } catch (const InputError&) {
@@ -162,15 +171,19 @@ class VdbContents final : public openvdb::io::Archive {
 
  private:
   [[noreturn]] void truncated(const std::string& where, std::int64_t size) const {
-    throw InputError(path_, where, std::to_string(size) + " bytes", "the file ends inside its " + where + ": truncated");
+    throw InputError(path_, where, std::to_string(size) + " bytes",
+                     "the file ends inside its " + where + ": truncated or not an OpenVDB file");
   }
   std::string path_;
 };
+
 }  // namespace
+
+void check_vdb_file(const std::string& path) { TableOfContents(path).check(); }
 
 std::vector<double> sample_level_set(const std::string& path, const std::vector<Vec3>& pts) {
   openvdb::initialize();
-  VdbContents(path).check();
+  check_vdb_file(path);
   openvdb::io::File file(path);
   try {
     file.open();

@@ -21,6 +21,10 @@ void write_labels_h5(const std::string& path, const Mask& phases, const Labels& 
 /// sigma 1 voxel (sub-voxel surface instead of the voxel staircase), rebuilt by OpenVDB.
 void write_level_set(const std::string& path, const Mask& m, double half_width_vox = 3.0);
 /// Trilinear samples of the level set at world points given in m, returned in m.
+/// Refuses (InputError naming the file and the grid) an OpenVDB file that is cut short, empty, a
+/// folder or not OpenVDB, by walking its table of contents before OpenVDB reads it: OpenVDB reads
+/// past the end of a cut file without noticing (garbage counts, unbounded allocation).
+void check_vdb_file(const std::string& path);
 std::vector<double> sample_level_set(const std::string& path, const std::vector<Vec3>& world_points);
 
 /// What an overlay needs of the grey volume: the grey window and the three mid-planes (xy at
