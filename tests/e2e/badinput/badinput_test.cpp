@@ -79,7 +79,7 @@ const std::vector<Row> kRows = {
     {"pack", "{pack.yaml} -o {W}/p.h5 --json {pack.yaml}", 2, {"--json", "pack.yaml"}},
     {"pack", "{pack.yaml} -o {link:pack.yaml}", 2, {"-o", "link-pack.yaml"}},
     {"pack", "{pack.yaml} --no-tessellation -o {text:notadir}/p.h5", 2, {"-o", "notadir/p.h5"},
-     "exit 1 after the whole packing is made: 'notadir/p.h5.tmpNNN: cannot create HDF5 file' (names the temporary; no check of -o before the work)"},
+     "exit 1 after the whole packing is made: 'notadir/p.h5: cannot create HDF5 file: ... Not a directory' (no check of -o before the work)"},
     {"pack", "{edit:pack.yaml:diameter: 5.0e-5=>diameter: .nan} -o {W}/p.h5", 2, {"pack.yaml", "diameter", "nan"}},
     {"pack", "{edit:pack.yaml:density: 6000=>density: -6000} -o {W}/p.h5", 2, {"pack.yaml", "density", "-6000"}},
 
