@@ -62,11 +62,7 @@ int run(int argc, char** argv) {
     std::vector<std::string> inputs = {config};
     inputs.insert(inputs.end(), cfg.inputs.begin(), cfg.inputs.end());
     const std::string option = app.count("--output") ? "-o" : "output.packing";
-    refuse_output_over_input(out, option, inputs);
-    refuse_output_over_input(std::filesystem::path(out).replace_extension(".xdmf").string(), option + " (its .xdmf sidecar)", inputs);
-    refuse_output_over_input(json_path, "--json", inputs);
-    if (!json_path.empty()) refuse_output_over_input(json_path, "--json", {out, std::filesystem::path(out).replace_extension(".xdmf").string()});
-    if (std::filesystem::is_directory(out)) throw InputError("", option, out, "is a folder; give the packing file's name (.h5)");
+    check_outputs(inputs, {{option, out}, {option + " (its .xdmf sidecar)", xdmf_sidecar_of(out)}, {"--json", json_path}});
   }
   geometry::validate(s);  // before any work: bad input exits 2 with nothing written
 

@@ -90,7 +90,7 @@ int main(int argc, char** argv) {
     if (rw->parsed()) {
       std::vector<std::string> inputs;
       for (const auto& sm : row_summaries) inputs.push_back(sm.substr(sm.find('=') + 1));
-      tomodem::refuse_output_over_input(row_out, "-o", inputs);
+      tomodem::check_outputs(inputs, {{"-o", row_out}});
       tomodem::write_text_atomic(row_out, tp::make_row(row_values, row_summaries));
       return 0;
     }
@@ -104,7 +104,7 @@ int main(int argc, char** argv) {
     if (!shard.empty()) std::tie(ro.shard, ro.shards) = tp::parse_shard(shard);
     lo.check_inputs = !(dt->parsed() || sl->parsed());  // nothing runs, so inputs may come later
     const tp::Pipeline p = tp::load(file, lo);
-    if (json_file != "-") tomodem::refuse_output_over_input(json_file, "--json", {file, p.lock_file});
+    tomodem::check_outputs({file, p.lock_file}, {{"--json", json_file}});
     if (sl->parsed()) {
       const tp::SlurmFiles f = tp::slurm_scripts(p, so);
       tomodem::write_text_atomic(f.array_path, f.array_script);

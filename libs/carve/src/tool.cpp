@@ -71,9 +71,9 @@ void check_config(const CarveConfig& cfg) {
   if (o.threads < 0 || o.threads > 4096)
     throw InputError("", "--threads", std::to_string(o.threads), "must lie in [0, 4096] (0: OpenMP's default)");
   // Outputs before any work: none may overwrite an input, nor two share a file.
-  mechanics::check_outputs({cfg.packing, cfg.level_set, cfg.labels, cfg.mesh, cfg.spheres},
+  check_outputs({cfg.packing, cfg.level_set, cfg.labels, cfg.mesh, cfg.spheres},
                            {{"-o", cfg.output},
-                            {"-o (its .xdmf sidecar)", mechanics::xdmf_sidecar_of(cfg.output)},
+                            {"-o (its .xdmf sidecar)", xdmf_sidecar_of(cfg.output)},
                             {"--json", cfg.json},
                             {"--picture", cfg.picture}});
 }

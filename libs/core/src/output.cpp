@@ -143,6 +143,37 @@ void refuse_output_over_input(const std::string& output, const std::string& opti
   }
 }
 
+void check_outputs(const std::vector<std::string>& inputs, const std::vector<OutputName>& outputs) {
+  const auto is_file = [](const std::string& p) { return !p.empty() && p != "-"; };
+  for (const OutputName& o : outputs) {
+    if (!is_file(o.path)) continue;
+    refuse_output_over_input(o.path, o.option, inputs);
+    std::error_code ec;
+    if (fs::is_directory(o.path, ec)) throw InputError("", o.option, o.path, "is a folder; give the name of a file to write");
+    const fs::path parent = fs::path(o.path).parent_path();
+    if (!parent.empty() && !fs::is_directory(parent, ec))
+      throw InputError("", o.option, o.path, "the folder " + parent.string() + " does not exist");
+  }
+  const auto same = [](const std::string& a, const std::string& b) {
+    std::error_code ec;
+    return fs::weakly_canonical(fs::absolute(a, ec), ec) == fs::weakly_canonical(fs::absolute(b, ec), ec) ||
+           fs::equivalent(a, b, ec);
+  };
+  for (std::size_t a = 0; a < outputs.size(); ++a)
+    for (std::size_t b = a + 1; b < outputs.size(); ++b)
+      if (is_file(outputs[a].path) && is_file(outputs[b].path) && same(outputs[a].path, outputs[b].path))
+        throw InputError("", outputs[b].option, outputs[b].path,
+                         "the same file as " + outputs[a].option + " " + outputs[a].path +
+                             ": two outputs cannot share one file; choose another name");
+}
+
+std::string xdmf_sidecar_of(const std::string& path) {
+  const auto slash = path.find_last_of('/');
+  const auto dot = path.find_last_of('.');
+  const bool ext = dot != std::string::npos && (slash == std::string::npos || dot > slash + 1);
+  return (ext ? path.substr(0, dot) : path) + ".xdmf";
+}
+
 void refuse_output_outside(const std::string& path, const std::string& folder, const std::string& file,
                            const std::string& field) {
   const fs::path p(path);
@@ -187,6 +218,17 @@ void check_memory_request(double bytes, const std::string& file, const std::stri
   if (!(bytes <= have))  // also catches NaN and inf
     throw InputError(file, field, value,
                      what + " would need " + bytes_text(bytes) + " of memory; this machine has " + bytes_text(have));
+}
+
+std::string read_input_text(const std::string& path, const std::string& what) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) throw InputError(path, "", "", "is a folder, not a " + what);
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, "", "", "cannot open the " + what + ": " + std::strerror(errno));
+  std::ostringstream s;
+  s << in.rdbuf();
+  if (in.bad()) throw InputError(path, "", "", "cannot read the " + what);
+  return s.str();
 }
 
 std::string csv_table(const std::vector<std::string>& columns, const std::vector<std::vector<double>>& rows) {

@@ -484,13 +484,6 @@ struct Reader {
   }
 };
 
-std::string sidecar_path(const std::string& h5_path) {
-  const auto slash = h5_path.find_last_of('/');
-  const auto dot = h5_path.find_last_of('.');
-  const bool has_ext = dot != std::string::npos && (slash == std::string::npos || dot > slash + 1);
-  return (has_ext ? h5_path.substr(0, dot) : h5_path) + ".xdmf";
-}
-
 std::string xml_escape(const std::string& s) {
   std::string out;
   for (char c : s) {
@@ -552,8 +545,8 @@ void write_packing(const std::string& path, const Packing& p) {
   try {
     write_xdmf_sidecar(path, p.particles.size(), !p.particles.velocity.empty());
   } catch (...) {
-    std::remove(sidecar_path(path).c_str());
-    std::remove(temporary_path(sidecar_path(path)).c_str());
+    std::remove(xdmf_sidecar_of(path).c_str());
+    std::remove(temporary_path(xdmf_sidecar_of(path)).c_str());
     throw;
   }
 }
@@ -602,7 +595,7 @@ void write_xdmf_sidecar(const std::string& h5_path, std::size_t n, bool has_velo
   x << "    </Grid>\n"
     << "  </Domain>\n"
     << "</Xdmf>\n";
-  write_text_atomic(sidecar_path(h5_path), x.str());
+  write_text_atomic(xdmf_sidecar_of(h5_path), x.str());
 }
 
 }  // namespace tomodem

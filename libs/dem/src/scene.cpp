@@ -224,13 +224,7 @@ void read_scene(Scene& scene, const YAML::Node& doc, const std::string& path, in
 Scene load_scene(const std::string& path, int threads) {
   Scene scene;
   scene.file = path;
-  {
-    std::ifstream in(path);
-    if (!in) throw InputError(path, "", "", "cannot open the scene file");
-    std::ostringstream s;
-    s << in.rdbuf();
-    scene.text = s.str();
-  }
+  scene.text = read_input_text(path, "scene file");
   const YAML::Node doc = yaml::load(scene.text, path);
   if (!doc || !doc.IsMap()) throw InputError(path, "", yaml::text(doc), "the scene must be a YAML mapping of sections");
   try {

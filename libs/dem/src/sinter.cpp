@@ -745,13 +745,7 @@ SinteredPacking sinter_packing(const Packing& green, const std::string& source, 
   // The settings file: a `sintering` section and optional physics (tangential law, restitution).
   Scene scene;
   scene.file = settings_file;
-  {
-    std::ifstream in(settings_file);
-    if (!in) throw InputError(settings_file, "", "", "cannot open the sintering settings file");
-    std::ostringstream t;
-    t << in.rdbuf();
-    scene.text = t.str();
-  }
+  scene.text = read_input_text(settings_file, "sintering settings file");
   const YAML::Node doc = yaml::load(scene.text, settings_file);
   if (!doc || !doc.IsMap()) throw InputError(settings_file, "", "", "must be a YAML mapping with a sintering section");
   const Sec root(doc, "", settings_file);

@@ -22,11 +22,7 @@ void read_config(PackConfig& cfg, const YAML::Node& root, const std::string& pat
 
 PackConfig load_pack_config(const std::string& path) {
   PackConfig cfg;
-  std::ifstream in(path);
-  if (!in) throw InputError(path, "file", path, "cannot be opened for reading");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  cfg.text = ss.str();
+  cfg.text = read_input_text(path, "pack config");
   const YAML::Node root = yaml::load(cfg.text, path);
   if (!root || !root.IsMap()) throw InputError(path, "", yaml::text(root), "the config must be a YAML mapping of keys to values");
   try {

@@ -41,8 +41,9 @@ bool attempt(const std::vector<Vec3>& xw, const std::vector<double>& r, const Ce
   double mk[3];
   for (int k = 0; k < 3; ++k) {
     const Vec3 a = cell.h.col((k + 1) % 3), b = cell.h.col((k + 2) % 3);
-    mk[k] = margin / (vol / norm(cross(a, b)));  // margin in fractional units along k
-    if (mk[k] >= 1) return false;
+    // The margin in fractional units along k; at most one cell length, where every image of the
+    // 27 is in (a small box of few particles needs them all, and no more exist).
+    mk[k] = std::min(1.0, margin / (vol / norm(cross(a, b))));
   }
   std::vector<std::pair<WP, int>> pts;
   pts.reserve(n * 2);

@@ -142,39 +142,29 @@ std::string sibling(const std::string& path, const std::string& new_ext) {
 void check_outputs(const std::vector<std::pair<std::string, std::string>>& outs, const std::vector<std::string>& inputs,
                    std::size_t folders = 0) {
   namespace fs = std::filesystem;
-  std::vector<std::pair<std::string, fs::path>> seen;
-  for (const auto& [option, path] : outs) {
-    if (seen.size() < folders && !path.empty()) {
-      refuse_output_over_input(path, option, inputs, true);
-      if (fs::exists(path) && !fs::is_directory(path)) throw InputError("", option, path + "/", "is a file, not a folder");
-      if (fs::is_directory(path))
-        for (const auto& e : fs::directory_iterator(path)) {
-          const std::string name = e.path().filename().string();
-          if (!(e.is_regular_file() && name.size() == 14 && name.rfind("slice", 0) == 0 &&
-                name.compare(10, 4, ".tif") == 0 && name.find_first_not_of("0123456789", 5) == 10))
-            throw InputError("", option, path + "/",
-                             "the folder holds " + name + ", which is not a slice of an earlier stack; writing the stack "
-                             "replaces the folder: choose a new or empty folder");
-        }
-      std::error_code ec;
-      seen.emplace_back(option, fs::weakly_canonical(fs::absolute(path, ec), ec));
-      const fs::path parent = fs::path(path).parent_path();
-      if (!parent.empty() && !fs::is_directory(parent))
-        throw InputError("", option, path + "/", "the folder " + parent.string() + " does not exist");
+  std::vector<OutputName> files;
+  for (std::size_t k = 0; k < outs.size(); ++k) {
+    const auto& [option, path] = outs[k];
+    if (k >= folders || path.empty()) {
+      files.push_back({option, path});
       continue;
     }
-    if (path.empty() || path == "-") continue;
-    refuse_output_over_input(path, option, inputs);
-    std::error_code ec;
-    const fs::path canon = fs::weakly_canonical(fs::absolute(path, ec), ec);
-    for (const auto& [o2, p2] : seen)
-      if (p2 == canon) throw InputError("", option, path, "is also the " + o2 + " output: give each output its own name");
-    seen.emplace_back(option, canon);
+    refuse_output_over_input(path, option, inputs, true);
+    if (fs::exists(path) && !fs::is_directory(path)) throw InputError("", option, path + "/", "is a file, not a folder");
+    if (fs::is_directory(path))
+      for (const auto& e : fs::directory_iterator(path)) {
+        const std::string name = e.path().filename().string();
+        if (!(e.is_regular_file() && name.size() == 14 && name.rfind("slice", 0) == 0 &&
+              name.compare(10, 4, ".tif") == 0 && name.find_first_not_of("0123456789", 5) == 10))
+          throw InputError("", option, path + "/",
+                           "the folder holds " + name + ", which is not a slice of an earlier stack; writing the stack "
+                           "replaces the folder: choose a new or empty folder");
+      }
     const fs::path parent = fs::path(path).parent_path();
     if (!parent.empty() && !fs::is_directory(parent))
-      throw InputError("", option, path, "the folder " + parent.string() + " does not exist");
-    if (fs::is_directory(path)) throw InputError("", option, path, "is a folder; give a file name");
+      throw InputError("", option, path + "/", "the folder " + parent.string() + " does not exist");
   }
+  tomodem::check_outputs(inputs, files);
 }
 
 std::string phase_rule(const SegmentConfig& c) { return c.pores_bright ? "pores above the threshold" : "pores below the threshold"; }

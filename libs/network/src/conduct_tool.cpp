@@ -63,38 +63,6 @@ void require_range(const std::string& option, double v, double lo, bool lo_open,
   throw InputError("", option, text(v), range + " (" + meaning + ")");
 }
 
-std::string sidecar_of(const std::string& path) {
-  const auto s = path.find_last_of('/'), d = path.find_last_of('.');
-  return ((d == std::string::npos || (s != std::string::npos && d < s)) ? path : path.substr(0, d)) + ".xdmf";
-}
-
-// Outputs: none may name the input, an existing folder or a missing folder; no two one file.
-void check_outputs(const std::string& input, const std::vector<std::pair<std::string, std::string>>& outputs) {
-  namespace fs = std::filesystem;
-  const auto is_file = [](const std::string& p) { return !p.empty() && p != "-"; };
-  for (const auto& [option, path] : outputs) {
-    if (!is_file(path)) continue;
-    refuse_output_over_input(path, option, {input});
-    std::error_code ec;
-    if (fs::is_directory(path, ec)) throw InputError("", option, path, "is a folder; give the name of a file to write");
-    const fs::path parent = fs::path(path).parent_path();
-    if (!parent.empty() && !fs::is_directory(parent, ec))
-      throw InputError("", option, path, "the folder " + parent.string() + " does not exist");
-  }
-  for (std::size_t a = 0; a < outputs.size(); ++a)
-    for (std::size_t b = a + 1; b < outputs.size(); ++b) {
-      if (!is_file(outputs[a].second) || !is_file(outputs[b].second)) continue;
-      std::error_code ec;
-      const bool same = fs::weakly_canonical(fs::absolute(outputs[a].second, ec), ec) ==
-                            fs::weakly_canonical(fs::absolute(outputs[b].second, ec), ec) ||
-                        fs::equivalent(outputs[a].second, outputs[b].second, ec);
-      if (same)
-        throw InputError("", outputs[b].first, outputs[b].second,
-                         "the same file as " + outputs[a].first + " " + outputs[a].second +
-                             ": two outputs cannot share one file; choose another name");
-    }
-}
-
 std::string join(const std::vector<std::string>& v) {
   std::string s;
   for (const auto& x : v) s += (s.empty() ? "" : ",") + x;
@@ -128,7 +96,7 @@ std::string run_conduct(const ConductConfig& c) {
                      "applies to a composite electrode: give --electronic and --ionic too");
   for (int res : c.voxel)
     if (res < 2) throw InputError("", "--voxel", std::to_string(res), "need at least 2 voxels along the longest edge");
-  check_outputs(c.input, {{"-o", c.output}, {"-o (its .xdmf sidecar)", c.output.empty() ? "" : sidecar_of(c.output)},
+  check_outputs({c.input}, {{"-o", c.output}, {"-o (its .xdmf sidecar)", c.output.empty() ? "" : xdmf_sidecar_of(c.output)},
                           {"--json", c.json}});
   NetworkOptions no;
   no.phases = c.phases;

@@ -102,6 +102,7 @@ void read_file(const fs::path& path, const std::string& shown, const Location& f
   if (std::find(stack.begin(), stack.end(), key) != stack.end())
     fail(from, "include", shown, "include cycle: this file includes itself, directly or not");
   YAML::Node doc;
+  if (fs::is_directory(path, ec)) fail(from, root ? "" : "include", shown, "is a folder, not a pipeline file");
   try {
     doc = YAML::LoadFile(path.string());
   } catch (const YAML::BadFile&) {

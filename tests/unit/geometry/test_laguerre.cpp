@@ -35,3 +35,18 @@ TEST(Laguerre, RandomPolydisperseCellsSumToBoxVolume) {
     EXPECT_LE(t.local_solid_fraction[i], 1.0);  // a non-overlapping sphere lies inside its cell
   }
 }
+
+// A box of a few large particles: the first margin (two diameters and two spacings) is wider than
+// the box, so every one of the 27 images is needed; this used to fail with "0 vs 0 m^3".
+TEST(Laguerre, FewParticlesInASmallBoxUseEveryImage) {
+  for (const int n : {2, 8, 40}) {
+    const Cell cell = Cell::box({0, 0, 0}, {1, 1, 1}, true);
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> u(0, 1);
+    std::vector<double> r;
+    for (int i = 0; i < n; ++i) r.push_back(0.25 * std::cbrt(1.0 / n) * (0.8 + 0.4 * u(rng)));
+    const auto x = insert_random(r, {}, {}, cell, 3);
+    const auto t = laguerre(x, r, cell);
+    EXPECT_LT(std::abs(t.total_volume - 1.0), 1e-9) << n << " particles";
+  }
+}

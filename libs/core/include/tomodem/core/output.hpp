@@ -31,6 +31,17 @@ void install_cleanup_handlers();
 /// `output_is_folder`, an output folder that contains an input, or equals one, is refused too.
 void refuse_output_over_input(const std::string& output, const std::string& option,
                               const std::vector<std::string>& inputs, bool output_is_folder = false);
+/// An output as the user named it: the option ("--json") and the path.
+struct OutputName {
+  std::string option, path;
+};
+/// Checks every output before any work: refuses one that names an input (as
+/// refuse_output_over_input), an existing folder, a file in a folder that does not exist, and two
+/// outputs that name one file. "" and "-" (stdout) are not files and pass.
+void check_outputs(const std::vector<std::string>& inputs, const std::vector<OutputName>& outputs);
+/// "out.xdmf" for "out.h5": the sidecar the HDF5 writers add beside a file.
+std::string xdmf_sidecar_of(const std::string& path);
+
 /// Refuses (InputError) an output path that leaves `folder` (absolute, or with "..").
 void refuse_output_outside(const std::string& path, const std::string& folder, const std::string& file,
                            const std::string& field);
@@ -44,6 +55,10 @@ void check_memory_request(double bytes, const std::string& file, const std::stri
                           const std::string& value, const std::string& what);
 /// "1.5 GB" style text for byte counts in messages.
 std::string bytes_text(double bytes);
+
+/// The whole text of an input file (a scene, a config): InputError naming it when it is missing,
+/// a folder or unreadable. `what` says what the file is ("scene file").
+std::string read_input_text(const std::string& path, const std::string& what);
 
 /// A CSV time series with a header that carries the unit of each column ("time_s" style names).
 std::string csv_table(const std::vector<std::string>& columns, const std::vector<std::vector<double>>& rows);

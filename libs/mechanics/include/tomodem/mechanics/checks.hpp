@@ -3,7 +3,6 @@
 // input and against the other outputs, and option values where they are read. All refusals are
 // InputError (exit 2) naming the option and the value as given.
 #include <cmath>
-#include <filesystem>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -13,48 +12,10 @@
 
 namespace tomodem::mechanics {
 
-/// An output as the user named it: the option ("--json") and the path.
-struct OutputName {
-  std::string option, path;
-};
-
-/// "out.xdmf" for "out.h5": the sidecar that write_packing and the other HDF5 writers add.
-inline std::string xdmf_sidecar_of(const std::string& path) {
-  const auto slash = path.find_last_of('/');
-  const auto dot = path.find_last_of('.');
-  const bool ext = dot != std::string::npos && (slash == std::string::npos || dot > slash + 1);
-  return (ext ? path.substr(0, dot) : path) + ".xdmf";
-}
-
-/// Refuses outputs that name an input (refuse_output_over_input), an existing folder or a file
-/// in a folder that does not exist, and two outputs that name one file. "" and "-" (stdout) are
-/// not files and pass.
-inline void check_outputs(const std::vector<std::string>& inputs, const std::vector<OutputName>& outputs) {
-  namespace fs = std::filesystem;
-  const auto is_file = [](const std::string& p) { return !p.empty() && p != "-"; };
-  for (const OutputName& o : outputs) {
-    if (!is_file(o.path)) continue;
-    refuse_output_over_input(o.path, o.option, inputs);
-    std::error_code ec;
-    if (fs::is_directory(o.path, ec))
-      throw InputError("", o.option, o.path, "is a folder; give the name of a file to write");
-    const fs::path parent = fs::path(o.path).parent_path();
-    if (!parent.empty() && !fs::is_directory(parent, ec))
-      throw InputError("", o.option, o.path, "the folder " + parent.string() + " does not exist");
-  }
-  const auto same = [](const std::string& a, const std::string& b) {
-    std::error_code ec;
-    const fs::path pa = fs::weakly_canonical(fs::absolute(a, ec), ec);
-    const fs::path pb = fs::weakly_canonical(fs::absolute(b, ec), ec);
-    return pa == pb || fs::equivalent(a, b, ec);
-  };
-  for (std::size_t a = 0; a < outputs.size(); ++a)
-    for (std::size_t b = a + 1; b < outputs.size(); ++b)
-      if (is_file(outputs[a].path) && is_file(outputs[b].path) && same(outputs[a].path, outputs[b].path))
-        throw InputError("", outputs[b].option, outputs[b].path,
-                         "the same file as " + outputs[a].option + " " + outputs[a].path +
-                             ": two outputs cannot share one file; choose another name");
-}
+// The output checks live in core (tomodem::check_outputs, OutputName, xdmf_sidecar_of).
+using tomodem::check_outputs;
+using tomodem::OutputName;
+using tomodem::xdmf_sidecar_of;
 
 /// The value as text for messages ("-5", "nan", "1e+300").
 inline std::string option_text(double v) {
