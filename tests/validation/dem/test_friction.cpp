@@ -13,6 +13,10 @@ using namespace tomodem::dem::testing;
 
 namespace {
 constexpr double R = 1e-3, rho = 2500, E = 1e8, nu = 0.25, mu = 0.3;
+// E* = E/(2(1 − ν²)) and G* = G/(2(2 − ν)), G = E/(2(1 + ν)), for a sphere on a wall of its own
+// material (docs/physics.md#notation), written out instead of read from ContactModel::finalize.
+constexpr double kEstar = E / (2 * (1 - nu * nu));
+constexpr double kGstar = E / (2 * (1 + nu)) / (2 * (2 - nu));
 // Overlap 1e-3 R: a small-strain Hertz contact (a/R = 0.03).
 constexpr double delta = 1e-3 * R;
 }  // namespace
@@ -24,10 +28,9 @@ constexpr double delta = 1e-3 * R;
 // round-off (≈1e-15 per step over ~2000 steps), so the tolerance is 1e-9 relative.
 TEST(TangentialMindlin, SpringFollowsMindlinStiffnessThenSlipsAtCoulombLimit) {
   const ContactModel m = model(NormalLaw::hertz, TangentialLaw::mindlin, material(E, nu, rho), 1.0, mu);
-  const PairParams& pp = m.pair(0, 0);
   const double a = std::sqrt(R * delta);
-  const double fn = 4.0 / 3.0 * pp.E_star * std::sqrt(R) * std::pow(delta, 1.5);
-  const double kt = 8 * pp.G_star * a;
+  const double fn = 4.0 / 3.0 * kEstar * std::sqrt(R) * std::pow(delta, 1.5);
+  const double kt = 8 * kGstar * a;
   const double u_slip = mu * fn / kt;
 
   Particles p;
@@ -76,10 +79,9 @@ TEST(TangentialMindlin, SpringFollowsMindlinStiffnessThenSlipsAtCoulombLimit) {
 // acceleration is exact (F_t sits on the cone). Tolerance 1%, the issue's.
 TEST(TangentialMindlin, StickBelowCoulombLimitSlipAbove) {
   const ContactModel m = model(NormalLaw::hertz, TangentialLaw::mindlin, material(E, nu, rho), 0.3, mu);
-  const PairParams& pp = m.pair(0, 0);
   const double a = std::sqrt(R * delta);
-  const double fn = 4.0 / 3.0 * pp.E_star * std::sqrt(R) * std::pow(delta, 1.5);
-  const double kt = 8 * pp.G_star * a;
+  const double fn = 4.0 / 3.0 * kEstar * std::sqrt(R) * std::pow(delta, 1.5);
+  const double kt = 8 * kGstar * a;
   const double f_limit = 2 * mu * fn;
 
   for (double load : {0.95, 1.05}) {

@@ -14,6 +14,10 @@ using namespace tomodem::dem::testing;
 
 namespace {
 constexpr double R = 1e-3, rho = 2500, E = 1e8, nu = 0.25, mu = 0.2, g = 9.81;
+// E* = E/(2(1 − ν²)) and G* = G/(2(2 − ν)), G = E/(2(1 + ν)), for a sphere on a wall of its own
+// material (docs/physics.md#notation), written out instead of read from ContactModel::finalize.
+constexpr double kEstar = E / (2 * (1 - nu * nu));
+constexpr double kGstar = E / (2 * (1 + nu)) / (2 * (2 - nu));
 
 struct Fit {
   double acceleration, slip_velocity, speed;
@@ -23,20 +27,19 @@ struct Fit {
 /// over the second half, after the start-up transient of the tangential spring.
 Fit run_incline(double theta) {
   const ContactModel m = model(NormalLaw::hertz, TangentialLaw::mindlin, material(E, nu, rho), 0.5, mu);
-  const PairParams& pp = m.pair(0, 0);
   Particles p;
   p.add({0, 0, R}, R, rho, 0);
   const double mass = p.m[0];
   // Start at the static overlap under the normal load m g cosθ (no normal oscillation).
   const double fn = mass * g * std::cos(theta);
-  const double delta = std::pow(fn / (4.0 / 3.0 * pp.E_star * std::sqrt(R)), 2.0 / 3.0);
+  const double delta = std::pow(fn / (4.0 / 3.0 * kEstar * std::sqrt(R)), 2.0 / 3.0);
   p.x[0].z = R - delta;
   Simulation sim(std::move(p), Cell::box({-10 * R, -10 * R, -10 * R}, {10 * R, 10 * R, 10 * R}, false), m);
   Wall w;
   w.normal = {0, 0, 1};
   sim.add_wall(w);
   sim.body_forces().gravity = {g * std::sin(theta), 0, -g * std::cos(theta)};
-  const double kt = 8 * pp.G_star * std::sqrt(R * delta);
+  const double kt = 8 * kGstar * std::sqrt(R * delta);
   const double period = 2 * M_PI * std::sqrt(mass / kt);
   const double dt = std::min(0.2 * sim.critical_time_step(), period / 60);
   sim.set_time_step(dt);

@@ -3,8 +3,10 @@
 // the box, and a loose (below-jamming) solid-fraction target reached exactly.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <set>
 
 #include "tomodem/geometry/pack.hpp"
@@ -26,6 +28,27 @@ PhaseSpec phase(const std::string& name, double f, PsdKind k, double d, double s
   p.psd.basis = b;
   return p;
 }
+// Independent of the packer's own report (psd_max_cdf_deviation): the Kolmogorov–Smirnov
+// distance between the empirical CDF of `d`, weighted by d^p (p = 0 by number, 3 by volume),
+// and the requested lognormal (median d50, σ) cut at ±3σ and renormalised
+// (SizeDistribution::truncation), written out here.
+double ks_lognormal(std::vector<double> d, int p, double d50, double sigma) {
+  const auto Phi = [](double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); };
+  const auto F = [&](double x) {
+    const double z = std::log(x / d50) / sigma;
+    return z <= -3 ? 0.0 : z >= 3 ? 1.0 : (Phi(z) - Phi(-3)) / (Phi(3) - Phi(-3));
+  };
+  std::sort(d.begin(), d.end());
+  double total = 0;
+  for (double x : d) total += std::pow(x, p);
+  double below = 0, dist = 0;
+  for (double x : d) {
+    const double w = std::pow(x, p), f = F(x);
+    dist = std::max({dist, std::abs(f - below / total), std::abs((below + w) / total - f)});
+    below += w;
+  }
+  return dist;
+}
 }  // namespace
 
 TEST(Pack, TwoPhaseLognormalFractionsAndPsdAsRequested) {
@@ -38,8 +61,22 @@ TEST(Pack, TwoPhaseLognormalFractionsAndPsdAsRequested) {
   const auto out = make_packing(s);
   const auto& r = out.report;
   ASSERT_EQ(r.phases.size(), 2u);
+  // The diameters of each phase in the packing itself, against the request (NiO by volume,
+  // YSZ by number); the packer's own figure is printed beside the independent one.
+  ASSERT_EQ(out.packing.materials.size(), 2u);
+  std::vector<double> d[2];
+  for (std::size_t i = 0; i < out.packing.particles.size(); ++i)
+    d[out.packing.particles.phase[i]].push_back(2 * out.packing.particles.radius[i]);
+  for (int ph = 0; ph < 2; ++ph) {
+    const bool nio = out.packing.materials[ph].name == "NiO";
+    const double ks = nio ? ks_lognormal(d[ph], 3, 1e-6, 0.3) : ks_lognormal(d[ph], 0, 0.6e-6, 0.25);
+    std::printf("%s: %zu particles, KS %.3e (packer reports %.3e)\n", out.packing.materials[ph].name.c_str(),
+                d[ph].size(), ks, r.phases[ph].psd_max_cdf_deviation);
+    // NiO by volume: 885 particles weighted by d³, measured 8.4e-3: the 2 % of issue 3. YSZ by
+    // number: stratified quantiles give 1/(2N) = 2.4e-4 (measured 2.4e-4): limit 2e-3.
+    EXPECT_LT(ks, nio ? 0.02 : 2e-3) << out.packing.materials[ph].name;
+  }
   for (const auto& p : r.phases) {
-    EXPECT_LT(p.psd_max_cdf_deviation, 0.02) << p.name;                   // issue 3: 2 %
     EXPECT_NEAR(p.realised_fraction, p.requested_fraction, 0.01) << p.name;  // issue 3: 1 %
   }
   EXPECT_NEAR(r.solid_fraction, 0.35, 1e-9);  // the final affine step lands on the target
