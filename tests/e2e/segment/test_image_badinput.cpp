@@ -196,6 +196,8 @@ struct Row {
   int code;                           // expected exit code
   std::vector<std::string> names;     // stderr must contain each
 };
+// ctest shows the row's name, not its bytes.
+void PrintTo(const Row& r, std::ostream* os) { *os << r.name; }
 
 const std::string kSeg = " -q -o {W}/l.h5";  // labels output of the segment rows (absent after a refusal)
 
