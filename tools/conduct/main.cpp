@@ -12,8 +12,12 @@
 int main(int argc, char** argv) {
   return tomodem::run_tool("tomodem-conduct", [&]() -> int {
     tomodem::network::ConductConfig c;
-    CLI::App app{"Effective conductivity of a packing as a resistor network (docs/conduct.md)", "tomodem-conduct"};
-    app.add_option("input", c.input, "packing (.h5, shared data model)")->required();
+    CLI::App app{"Effective conductivity of a packing as a resistor network, or of a segmented image (docs/conduct.md)", "tomodem-conduct"};
+    app.add_option("input", c.input, "packing (.h5, shared data model); or --image");
+    app.add_option("--image", c.image, "transport in a segmented label volume (.h5 /labels from tomodem-segment)");
+    app.add_option("--phase", c.phase, "--image: the conducting label (conductivity 1)");
+    app.add_option("--phase-conductivity", c.phase_conductivity, "--image: several labels, e.g. 1:1.0,2:0.3");
+    app.add_option("--sides", c.sides, "--image: faces parallel to the axis: noflux | periodic")->capture_default_str();
     app.add_option("-o,--output", c.output, "potentials and currents per particle and edge (.h5 + .xdmf)");
     app.add_option("--json", c.json, "write the JSON summary to FILE (default: stdout)");
     app.add_option("--phases", c.phases, "conducting phases by material name (default: all)")->delimiter(',');
@@ -50,7 +54,7 @@ int main(int argc, char** argv) {
     if (threads < 0 || threads > 4096)
       throw tomodem::InputError("", "--threads", std::to_string(threads), "must lie in [0, 4096] (0: OpenMP's default)");
     if (threads > 0) omp_set_num_threads(threads);
-    tomodem::info("reading " + c.input);
+    tomodem::info("reading " + (c.image.empty() ? c.input : c.image));
     const std::string summary = tomodem::network::run_conduct(c);
     if (c.json.empty() || c.json == "-") std::cout << summary;
     return tomodem::exit_code::ok;

@@ -1,6 +1,11 @@
 #include "tomodem/network/conduct_tool.hpp"
 
+#include <algorithm>
+#include <array>
 #include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <set>
 #include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -12,6 +17,7 @@
 #include "tomodem/core/tool.hpp"
 #include "tomodem/network/conductivity.hpp"
 #include "tomodem/network/electrode.hpp"
+#include "tomodem/network/image_transport.hpp"
 #include "tomodem/network/output.hpp"
 #include "tomodem/network/voxel.hpp"
 
@@ -68,9 +74,170 @@ std::string join(const std::vector<std::string>& v) {
   for (const auto& x : v) s += (s.empty() ? "" : ",") + x;
   return s;
 }
+
+// --phase-conductivity "1:1.0,2:0.3": label (0..255) : conductivity (finite, >= 0), at least one > 0.
+std::array<double, 256> parse_phase_table(const std::string& t) {
+  std::array<double, 256> table{};
+  std::set<long> seen;
+  std::stringstream ss(t);
+  std::string item;
+  bool any = false;
+  while (std::getline(ss, item, ',')) {
+    const auto colon = item.find(':');
+    char* end = nullptr;
+    if (colon == std::string::npos)
+      throw InputError("", "--phase-conductivity", t, "entry '" + item + "' is not LABEL:CONDUCTIVITY (e.g. 1:1.0,2:0.3)");
+    const std::string ls = item.substr(0, colon), vs = item.substr(colon + 1);
+    const long label = std::strtol(ls.c_str(), &end, 10);
+    if (ls.empty() || *end != '\0' || label < 0 || label > 255)
+      throw InputError("", "--phase-conductivity", t, "label '" + ls + "' must be an integer in [0, 255]");
+    const double v = std::strtod(vs.c_str(), &end);
+    if (vs.empty() || *end != '\0' || !std::isfinite(v) || v < 0)
+      throw InputError("", "--phase-conductivity", t, "conductivity '" + vs + "' of label " + ls + " must be finite and >= 0");
+    if (!seen.insert(label).second)
+      throw InputError("", "--phase-conductivity", t, "label " + ls + " given twice");
+    table[label] = v;
+    any = any || v > 0;
+  }
+  if (!any) throw InputError("", "--phase-conductivity", t, "no label conducts (every conductivity is 0 or none given)");
+  return table;
+}
+
+json image_axis_json(const ImageAxisResult& a) {
+  return {{"percolates", a.percolates},
+          {"sigma_eff", a.sigma_eff},
+          {"porosity", a.porosity},
+          {"tortuosity", finite(a.tortuosity)},
+          {"sigma_eff_error", a.sigma_eff_error},
+          {"flux_imbalance", a.flux_imbalance},
+          {"residual", a.residual},
+          {"current_in_A_per_V", a.current_in},
+          {"current_out_A_per_V", a.current_out},
+          {"spanning_fraction", a.spanning_fraction},
+          {"dead_end_fraction", a.dead_end_fraction},
+          {"isolated_fraction", a.isolated_fraction},
+          {"solver", {{"unknowns", a.unknowns}, {"nonzeros", a.nonzeros}, {"iterations", a.iterations},
+                      {"converged", a.converged}, {"multigrid", {{"levels", a.levels}, {"operator_complexity", a.operator_complexity}}},
+                      {"setup_time_s", a.setup_time_s}, {"solve_time_s", a.solve_time_s}}},
+          {"wall_time_s", a.wall_time_s}};
+}
+
+// tomodem-conduct --image: transport in a segmented label volume (image_transport.hpp).
+std::string run_image_conduct(const ConductConfig& c) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (!c.input.empty())
+    throw InputError("", "--image", c.image, "give either a packing (positional input '" + c.input + "') or --image, not both");
+  if (!c.voxel.empty()) throw InputError("", "--voxel", std::to_string(c.voxel.front()), "applies to a packing, not to --image");
+  if (!c.electronic.empty() || !c.ionic.empty())
+    throw InputError("", c.electronic.empty() ? "--ionic" : "--electronic", join(c.electronic.empty() ? c.ionic : c.electronic),
+                     "applies to a packing; with --image give --phase-conductivity");
+  if (c.bc != "electrodes") throw InputError("", "--bc", c.bc, "applies to a packing; with --image use --sides noflux|periodic");
+  if (c.sides != "noflux" && c.sides != "periodic")
+    throw InputError("", "--sides", c.sides, "expected 'noflux' or 'periodic'");
+  std::vector<int> axes;
+  const std::string ax = c.axes == "all" ? "xyz" : c.axes;
+  for (char ch : ax) {
+    if (ch < 'x' || ch > 'z') throw InputError("", "--axis", c.axes, "expected letters from x, y, z or 'all'");
+    if (std::find(axes.begin(), axes.end(), ch - 'x') == axes.end()) axes.push_back(ch - 'x');
+  }
+  if (axes.empty()) throw InputError("", "--axis", c.axes, "no axis given");
+  require_range("--tolerance", c.tolerance, 0, true, 1, true, "relative residual of the CG solve");
+  if (c.max_iterations < 0)
+    throw InputError("", "--max-iterations", std::to_string(c.max_iterations), "must be >= 0 (0: automatic)");
+  std::array<double, 256> table{};
+  if (c.phase >= 0 && !c.phase_conductivity.empty())
+    throw InputError("", "--phase", std::to_string(c.phase), "give --phase or --phase-conductivity, not both");
+  if (!c.phase_conductivity.empty()) {
+    table = parse_phase_table(c.phase_conductivity);
+  } else if (c.phase == -1) {
+    throw InputError("", "--image", c.image, "give the conducting phase: --phase N or --phase-conductivity N:S,...");
+  } else if (c.phase < 0 || c.phase > 255) {
+    throw InputError("", "--phase", std::to_string(c.phase), "must be a label in [0, 255]");
+  } else {
+    table[c.phase] = 1.0;
+  }
+  check_outputs({c.image}, {{"-o", c.output}, {"-o (its .xdmf sidecar)", c.output.empty() ? "" : xdmf_sidecar_of(c.output)},
+                          {"--json", c.json}});
+  const auto shape = label_image_shape(c.image);
+  const double nv = static_cast<double>(shape[0]) * shape[1] * shape[2];
+  char count[64];
+  std::snprintf(count, sizeof count, "%zux%zux%zu voxels", shape[0], shape[1], shape[2]);
+  check_memory_request(nv * image_transport_bytes_per_voxel(!c.output.empty()) +
+                           (c.output.empty() ? 0.0 : nv * 8.0 * (axes.size() - 1)),
+                       c.image, "/labels", count, "the transport solve of " + std::string(count));
+  const LabelImage im = read_label_image(c.image);
+  std::array<std::size_t, 256> hist{};
+  for (uint8_t v : im.v) ++hist[v];
+  std::string present;
+  for (int l = 0; l < 256; ++l)
+    if (hist[l]) present += (present.empty() ? "" : ", ") + std::to_string(l);
+  std::size_t conducting = 0;
+  for (int l = 0; l < 256; ++l)
+    if (table[l] > 0) conducting += hist[l];
+  if (conducting == 0)
+    throw InputError(c.image, "/labels",
+                     c.phase >= 0 ? "phase " + std::to_string(c.phase) : "phases " + c.phase_conductivity,
+                     "absent from the volume (labels present: " + present + ")");
+
+  json out = {{"tool", "tomodem-conduct"}, {"version", version_string()}, {"image", c.image}, {"dataset", "/labels"},
+              {"grid", {im.nx, im.ny, im.nz}}, {"spacing_m", im.spacing}, {"sides", c.sides},
+              {"units", {{"sigma_eff", "relative to sigma0 (the largest conductivity given)"}, {"wall_time_s", "s"}}}};
+  if (c.phase >= 0) out["phase"] = c.phase;
+  json tab = json::object();
+  for (int l = 0; l < 256; ++l)
+    if (table[l] > 0) tab[std::to_string(l)] = table[l];
+  out["phase_conductivity"] = tab;
+  out["solver"] = {{"method", "conjugate gradient"}, {"preconditioner", "amg"}, {"tolerance", c.tolerance}};
+  ImageTransportOptions io;
+  io.conductivity = table;
+  io.periodic_sides = c.sides == "periodic";
+  io.tolerance = c.tolerance;
+  io.max_iterations = c.max_iterations;
+  io.fields = !c.output.empty();
+  std::vector<ImageAxisResult> results;
+  json sigma = json::object(), tau = json::object(), err = json::object(), per_axis = json::object();
+  for (int k : axes) {
+    io.axis = k;
+    info(std::string("solving along ") + kAxis[k]);
+    results.push_back(image_conductivity(im, io));
+    const ImageAxisResult& r = results.back();
+    sigma[kAxis[k]] = r.sigma_eff;
+    tau[kAxis[k]] = finite(r.tortuosity);
+    err[kAxis[k]] = r.sigma_eff_error;
+    per_axis[kAxis[k]] = image_axis_json(r);
+    if (!r.percolates)
+      warn(std::string("no spanning path of the conducting phase along ") + kAxis[k] +
+           ": sigma_eff = 0, tortuosity = inf (null in the JSON)");
+    else if (!r.converged)
+      warn(std::string("solver did not reach the tolerance along ") + kAxis[k]);
+    if (!io.fields) results.back() = ImageAxisResult{};
+  }
+  out["porosity"] = results.empty() ? 0.0 : per_axis[kAxis[axes.front()]]["porosity"].get<double>();
+  out["sigma_eff"] = sigma;
+  out["tortuosity"] = tau;
+  out["sigma_eff_error"] = err;
+  out["axes"] = per_axis;
+  if (!c.output.empty()) {
+    std::ostringstream params;
+    params << "image: " << c.image << "\nphase_conductivity: " << tab.dump() << "\nsides: " << c.sides
+           << "\naxes: " << ax << "\ntolerance: " << c.tolerance << "\n";
+    write_image_fields(c.output, im, results, params.str());
+    out["outputs"] = {{"fields", c.output}, {"xdmf", xdmf_sidecar_of(c.output)}};
+  }
+  out["wall_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const std::string text = out.dump(2) + "\n";
+  if (!c.json.empty() && c.json != "-") write_text_atomic(c.json, text);
+  return text;
+}
 }  // namespace
 
 std::string run_conduct(const ConductConfig& c) {
+  if (!c.image.empty()) return run_image_conduct(c);
+  if (c.input.empty()) throw InputError("", "input", "", "give a packing (.h5) or --image LABELS.h5");
+  if (c.phase >= 0 || !c.phase_conductivity.empty() || c.sides != "noflux")
+    throw InputError("", c.phase >= 0 ? "--phase" : !c.phase_conductivity.empty() ? "--phase-conductivity" : "--sides",
+                     c.phase >= 0 ? std::to_string(c.phase) : !c.phase_conductivity.empty() ? c.phase_conductivity : c.sides,
+                     "applies to --image; a packing takes --phases and --bc");
   const auto t0 = std::chrono::steady_clock::now();
   if (c.bc != "electrodes" && c.bc != "periodic")
     throw InputError("", "--bc", c.bc, "expected 'electrodes' or 'periodic'");

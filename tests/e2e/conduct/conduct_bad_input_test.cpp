@@ -36,6 +36,17 @@ void make_inputs(const fs::path& d) {
     f.write("/bonds/radius", a);
   });
   write_not_packings(d, d / "lattice.h5", p);
+  // --image: a 6×5×4 label volume (z, y, x) with a channel of label 1 along x.
+  auto labels = [&](const fs::path& f, std::vector<double> spacing) {
+    std::vector<uint8_t> v(4 * 5 * 6, 0);
+    for (std::size_t x = 0; x < 6; ++x) v[(2 * 5 + 2) * 6 + x] = 1;
+    h5::File h(f.string(), h5::File::Mode::create);
+    h.write("/labels", v, {4, 5, 6});
+    h.set_attr("/labels", "spacing", spacing);
+    h.close();
+  };
+  labels(d / "labels.h5", {1e-6, 1e-6, 1e-6});
+  labels(d / "labels_nan.h5", {1e-6, NAN, 1e-6});
 }
 
 const InputCache& inputs() {
@@ -60,6 +71,21 @@ const std::vector<Case> kCases = {
     {"hdf5_not_a_packing", "conduct", "{D}/plain.h5", 2, {"plain.h5", "tomodem_format"}},
     {"missing_radius", "conduct", "{D}/noradius.h5", 2, {"noradius.h5", "/particles/radius"}},
     {"wrong_shape", "conduct", "{D}/shape.h5", 2, {"shape.h5", "/particles/position"}},
+    // ---- --image (a segmented label volume)
+    {"image_phase_absent", "conduct", "--image {D}/labels.h5 --phase 7", 2, {"labels.h5", "/labels", "phase 7", "absent"}},
+    {"image_spacing_nan", "conduct", "--image {D}/labels_nan.h5 --phase 1", 2, {"labels_nan.h5", "spacing", "nan"}},
+    {"image_wrong_dataset", "conduct", "--image {D}/lattice.h5 --phase 1", 2, {"lattice.h5", "/labels", "missing"}},
+    {"image_not_hdf5", "conduct", "--image {D}/text.h5 --phase 1", 2, {"text.h5"}},
+    {"image_output_is_input", "conduct", "--image {D}/labels.h5 --phase 1 -o {D}/labels.h5", 2, {"-o", "labels.h5"}},
+    {"image_json_is_input", "conduct", "--image {D}/labels.h5 --phase 1 --json {D}/labels.h5", 2, {"--json", "labels.h5"}},
+    {"image_no_phase", "conduct", "--image {D}/labels.h5", 2, {"--phase"}},
+    {"image_phase_out_of_range", "conduct", "--image {D}/labels.h5 --phase 300", 2, {"--phase", "300"}},
+    {"image_phase_table_negative", "conduct", "--image {D}/labels.h5 --phase-conductivity 1:-2", 2,
+     {"--phase-conductivity", "1:-2"}},
+    {"image_phase_table_nan", "conduct", "--image {D}/labels.h5 --phase-conductivity 1:nan", 2,
+     {"--phase-conductivity", "nan"}},
+    {"image_sides_unknown", "conduct", "--image {D}/labels.h5 --phase 1 --sides mirror", 2, {"--sides", "mirror"}},
+    {"image_and_packing", "conduct", L + " --image {D}/labels.h5 --phase 1", 2, {"--image", "lattice.h5"}},
     // ---- options
     {"voxel_resolution_huge", "conduct", L + " --voxel 100000", 2, {"--voxel", "100000", "would need", "this machine has"}},
     {"voxel_resolution_one", "conduct", L + " --voxel 1", 2, {"--voxel", "1"}},
@@ -90,6 +116,13 @@ INSTANTIATE_TEST_SUITE_P(Rows, ConductBadInput, ::testing::ValuesIn(kCases), cas
 TEST(ConductBadInputControl, TheValidInputRuns) {
   const std::string cmd = std::string(TOMODEM_BIN_DIR) + "/tomodem-conduct " +
                           (inputs().dir() / "lattice.h5").string() + " -q > /dev/null 2>&1";
+  EXPECT_EQ(std::system(cmd.c_str()), 0);
+}
+
+// The valid label volume runs (exit 0), so the --image rows fail for their defect only.
+TEST(ConductBadInputControl, TheValidImageRuns) {
+  const std::string cmd = std::string(TOMODEM_BIN_DIR) + "/tomodem-conduct --image " +
+                          (inputs().dir() / "labels.h5").string() + " --phase 1 -q > /dev/null 2>&1";
   EXPECT_EQ(std::system(cmd.c_str()), 0);
 }
 

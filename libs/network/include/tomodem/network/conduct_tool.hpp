@@ -23,6 +23,11 @@ struct ConductConfig {
   double charge_transfer = 0;        ///< S/m per metre of TPB
   // Voxel cross-check: resolutions (voxels along the longest edge), e.g. {16, 32, 64}.
   std::vector<int> voxel;
+  // Transport in a segmented image (--image): a label volume instead of a packing.
+  std::string image;                 ///< labels (.h5, dataset /labels) from tomodem-segment
+  int phase = -1;                    ///< the conducting label (σ = 1); -1: not given
+  std::string phase_conductivity;    ///< "1:1.0,2:0.3": several conducting labels
+  std::string sides = "noflux";      ///< faces parallel to the axis: "noflux" | "periodic"
 };
 
 /// Runs the computation and writes the outputs (atomically). Returns the JSON summary text.
