@@ -54,7 +54,7 @@ int main(int argc, char** argv) {
     if (threads < 0 || threads > 4096)
       throw tomodem::InputError("", "--threads", std::to_string(threads), "must lie in [0, 4096] (0: OpenMP's default)");
     if (threads > 0) omp_set_num_threads(threads);
-    tomodem::info("reading " + (c.image.empty() ? c.input : c.image));
+    if (!c.image.empty() || !c.input.empty()) tomodem::info("reading " + (c.image.empty() ? c.input : c.image));
     const std::string summary = tomodem::network::run_conduct(c);
     if (c.json.empty() || c.json == "-") std::cout << summary;
     return tomodem::exit_code::ok;
