@@ -365,6 +365,9 @@ std::string run_conduct(const ConductConfig& c) {
   if (!c.voxel.empty()) {
     json vx = json::array();
     std::vector<double> s;
+    bool resolved = true;
+    long need_min = 0, need_median = 0;
+    double neck_min_vox = 0;
     for (int res : c.voxel) {
       VoxelOptions vo;
       vo.axis = axes.front();
@@ -372,29 +375,72 @@ std::string run_conduct(const ConductConfig& c) {
       vo.phases = c.phases;
       vo.solver = co.solver;
       vo.source = c.input;
+      vo.neck_radii = net.contact_radius;
       const VoxelResult r = voxel_conductivity(pk, vo);
       s.push_back(r.sigma_eff);
+      resolved = r.necks_resolved;  // of the finest grid (the last one given)
+      need_min = r.required_resolution_min;
+      need_median = r.required_resolution_median;
+      neck_min_vox = r.neck_min_voxels;
       vx.push_back({{"resolution", res},
                     {"grid", {r.nx, r.ny, r.nz}},
                     {"voxel_size_m", r.voxel_size},
+                    {"voxels_per_diameter", r.voxels_per_diameter},
+                    {"neck_min_voxels", r.neck_min_voxels},
+                    {"neck_median_voxels", r.neck_median_voxels},
                     {"solid_fraction", r.solid_fraction},
                     {"sigma_eff", r.sigma_eff},
                     {"percolates", r.percolates},
+                    {"conservation_error", r.conservation_error},
                     {"solver", solver_json(r.solver)},
                     {"wall_time_s", r.wall_time_s}});
     }
-    out["voxel"] = {{"axis", kAxis[axes.front()]}, {"runs", vx}};
+    out["voxel"] = {{"axis", kAxis[axes.front()]}, {"runs", vx}, {"sigma_eff_per_resolution", s},
+                    {"resolutions", c.voxel}};
+    std::vector<std::string> problems;
+    if (!resolved) {
+      char msg[400];
+      std::snprintf(msg, sizeof msg,
+                    "the voxel grid does not resolve the necks: the smallest neck radius is %.2g voxels on the finest "
+                    "grid (need >= %.0f); --voxel must reach %ld voxels per longest edge for the smallest neck, %ld for "
+                    "the median one; until then the voxel answer is not converged",
+                    neck_min_vox, kNeckVoxels, need_min, need_median);
+      problems.push_back(msg);
+    }
     if (s.size() >= 3) {
       const std::size_t k = s.size();
       double order = 0, e = 0;
       const double ratio = static_cast<double>(c.voxel[k - 1]) / c.voxel[k - 2];
+      const double ratio0 = static_cast<double>(c.voxel[k - 2]) / c.voxel[k - 3];
       const double ext = richardson(s[k - 3], s[k - 2], s[k - 1], ratio, &order, &e);
+      const bool same_ratio = std::abs(ratio - ratio0) <= 1e-9 * ratio;
+      const bool converging = same_ratio && order > 0.5;
       out["voxel"]["extrapolated_sigma_eff"] = ext;
       out["voxel"]["observed_order"] = order;
       out["voxel"]["discretisation_error"] = e;
+      out["voxel"]["converging"] = converging;
+      if (!same_ratio) problems.push_back("the last three --voxel resolutions are not refined by one factor: no Richardson extrapolation");
+      else if (!converging) {
+        char msg[200];
+        std::snprintf(msg, sizeof msg, "the voxel answers %.4g, %.4g, %.4g do not converge (observed order %.2f <= 0.5): "
+                      "the extrapolated value is the finest result, not a converged one", s[k - 3], s[k - 2], s[k - 1], order);
+        problems.push_back(msg);
+      }
       if (c.bc == "electrodes" && ext != 0)
         out["voxel"]["network_minus_voxel_relative"] = (sigma[kAxis[axes.front()]].get<double>() - ext) / ext;
+    } else {
+      problems.push_back("fewer than three --voxel resolutions: no observed order, no extrapolation");
     }
+    std::string message;
+    for (const auto& p : problems) {
+      warn(p);
+      message += (message.empty() ? "" : "; ") + p;
+    }
+    out["voxel"]["necks_resolved"] = resolved;
+    out["voxel"]["required_resolution_smallest_neck"] = need_min;
+    out["voxel"]["required_resolution_median_neck"] = need_median;
+    out["voxel"]["warning"] = !problems.empty();
+    out["voxel"]["warning_message"] = message;
   }
   std::ostringstream params;
   params << "phases: [" << join(c.phases) << "]\nbc: " << c.bc << "\naxes: " << ax << "\ncontact_radius: "

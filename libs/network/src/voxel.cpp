@@ -8,13 +8,13 @@
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
 #include "tomodem/network/graph.hpp"
+#include "tomodem/network/image_transport.hpp"
 
 namespace tomodem::network {
 
 namespace {
-// Bytes per voxel of the cross-check: conductivity (4), up to four edges of the graph (i, j, g:
-// 16 each), the percolation and solver vectors and the CSR matrix of the Kirchhoff solve (~100).
-constexpr double kBytesPerVoxel = 200;
+// Bytes per voxel of the cross-check: the label (1) and the image solver's working set.
+double bytes_per_voxel() { return 1 + image_transport_bytes_per_voxel(false); }
 }  // namespace
 
 void check_voxel_grid(const Packing& pk, const VoxelOptions& opt) {
@@ -35,7 +35,7 @@ void check_voxel_grid(const Packing& pk, const VoxelOptions& opt) {
   for (double l : L) nv *= std::max(1.0, std::round(l / vs));
   char count[32];
   std::snprintf(count, sizeof count, "%.3g", nv);
-  check_memory_request(nv * kBytesPerVoxel, "", "--voxel", res,
+  check_memory_request(nv * bytes_per_voxel(), "", "--voxel", res,
                        "the voxel cross-check at " + res + " voxels along the longest edge (" + count + " voxels)");
   if (nv > 2147483645.0)
     throw InputError("", "--voxel", res,
@@ -48,6 +48,9 @@ VoxelResult voxel_conductivity(const Packing& pk, const VoxelOptions& opt) {
   const Mat3& h = pk.cell.h;
   check_voxel_grid(pk, opt);
   const std::size_t nm = pk.materials.size();
+  if (nm > 255)
+    throw InputError(opt.source, "/materials", std::to_string(nm) + " materials",
+                     "the voxel cross-check labels voxels by material in 8 bits (at most 255 materials)");
   std::vector<double> sigma_of(nm, opt.phases.empty() ? 1.0 : 0.0);
   for (std::size_t m = 0; m < nm; ++m) sigma_of[m] *= pk.materials[m].conductivity;
   for (const auto& name : opt.phases)
@@ -61,15 +64,24 @@ VoxelResult voxel_conductivity(const Packing& pk, const VoxelOptions& opt) {
   res.nx = n[0]; res.ny = n[1]; res.nz = n[2];
   const double d[3] = {Lx / n[0], Ly / n[1], Lz / n[2]};  // exact fit: slightly anisotropic at worst
   res.voxel_size = vs;
-  const std::size_t nv = static_cast<std::size_t>(n[0]) * n[1] * n[2];
-  auto id = [&](int x, int y, int z) { return (static_cast<std::size_t>(x) * n[1] + y) * n[2] + z; };
-  std::vector<float> sig(nv, 0.0f);
-  // Rasterise: voxel centres inside spheres (periodic directions wrap).
+  // Rasterise into a label image (label = material index + 1, 0 = void) and solve it with the
+  // segmented-image transport solver: one finite-volume scheme for --image and --voxel.
+  LabelImage im;
+  im.nx = n[0]; im.ny = n[1]; im.nz = n[2];
+  im.spacing = {d[0], d[1], d[2]};
+  im.origin = {pk.cell.origin[0], pk.cell.origin[1], pk.cell.origin[2]};
+  im.v.assign(im.size(), 0);
+  auto id = [&](int x, int y, int z) { return (static_cast<std::size_t>(z) * n[1] + y) * n[0] + x; };
+  double dsum = 0;
+  std::size_t dcount = 0;
   for (std::size_t p = 0; p < pk.particles.size(); ++p) {
-    const double s = sigma_of[pk.particles.phase[p]];
+    const int m = pk.particles.phase[p];
+    const double s = sigma_of[m];
     if (!(s > 0)) continue;
     const Vec3 c = pk.particles.position[p] - pk.cell.origin;
     const double r = pk.particles.radius[p];
+    dsum += 2 * r;
+    ++dcount;
     int lo[3], hi[3];
     for (int k = 0; k < 3; ++k) {
       lo[k] = static_cast<int>(std::floor((c[k] - r) / d[k] - 0.5));
@@ -82,70 +94,46 @@ VoxelResult voxel_conductivity(const Packing& pk, const VoxelOptions& opt) {
           const double dx = (x + 0.5) * d[0] - c[0], dy = (y + 0.5) * d[1] - c[1], dz = (z + 0.5) * d[2] - c[2];
           if (dx * dx + dy * dy + dz * dz > r * r) continue;
           const int w[3] = {((x % n[0]) + n[0]) % n[0], ((y % n[1]) + n[1]) % n[1], ((z % n[2]) + n[2]) % n[2]};
-          float& v = sig[id(w[0], w[1], w[2])];
-          if (v == 0.0f) v = static_cast<float>(s);
+          uint8_t& v = im.v[id(w[0], w[1], w[2])];
+          if (v == 0) v = static_cast<uint8_t>(m + 1);
         }
   }
-  std::size_t solid = 0;
-  for (float v : sig) solid += v > 0;
-  res.solid_fraction = static_cast<double>(solid) / nv;
-  // Graph: voxels + two electrode nodes (low = nv, high = nv + 1).
-  Graph g;
-  g.n_nodes = nv + 2;
-  const int ax = opt.axis;
-  const double face[3] = {d[1] * d[2], d[0] * d[2], d[0] * d[1]};
-  for (int x = 0; x < n[0]; ++x)
-    for (int y = 0; y < n[1]; ++y)
-      for (int z = 0; z < n[2]; ++z) {
-        const std::size_t a = id(x, y, z);
-        const double sa = sig[a];
-        if (sa <= 0) continue;
-        const int q[3] = {x, y, z};
-        for (int k = 0; k < 3; ++k) {
-          int nb[3] = {x, y, z};
-          nb[k] += 1;
-          if (nb[k] >= n[k]) {
-            if (!pk.cell.periodic[k] || k == ax || n[k] < 3) continue;
-            nb[k] = 0;
-          }
-          const std::size_t b = id(nb[0], nb[1], nb[2]);
-          const double sb = sig[b];
-          if (sb <= 0) continue;
-          g.add_edge(static_cast<int32_t>(a), static_cast<int32_t>(b), face[k] / d[k] * 2.0 * sa * sb / (sa + sb));
-        }
-        if (q[ax] == 0) g.add_edge(static_cast<int32_t>(nv), static_cast<int32_t>(a), face[ax] / d[ax] * 2.0 * sa);
-        if (q[ax] == n[ax] - 1) g.add_edge(static_cast<int32_t>(a), static_cast<int32_t>(nv + 1), face[ax] / d[ax] * 2.0 * sa);
-      }
-  std::vector<int8_t> terminal(g.n_nodes, -1);
-  terminal[nv] = 0;
-  terminal[nv + 1] = 1;
-  const std::vector<uint8_t> span = spanning_nodes(g, terminal);
-  res.percolates = span[nv] != 0;
-  if (res.percolates) {
-    std::vector<uint8_t> fixed(g.n_nodes, 0);
-    fixed[nv] = fixed[nv + 1] = 1;
-    std::vector<double> pot(g.n_nodes, 0.0);
-    for (int x = 0; x < n[0]; ++x)
-      for (int y = 0; y < n[1]; ++y)
-        for (int z = 0; z < n[2]; ++z) {
-          const int q[3] = {x, y, z};
-          pot[id(x, y, z)] = 1.0 - (q[ax] + 0.5) / n[ax];
-        }
-    pot[nv] = 1.0;
-    pot[nv + 1] = 0.0;
-    res.solver = solve_kirchhoff(g, span, fixed, {}, pot, opt.solver);
-    double in = 0, out = 0;
-    for (std::size_t e = 0; e < g.n_edges(); ++e) {
-      if (!span[g.i[e]] || !span[g.j[e]]) continue;
-      const double I = g.g[e] * (pot[g.i[e]] - pot[g.j[e]]);
-      if (static_cast<std::size_t>(g.i[e]) == nv) in += I;
-      if (static_cast<std::size_t>(g.j[e]) == nv + 1) out += I;
-    }
-    const double L = n[ax] * d[ax], A = face[ax] * (static_cast<double>(nv) / n[ax]);
-    res.sigma_eff = 0.5 * (in + out) * L / A;
-    const double imax = std::max(std::abs(in), std::abs(out));
-    res.conservation_error = imax > 0 ? std::abs(in - out) / imax : 0;
+  if (dcount) res.voxels_per_diameter = dsum / dcount / vs;
+  // Neck resolution: the constriction a carries the resistance, and a neck narrower than a voxel
+  // is either lost or a voxel-wide bridge, so the grid must put >= kNeckVoxels voxels across a.
+  if (!opt.neck_radii.empty()) {
+    std::vector<double> a = opt.neck_radii;
+    std::sort(a.begin(), a.end());
+    res.neck_min_voxels = a.front() / vs;
+    res.neck_median_voxels = a[a.size() / 2] / vs;
+    const double lmax = std::max({Lx, Ly, Lz});
+    res.required_resolution_min = static_cast<long>(std::ceil(kNeckVoxels * lmax / std::max(a.front(), 1e-300)));
+    res.required_resolution_median = static_cast<long>(std::ceil(kNeckVoxels * lmax / a[a.size() / 2]));
+    res.necks_resolved = res.neck_min_voxels >= kNeckVoxels;
   }
+  ImageTransportOptions io;
+  for (std::size_t m = 0; m < nm; ++m) io.conductivity[m + 1] = sigma_of[m];
+  io.axis = opt.axis;
+  bool lateral_periodic = true;
+  for (int k = 0; k < 3; ++k)
+    if (k != opt.axis) lateral_periodic = lateral_periodic && pk.cell.periodic[k];
+  io.periodic_sides = lateral_periodic;
+  io.tolerance = opt.solver.tolerance;
+  io.max_iterations = opt.solver.max_iterations;
+  const ImageAxisResult r = image_conductivity(im, io);
+  res.solid_fraction = r.porosity;
+  res.percolates = r.percolates;
+  res.sigma_eff = r.percolates ? r.sigma_eff : 0.0;
+  res.conservation_error = r.flux_imbalance;
+  res.solver.iterations = r.iterations;
+  res.solver.residual = r.residual;
+  res.solver.converged = r.converged;
+  res.solver.unknowns = r.unknowns;
+  res.solver.nonzeros = r.nonzeros;
+  res.solver.levels = r.levels;
+  res.solver.operator_complexity = r.operator_complexity;
+  res.solver.setup_time_s = r.setup_time_s;
+  res.solver.solve_time_s = r.solve_time_s;
   res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return res;
 }

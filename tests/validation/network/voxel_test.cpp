@@ -73,3 +73,56 @@ TEST(Voxel, NetworkAndVoxelAgreeWithinModelErrorAndConverge) {
               ext, order);
   EXPECT_NEAR(a.sigma_eff, ext, 0.25 * ext);
 }
+
+// Validation of the converged cross-check on a structure with an independent answer: the simple
+// cubic lattice of spheres (spacing 2, radius Rs = sqrt(1 + a²), so neighbours overlap in necks of
+// radius a). By symmetry one period is a single sphere clipped by the cube [0, 2]³ (the faces
+// normal to the axis are the neck planes, equipotential by symmetry; the others carry no flux),
+// so the voxel cross-check solves that cube; the network is a two-sphere chain with one neck
+// (Holm: G = 2σa, L = 2, A = 4, σ_net = σa). Grids of 16, 32, 64, 128 voxels per cube edge
+// (18–143 voxels per diameter; the neck radius a = 0.5 spans 4–32 voxels).
+// Measured: 0.48955, 0.47802, 0.47272, 0.47378; Richardson of 16/32/64: 0.46822, order 1.12.
+// Centre sampling puts the narrowest voxel layer h/2 off the neck plane, so the imaged neck is
+// a² + O(R h): first order, with a staircase oscillation once the error is ~1 % (the 128 grid
+// lies above 64). Asserted: observed order > 0.5 on 16/32/64, the extrapolation agrees with the
+// 128 grid within its own error estimate + 1 %, and the network lies within the Holm model
+// error of the extrapolation: Holm's 1/(2σa) is the small-neck limit and ignores the sphere
+// bodies, so for a/R = 0.45 the network is above the voxel answer (measured +7 %); we assert
+// above, by at most 35 % (the bound stated in docs/conduct.md for a/R <= 0.5 is 25 %).
+// A smaller neck (a = 0.25) does not converge on these grids (order 0 on 16/32/64): h must be
+// well below a²/R, not just below a.
+TEST(Voxel, SimpleCubicNeckLatticeConvergesAndHolmIsWithinModelError) {
+  const double a = 0.5, Rs = std::sqrt(1.0 + a * a);
+  Packing chain = test::sc_lattice(2, 1, 1, 1.0, a, false);
+  const Network net = build_network(chain, NetworkOptions{});
+  ConductOptions co;
+  co.solver.tolerance = 1e-12;
+  const AxisResult an = solve_electrodes(net, 0, co);
+  ASSERT_TRUE(an.percolates);
+  EXPECT_NEAR(an.sigma_eff, a, 1e-9);  // σa: Holm, one neck, L = 2, A = 4
+  Packing cell = test::sc_lattice(1, 1, 1, 1.0, a, false);
+  cell.bonds = BondTable{};
+  cell.particles.radius[0] = Rs;
+  std::vector<double> s;
+  for (int res : {16, 32, 64, 128}) {
+    VoxelOptions o;
+    o.resolution = res;
+    o.solver.tolerance = 1e-10;
+    o.neck_radii = {a};
+    const VoxelResult v = voxel_conductivity(cell, o);
+    ASSERT_TRUE(v.percolates);
+    EXPECT_LT(v.conservation_error, 1e-6);
+    EXPECT_NEAR(v.neck_min_voxels, a * res / 2.0, 1e-12);
+    EXPECT_EQ(v.necks_resolved, a * res / 2.0 >= kNeckVoxels);
+    s.push_back(v.sigma_eff);
+  }
+  double p1 = 0, e1 = 0, p2 = 0, e2 = 0;
+  const double x1 = richardson(s[0], s[1], s[2], 2.0, &p1, &e1);
+  const double x2 = richardson(s[1], s[2], s[3], 2.0, &p2, &e2);
+  std::printf("network %.5g voxel %.5g %.5g %.5g %.5g; extrapolated %.5g (order %.2f) %.5g (order %.2f)\n", an.sigma_eff,
+              s[0], s[1], s[2], s[3], x1, p1, x2, p2);
+  EXPECT_GT(p1, 0.5);
+  EXPECT_NEAR(x1, s[3], e1 + 0.01 * s[3]);
+  EXPECT_NEAR(an.sigma_eff, x1, 0.35 * x1);
+  EXPECT_GT(an.sigma_eff, x1);
+}

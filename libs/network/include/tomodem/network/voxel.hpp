@@ -1,10 +1,11 @@
 #pragma once
 // Image cross-check: the effective conductivity of a voxel image of the same structure.
-// The packing is rasterised (a voxel takes the conductivity of the first conducting particle
-// that contains its centre, 0 elsewhere) and solved with a two-point flux finite-volume scheme:
-// the conductance between neighbouring voxels is h · 2σ₁σ₂/(σ₁+σ₂) (harmonic mean, face area
-// h², distance h), a boundary voxel meets its electrode through half a voxel (2σh). The same
-// Kirchhoff solver and percolation pruning as the particle network are used.
+// The packing is rasterised into a label image (a voxel takes the material of the first
+// conducting particle that contains its centre, void elsewhere) and solved by the segmented-image
+// transport solver (image_transport.hpp: two-point flux finite volumes, harmonic face means, half
+// a voxel to each Dirichlet face, flood-fill pruning, AMG-CG). One scheme serves --image and --voxel.
+// The answer converges only once the necks are resolved: a neck of radius a below ~2 voxels is
+// either lost or replaced by a voxel-wide bridge (neck_min_voxels, necks_resolved).
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -20,7 +21,11 @@ struct VoxelOptions {
   std::vector<std::string> phases;  ///< conducting phases; empty = all
   SolverOptions solver;
   std::string source;               ///< file name for error messages
+  std::vector<double> neck_radii;   ///< m, of the network's edges (optional: neck diagnostics)
 };
+
+/// Voxels across the smallest neck radius below which the grid does not resolve the necks.
+constexpr double kNeckVoxels = 2.0;
 
 struct VoxelResult {
   int nx = 0, ny = 0, nz = 0;
@@ -31,6 +36,11 @@ struct VoxelResult {
   double conservation_error = 0;
   SolverReport solver;
   double wall_time_s = 0;
+  double voxels_per_diameter = 0;   ///< mean diameter of the conducting particles / voxel size
+  double neck_min_voxels = 0, neck_median_voxels = 0;  ///< neck radius / voxel size (neck_radii given)
+  bool necks_resolved = true;       ///< neck_min_voxels >= kNeckVoxels (true without neck_radii)
+  long required_resolution_min = 0;     ///< voxels per longest edge for kNeckVoxels across the smallest neck
+  long required_resolution_median = 0;  ///< ... across the median neck
 };
 
 /// Refuses (InputError naming --voxel and the resolution) a grid that cannot be built: a cell
