@@ -417,7 +417,8 @@ void write_volume(const std::string& path, const Volume& v, bool as_uint16) {
           out.write(reinterpret_cast<const char*>(&x), 4);
         }
       }
-      if (!out) throw RuntimeFailure("cannot write " + tmp);
+      out.close();  // the last buffer is written here: a full disk shows now, before the rename
+      if (!out) throw RuntimeFailure("cannot write " + path + " (disk full or a file-size limit?)");
     }
     commit_output(path);
     return;
