@@ -364,3 +364,23 @@ TEST(RunCli, ExampleSweepGivesTheTableItsReadmePromises) {
   EXPECT_NE(s.read("summary.json").find("\"ran\": 12"), std::string::npos) << s.read("summary.json");
   EXPECT_NE(s.read("summary.json").find("\"up_to_date\": 2"), std::string::npos);
 }
+
+// Tools set a short OpenMP spin (GOMP_SPINCOUNT=1000, docs/benchmarks.md "Waiting threads") when
+// the user set no waiting policy, and keep the user's when there is one; the runner's steps
+// inherit what the runner runs with.
+TEST(RunCli, ToolsSpinBrieflyUnlessTheUserSaidOtherwise) {
+  Scratch s;
+  s.write("p.yaml", "steps:\n  a:\n    cmd: printf '%s|%s' \"$GOMP_SPINCOUNT\" \"$OMP_WAIT_POLICY\" > ${outs.0}\n"
+                    "    outs: [env.txt]\n");
+  const auto with = [&](const std::string& env) {
+    std::filesystem::remove(s.path("env.txt"));
+    std::filesystem::remove(s.path("p.lock.json"));
+    const std::string cmd = "cd '" + s.dir + "' && env -u OMP_WAIT_POLICY -u GOMP_SPINCOUNT " + env + " '" + kRun +
+                            "' p.yaml -q";
+    EXPECT_EQ(std::system(cmd.c_str()), 0) << env;
+    return s.read("env.txt");
+  };
+  EXPECT_EQ(with(""), "1000|");
+  EXPECT_EQ(with("OMP_WAIT_POLICY=ACTIVE"), "|ACTIVE");
+  EXPECT_EQ(with("GOMP_SPINCOUNT=5"), "5|");
+}
