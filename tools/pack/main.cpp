@@ -93,6 +93,12 @@ int run(int argc, char** argv) {
   j["pressure"] = r.pressure;
   j["unbalanced_force_ratio"] = r.unbalanced_force_ratio;
   j["equilibrium"] = r.equilibrium;
+  // A pressure target is reached when the packing is in equilibrium within 5 % of it (the
+  // densification's own criterion); a run that stops short says so (exit 4), never silently.
+  const bool pressure_target = s.target == geometry::Target::pressure;
+  const bool reached = !pressure_target || (r.equilibrium && std::abs(r.pressure / s.target_pressure - 1) < 0.05);
+  if (pressure_target) j["target_pressure"] = s.target_pressure;
+  j["target_reached"] = reached;
   j["inertial_number"] = r.inertial_number;
   j["steps"] = r.steps;
   j["time_step_s"] = r.time_step;
@@ -130,6 +136,12 @@ int run(int argc, char** argv) {
   const std::string text = j.dump(2);
   if (!json_path.empty()) write_text_atomic(json_path, text + "\n");
   std::cout << text << std::endl;
+  if (!reached) {
+    warn("the target pressure " + std::to_string(s.target_pressure) + " Pa was not reached: the run ended at " +
+         std::to_string(r.pressure) + " Pa" + (r.equilibrium ? "" : ", not in equilibrium") +
+         " (target_reached: false; the packing is written; exit code 4)");
+    return exit_code::target_not_reached;
+  }
   return 0;
 }
 }  // namespace

@@ -98,3 +98,20 @@ TEST(PackCli, SmallRunWritesPackingAndSummaryKeys) {
   EXPECT_EQ(run("--help").code, 0);
   EXPECT_EQ(run("--version").code, 0);
 }
+
+// A pressure target the run does not reach (here: stopped after 50 steps) is said, not hidden:
+// exit 4, `target_reached: false` and a warning, the packing still written; the same config
+// without the step limit reaches it (within the densification's 5 %) and exits 0.
+TEST(PackCli, PressureTargetNotReachedExitsFourAndSaysSo) {
+  const std::string out = ::testing::TempDir() + "short.h5", js = ::testing::TempDir() + "short.json";
+  const auto cfg = config("short.yaml", kOne, "target: {pressure: 100}\nprotocol: {max_steps: 50}\n");
+  const CliRun r = run(cfg + " -q --no-tessellation -o " + out + " --json " + js);
+  EXPECT_EQ(r.code, 4) << r.out;
+  EXPECT_NE(r.out.find("\"target_reached\": false"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("was not reached"), std::string::npos) << r.out;
+  EXPECT_TRUE(fs::exists(out));
+  const auto ok = config("long.yaml", kOne, "target: {pressure: 100}\n");
+  const CliRun o = run(ok + " -q --no-tessellation -o " + ::testing::TempDir() + "long.h5");
+  EXPECT_EQ(o.code, 0) << o.out;
+  EXPECT_NE(o.out.find("\"target_reached\": true"), std::string::npos) << o.out;
+}

@@ -3,6 +3,7 @@
 //   2  bad usage or bad input (InputError: names the file, the field and the value)
 //   1  a failure while running (RuntimeFailure, or any other exception)
 //   3  numerical refusal: a run that became unstable (NumericalError)
+//   4  finished without reaching its target (outputs written, flagged in the summary)
 #include <stdexcept>
 #include <string>
 
@@ -38,6 +39,9 @@ inline constexpr int ok = 0;
 inline constexpr int failure = 1;
 inline constexpr int bad_input = 2;
 inline constexpr int numerical = 3;
+/// The run ended without reaching what was asked (a pressure target): outputs are written and
+/// the summary says `target_reached: false`.
+inline constexpr int target_not_reached = 4;
 }  // namespace exit_code
 
 }  // namespace tomodem
