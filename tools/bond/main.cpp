@@ -26,14 +26,12 @@ int main(int argc, char** argv) {
     bool require = false, quiet = false;
     app.add_flag("--require-spanning", require, "exit 2 when no bonded cluster spans the periodic cell");
     int threads = 0;
-    app.add_option("--threads", threads, "threads (default: OMP_NUM_THREADS or all cores)");
+    tomodem::cli::add_threads(app, threads);
     app.add_flag("-q,--quiet", quiet, "no progress messages");
     tomodem::cli::add_version(app, "tomodem-bond");
     if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
     c.allow_disconnected = !require;
     tomodem::set_quiet(quiet);
-    if (threads < 0 || threads > 4096)
-      throw tomodem::InputError("", "--threads", std::to_string(threads), "must lie in [0, 4096] (0: OpenMP's default)");
     if (threads > 0) omp_set_num_threads(threads);
     c.threads = threads;
     tomodem::info("reading " + c.input);

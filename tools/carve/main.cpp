@@ -100,7 +100,6 @@ int main(int argc, char** argv) {
     if (o.mapping.fit && app.count("--scale")) throw InputError("", "--fit", "", "give either --fit or --scale");
     if (!(o.mapping.scale > 0))
       throw InputError("", "--scale", given(app, "--scale"), "must be > 0 (packing length per image length)");
-    if (o.threads < 0) throw InputError("", "--threads", std::to_string(o.threads), "must be >= 0");
     if (o.relax_steps < 0) throw InputError("", "--relax", std::to_string(o.relax_steps), "must be >= 0");
     const std::string summary = carve::run_carve(c);
     if (c.json.empty() || c.json == "-") std::cout << summary << std::endl;

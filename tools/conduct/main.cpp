@@ -44,15 +44,13 @@ int main(int argc, char** argv) {
     app.add_option("--voxel", c.voxel, "voxel cross-check at these resolutions (voxels along the longest edge)")
         ->delimiter(',');
     int threads = 0;
-    app.add_option("--threads", threads, "threads (default: OMP_NUM_THREADS or all cores)");
+    tomodem::cli::add_threads(app, threads);
     app.add_flag("-q,--quiet", quiet, "no progress messages");
     tomodem::cli::add_version(app, "tomodem-conduct");
     if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
     c.bonds = !no_bonds;
     c.contacts = !no_contacts;
     tomodem::set_quiet(quiet);
-    if (threads < 0 || threads > 4096)
-      throw tomodem::InputError("", "--threads", std::to_string(threads), "must lie in [0, 4096] (0: OpenMP's default)");
     if (threads > 0) omp_set_num_threads(threads);
     if (!c.image.empty() || !c.input.empty()) tomodem::info("reading " + (c.image.empty() ? c.input : c.image));
     const std::string summary = tomodem::network::run_conduct(c);

@@ -58,7 +58,7 @@ int main(int argc, char** argv) {
     app.add_option("--plot", c.plot, "write the curve as STEM.png and STEM.svg (gnuplot)");
     app.add_option("--map", c.map, "write the broken-bond map (HDF5 + .xdmf for ParaView)");
     int threads = 0;
-    app.add_option("--threads", threads, "threads (default: OMP_NUM_THREADS or all cores)");
+    tomodem::cli::add_threads(app, threads);
     app.add_flag("-q,--quiet", quiet, "no progress messages");
     tomodem::cli::add_version(app, "tomodem-fracture");
     if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
@@ -69,8 +69,6 @@ int main(int argc, char** argv) {
     c.elastic = !no_elastic;
     ex.track_energy = !no_energy;
     tomodem::set_quiet(quiet);
-    if (threads < 0 || threads > 4096)
-      throw tomodem::InputError("", "--threads", std::to_string(threads), "must lie in [0, 4096] (0: OpenMP's default)");
     if (threads > 0) omp_set_num_threads(threads);
     ex.threads = threads > 0 ? threads : omp_get_max_threads();
     tomodem::info("reading " + c.input);

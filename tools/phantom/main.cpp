@@ -37,14 +37,13 @@ int main(int argc, char** argv) {
     app.add_option("--json", c.json, "write the JSON summary to FILE (default: stdout)");
     int threads = 0;
     bool quiet = false;
-    app.add_option("--threads", threads, "threads (default: OMP_NUM_THREADS or all cores)");
+    tomodem::cli::add_threads(app, threads);
     app.add_flag("-q,--quiet", quiet, "no progress messages");
     tomodem::cli::add_version(app, "tomodem-phantom");
     if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
     o.as_written = tomodem::image::options_as_written(app);
     o.macropores_auto = macropores->count() == 0;
     tomodem::set_quiet(quiet);
-    if (threads < 0) throw tomodem::InputError("", "--threads", std::to_string(threads), "must be >= 0");
     tomodem::image::set_threads(threads);
     const std::string summary = tomodem::image::run_phantom(c);
     if (c.json.empty() || c.json == "-") std::cout << summary;

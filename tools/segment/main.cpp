@@ -57,13 +57,12 @@ int main(int argc, char** argv) {
     app.add_option("--json", c.json, "write the JSON summary to FILE (default: stdout)");
     int threads = 0;
     bool quiet = false;
-    app.add_option("--threads", threads, "threads (default: OMP_NUM_THREADS or all cores)");
+    tomodem::cli::add_threads(app, threads);
     app.add_flag("-q,--quiet", quiet, "no progress messages");
     tomodem::cli::add_version(app, "tomodem-segment");
     if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
     c.as_written = tomodem::image::options_as_written(app);
     tomodem::set_quiet(quiet);
-    if (threads < 0) throw tomodem::InputError("", "--threads", std::to_string(threads), "must be >= 0");
     tomodem::image::set_threads(threads);
     if (!c.packing.empty()) c.grains = true;
     const std::string summary = tomodem::image::run_segment(c);

@@ -53,7 +53,7 @@ int main(int argc, char** argv) {
                  "explicit: skip the second run over half the loading time (E_error is then the slope spread only)");
     app.add_option("--curve", c.output_csv, "explicit: write the stress-strain points as CSV");
     int threads = 0;
-    app.add_option("--threads", threads, "threads (default: OMP_NUM_THREADS or all cores)");
+    tomodem::cli::add_threads(app, threads);
     app.add_flag("-q,--quiet", quiet, "no progress messages");
     tomodem::cli::add_version(app, "tomodem-young");
     if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
@@ -63,8 +63,6 @@ int main(int argc, char** argv) {
     c.law.shear = !normal_only;
     im.full_tensor = !normal_cases;
     tomodem::set_quiet(quiet);
-    if (threads < 0 || threads > 4096)
-      throw tomodem::InputError("", "--threads", std::to_string(threads), "must lie in [0, 4096] (0: OpenMP's default)");
     if (threads > 0) omp_set_num_threads(threads);
     ex.threads = threads > 0 ? threads : omp_get_max_threads();
     ex.quiet = quiet;

@@ -1,5 +1,7 @@
 #include "tomodem/core/error.hpp"
 
+#include <sstream>
+
 namespace tomodem {
 
 namespace {
@@ -12,6 +14,12 @@ std::string describe(const std::string& file, const std::string& field, const st
   return m + why;
 }
 }  // namespace
+
+std::string value_text(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
 
 InputError::InputError(std::string file, std::string field, std::string value, const std::string& why)
     : std::runtime_error(describe(file, field, value, why)),

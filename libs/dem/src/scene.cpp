@@ -305,7 +305,7 @@ void read_scene(Scene& scene, const YAML::Node& doc, const std::string& path, in
       const int per_cell = arr == "simple_cubic" ? 1 : (arr == "bcc" ? 2 : 4);
       const double sites_wanted = double(per_cell) * double(n) * double(n) * double(n);
       check_memory_request(sites_wanted * kBytesPerParticle, file, g.where("cells"), g.text("cells"),
-                           g.text("cells") + "^3 " + arr + " cells (" + yaml::number_text(sites_wanted) + " particles)");
+                           g.text("cells") + "^3 " + arr + " cells (" + value_text(sites_wanted) + " particles)");
       if (sites_wanted > INT_MAX) throw g.error("cells", g.text("cells"), "at most 2147483647 particles in all");
       double a = g.has("spacing") ? g.positive("spacing", 0)
                                   : std::cbrt(per_cell * 4.0 / 3.0 * M_PI * r * r * r / phi);
@@ -449,7 +449,7 @@ void read_scene(Scene& scene, const YAML::Node& doc, const std::string& path, in
     const double steps = std::ceil(pr.positive("duration", 0) / p.timestep);
     if (!(steps <= 1e15))
       throw pr.error("duration", pr.text("duration"),
-                     "needs " + yaml::number_text(steps) + " steps of " + yaml::number_text(p.timestep) + " s (at most 10^15)");
+                     "needs " + value_text(steps) + " steps of " + value_text(p.timestep) + " s (at most 10^15)");
     p.steps = long(steps);
   } else {
     p.steps = pr.integer("steps", 0, 0, 1000000000000000L);
@@ -462,7 +462,7 @@ void read_scene(Scene& scene, const YAML::Node& doc, const std::string& path, in
     check_memory_request(double(p.steps / p.output_interval + 2) * kBytesPerSeriesRow, file,
                          pr.has("output_interval") ? pr.where("output_interval") : pr.where("steps"),
                          pr.has("output_interval") ? pr.text("output_interval") : pr.text("steps"),
-                         yaml::number_text(double(p.steps / p.output_interval + 2)) + " time-series rows");
+                         value_text(double(p.steps / p.output_interval + 2)) + " time-series rows");
   const Map stop = pr.map("stop");
   stop.allow({"unbalanced_force_ratio", "kinetic_energy"});
   p.stop_unbalanced_force = stop.positive("unbalanced_force_ratio", 0);

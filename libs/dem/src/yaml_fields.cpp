@@ -29,12 +29,6 @@ std::string text(const YAML::Node& n) {
   return t;
 }
 
-std::string number_text(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
-
 namespace {
 std::string line_of(const YAML::Node& n) {
   if (n && n.IsDefined() && n.Mark().line >= 0) return " (line " + std::to_string(n.Mark().line + 1) + ")";
@@ -143,7 +137,7 @@ double Section::in_range(const std::string& key, double fallback, double lo, dou
   const bool ok = (lo_open ? v > lo : v >= lo) && (hi_open ? v < hi : v <= hi);
   if (!ok)
     throw error(key, text(key),
-                std::string("must lie in ") + (lo_open ? "(" : "[") + number_text(lo) + ", " + number_text(hi) + (hi_open ? ")" : "]"));
+                std::string("must lie in ") + (lo_open ? "(" : "[") + value_text(lo) + ", " + value_text(hi) + (hi_open ? ")" : "]"));
   return v;
 }
 

@@ -193,8 +193,8 @@ BondingReport bond_network(Network& net, const BondingOptions& o) {
     // (radii fixed) until the union density reaches the target. Pairs are searched once at the
     // largest reach the bracket needs.
     if (!(o.target_density > rep.initial_relative_density && o.target_density < 1))
-      throw InputError("", "--target-density", option_text(o.target_density),
-                       "must lie between the packing's relative density (" + option_text(rep.initial_relative_density) +
+      throw InputError("", "--target-density", value_text(o.target_density),
+                       "must lie between the packing's relative density (" + value_text(rep.initial_relative_density) +
                            ") and 1");
     // Without overlaps the density would grow as 1/s³; overlaps slow it down, so start there
     // and lower the bracket until the target is passed.
@@ -209,7 +209,7 @@ BondingReport bond_network(Network& net, const BondingOptions& o) {
       lo *= 0.97;
     }
     if (density_of(p, pairs, lo) <= o.target_density)
-      throw InputError("", "--target-density", option_text(o.target_density),
+      throw InputError("", "--target-density", value_text(o.target_density),
                        "not reached by densifying this packing (pairwise lens formula)");
     for (int it = 0; it < 100 && hi - lo > 1e-13; ++it) {
       const double mid = 0.5 * (lo + hi);

@@ -186,9 +186,9 @@ std::string run_fracture(const FractureConfig& c) {
     const bool centre = c.crack.geometry == "centre";
     const double a = c.crack.a_over_w, amax = centre ? 0.5 : 1;
     if (!(std::isfinite(a) && a > 0 && a < amax))
-      throw InputError("", "--a-over-w", option_text(a),
+      throw InputError("", "--a-over-w", value_text(a),
                        std::string(a >= amax ? "the crack is longer than the sample: " : "") + "a/W must lie in (0, " +
-                           option_text(amax) + ") for " + (centre ? "a centre crack of length 2a" : "an edge notch"));
+                           value_text(amax) + ") for " + (centre ? "a centre crack of length 2a" : "an edge notch"));
   }
   require_non_negative("--grip", c.crack.grip, "m; 0: one mean diameter");
   require_range("--crack-offset", c.crack.plane_offset, -0.5, true, 0.5, true, "fraction of the grip distance");

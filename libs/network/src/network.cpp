@@ -10,13 +10,6 @@
 
 namespace tomodem::network {
 
-namespace {
-std::string value_text(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
-}  // namespace
 
 ContactRadius parse_contact_radius(const std::string& name) {
   if (name == "geometric") return ContactRadius::geometric;

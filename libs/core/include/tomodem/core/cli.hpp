@@ -24,6 +24,13 @@ inline void add_version(CLI::App& app, const std::string& tool) {
       "print the version and exit");
 }
 
+/// --threads N of the tools whose default is OpenMP's own (0: OMP_NUM_THREADS or all cores);
+/// CLI11 refuses (exit 2, naming the option and the value) anything outside [0, 4096].
+inline CLI::Option* add_threads(CLI::App& app, int& threads) {
+  return app.add_option("--threads", threads, "threads (default 0: OMP_NUM_THREADS or all cores)")
+      ->check(CLI::Range(0, 4096));
+}
+
 /// Parses the command line: the exit code to stop with (0 after --help or --version, 2 for bad
 /// usage, after CLI11's message), or nothing when the tool should go on.
 inline std::optional<int> parse(CLI::App& app, int argc, char** argv) {

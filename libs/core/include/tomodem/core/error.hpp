@@ -34,6 +34,9 @@ class NumericalError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// A number as a message shows it ("-5", "nan", "1e+300": the shortest default form).
+std::string value_text(double v);
+
 namespace exit_code {
 inline constexpr int ok = 0;
 inline constexpr int failure = 1;

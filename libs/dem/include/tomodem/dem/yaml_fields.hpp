@@ -26,8 +26,6 @@ YAML::Node load(const std::string& text, const std::string& file);
 /// The text of a node as the user wrote it (flow style on one line for lists and maps).
 std::string text(const YAML::Node& n);
 
-/// "1e12" style text of a number for messages.
-std::string number_text(double v);
 
 class Section {
  public:

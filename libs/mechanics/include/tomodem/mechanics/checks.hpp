@@ -1,9 +1,8 @@
 #pragma once
-// Checks the mechanics tools (and tomodem-carve) make before any work: every output against every
-// input and against the other outputs, and option values where they are read. All refusals are
-// InputError (exit 2) naming the option and the value as given.
+// Option checks the mechanics tools (and tomodem-carve) make where they read a value (the output
+// checks are core's check_outputs). All refusals are InputError (exit 2) naming the option and
+// the value.
 #include <cmath>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -11,18 +10,6 @@
 #include "tomodem/core/output.hpp"
 
 namespace tomodem::mechanics {
-
-// The output checks live in core (tomodem::check_outputs, OutputName, xdmf_sidecar_of).
-using tomodem::check_outputs;
-using tomodem::OutputName;
-using tomodem::xdmf_sidecar_of;
-
-/// The value as text for messages ("-5", "nan", "1e+300").
-inline std::string option_text(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
 
 /// Option checks: `lo`/`hi` bounds, open or closed; NaN and infinities are always refused.
 inline void require_range(const std::string& option, double v, double lo, bool lo_open, double hi, bool hi_open,
@@ -33,11 +20,11 @@ inline void require_range(const std::string& option, double v, double lo, bool l
   if (std::isinf(lo) && std::isinf(hi))
     range = "must be a finite number";
   else if (std::isinf(hi))
-    range = std::string("must be finite and ") + (lo_open ? "> " : ">= ") + option_text(lo);
+    range = std::string("must be finite and ") + (lo_open ? "> " : ">= ") + value_text(lo);
   else
-    range = std::string("must lie in ") + (lo_open ? "(" : "[") + option_text(lo) + ", " + option_text(hi) +
+    range = std::string("must lie in ") + (lo_open ? "(" : "[") + value_text(lo) + ", " + value_text(hi) +
             (hi_open ? ")" : "]");
-  throw InputError("", option, option_text(v), range + (meaning.empty() ? "" : " (" + meaning + ")"));
+  throw InputError("", option, value_text(v), range + (meaning.empty() ? "" : " (" + meaning + ")"));
 }
 inline void require_positive(const std::string& option, double v, const std::string& meaning = "") {
   require_range(option, v, 0, true, INFINITY, true, meaning);
