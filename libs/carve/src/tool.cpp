@@ -9,7 +9,6 @@
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/packing_io.hpp"
 #include "tomodem/core/tool.hpp"
-#include "tomodem/mechanics/checks.hpp"
 
 namespace tomodem::carve {
 
@@ -40,7 +39,6 @@ std::unique_ptr<Macropores> load_macropores(const CarveConfig& cfg) {
 }
 
 void check_config(const CarveConfig& cfg) {
-  using mechanics::require_range;
   const Options& o = cfg.options;
   const Mapping& m = o.mapping;
   for (int k = 0; k < 3; ++k) {
@@ -52,7 +50,7 @@ void check_config(const CarveConfig& cfg) {
       require_range("--image-box", m.image_box.hi[k], -INFINITY, false, INFINITY, false, "m");
     }
   }
-  if (!m.fit) mechanics::require_positive("--scale", m.scale, "packing length per image length");
+  if (!m.fit) require_positive("--scale", m.scale, "packing length per image length");
   require_range("--fraction", o.fraction, 0, false, 1, true, "volume fraction inside");
   if (o.samples_per_diameter < 2 || o.samples_per_diameter > 1024)
     throw InputError("", "--samples", std::to_string(o.samples_per_diameter),

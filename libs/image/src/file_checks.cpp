@@ -1,4 +1,4 @@
-// Structure checks of TIFF, MetaImage and OpenVDB files before they are read (file_checks.hpp).
+// Structure checks of TIFF, MetaImage and NIfTI files before they are read (file_checks.hpp).
 #include "file_checks.hpp"
 
 #include <zlib.h>

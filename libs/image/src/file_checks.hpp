@@ -1,8 +1,8 @@
 #pragma once
 // Checks of a file's structure before a library reads it, so a truncated or inconsistent file is
 // refused (InputError naming the file, the field and the value) instead of being read in part:
-// ITK reads a truncated MetaImage or multi-page TIFF without an error, OpenVDB allocates what a
-// truncated file's header claims. No third-party headers.
+// ITK reads a truncated MetaImage, NIfTI or multi-page TIFF without an error (OpenVDB files:
+// check_vdb_file in outputs.hpp). No third-party headers.
 #include <cstddef>
 #include <cstdint>
 #include <string>

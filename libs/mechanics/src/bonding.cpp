@@ -6,8 +6,8 @@
 #include <cmath>
 
 #include "tomodem/core/error.hpp"
+#include "tomodem/core/output.hpp"
 #include "tomodem/dem/sinter.hpp"
-#include "tomodem/mechanics/checks.hpp"
 
 namespace tomodem::mechanics {
 

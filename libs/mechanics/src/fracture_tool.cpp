@@ -13,7 +13,6 @@
 #include "tomodem/core/packing_io.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/core/plot.hpp"
-#include "tomodem/mechanics/checks.hpp"
 #include "tomodem/mechanics/fracture.hpp"
 
 namespace tomodem::mechanics {

@@ -10,7 +10,6 @@
 #include "tomodem/core/h5.hpp"
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/packing_io.hpp"
-#include "tomodem/mechanics/checks.hpp"
 
 namespace tomodem::mechanics {
 

@@ -11,7 +11,6 @@
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/tool.hpp"
-#include "tomodem/mechanics/checks.hpp"
 
 namespace tomodem::mechanics {
 

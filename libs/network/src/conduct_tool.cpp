@@ -53,22 +53,6 @@ json axis_json(const AxisResult& a) {
           {"solver", solver_json(a.solver)},    {"wall_time_s", a.wall_time_s}};
 }
 
-std::string text(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
-
-// Options: NaN and infinities are always refused; the message names the option and the value.
-void require_range(const std::string& option, double v, double lo, bool lo_open, double hi, bool hi_open,
-                   const std::string& meaning) {
-  if (std::isfinite(v) && (lo_open ? v > lo : v >= lo) && (hi_open ? v < hi : v <= hi)) return;
-  const std::string range =
-      std::isinf(hi) ? std::string("must be finite and ") + (lo_open ? "> " : ">= ") + text(lo)
-                     : std::string("must lie in ") + (lo_open ? "(" : "[") + text(lo) + ", " + text(hi) + (hi_open ? ")" : "]");
-  throw InputError("", option, text(v), range + " (" + meaning + ")");
-}
-
 std::string join(const std::vector<std::string>& v) {
   std::string s;
   for (const auto& x : v) s += (s.empty() ? "" : ",") + x;
@@ -259,7 +243,7 @@ std::string run_conduct(const ConductConfig& c) {
   if (c.max_iterations < 0)
     throw InputError("", "--max-iterations", std::to_string(c.max_iterations), "must be >= 0 (0: automatic)");
   if (c.charge_transfer != 0 && c.electronic.empty() && c.ionic.empty())
-    throw InputError("", "--charge-transfer", text(c.charge_transfer),
+    throw InputError("", "--charge-transfer", value_text(c.charge_transfer),
                      "applies to a composite electrode: give --electronic and --ionic too");
   for (int res : c.voxel)
     if (res < 2) throw InputError("", "--voxel", std::to_string(res), "need at least 2 voxels along the longest edge");

@@ -37,6 +37,14 @@ class NumericalError : public std::runtime_error {
 /// A number as a message shows it ("-5", "nan", "1e+300": the shortest default form).
 std::string value_text(double v);
 
+/// Option checks where a value is read: InputError naming the option and the value unless v lies
+/// in the range (`lo`/`hi` open or closed; NaN and infinities always refused). `meaning` says
+/// what the value is ("m", "fraction of the mean radius").
+void require_range(const std::string& option, double v, double lo, bool lo_open, double hi, bool hi_open,
+                   const std::string& meaning = "");
+void require_positive(const std::string& option, double v, const std::string& meaning = "");
+void require_non_negative(const std::string& option, double v, const std::string& meaning = "");
+
 namespace exit_code {
 inline constexpr int ok = 0;
 inline constexpr int failure = 1;
