@@ -3,7 +3,7 @@
 // sparse stiffness matrix with six DOF per particle, and solved with Eigen for six macroscopic
 // strain cases imposed through the bond vectors (affine ε·d plus periodic fluctuations). Solvers:
 // Eigen's SimplicialLDLT, or conjugate gradients preconditioned by smoothed-aggregation multigrid
-// whose coarse spaces carry the particles' rigid-body modes (tomodem/core/amg.hpp).
+// whose coarse spaces carry the particles' rigid-body modes (tomodem/linalg/amg.hpp).
 #include <omp.h>
 
 #include <Eigen/Dense>
@@ -15,7 +15,7 @@
 #include <cmath>
 #include <memory>
 
-#include "tomodem/core/amg.hpp"
+#include "tomodem/linalg/amg.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/mechanics/elastic.hpp"

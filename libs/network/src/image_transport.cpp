@@ -8,7 +8,7 @@
 #include <limits>
 #include <sstream>
 
-#include "tomodem/core/amg.hpp"
+#include "tomodem/linalg/amg.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/h5.hpp"
 #include "tomodem/core/output.hpp"

@@ -6,7 +6,7 @@
 #include <chrono>
 #include <cmath>
 
-#include "tomodem/core/amg.hpp"
+#include "tomodem/linalg/amg.hpp"
 #include "tomodem/core/error.hpp"
 
 namespace tomodem::network {
@@ -110,7 +110,7 @@ SolverReport solve_kirchhoff(const Graph& graph, const std::vector<uint8_t>& act
   if (bnorm == 0.0) {  // no drive: the solution is zero
     x.setZero();
   } else if (opt.preconditioner == Preconditioner::amg) {
-    // Smoothed-aggregation multigrid (tomodem/core/amg.hpp) with the constant vector as the
+    // Smoothed-aggregation multigrid (tomodem/linalg/amg.hpp) with the constant vector as the
     // near-null space of the Laplacian; its own OpenMP loops (above 5e4 unknowns) and CG.
     const auto ts = Clock::now();
     const CsrView view{nf, A.outerIndexPtr(), A.innerIndexPtr(), A.valuePtr()};

@@ -19,7 +19,7 @@ void uniaxial_from_tensor(const Matrix6& C, int axis, double& E, double& nu);
 
 struct ImplicitOptions {
   /// ldlt (Eigen SimplicialLDLT, exact), amg (conjugate gradients preconditioned by smoothed-
-  /// aggregation multigrid with the rigid-body modes, tomodem/core/amg.hpp), cg (Jacobi), cg-ic
+  /// aggregation multigrid with the rigid-body modes, tomodem/linalg/amg.hpp), cg (Jacobi), cg-ic
   /// (Eigen incomplete Cholesky), auto (ldlt below 2 000 particles: its fill-in grows fast in 3-D;
   /// amg above).
   std::string solver = "auto";

@@ -6,7 +6,7 @@
 // side faces, the harmonic mean 2σ₁σ₂/(σ₁+σ₂) of the two voxel conductivities on an inner face.
 // Only the voxels connected (6-neighbourhood, the faces the scheme couples) to both Dirichlet faces
 // are solved for; the linear system is solved by conjugate gradients preconditioned with the
-// smoothed-aggregation multigrid of tomodem/core/amg.hpp.
+// smoothed-aggregation multigrid of tomodem/linalg/amg.hpp.
 #include <array>
 #include <cstddef>
 #include <cstdint>

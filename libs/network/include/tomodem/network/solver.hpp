@@ -13,7 +13,7 @@ namespace tomodem::network {
 enum class Preconditioner {
   incomplete_cholesky,  ///< Eigen::IncompleteCholesky (Lin & Moré), natural ordering
   jacobi,               ///< diagonal scaling: cheapest set-up, multi-threaded apply
-  amg,                  ///< smoothed-aggregation multigrid (tomodem/core/amg.hpp): iterations nearly independent of size
+  amg,                  ///< smoothed-aggregation multigrid (tomodem/linalg/amg.hpp): iterations nearly independent of size
 };
 Preconditioner parse_preconditioner(const std::string& name);  ///< "ic" | "jacobi" | "amg"
 std::string to_string(Preconditioner p);

@@ -4,7 +4,7 @@
 // aggregate), tentative prolongator from the near-null space restricted to each aggregate and
 // orthonormalised (QR; R is the next level's near-null space), optional Jacobi smoothing of the
 // prolongator, Galerkin coarse matrix Rᵀ A P. Smoother: damped block-Jacobi on the node blocks.
-#include "tomodem/core/amg.hpp"
+#include "tomodem/linalg/amg.hpp"
 
 #include <omp.h>
 
@@ -314,6 +314,12 @@ int32_t aggregate(const std::vector<int32_t>& gstart, const std::vector<int32_t>
   return na;
 }
 
+/// The caller's description of the finest level's unknowns.
+struct FineModesRef {
+  const NearNullspace* ns;
+  const std::vector<int32_t>* node_id;
+};
+
 }  // namespace
 
 struct Amg::Impl {
@@ -324,6 +330,8 @@ struct Amg::Impl {
   bool use_dense = true;
   AmgStats stats;
 
+  bool coarsen(const FineModesRef& fine, Eigen::MatrixXd& B, double& tc);
+  void finish(const CsrView& A);
   void cycle(std::size_t l, const Eigen::VectorXd& b, Eigen::VectorXd& x) const {
     const Level& L = levels[l];
     if (l + 1 == levels.size()) {
@@ -348,235 +356,286 @@ struct Amg::Impl {
   }
 };
 
+namespace {
+
+/// Finest level: nodes in order of appearance (the unknowns of a node consecutive). `node_id`:
+/// finest node -> the caller's node (index of its position); empty for a scalar problem.
+Level finest_level(const CsrView& A, const NearNullspace& ns, std::vector<int32_t>& node_id) {
+  const int32_t n = A.rows;
+  Level fine;
+  fine.A = A;
+  if (ns.kind.empty()) {
+    fine.node_start.resize(std::size_t(n) + 1);
+    for (int32_t i = 0; i <= n; ++i) fine.node_start[i] = i;
+    return fine;
+  }
+  for (int32_t i = 0; i < n; ++i)
+    if (i == 0 || ns.node[i] != ns.node[i - 1]) {
+      if (i > 0 && ns.node[i] < ns.node[i - 1])
+        throw RuntimeFailure("multigrid: the unknowns of a node must be consecutive and nodes increasing");
+      fine.node_start.push_back(i);
+      node_id.push_back(ns.node[i]);
+    }
+  fine.node_start.push_back(n);
+  return fine;
+}
+
+/// The nodes of each aggregate as CSR: members of aggregate a in [mstart[a], mstart[a + 1]).
+void aggregate_members(const std::vector<int32_t>& agg, int32_t na, std::vector<int32_t>& mstart,
+                       std::vector<int32_t>& members) {
+  mstart.assign(std::size_t(na) + 1, 0);
+  members.assign(agg.size(), 0);
+  for (int32_t v : agg)
+    if (v >= 0) ++mstart[v + 1];
+  for (int32_t a = 0; a < na; ++a) mstart[a + 1] += mstart[a];
+  std::vector<int32_t> fill(mstart.begin(), mstart.end() - 1);
+  for (int32_t v = 0; v < int32_t(agg.size()); ++v)
+    if (agg[v] >= 0) members[std::size_t(fill[agg[v]]++)] = v;
+}
+
+/// What the finest level needs to evaluate the rigid-body modes (coarser levels carry them in B).
+struct FineModes {
+  const NearNullspace* ns = nullptr;  // null on coarse levels and for scalar problems
+  const std::vector<int32_t>* node_id = nullptr;
+  Mat3 hinv;
+};
+
+/// The near-null space restricted to aggregate a (rows: its unknowns; 1 or 6 columns). On the
+/// finest level of an elastic problem: translations and rotations about the aggregate's root,
+/// lever arms by the minimum image along periodic directions.
+Eigen::MatrixXd aggregate_modes(const Level& L, int k, const Eigen::MatrixXd& B, const FineModes& fm,
+                                const int32_t* first, const int32_t* last, int32_t root_node) {
+  int32_t rows = 0;
+  for (const int32_t* t = first; t != last; ++t) rows += L.node_start[*t + 1] - L.node_start[*t];
+  Eigen::MatrixXd Ba(rows, k);
+  if (!fm.ns) {  // coarse level (B given) or scalar finest level (the constant)
+    int32_t r = 0;
+    for (const int32_t* t = first; t != last; ++t)
+      for (int32_t i = L.node_start[*t]; i < L.node_start[*t + 1]; ++i, ++r)
+        if (B.rows() > 0) Ba.row(r) = B.row(i);
+        else Ba(r, 0) = 1;
+    return Ba;
+  }
+  const NearNullspace& ns = *fm.ns;
+  const Vec3 origin = ns.position[std::size_t((*fm.node_id)[root_node])];
+  int32_t r = 0;
+  for (const int32_t* t = first; t != last; ++t) {
+    Vec3 s = fm.hinv * (ns.position[std::size_t((*fm.node_id)[*t])] - origin);
+    for (int c = 0; c < 3; ++c)
+      if (ns.periodic[c]) s[c] -= std::round(s[c]);
+    const Vec3 off = (1 / ns.rotation_scale) * (ns.cell * s);
+    for (int32_t i = L.node_start[*t]; i < L.node_start[*t + 1]; ++i, ++r) {
+      Ba.row(r).setZero();
+      const int kind = ns.kind[std::size_t(i)];
+      if (kind >= 0 && kind < 3) {
+        Ba(r, kind) = 1;
+        for (int w = 0; w < 3; ++w) {  // (e_w × off)_kind
+          Vec3 e{0, 0, 0};
+          e[w] = 1;
+          Ba(r, 3 + w) = cross(e, off)[kind];
+        }
+      } else if (kind >= 3 && kind < 6) {
+        Ba(r, kind) = 1;
+      }
+    }
+  }
+  return Ba;
+}
+
+/// Tentative prolongator: per aggregate Q R = its near-null space (rank-revealing QR); P_tent holds
+/// the Q blocks, `Bc` (the stacked R) is the next level's near-null space, `cstart` its node starts.
+/// Returns false when coarsening stalls (the level is then solved directly).
+bool tentative_prolongator(const Level& L, int k, const Eigen::MatrixXd& B, const FineModes& fm,
+                           const std::vector<int32_t>& mstart, const std::vector<int32_t>& members,
+                           const std::vector<int32_t>& root, SpMat& P, Eigen::MatrixXd& Bc,
+                           std::vector<int32_t>& cstart) {
+  const int32_t na = int32_t(root.size());
+  std::vector<Eigen::MatrixXd> Q(static_cast<std::size_t>(na)), Rf(static_cast<std::size_t>(na));
+  cstart.assign(std::size_t(na) + 1, 0);
+#pragma omp parallel for schedule(dynamic, 256) if (na > 2000)
+  for (int32_t a = 0; a < na; ++a) {
+    const Eigen::MatrixXd Ba =
+        aggregate_modes(L, k, B, fm, members.data() + mstart[a], members.data() + mstart[a + 1], root[a]);
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(Ba.rows(), Ba.cols());
+    qr.setThreshold(1e-10);
+    qr.compute(Ba);
+    const int rank = int(qr.rank());
+    Q[a] = qr.householderQ() * Eigen::MatrixXd::Identity(Ba.rows(), rank);
+    Rf[a] = Q[a].transpose() * Ba;
+    cstart[a + 1] = rank;
+  }
+  for (int32_t a = 0; a < na; ++a) cstart[a + 1] += cstart[a];
+  const int32_t nc = cstart[na];
+  if (nc == 0 || nc >= int32_t(0.9 * L.A.rows)) return false;
+
+  std::vector<Eigen::Triplet<double, int>> tri;
+  tri.reserve(std::size_t(L.A.rows) * std::size_t(k));
+  Bc.resize(nc, k);
+  for (int32_t a = 0; a < na; ++a) {
+    int32_t r = 0;
+    for (int32_t t = mstart[a]; t < mstart[a + 1]; ++t)
+      for (int32_t i = L.node_start[members[t]]; i < L.node_start[members[t] + 1]; ++i, ++r)
+        for (int32_t c = 0; c < Q[a].cols(); ++c) tri.emplace_back(i, cstart[a] + c, Q[a](r, c));
+    Bc.middleRows(cstart[a], Rf[a].rows()) = Rf[a];
+  }
+  P = SpMat(L.A.rows, nc);
+  P.setFromTriplets(tri.begin(), tri.end());
+  return true;
+}
+
+/// The filtered matrix A_F: the couplings between strongly coupled nodes (and within a node); the
+/// dropped ones are added to the diagonal (row sums kept). `dF`: the diagonal that scales each row.
+SpMat filtered_matrix(const Level& L, const std::vector<int32_t>& gstart, const std::vector<int32_t>& gnbr,
+                      std::vector<double>& dF) {
+  const int32_t nr = L.A.rows, nn = L.nodes();
+  std::vector<int32_t> node_of(static_cast<std::size_t>(nr)), mark(static_cast<std::size_t>(nn), -1);
+  for (int32_t v = 0; v < nn; ++v)
+    for (int32_t i = L.node_start[v]; i < L.node_start[v + 1]; ++i) node_of[i] = v;
+  SpMat AF(nr, nr);
+  AF.resizeNonZeros(Eigen::Index(L.A.start[nr]));
+  dF.assign(static_cast<std::size_t>(nr), 0.0);
+  int32_t* fs = AF.outerIndexPtr();
+  int32_t* fc = AF.innerIndexPtr();
+  double* fv = AF.valuePtr();
+  int32_t out = 0;
+  for (int32_t v = 0; v < nn; ++v) {
+    mark[v] = v;
+    for (int32_t g = gstart[v]; g < gstart[v + 1]; ++g) mark[gnbr[g]] = v;
+    for (int32_t i = L.node_start[v]; i < L.node_start[v + 1]; ++i) {
+      fs[i] = out;
+      double lumped = 0;
+      int32_t diag = -1;
+      for (int32_t e = L.A.start[i]; e < L.A.start[i + 1]; ++e) {
+        const int32_t j = L.A.column[e];
+        if (mark[node_of[j]] == v) {
+          if (j == i) diag = out;
+          fc[out] = j;
+          fv[out++] = L.A.value[e];
+        } else {
+          lumped += L.A.value[e];
+        }
+      }
+      if (diag >= 0) {
+        const double a_ii = fv[diag];
+        fv[diag] += lumped;
+        // A node whose couplings are all weak has a lumped diagonal near 0: scale its row by the
+        // unfiltered diagonal instead.
+        dF[i] = fv[diag] > 0.01 * a_ii ? fv[diag] : a_ii;
+      }
+    }
+  }
+  fs[nr] = out;
+  AF.resizeNonZeros(out);
+  for (int32_t i = 0; i < nr; ++i)
+    if (!(dF[i] > 0)) throw NumericalError("multigrid: a filtered diagonal entry is not positive");
+  return AF;
+}
+
+/// P = P_tent − ω D_F⁻¹ A_F P_tent (Vaněk, Mandel & Brezina), ω = 4/(3 ρ(D_F⁻¹ A_F)): P spreads
+/// along strong couplings only.
+void smooth_prolongator(const Level& L, const std::vector<int32_t>& gstart, const std::vector<int32_t>& gnbr,
+                        SpMat& P) {
+  std::vector<double> dF;
+  const SpMat AF = filtered_matrix(L, gstart, gnbr, dF);
+  const int32_t nr = L.A.rows;
+  const CsrView afv = as_view(AF);
+  const double omega = 4.0 / (3.0 * spectral_radius(afv, [&](const double* w, double* z) {
+                                for (int32_t i = 0; i < nr; ++i) z[i] = w[i] / dF[i];
+                              }));
+  SpMat DAP = spgemm(afv, P);
+  for (int32_t i = 0; i < nr; ++i) {
+    const double f = omega / dF[i];
+    for (int32_t e = DAP.outerIndexPtr()[i]; e < DAP.outerIndexPtr()[i + 1]; ++e) DAP.valuePtr()[e] *= f;
+  }
+  P = P - DAP;
+}
+
+}  // namespace
+
+/// Prepares the smoother of the last level; unless it is coarse enough, appends the next level
+/// (aggregation, prolongator, Galerkin product R A P). Returns false when the hierarchy is complete.
+bool Amg::Impl::coarsen(const FineModesRef& fine, Eigen::MatrixXd& B, double& tc) {
+  Level& L = levels.back();
+  diagonal_blocks(L);
+  stamp("diagonal blocks", tc);
+  L.omega = 4.0 / (3.0 * spectral_radius(L));
+  stamp("spectral radius", tc);
+  L.x.resize(L.A.rows), L.b.resize(L.A.rows), L.r.resize(L.A.rows);
+  const std::size_t l = levels.size() - 1;
+  if (L.A.rows <= opt.coarse_size || int(levels.size()) >= opt.max_levels) return false;
+
+  std::vector<int32_t> gstart, gnbr, agg, root, mstart, members, cstart;
+  strong_graph(L, opt.strength * std::pow(0.5, double(l)), gstart, gnbr);
+  stamp("strong graph", tc);
+  const int32_t na = aggregate(gstart, gnbr, opt.aggregate_radius, agg, root);
+  stamp("aggregation", tc);
+  if (na == 0) return false;
+  aggregate_members(agg, na, mstart, members);
+  FineModes fm;
+  if (l == 0 && fine.ns && !fine.ns->kind.empty()) fm = {fine.ns, fine.node_id, fine.ns->cell.inverse()};
+  const int k = fine.ns && !fine.ns->kind.empty() ? 6 : 1;
+  SpMat P;
+  Eigen::MatrixXd Bc;
+  if (!tentative_prolongator(L, k, B, fm, mstart, members, root, P, Bc, cstart))
+    return false;  // coarsening stalled: solve this level directly
+  stamp("tentative P", tc);
+  if (opt.smooth) smooth_prolongator(L, gstart, gnbr, P);
+  P.makeCompressed();
+  stamp("smoothing P", tc);
+  L.R = P.transpose();
+  L.R.makeCompressed();
+  Level C;
+  C.own = spgemm(L.R, spgemm(L.A, P));
+  C.own.makeCompressed();
+  stamp("R A P", tc);
+  L.P = std::move(P);
+  C.node_start.assign(cstart.begin(), cstart.end());
+  B = std::move(Bc);
+  levels.push_back(std::move(C));
+  levels.back().A = as_view(levels.back().own);
+  return true;
+}
+
+/// The coarsest level's direct factorisation and the statistics of the hierarchy.
+void Amg::Impl::finish(const CsrView& A) {
+  const Level& last = levels.back();
+  const MapMat Ac = as_map(last.A);
+  use_dense = last.A.rows <= 3000;
+  if (use_dense) {
+    dense.compute(Ac.toDense());
+    if (dense.info() != Eigen::Success) throw NumericalError("multigrid: coarsest matrix is singular");
+  } else {
+    sparse.compute(Eigen::SparseMatrix<double, Eigen::ColMajor, int>(Ac));
+    if (sparse.info() != Eigen::Success) throw NumericalError("multigrid: coarsest matrix is singular");
+  }
+  for (std::size_t l = 0; l < levels.size(); ++l) {
+    const Level& L = levels[l];
+    stats.rows.push_back(L.A.rows);
+    stats.nonzeros.push_back(L.A.start[L.A.rows]);
+    stats.operator_complexity += double(L.A.start[L.A.rows]) / double(A.start[A.rows]);
+    if (l > 0) stats.memory_bytes += 12 * std::size_t(L.own.nonZeros());
+    stats.memory_bytes +=
+        12 * std::size_t(L.P.nonZeros() + L.R.nonZeros()) + 8 * L.dinv.size() + 24 * std::size_t(L.A.rows);
+  }
+  if (use_dense) stats.memory_bytes += 8 * std::size_t(last.A.rows) * std::size_t(last.A.rows);
+}
+
 Amg::Amg(const CsrView& A, const NearNullspace& ns, const AmgOptions& o) : impl_(std::make_unique<Impl>()) {
   const auto t0 = std::chrono::steady_clock::now();
   Impl& m = *impl_;
   m.opt = o;
-  const int32_t n = A.rows;
-  if (n <= 0) throw RuntimeFailure("multigrid: empty matrix");
-  const bool scalar = ns.kind.empty();
-  if (!scalar && (ns.kind.size() != std::size_t(n) || ns.node.size() != std::size_t(n)))
+  if (A.rows <= 0) throw RuntimeFailure("multigrid: empty matrix");
+  if (!ns.kind.empty() && (ns.kind.size() != std::size_t(A.rows) || ns.node.size() != std::size_t(A.rows)))
     throw RuntimeFailure("multigrid: near-null space description does not match the matrix size");
-  const int k = scalar ? 1 : 6;
-
-  // Finest level: nodes in order of appearance (unknowns of a node consecutive).
-  Level fine;
-  fine.A = A;
-  std::vector<int32_t> node_id;  // finest node -> caller's node (position index)
-  if (scalar) {
-    fine.node_start.resize(std::size_t(n) + 1);
-    for (int32_t i = 0; i <= n; ++i) fine.node_start[i] = i;
-  } else {
-    for (int32_t i = 0; i < n; ++i)
-      if (i == 0 || ns.node[i] != ns.node[i - 1]) {
-        if (i > 0 && ns.node[i] < ns.node[i - 1])
-          throw RuntimeFailure("multigrid: the unknowns of a node must be consecutive and nodes increasing");
-        fine.node_start.push_back(i);
-        node_id.push_back(ns.node[i]);
-      }
-    fine.node_start.push_back(n);
-  }
+  std::vector<int32_t> node_id;
   m.levels.reserve(std::size_t(std::max(1, o.max_levels)) + 1);  // no reallocation: views stay valid
-  m.levels.push_back(std::move(fine));
-  const Mat3 hinv = ns.cell.inverse();
-  Eigen::MatrixXd B;  // near-null space of the current level (coarse levels)
-
+  m.levels.push_back(finest_level(A, ns, node_id));
+  const FineModesRef fine{&ns, &node_id};
+  Eigen::MatrixXd B;  // near-null space of the current level (empty on the finest)
   double tc = now_cpu();
-  while (true) {
-    Level& L = m.levels.back();
-    diagonal_blocks(L);
-    stamp("diagonal blocks", tc);
-    L.omega = 4.0 / (3.0 * spectral_radius(L));
-    stamp("spectral radius", tc);
-    L.x.resize(L.A.rows), L.b.resize(L.A.rows), L.r.resize(L.A.rows);
-    const std::size_t l = m.levels.size() - 1;
-    if (L.A.rows <= o.coarse_size || int(m.levels.size()) >= o.max_levels) break;
-
-    std::vector<int32_t> gstart, gnbr, agg, root;
-    strong_graph(L, o.strength * std::pow(0.5, double(l)), gstart, gnbr);
-    stamp("strong graph", tc);
-    const int32_t na = aggregate(gstart, gnbr, o.aggregate_radius, agg, root);
-    stamp("aggregation", tc);
-    if (na == 0) break;
-    // Members of each aggregate.
-    std::vector<int32_t> mstart(std::size_t(na) + 1, 0), members(std::size_t(L.nodes()));
-    for (int32_t v : agg)
-      if (v >= 0) ++mstart[v + 1];
-    for (int32_t a = 0; a < na; ++a) mstart[a + 1] += mstart[a];
-    {
-      std::vector<int32_t> fill(mstart.begin(), mstart.end() - 1);
-      for (int32_t v = 0; v < L.nodes(); ++v)
-        if (agg[v] >= 0) members[std::size_t(fill[agg[v]]++)] = v;
-    }
-    // Tentative prolongator per aggregate: Q R = B restricted to the aggregate.
-    std::vector<Eigen::MatrixXd> Q(static_cast<std::size_t>(na)), Rf(static_cast<std::size_t>(na));
-    std::vector<int32_t> cstart(std::size_t(na) + 1, 0);
-#pragma omp parallel for schedule(dynamic, 256) if (na > 2000)
-    for (int32_t a = 0; a < na; ++a) {
-      int32_t rows = 0;
-      for (int32_t t = mstart[a]; t < mstart[a + 1]; ++t)
-        rows += L.node_start[members[t] + 1] - L.node_start[members[t]];
-      Eigen::MatrixXd Ba(rows, k);
-      int32_t r = 0;
-      const Vec3 origin = l == 0 && !scalar ? ns.position[std::size_t(node_id[root[a]])] : Vec3{0, 0, 0};
-      for (int32_t t = mstart[a]; t < mstart[a + 1]; ++t) {
-        const int32_t v = members[t];
-        Vec3 off{0, 0, 0};
-        if (l == 0 && !scalar) {
-          Vec3 d = ns.position[std::size_t(node_id[v])] - origin;
-          Vec3 s = hinv * d;
-          for (int c = 0; c < 3; ++c)
-            if (ns.periodic[c]) s[c] -= std::round(s[c]);
-          off = (1 / ns.rotation_scale) * (ns.cell * s);
-        }
-        for (int32_t i = L.node_start[v]; i < L.node_start[v + 1]; ++i, ++r) {
-          if (l > 0) {
-            Ba.row(r) = B.row(i);
-          } else if (scalar) {
-            Ba(r, 0) = 1;
-          } else {
-            Ba.row(r).setZero();
-            const int kind = ns.kind[std::size_t(i)];
-            if (kind >= 0 && kind < 3) {
-              Ba(r, kind) = 1;
-              for (int w = 0; w < 3; ++w) {  // (e_w × off)_kind
-                Vec3 e{0, 0, 0};
-                e[w] = 1;
-                Ba(r, 3 + w) = cross(e, off)[kind];
-              }
-            } else if (kind >= 3 && kind < 6) {
-              Ba(r, kind) = 1;
-            }
-          }
-        }
-      }
-      Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(Ba.rows(), Ba.cols());
-      qr.setThreshold(1e-10);
-      qr.compute(Ba);
-      const int rank = int(qr.rank());
-      Q[a] = qr.householderQ() * Eigen::MatrixXd::Identity(Ba.rows(), rank);
-      Rf[a] = Q[a].transpose() * Ba;
-      cstart[a + 1] = rank;
-    }
-    for (int32_t a = 0; a < na; ++a) cstart[a + 1] += cstart[a];
-    stamp("QR", tc);
-    const int32_t nc = cstart[na];
-    if (nc == 0 || nc >= int32_t(0.9 * L.A.rows)) break;  // coarsening stalled: solve this level directly
-
-    std::vector<Eigen::Triplet<double, int>> tri;
-    tri.reserve(std::size_t(L.A.rows) * std::size_t(k));
-    Eigen::MatrixXd Bc(nc, k);
-    for (int32_t a = 0; a < na; ++a) {
-      int32_t r = 0;
-      for (int32_t t = mstart[a]; t < mstart[a + 1]; ++t)
-        for (int32_t i = L.node_start[members[t]]; i < L.node_start[members[t] + 1]; ++i, ++r)
-          for (int32_t c = 0; c < Q[a].cols(); ++c) tri.emplace_back(i, cstart[a] + c, Q[a](r, c));
-      Bc.middleRows(cstart[a], Rf[a].rows()) = Rf[a];
-    }
-    Q.clear(), Rf.clear();
-    SpMat P(L.A.rows, nc);
-    P.setFromTriplets(tri.begin(), tri.end());
-    tri.clear();
-    tri.shrink_to_fit();
-    stamp("tentative P", tc);
-    if (o.smooth) {
-      // P = P_tent − ω D_F⁻¹ A_F P_tent (Vaněk, Mandel & Brezina): the filtered matrix A_F keeps the
-      // couplings between strongly coupled nodes (and within a node) and adds the dropped ones to
-      // the diagonal (row sums kept), so P spreads along strong couplings only; D_F = diag(A_F),
-      // ω = 4/(3 ρ(D_F⁻¹ A_F)).
-      const int32_t nr = L.A.rows, nn = L.nodes();
-      std::vector<int32_t> node_of(static_cast<std::size_t>(nr)), mark(static_cast<std::size_t>(nn), -1);
-      for (int32_t v = 0; v < nn; ++v)
-        for (int32_t i = L.node_start[v]; i < L.node_start[v + 1]; ++i) node_of[i] = v;
-      SpMat AF(nr, nr);
-      AF.resizeNonZeros(Eigen::Index(L.A.start[nr]));
-      std::vector<double> dF(static_cast<std::size_t>(nr), 0.0);
-      {
-        int32_t* fs = AF.outerIndexPtr();
-        int32_t* fc = AF.innerIndexPtr();
-        double* fv = AF.valuePtr();
-        int32_t out = 0;
-        for (int32_t v = 0; v < nn; ++v) {
-          mark[v] = v;
-          for (int32_t g = gstart[v]; g < gstart[v + 1]; ++g) mark[gnbr[g]] = v;
-          for (int32_t i = L.node_start[v]; i < L.node_start[v + 1]; ++i) {
-            fs[i] = out;
-            double lumped = 0;
-            int32_t diag = -1;
-            for (int32_t e = L.A.start[i]; e < L.A.start[i + 1]; ++e) {
-              const int32_t j = L.A.column[e];
-              if (mark[node_of[j]] == v) {
-                if (j == i) diag = out;
-                fc[out] = j;
-                fv[out++] = L.A.value[e];
-              } else {
-                lumped += L.A.value[e];
-              }
-            }
-            if (diag >= 0) {
-              const double a_ii = fv[diag];
-              fv[diag] += lumped;
-              // A node whose couplings are all weak has a lumped diagonal near 0: scale its row
-              // by the unfiltered diagonal instead.
-              dF[i] = fv[diag] > 0.01 * a_ii ? fv[diag] : a_ii;
-            }
-          }
-        }
-        fs[nr] = out;
-        AF.resizeNonZeros(out);
-      }
-      for (int32_t i = 0; i < nr; ++i)
-        if (!(dF[i] > 0)) throw NumericalError("multigrid: a filtered diagonal entry is not positive");
-      const CsrView afv = as_view(AF);
-      const double omega = 4.0 / (3.0 * spectral_radius(afv, [&](const double* w, double* z) {
-                                    for (int32_t i = 0; i < nr; ++i) z[i] = w[i] / dF[i];
-                                  }));
-      SpMat DAP = spgemm(afv, P);
-      for (int32_t i = 0; i < nr; ++i) {
-        const double f = omega / dF[i];
-        for (int32_t e = DAP.outerIndexPtr()[i]; e < DAP.outerIndexPtr()[i + 1]; ++e) DAP.valuePtr()[e] *= f;
-      }
-      P = P - DAP;
-    }
-    P.makeCompressed();
-    stamp("smoothing P", tc);
-    L.R = P.transpose();
-    L.R.makeCompressed();
-    stamp("transpose", tc);
-    Level C;
-    {
-      const SpMat AP = spgemm(L.A, P);
-      stamp("A P", tc);
-      C.own = spgemm(L.R, AP);
-      stamp("R (A P)", tc);
-    }
-    C.own.makeCompressed();
-    L.P = std::move(P);
-    C.node_start.assign(cstart.begin(), cstart.end());
-    B = std::move(Bc);
-    m.levels.push_back(std::move(C));
-    m.levels.back().A = as_view(m.levels.back().own);
+  while (m.coarsen(fine, B, tc)) {
   }
-  // Coarsest level: a direct factorisation.
-  const Level& last = m.levels.back();
-  const MapMat Ac = as_map(last.A);
-  m.use_dense = last.A.rows <= 3000;
-  if (m.use_dense) {
-    m.dense.compute(Ac.toDense());
-    if (m.dense.info() != Eigen::Success) throw NumericalError("multigrid: coarsest matrix is singular");
-  } else {
-    m.sparse.compute(Eigen::SparseMatrix<double, Eigen::ColMajor, int>(Ac));
-    if (m.sparse.info() != Eigen::Success) throw NumericalError("multigrid: coarsest matrix is singular");
-  }
-  for (std::size_t l = 0; l < m.levels.size(); ++l) {
-    const Level& L = m.levels[l];
-    m.stats.rows.push_back(L.A.rows);
-    m.stats.nonzeros.push_back(L.A.start[L.A.rows]);
-    m.stats.operator_complexity += double(L.A.start[L.A.rows]) / double(A.start[A.rows]);
-    if (l > 0) m.stats.memory_bytes += 12 * std::size_t(L.own.nonZeros());
-    m.stats.memory_bytes += 12 * std::size_t(L.P.nonZeros() + L.R.nonZeros()) + 8 * L.dinv.size() + 24 * std::size_t(L.A.rows);
-  }
-  if (m.use_dense) m.stats.memory_bytes += 8 * std::size_t(last.A.rows) * std::size_t(last.A.rows);
+  m.finish(A);
   m.stats.setup_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
