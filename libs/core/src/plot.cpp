@@ -29,7 +29,7 @@ bool plotting_available() { return std::system("command -v gnuplot >/dev/null 2>
 
 void write_plot(const std::filesystem::path& stem, const PlotSpec& spec) {
   for (const auto& s : spec.series)
-    if (s.x.size() != s.y.size())
+    if (s.x.size() != s.y.size() || (!s.yerr.empty() && s.yerr.size() != s.y.size()))
       throw InputError(stem.string(), "series '" + s.title + "'", std::to_string(s.x.size()) + " x values",
                        "it has " + std::to_string(s.y.size()) + " y values; a series needs one y per x");
   if (!plotting_available())
@@ -42,7 +42,12 @@ void write_plot(const std::filesystem::path& stem, const PlotSpec& spec) {
   for (const auto& s : spec.series) {  // one block per series, addressed by `index` in the script
     data << "# " << s.title << "\n";
     for (std::size_t i = 0; i < s.x.size(); ++i)
-      if (std::isfinite(s.x[i]) && std::isfinite(s.y[i])) data << s.x[i] << ' ' << s.y[i] << '\n';
+      if (std::isfinite(s.x[i]) && std::isfinite(s.y[i])) {
+        data << s.x[i] << ' ' << s.y[i];
+        // A third column only for series with bars; a point without a spread gets a bar of 0.
+        if (!s.yerr.empty()) data << ' ' << (i < s.yerr.size() && std::isfinite(s.yerr[i]) ? s.yerr[i] : 0.0);
+        data << '\n';
+      }
     data << "\n\n";
   }
   write_text_atomic(dat, data.str());
@@ -58,8 +63,10 @@ void write_plot(const std::filesystem::path& stem, const PlotSpec& spec) {
   script << "plot ";
   for (std::size_t i = 0; i < spec.series.size(); ++i) {
     const auto& s = spec.series[i];
-    script << (i ? ", \\\n     " : "") << quoted(dat_name) << " index " << i << " using 1:2 with "
-           << (s.points_only ? "points" : "linespoints") << " title " << quoted(s.title);
+    const bool bars = !s.yerr.empty();
+    script << (i ? ", \\\n     " : "") << quoted(dat_name) << " index " << i << (bars ? " using 1:2:3 with " : " using 1:2 with ")
+           << (bars ? (s.points_only ? "yerrorbars" : "yerrorlines") : s.points_only ? "points" : "linespoints")
+           << " title " << quoted(s.title);
   }
   script << "\n";
   write_text_atomic(gp, script.str());

@@ -11,6 +11,7 @@ struct PlotSeries {
   std::string title;
   std::vector<double> x, y;
   bool points_only = false;  ///< markers without a line (scattered data such as replicas)
+  std::vector<double> yerr;  ///< error bar half-heights, one per y (empty: no bars; NaN: none at that point)
 };
 
 struct PlotSpec {
