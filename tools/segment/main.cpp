@@ -52,7 +52,7 @@ int main(int argc, char** argv) {
     app.add_option("--packing", c.packing, "write the grains as a packing (.h5, implies --grains)");
     app.add_option("-o,--output", c.output, "labels (.h5: /labels, /macropores, /grains)");
     app.add_option("--mha", c.mha, "labels as MetaImage (.mha or .mhd)");
-    app.add_option("--vdb", c.vdb, "macropores as an OpenVDB signed-distance level set (m)");
+    app.add_option("--vdb", c.vdb, "macropores as an OpenVDB signed-distance level set (world unit mm, stated in its metadata)");
     app.add_option("--overlay", c.overlay, "mid-plane PNG overlays: PREFIX_xy.png, _xz, _yz");
     app.add_option("--json", c.json, "write the JSON summary to FILE (default: stdout)");
     int threads = 0;

@@ -4,7 +4,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <sstream>
+#include <tuple>
 
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/h5.hpp"
@@ -152,6 +155,12 @@ struct Writer {
     put_int("/bonds/state", b.state, "1");
     put("/bonds/broken_at", b.broken_at, "s");
     f.set_attr("/bonds/state", "legend", "0 intact, 1 broken");
+    // i and j as rows (M x 2) for the XDMF sidecar's one line per bond; the reader uses i and j.
+    std::vector<int32_t> ij(2 * m);
+    for (std::size_t k = 0; k < m; ++k) ij[2 * k] = b.i[k], ij[2 * k + 1] = b.j[k];
+    f.write("/bonds/connectivity", ij, {m, 2});
+    f.set_attr("/bonds/connectivity", "units", "1");
+    f.set_attr("/bonds/connectivity", "meaning", "rows (i, j) for viewers (XDMF lines); a copy of /bonds/i and /bonds/j");
   }
 
   void contacts(const ContactTable& c, std::size_t n) {
@@ -515,6 +524,7 @@ void write_packing_groups(h5::File& f, const Packing& p) {
   w.bonds(p.bonds, n);
   w.contacts(p.contacts, n);
   w.results(p.results);
+  write_provenance(f);
 }
 
 Packing read_packing_groups(const h5::File& f) {
@@ -543,7 +553,7 @@ void write_packing(const std::string& path, const Packing& p) {
   commit_output(path);
   // The sidecar follows the data: a stale sidecar from an earlier run must not survive a failure.
   try {
-    write_xdmf_sidecar(path, p.particles.size(), !p.particles.velocity.empty());
+    write_xdmf_sidecar(path, p.particles.size(), !p.particles.velocity.empty(), p.bonds.size());
   } catch (...) {
     std::remove(xdmf_sidecar_of(path).c_str());
     std::remove(temporary_path(xdmf_sidecar_of(path)).c_str());
@@ -567,7 +577,7 @@ Packing read_packing(const std::string& path) {
   return read_packing_groups(f);
 }
 
-void write_xdmf_sidecar(const std::string& h5_path, std::size_t n, bool has_velocity) {
+void write_xdmf_sidecar(const std::string& h5_path, std::size_t n, bool has_velocity, std::size_t n_bonds) {
   // XDMF 2: read by both ParaView XDMF readers. The HDF5 file is named relative to the sidecar,
   // so the pair can be moved together. Polyvertex without connectivity = one vertex per point.
   const auto slash = h5_path.find_last_of('/');
@@ -592,9 +602,122 @@ void write_xdmf_sidecar(const std::string& h5_path, std::size_t n, bool has_velo
   attribute("radius", "Scalar", "", "Float", 8);
   attribute("phase", "Scalar", "", "Int", 4);
   if (has_velocity) attribute("velocity", "Vector", " 3", "Float", 8);
-  x << "    </Grid>\n"
-    << "  </Domain>\n"
+  x << "    </Grid>\n";
+  if (n_bonds > 0) {  // one line per bond between the particle centres (across a periodic face too)
+    const std::string M = std::to_string(n_bonds);
+    x << "    <Grid Name=\"bonds\" GridType=\"Uniform\">\n"
+      << "      <Topology TopologyType=\"Polyline\" NumberOfElements=\"" << M << "\" NodesPerElement=\"2\">\n"
+      << "        <DataItem Dimensions=\"" << M << " 2\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">" << h5
+      << ":/bonds/connectivity</DataItem>\n"
+      << "      </Topology>\n"
+      << "      <Geometry GeometryType=\"XYZ\">\n"
+      << "        <DataItem Dimensions=\"" << N << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5
+      << ":/particles/position</DataItem>\n"
+      << "      </Geometry>\n";
+    for (const auto& [name, number, prec] : {std::tuple{"radius", "Float", 8}, std::tuple{"rest_length", "Float", 8},
+                                             std::tuple{"state", "UChar", 1}, std::tuple{"broken_at", "Float", 8}})
+      x << "      <Attribute Name=\"" << name << "\" AttributeType=\"Scalar\" Center=\"Cell\">\n"
+        << "        <DataItem Dimensions=\"" << M << "\" NumberType=\"" << number << "\" Precision=\"" << prec
+        << "\" Format=\"HDF\">" << h5 << ":/bonds/" << name << "</DataItem>\n"
+        << "      </Attribute>\n";
+    x << "    </Grid>\n";
+  }
+  x << "  </Domain>\n"
     << "</Xdmf>\n";
+  write_text_atomic(xdmf_sidecar_of(h5_path), x.str());
+}
+
+namespace {
+// The command line of this process, words quoted where the shell would need it.
+std::string this_command_line() {
+  std::ifstream in("/proc/self/cmdline", std::ios::binary);
+  std::string all((std::istreambuf_iterator<char>(in)), {}), out, word;
+  auto flush = [&] {
+    const bool plain = !word.empty() && word.find_first_not_of(
+        "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_./=,:+@%") == std::string::npos;
+    std::string q = word;
+    if (!plain) {
+      q = "'";
+      for (char c : word) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+      q += "'";
+    }
+    out += (out.empty() ? "" : " ") + q;
+    word.clear();
+  };
+  for (char c : all) {
+    if (c == '\0') flush();
+    else word += c;
+  }
+  if (!word.empty()) flush();
+  return out;
+}
+std::string program_name() {
+  std::ifstream in("/proc/self/cmdline", std::ios::binary);
+  std::string argv0;
+  std::getline(in, argv0, '\0');
+  return std::filesystem::path(argv0).filename().string();
+}
+}  // namespace
+
+void write_provenance(h5::File& f, const std::vector<std::string>& inputs) {
+  f.set_attr("/", "units", std::string("m"));
+  const auto missing = [&](const char* a) { return !f.has_attr("/", a) || f.attr_string("/", a).empty(); };
+  // tool_name() and command_line() are set by run_tool and cli::parse; /proc/self/cmdline otherwise (tests).
+  if (missing("tool")) f.set_attr("/", "tool", tool_name() != "tomodem" ? tool_name() : program_name());
+  if (missing("version")) f.set_attr("/", "version", version_string());
+  if (missing("created_utc")) f.set_attr("/", "created_utc", utc_now());
+  if (missing("command_line")) f.set_attr("/", "command_line", command_line().empty() ? this_command_line() : command_line());
+  for (const auto& in : inputs) {
+    std::error_code ec;
+    if (!in.empty() && std::filesystem::is_regular_file(in, ec) && !f.has_attr("/provenance/inputs", in))
+      f.set_attr("/provenance/inputs", in, file_hash(in));
+  }
+}
+
+double metres_per_unit(const std::string& u) {
+  if (u == "m") return 1;
+  if (u == "mm") return 1e-3;
+  if (u == "um" || u == "\u00b5m" || u == "micron") return 1e-6;
+  if (u == "nm") return 1e-9;
+  return 0;
+}
+
+double h5_length_unit(const h5::File& f, bool warn_missing) {
+  if (!f.has_attr("/", "units")) {
+    if (warn_missing)
+      warn(f.path() + ": no length unit (root attribute 'units'): lengths taken in metres, as every tomodem HDF5 "
+           "file was written before files carried it");
+    return 1;
+  }
+  const std::string u = f.attr_string("/", "units");
+  const double m = metres_per_unit(u);
+  if (!(m > 0)) throw InputError(f.path(), "/@units", u, "unknown length unit (m, mm, um, nm)");
+  return m;
+}
+
+void write_volume_xdmf(const std::string& h5_path, const std::array<std::size_t, 3>& d,
+                       const std::array<double, 3>& origin, const std::array<double, 3>& sp,
+                       const std::vector<XdmfField>& fields) {
+  const auto slash = h5_path.find_last_of('/');
+  const std::string h5 = xml_escape(slash == std::string::npos ? h5_path : h5_path.substr(slash + 1));
+  std::ostringstream x;
+  x.precision(17);
+  // The mesh nodes are the voxel corners: origin (a voxel centre) less half a voxel. XDMF lists
+  // CoRectMesh dimensions, origin and spacing slowest axis first (z, y, x).
+  x << "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n<Xdmf Version=\"2.0\">\n  <Domain>\n"
+    << "    <Grid Name=\"volume\" GridType=\"Uniform\">\n"
+    << "      <Topology TopologyType=\"3DCoRectMesh\" Dimensions=\"" << d[2] + 1 << " " << d[1] + 1 << " " << d[0] + 1
+    << "\"/>\n      <Geometry GeometryType=\"ORIGIN_DXDYDZ\">\n"
+    << "        <DataItem Name=\"origin\" Dimensions=\"3\" NumberType=\"Float\" Precision=\"8\" Format=\"XML\">"
+    << origin[2] - 0.5 * sp[2] << " " << origin[1] - 0.5 * sp[1] << " " << origin[0] - 0.5 * sp[0] << "</DataItem>\n"
+    << "        <DataItem Name=\"spacing\" Dimensions=\"3\" NumberType=\"Float\" Precision=\"8\" Format=\"XML\">"
+    << sp[2] << " " << sp[1] << " " << sp[0] << "</DataItem>\n      </Geometry>\n";
+  for (const auto& fl : fields)
+    x << "      <Attribute Name=\"" << xml_escape(fl.name) << "\" AttributeType=\"Scalar\" Center=\"Cell\">\n"
+      << "        <DataItem Dimensions=\"" << d[2] << " " << d[1] << " " << d[0] << "\" NumberType=\"" << fl.number_type
+      << "\" Precision=\"" << fl.precision << "\" Format=\"HDF\">" << h5 << ":" << xml_escape(fl.dataset)
+      << "</DataItem>\n      </Attribute>\n";
+  x << "    </Grid>\n  </Domain>\n</Xdmf>\n";
   write_text_atomic(xdmf_sidecar_of(h5_path), x.str());
 }
 

@@ -7,6 +7,7 @@
 #include <itkImageIOFactory.h>
 #include <itkImageSeriesWriter.h>
 #include <itkImportImageFilter.h>
+#include <itkMetaDataObject.h>
 
 #include <algorithm>
 #include <cctype>
@@ -21,7 +22,16 @@ namespace tomodem::image::itkb {
 namespace {
 
 using FloatImage = itk::Image<float, 3>;
-constexpr double kMmPerM = 1e3;  // files written by tomodem carry spacing in mm (ITK/medical convention)
+// Files written by tomodem carry spacing and origin in metres and say so in a header key "units"
+// (MetaImage and NRRD keep unknown keys). NIfTI states its own unit, which ITK writes as mm.
+constexpr const char* kUnitKey = "units";
+double header_units_per_m(const std::string& path) {
+  std::string l = path;
+  for (auto& c : l) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  const bool nifti = (l.size() > 4 && l.compare(l.size() - 4, 4, ".nii") == 0) ||
+                     (l.size() > 7 && l.compare(l.size() - 7, 7, ".nii.gz") == 0);
+  return nifti ? 1e3 : 1.0;
+}
 
 itk::ImageIOBase::Pointer probe(const std::string& path) {
   auto io = itk::ImageIOFactory::CreateImageIO(path.c_str(), itk::ImageIOFactory::IOFileModeEnum::ReadMode);
@@ -75,7 +85,7 @@ std::string component_name(const itk::ImageIOBase* io) {
 }
 
 template <class P, class T>
-typename itk::Image<P, 3>::Pointer to_itk(const Grid<T>& g, P (*conv)(T)) {
+typename itk::Image<P, 3>::Pointer to_itk(const Grid<T>& g, P (*conv)(T), double per_m = 1.0) {
   using Image = itk::Image<P, 3>;
   auto img = Image::New();
   typename Image::SizeType size;
@@ -83,9 +93,10 @@ typename itk::Image<P, 3>::Pointer to_itk(const Grid<T>& g, P (*conv)(T)) {
   img->SetRegions(typename Image::RegionType(size));
   typename Image::SpacingType sp;
   typename Image::PointType org;
-  for (int k = 0; k < 3; ++k) { sp[k] = g.spacing[k] * kMmPerM; org[k] = g.origin[k] * kMmPerM; }
+  for (int k = 0; k < 3; ++k) { sp[k] = g.spacing[k] * per_m; org[k] = g.origin[k] * per_m; }
   img->SetSpacing(sp);
   img->SetOrigin(org);
+  itk::EncapsulateMetaData<std::string>(img->GetMetaDataDictionary(), kUnitKey, per_m == 1.0 ? "m" : "mm");
   img->Allocate();
   P* out = img->GetBufferPointer();
   for (std::size_t i = 0; i < g.v.size(); ++i) out[i] = conv(g.v[i]);
@@ -181,6 +192,14 @@ Volume read_file(const std::string& path, ReadInfo* info) {
     v.spacing[k] = img->GetSpacing()[k];
     v.origin[k] = img->GetOrigin()[k];
   }
+  if (info) {
+    std::string unit;
+    if (itk::ExposeMetaData<std::string>(io->GetMetaDataDictionary(), kUnitKey, unit)) {
+      while (!unit.empty() && std::isspace(static_cast<unsigned char>(unit.back()))) unit.pop_back();
+      while (!unit.empty() && std::isspace(static_cast<unsigned char>(unit.front()))) unit.erase(unit.begin());
+      info->length_unit = unit.empty() ? "(empty)" : unit;
+    }
+  }
   return v;
 }
 
@@ -230,8 +249,9 @@ Volume read_series(const std::vector<std::string>& files, ReadInfo* info, const 
 }
 
 void write_file(const std::string& path, const Volume& v, bool as_uint16) {
-  if (as_uint16) write_image(path, to_itk<uint16_t, float>(v, to_u16).GetPointer());
-  else write_image(path, to_itk<float, float>(v, to_f).GetPointer());
+  const double u = header_units_per_m(path);
+  if (as_uint16) write_image(path, to_itk<uint16_t, float>(v, to_u16, u).GetPointer());
+  else write_image(path, to_itk<float, float>(v, to_f, u).GetPointer());
 }
 
 void write_series(const std::vector<std::string>& files, const Volume& v, bool as_uint16) {
@@ -251,9 +271,11 @@ void write_series(const std::vector<std::string>& files, const Volume& v, bool a
   else run(to_itk<float, float>(v, to_f));
 }
 
-void write_file(const std::string& path, const Mask& m) { write_image(path, to_itk<uint8_t, uint8_t>(m, to_u8).GetPointer()); }
+void write_file(const std::string& path, const Mask& m) {
+  write_image(path, to_itk<uint8_t, uint8_t>(m, to_u8, header_units_per_m(path)).GetPointer());
+}
 void write_file(const std::string& path, const Labels& m) {
-  write_image(path, to_itk<int32_t, int32_t>(m, to_i32).GetPointer());
+  write_image(path, to_itk<int32_t, int32_t>(m, to_i32, header_units_per_m(path)).GetPointer());
 }
 
 }  // namespace tomodem::image::itkb

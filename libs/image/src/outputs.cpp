@@ -21,13 +21,15 @@
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/h5.hpp"
 #include "tomodem/core/output.hpp"
+#include "tomodem/core/packing_io.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/image/outputs.hpp"
 #include "tomodem/image/segment.hpp"
 
 namespace tomodem::image {
 
-void write_labels_h5(const std::string& path, const Mask& phases, const Labels& macro, const Labels* grains) {
+void write_labels_h5(const std::string& path, const Mask& phases, const Labels& macro, const Labels* grains,
+                     const std::vector<std::string>& inputs) {
   const std::string tmp = temporary_path(path);
   try {
     h5::File f(tmp, h5::File::Mode::create);
@@ -37,6 +39,7 @@ void write_labels_h5(const std::string& path, const Mask& phases, const Labels& 
       f.set_attr(ds, "spacing", sp);
       f.set_attr(ds, "origin", org);
       f.set_attr(ds, "axes", std::string("z,y,x (spacing and origin listed x,y,z, m)"));
+      f.set_attr(ds, "units", std::string("1"));  // labels and ids; lengths are in the root's units (m)
     };
     f.write("/labels", phases.v, dims);
     f.set_attr("/labels", "legend", std::string(kLegend));
@@ -47,12 +50,22 @@ void write_labels_h5(const std::string& path, const Mask& phases, const Labels& 
       f.write("/grains", grains->v, dims);
       geom("/grains");
     }
+    write_provenance(f, inputs);
     f.close();  // a full disk is found here, before the rename
   } catch (...) {
     std::remove(tmp.c_str());
     throw;
   }
   commit_output(path);
+  // The sidecar follows the data (ParaView opens the labels in metres beside the packings).
+  std::vector<XdmfField> fields{{"labels", "/labels", "UChar", 1}, {"macropores", "/macropores", "Int", 4}};
+  if (grains) fields.push_back({"grains", "/grains", "Int", 4});
+  try {
+    write_volume_xdmf(path, {phases.dims.nx, phases.dims.ny, phases.dims.nz}, phases.origin, phases.spacing, fields);
+  } catch (...) {
+    std::remove(xdmf_sidecar_of(path).c_str());
+    throw;
+  }
 }
 
 namespace {

@@ -198,6 +198,7 @@ std::string run_segment(const SegmentConfig& cfgin) {
                                                           {"--json", cfg.json}, {"--packing", cfg.packing}};
     if (cfg.mha.size() > 4 && cfg.mha.substr(cfg.mha.size() - 4) == ".mhd") outs.push_back({"--mha", sibling(cfg.mha, ".raw")});
     if (!cfg.packing.empty()) outs.push_back({"--packing", sibling(cfg.packing, ".xdmf")});
+    if (!cfg.output.empty()) outs.push_back({"-o", sibling(cfg.output, ".xdmf")});  // the labels' XDMF sidecar
     if (!cfg.overlay.empty())
       for (const char* p : {"_xy.png", "_xz.png", "_yz.png"}) outs.push_back({"--overlay", cfg.overlay + p});
     check_outputs(outs, input_files(cfg.input, ro));
@@ -400,7 +401,7 @@ std::string run_segment(const SegmentConfig& cfgin) {
   }
   // ---- outputs (everything computed: nothing is written before this point)
   json outs;
-  if (!cfg.output.empty()) { write_labels_h5(cfg.output, phases, macro, cfg.grains ? &grains : nullptr); outs["labels_h5"] = cfg.output; }
+  if (!cfg.output.empty()) { write_labels_h5(cfg.output, phases, macro, cfg.grains ? &grains : nullptr, rinfo.files); outs["labels_h5"] = cfg.output; }
   if (!cfg.mha.empty()) { write_metaimage(cfg.mha, phases); outs["labels_mha"] = cfg.mha; }
   if (!cfg.vdb.empty()) {
     Mask m;
@@ -484,6 +485,7 @@ std::string run_phantom(const PhantomConfig& c) {
                                                                             : "0:solid,1:fine_pore,2:macropore"));
       f.write("/macropores", P.macropore_ids.v, dims);
       f.set_attr("/labels", "spacing", std::vector<double>(3, c.opt.voxel));
+      write_provenance(f);  // units = "m", tool, version, command line, time
       f.close();  // a full disk is found here, before the rename
     }
     commit_output(c.truth);

@@ -13,6 +13,8 @@
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/h5.hpp"
 #include "tomodem/core/output.hpp"
+#include "tomodem/core/packing_io.hpp"
+#include "tomodem/core/tool.hpp"
 #include "tomodem/image/volume.hpp"
 
 namespace fs = std::filesystem;
@@ -164,7 +166,7 @@ Volume read_raw(const std::string& path, const ReadOptions& o, ReadInfo* info) {
   return v;
 }
 
-Volume read_h5(const std::string& path, const ReadOptions& o, bool* has_spacing) {
+Volume read_h5(const std::string& path, const ReadOptions& o, bool* has_spacing, std::string* unit) {
   h5::File f(path, h5::File::Mode::read);
   std::vector<std::size_t> d = f.shape(o.h5_dataset);  // InputError naming the dataset when missing
   if (d.size() != 3)
@@ -177,15 +179,19 @@ Volume read_h5(const std::string& path, const ReadOptions& o, bool* has_spacing)
   Volume v(Dims{d[2], d[1], d[0]});
   for (std::size_t i = 0; i < data.size(); ++i) v.v[i] = static_cast<float>(data[i]);
   *has_spacing = false;
+  const bool has_geometry = f.has_attr(o.h5_dataset, "spacing") || f.has_attr(o.h5_dataset, "origin");
+  // Lengths in the file's unit (root attribute `units`); files without it were written in metres.
+  const double u = has_geometry ? h5_length_unit(f, o.spacing[0] == 0) : 1.0;
+  if (f.has_attr("/", "units")) *unit = f.attr_string("/", "units");
   if (f.has_attr(o.h5_dataset, "spacing")) {
     const auto s = f.attr_doubles(o.h5_dataset, "spacing");
     if (s.size() != 3) throw InputError(path, o.h5_dataset + "@spacing", "", "expected 3 values (x, y, z) in m");
-    v.spacing = {s[0], s[1], s[2]};
+    v.spacing = {s[0] * u, s[1] * u, s[2] * u};
     *has_spacing = true;
   }
   if (f.has_attr(o.h5_dataset, "origin")) {
     const auto s = f.attr_doubles(o.h5_dataset, "origin");
-    if (s.size() == 3) v.origin = {s[0], s[1], s[2]};
+    if (s.size() == 3) v.origin = {s[0] * u, s[1] * u, s[2] * u};
   }
   return v;
 }
@@ -325,14 +331,27 @@ Volume read_volume(const std::string& input, const ReadOptions& o, ReadInfo* inf
     check_read_memory(input, info.format == "mha" ? "DimSize" : "dims", itkb::header_dims(input), 0, o);
     v = itkb::read_file(input, &info);
     header_spacing = info.format != "tiff";  // TIFF resolution tags are not a voxel size
-    if (header_spacing)
-      for (int k = 0; k < 3; ++k) { v.spacing[k] *= o.header_unit; v.origin[k] *= o.header_unit; }
+    if (header_spacing) {
+      // The unit the header states wins (tomodem writes "m"); a file that states none is read in
+      // --header-unit (mm by default: the ITK convention, and tomodem's own files before).
+      double unit = o.header_unit;
+      if (!info.length_unit.empty()) {
+        unit = metres_per_unit(info.length_unit);
+        if (!(unit > 0)) throw InputError(input, "units", info.length_unit, "unknown length unit in the header (m, mm, um, nm)");
+      } else if (info.format != "nifti" && o.spacing[0] == 0) {  // NIfTI states its unit itself (ITK gives mm)
+        char u[32];
+        std::snprintf(u, sizeof u, "%g", o.header_unit);
+        warn(input + ": the header states no length unit (key 'units'): spacing and origin read as " + u +
+             " m per unit (--header-unit; the ITK convention, and how tomodem wrote files before they stated the unit)");
+      }
+      for (int k = 0; k < 3; ++k) { v.spacing[k] *= unit; v.origin[k] *= unit; }
+    }
   } else if (info.format == "raw") {
     info.files = {input};
     v = read_raw(input, o, &info);
   } else if (info.format == "h5") {
     info.files = {input};
-    v = read_h5(input, o, &header_spacing);
+    v = read_h5(input, o, &header_spacing, &info.length_unit);
     info.pixel_type = "float64 (as read)";
     field = o.h5_dataset;
   } else {
@@ -400,6 +419,7 @@ void write_volume(const std::string& path, const Volume& v, bool as_uint16) {
       f.write("/volume", d, {v.dims.nz, v.dims.ny, v.dims.nx});
       f.set_attr("/volume", "spacing", std::vector<double>(v.spacing.begin(), v.spacing.end()));
       f.set_attr("/volume", "origin", std::vector<double>(v.origin.begin(), v.origin.end()));
+      write_provenance(f);
       f.close();  // a full disk is found here, before the rename
     }
     commit_output(path);

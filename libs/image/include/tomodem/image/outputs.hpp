@@ -12,8 +12,10 @@ namespace tomodem::image {
 inline constexpr const char* kLegend = "0:solid,1:fine_pore,2:macropore,3:solid_phase_2";
 
 /// HDF5: /labels (z,y,x uint8), /macropores (int32 ids, 0 = none), /grains (int32, when given);
-/// each with attributes spacing and origin (m, x y z) and /labels@legend.
-void write_labels_h5(const std::string& path, const Mask& phases, const Labels& macropores, const Labels* grains);
+/// each with attributes spacing and origin (m, x y z) and /labels@legend; root attributes units
+/// ("m") and provenance (hashes of `inputs`). An XDMF sidecar (xdmf_sidecar_of(path)) beside it.
+void write_labels_h5(const std::string& path, const Mask& phases, const Labels& macropores, const Labels* grains,
+                     const std::vector<std::string>& inputs = {});
 
 /// The set m != 0 as an OpenVDB narrow-band signed-distance level set (FloatGrid "macropores",
 /// negative inside) in MILLIMETRES (world and values; metadata units = "mm", metres_per_unit):

@@ -44,10 +44,14 @@ struct ReadOptions {
   std::string byte_order = "little";    ///< little | big
   std::size_t raw_header = 0;           ///< bytes to skip
   // HDF5
-  std::string h5_dataset = "/volume";   ///< (z, y, x); spacing from its attribute "spacing" (m, x y z) if present
+  std::string h5_dataset = "/volume";   ///< (z, y, x); spacing from its attribute "spacing" (x y z) if present,
+                                        ///< in the file's root attribute `units` (m when absent)
   // voxel size
   std::array<double, 3> spacing{0, 0, 0};  ///< m; 0 = take from the header
-  double header_unit = 1e-3;            ///< metres per header length unit (ITK/medical files: mm)
+  /// Metres per header length unit of a MetaImage/NRRD/NIfTI file that does not state its unit
+  /// (header key `units`; tomodem writes "m"): 1e-3, the ITK/medical convention and what tomodem
+  /// wrote before it stated the unit. A file that states its unit is read in that unit.
+  double header_unit = 1e-3;
   // region of interest (voxels, after reading) and block-average downsampling
   bool has_roi = false;
   std::array<std::size_t, 6> roi{0, 0, 0, 0, 0, 0};  ///< x0, y0, z0, nx, ny, nz
@@ -63,6 +67,7 @@ struct ReadInfo {
   std::string format;          ///< tiff-stack | tiff | mha | nrrd | nifti | raw | h5
   std::string pixel_type;      ///< as stored: uint8, uint16, int16, float32, ...
   std::string spacing_source;  ///< header | --spacing
+  std::string length_unit;     ///< the unit the file states (header key or HDF5 attribute `units`); "" = none
   std::vector<std::string> files;
 };
 
