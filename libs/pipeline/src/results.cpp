@@ -17,6 +17,7 @@
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/plot.hpp"
 #include "tomodem/core/tool.hpp"
+#include "tomodem/pipeline/stats.hpp"
 
 namespace tomodem::pipeline {
 
@@ -184,18 +185,20 @@ void refuse_report_folder(const std::string& dir, const std::vector<std::string>
                      "this folder is not a tomodem report and is not empty; the report replaces its folder, so name "
                      "a new one");
 }
-}  // namespace
 
-ReportFiles write_report(const std::string& dir, const std::vector<std::string>& row_files, const ReportOptions& o) {
-  if (row_files.empty()) throw InputError("", "rows", "", "no row files given");
-  refuse_report_folder(dir, row_files);
-  // ---- read the rows and add the ratios --------------------------------------------------
+// ---- the table ----------------------------------------------------------------------------
+
+struct Table {
   std::vector<Row> rows;
   std::vector<std::string> all;  // every column, in order of first appearance
   std::set<std::string> known;
-  const auto note = [&](const std::string& c) {
+  void note(const std::string& c) {
     if (known.insert(c).second) all.push_back(c);
-  };
+  }
+};
+
+Table read_rows(const std::vector<std::string>& row_files) {
+  Table t;
   for (const auto& f : row_files) {
     json j;
     try {
@@ -205,20 +208,44 @@ ReportFiles write_report(const std::string& dir, const std::vector<std::string>&
     }
     if (!j.is_object() || std::any_of(j.begin(), j.end(), [](const json& v) { return v.is_structured(); }))
       throw InputError(f, "rows", "", "not a row file (a flat JSON object, made by `tomodem run row`)");
-    const Row r = flatten_json(j.dump(), "", f);
-    for (const auto& kv : r) note(kv.first);
-    rows.push_back(std::move(r));
+    Row r = flatten_json(j.dump(), "", f);
+    for (const auto& kv : r) t.note(kv.first);
+    t.rows.push_back(std::move(r));
   }
-  for (const auto& item : o.ratios) {
+  return t;
+}
+
+double number_in(const Row& r, const std::string& c) {
+  const Value* v = find(r, c);
+  return v && v->number ? v->x : NAN;
+}
+
+// A tool's own 1-sigma error of column `c` as an absolute number: `<c>_error` is relative
+// (issue 18's convention) unless the summary's units name another unit for it
+// (`<prefix>.units.<key>_error`: "Pa" makes it absolute); NaN when the row has none.
+double tool_error(const Row& r, const std::string& c, double value) {
+  const double e = number_in(r, c + "_error");
+  if (!std::isfinite(e)) return NAN;
+  const auto dot = c.rfind('.');
+  const std::string unit_col = dot == std::string::npos ? "units." + c + "_error"
+                                                        : c.substr(0, dot) + ".units." + c.substr(dot + 1) + "_error";
+  const Value* unit = find(r, unit_col);
+  const bool relative = !unit || unit->text.empty() || unit->text == "relative" || unit->text == "1";
+  return relative ? std::fabs(e * value) : std::fabs(e);
+}
+
+void add_ratios(Table& t, const std::vector<std::string>& ratios) {
+  for (const auto& item : ratios) {
     const auto [name, expr] = split_eq(item, "--ratio");
     const auto slash = expr.find('/');
     if (slash == std::string::npos) throw InputError("", "--ratio", item, "expected NAME=A/B");
     const std::string a = expr.substr(0, slash), b = expr.substr(slash + 1);
     for (const auto& operand : {a, b})
-      if (!known.count(operand) && !value_of(operand).number)
+      if (!t.known.count(operand) && !value_of(operand).number)
         throw InputError("", "--ratio", item, "'" + operand + "' is neither a column nor a number");
-    note(name);
-    for (auto& r : rows) {
+    t.note(name);
+    bool error_column = false;
+    for (auto& r : t.rows) {
       // A column's number, or the operand itself as a literal; NaN when the row lacks it.
       const auto num = [&](const std::string& s) {
         const Value* v = find(r, s);
@@ -226,140 +253,511 @@ ReportFiles write_report(const std::string& dir, const std::vector<std::string>&
         return v ? (v->number ? v->x : NAN) : lit.number ? lit.x : NAN;
       };
       const double x = num(a), y = num(b);
-      if (std::isfinite(x) && std::isfinite(y) && y != 0)
-        r.emplace_back(name, Value{number_text(x / y), true, x / y});
+      if (!(std::isfinite(x) && std::isfinite(y) && y != 0)) continue;
+      // The operands' own relative errors carry over in quadrature (independent errors).
+      const double ea = t.known.count(a) ? tool_error(r, a, x) / std::fabs(x) : NAN;
+      const double eb = t.known.count(b) ? tool_error(r, b, y) / std::fabs(y) : NAN;
+      r.emplace_back(name, Value{number_text(x / y), true, x / y});
+      if (std::isfinite(ea) || std::isfinite(eb)) {
+        const double e = std::hypot(std::isfinite(ea) ? ea : 0, std::isfinite(eb) ? eb : 0);
+        r.emplace_back(name + "_error", Value{number_text(e), true, e});
+        error_column = true;
+      }
     }
+    if (error_column) t.note(name + "_error");
   }
-  const std::vector<std::string> columns = o.columns.empty() ? all : o.columns;
-  for (const auto& c : columns)
-    if (!known.count(c)) throw InputError("", "--columns", c, "no row has this column");
+}
+
+std::vector<PlotRequest> plot_requests(const Table& t, const std::vector<std::string>& specs) {
   std::vector<PlotRequest> plots;
-  for (const auto& spec : o.plots) {
+  for (const auto& spec : specs) {
     PlotRequest p = parse_plot(spec);
     std::vector<std::string> used = p.y;
     used.push_back(p.x);
     if (!p.by.empty()) used.push_back(p.by);
     for (const auto& c : used)
-      if (!known.count(c)) throw InputError("", "--plot", spec, "no row has the column '" + c + "'");
+      if (!t.known.count(c)) throw InputError("", "--plot", spec, "no row has the column '" + c + "'");
     for (const auto& q : plots)
       if (q.name == p.name) throw InputError("", "--plot", spec, "two plots named '" + p.name + "'");
     plots.push_back(std::move(p));
   }
+  return plots;
+}
 
-  // ---- write everything into a temporary folder, then rename it -------------------------
+std::string csv_text(const Table& t, const std::vector<std::string>& columns) {
+  std::ostringstream csv;
+  for (std::size_t k = 0; k < columns.size(); ++k) csv << (k ? "," : "") << csv_field(columns[k]);
+  csv << "\n";
+  for (const auto& r : t.rows) {
+    for (std::size_t k = 0; k < columns.size(); ++k) {
+      const Value* v = find(r, columns[k]);
+      csv << (k ? "," : "") << (v ? csv_field(v->text) : "");
+    }
+    csv << "\n";
+  }
+  return csv.str();
+}
+
+// ---- statistics of replicas ---------------------------------------------------------------
+
+stats::Estimate estimate_of(const std::vector<const Row*>& rows, const std::string& c) {
+  std::vector<double> xs, errs;
+  for (const Row* r : rows) {
+    const double x = number_in(*r, c);
+    if (!std::isfinite(x)) continue;
+    xs.push_back(x);
+    errs.push_back(tool_error(*r, c, x));
+  }
+  return stats::estimate(xs, errs);
+}
+
+// CPU time a row cost: its columns named cpu_time_s (one per step summary), else wall_time_s.
+double row_cpu(const Row& r) {
+  const auto sum_of = [&](const std::string& leaf) {
+    double s = 0;
+    bool any = false;
+    for (const auto& [k, v] : r)
+      if (v.number && (k == leaf || (k.size() > leaf.size() && k.compare(k.size() - leaf.size() - 1, std::string::npos, "." + leaf) == 0)))
+        s += v.x, any = true;
+    return any ? s : NAN;
+  };
+  const double cpu = sum_of("cpu_time_s");
+  return std::isfinite(cpu) ? cpu : sum_of("wall_time_s");
+}
+
+bool is_property(const std::string& c, const std::vector<std::string>& group) {
+  const auto ends = [&](const std::string& s) { return c.size() >= s.size() && c.compare(c.size() - s.size(), s.size(), s) == 0; };
+  return std::find(group.begin(), group.end(), c) == group.end() && c != "replica" && c != "seed" &&
+         c.find("_error") == std::string::npos && !ends("_time_s") && !ends("_bytes");
+}
+
+// One adaptive-replica cell from the runner's record: its matrix values and why it stopped.
+struct Stop {
+  std::map<std::string, std::string> matrix;
+  std::string because;
+  std::size_t n = 0;
+};
+
+std::vector<Stop> read_stops(const std::string& file) {
+  std::vector<Stop> out;
+  if (file.empty()) return out;
+  try {
+    const json j = json::parse(read_file(file, "--replicas"));
+    for (const auto& g : j.at("groups")) {
+      Stop s;
+      for (auto it = g.at("matrix").begin(); it != g.at("matrix").end(); ++it) s.matrix[it.key()] = it.value().get<std::string>();
+      s.because = g.at("stopped_because").get<std::string>();
+      s.n = g.at("n").get<std::size_t>();
+      out.push_back(std::move(s));
+    }
+  } catch (const json::exception& e) {
+    throw InputError(file, "--replicas", file, std::string("not a tomodem-run replica record: ") + e.what());
+  }
+  return out;
+}
+
+bool same_value(const std::string& a, const std::string& b) {
+  if (a == b) return true;
+  const Value x = value_of(a), y = value_of(b);
+  return x.number && y.number && x.x == y.x;
+}
+
+// The rows that share the group values: the replicas of one cell.
+struct Cell {
+  std::vector<std::pair<std::string, std::string>> key;  // group column -> value text
+  std::vector<const Row*> rows;
+  double cpu_s = 0;
+  std::string stopped_because = "fixed replicas";
+};
+
+std::vector<Cell> cells_of(const Table& t, const std::vector<std::string>& group, const std::vector<Stop>& stops) {
+  std::vector<Cell> cells;
+  for (const auto& r : t.rows) {
+    std::vector<std::pair<std::string, std::string>> key;
+    for (const auto& g : group) {
+      const Value* v = find(r, g);
+      key.emplace_back(g, v ? v->text : "");
+    }
+    auto it = std::find_if(cells.begin(), cells.end(), [&](const Cell& c) { return c.key == key; });
+    if (it == cells.end()) it = cells.insert(cells.end(), Cell{key, {}, 0, "fixed replicas"});
+    it->rows.push_back(&r);
+  }
+  // Replicas in the order they were made, so the error-against-time curve follows the run.
+  const auto replica = [](const Row* r) { return number_in(*r, "replica"); };
+  for (auto& c : cells) {
+    std::stable_sort(c.rows.begin(), c.rows.end(), [&](const Row* a, const Row* b) { return replica(a) < replica(b); });
+    for (const Row* r : c.rows)
+      if (const double cpu = row_cpu(*r); std::isfinite(cpu)) c.cpu_s += cpu;
+    for (const auto& s : stops) {
+      const bool match = std::all_of(s.matrix.begin(), s.matrix.end(), [&](const auto& kv) {
+        const auto k = std::find_if(c.key.begin(), c.key.end(), [&](const auto& x) { return x.first == kv.first; });
+        return k == c.key.end() || same_value(k->second, kv.second);
+      });
+      if (match) {
+        c.stopped_because = s.because;
+        break;
+      }
+    }
+  }
+  return cells;
+}
+
+std::string cell_text(const std::vector<std::pair<std::string, std::string>>& key, std::size_t from = 0) {
+  std::string s;
+  for (std::size_t k = from; k < key.size(); ++k) s += (s.empty() ? "" : ", ") + key[k].first + "=" + key[k].second;
+  return s;
+}
+
+json cell_json(const Cell& c, const std::string& property, const stats::Estimate& e) {
+  json j = json::object();
+  for (const auto& [k, v] : c.key) {
+    const Value x = value_of(v);
+    j[k] = x.number ? json(x.x) : json(v);
+  }
+  j["property"] = property;
+  j["n"] = e.n;
+  j["mean"] = e.mean;
+  j["sd"] = e.sd;
+  j["sem"] = e.sem;
+  j["tool_error"] = e.tool;
+  j["u"] = e.u;
+  j["dof"] = std::isinf(e.dof) ? json("inf") : json(e.dof);
+  j["ci95"] = std::isfinite(e.half95) ? json::array({e.mean - e.half95, e.mean + e.half95}) : json(nullptr);
+  j["half_width95"] = e.half95;
+  j["rel_half_width95"] = e.rel_half95();
+  j["stopped_because"] = c.stopped_because;
+  j["cpu_s"] = c.cpu_s;
+  return j;
+}
+
+struct Ranking {
+  std::string property, at, text;
+  json j;
+};
+
+// Pairs of cells that differ only in the first group column, per property: which is lower, and
+// whether Welch's test resolves it at 5 %.
+std::vector<Ranking> rankings_of(const std::vector<Cell>& cells, const std::vector<std::string>& props) {
+  std::vector<Ranking> out;
+  if (cells.empty() || cells[0].key.empty()) return out;
+  for (const auto& prop : props)
+    for (std::size_t a = 0; a < cells.size(); ++a)
+      for (std::size_t b = a + 1; b < cells.size(); ++b) {
+        const auto& ka = cells[a].key;
+        const auto& kb = cells[b].key;
+        if (!std::equal(ka.begin() + 1, ka.end(), kb.begin() + 1)) continue;
+        std::vector<double> xa, xb;
+        for (const Row* r : cells[a].rows)
+          if (std::isfinite(number_in(*r, prop))) xa.push_back(number_in(*r, prop));
+        for (const Row* r : cells[b].rows)
+          if (std::isfinite(number_in(*r, prop))) xb.push_back(number_in(*r, prop));
+        if (xa.size() < 2 || xb.size() < 2) continue;
+        const stats::Welch w = stats::welch(xa, xb);
+        const double ma = stats::estimate(xa).mean, mb = stats::estimate(xb).mean;
+        const bool a_low = ma <= mb;
+        const std::string lo = a_low ? ka[0].second : kb[0].second, hi = a_low ? kb[0].second : ka[0].second;
+        const std::string at = cell_text(ka, 1);
+        const bool resolved = w.p < 0.05;
+        Ranking r;
+        r.property = prop;
+        r.at = at;
+        r.text = (resolved ? lo + " < " + hi : lo + " vs " + hi) + " in " + prop + (at.empty() ? "" : " at " + at) + ": " +
+                 (resolved ? "" : "not resolved, ") + "Welch p = " + stats::p_text(w.p);
+        r.j = {{"property", prop}, {"at", at},      {"lower", lo},       {"higher", hi}, {"mean_lower", a_low ? ma : mb},
+               {"mean_higher", a_low ? mb : ma},    {"t", std::fabs(w.t)}, {"dof", w.dof}, {"p", w.p},
+               {"resolved", resolved},              {"text", r.text}};
+        out.push_back(std::move(r));
+      }
+  return out;
+}
+
+// ---- plots ----------------------------------------------------------------------------------
+
+// Each point: the mean over the rows sharing its x value and series, with its 95 % half-width.
+PlotSpec plot_spec(const Table& t, const PlotRequest& p) {
+  PlotSpec spec;
+  spec.title = p.title;
+  spec.xlabel = p.xlabel;
+  spec.ylabel = p.ylabel;
+  spec.logx = p.logx;
+  spec.logy = p.logy;
+  std::vector<std::string> groups;  // values of `by`, in order of appearance
+  for (const auto& r : t.rows) {
+    const Value* g = p.by.empty() ? nullptr : find(r, p.by);
+    const std::string key = g ? g->text : "";
+    if (std::find(groups.begin(), groups.end(), key) == groups.end()) groups.push_back(key);
+  }
+  for (const auto& g : groups)
+    for (const auto& ycol : p.y) {
+      std::map<double, std::vector<const Row*>> at_x;
+      for (const auto& r : t.rows) {
+        const Value* gv = p.by.empty() ? nullptr : find(r, p.by);
+        if ((gv ? gv->text : "") != g) continue;
+        const Value *xv = find(r, p.x), *yv = find(r, ycol);
+        if (!xv || !yv || !xv->number || !yv->number) continue;
+        if ((p.logx && xv->x <= 0) || (p.logy && yv->x <= 0)) continue;
+        at_x[xv->x].push_back(&r);
+      }
+      if (at_x.empty()) continue;
+      PlotSeries s;
+      s.title = g.empty() ? ycol : p.y.size() > 1 ? g + " " + ycol : g;
+      for (const auto& [x, rows] : at_x) {
+        const stats::Estimate e = estimate_of(rows, ycol);
+        s.x.push_back(x);
+        s.y.push_back(e.mean);
+        s.yerr.push_back(e.half95);
+      }
+      spec.series.push_back(std::move(s));
+    }
+  if (spec.series.empty()) throw InputError("", "--plot", p.name, "no row has numbers in both '" + p.x + "' and the y columns");
+  return spec;
+}
+
+std::string file_stem(const std::string& s) {
+  std::string o;
+  for (const char c : s) o += std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' ? c : '_';
+  return o;
+}
+
+// Relative 95 % half-width after the first k replicas of each cell against the CPU time they
+// cost: the error-against-run-time curve, one series per cell. Empty when no cell has one.
+PlotSpec error_vs_cpu(const std::vector<Cell>& cells, const std::string& prop) {
+  PlotSpec spec;
+  spec.title = "95 % half-width of the mean of " + prop + " against CPU time";
+  spec.xlabel = "CPU time spent (s, sum over replicas)";
+  spec.ylabel = "relative 95 % half-width";
+  spec.logx = spec.logy = true;
+  for (const auto& c : cells) {
+    PlotSeries s;
+    s.title = c.key.empty() ? "all" : cell_text(c.key);
+    std::vector<const Row*> first;
+    double cpu = 0;
+    for (const Row* r : c.rows) {
+      first.push_back(r);
+      cpu += row_cpu(*r);
+      const double rel = estimate_of(first, prop).rel_half95();
+      if (first.size() >= 2 && std::isfinite(cpu) && cpu > 0 && std::isfinite(rel) && rel > 0) {
+        s.x.push_back(cpu);
+        s.y.push_back(rel);
+      }
+    }
+    if (!s.x.empty()) spec.series.push_back(std::move(s));
+  }
+  return spec;
+}
+
+// ---- the HTML page --------------------------------------------------------------------------
+
+struct Page {
+  const Table& t;
+  const std::vector<std::string>& columns;
+  const std::vector<PlotRequest>& plots;
+  const std::vector<std::string>& error_plots;  // stems, with the property each is about
+  const std::vector<Cell>& cells;
+  const std::vector<std::string>& shown_props;
+  const std::vector<Ranking>& rankings;
+  const ReportOptions& o;
+};
+
+std::string figure(const std::string& name, const std::string& title) {
+  return "<figure>\n<img src=\"" + name + ".svg\" alt=\"" + html(title) + "\">\n<figcaption>" + html(title) + ": <a href=\"" +
+         name + ".png\">PNG</a>, <a href=\"" + name + ".svg\">SVG</a>, <a href=\"" + name + ".gp\">gnuplot script</a>, <a href=\"" +
+         name + ".dat\">data</a></figcaption>\n</figure>\n";
+}
+
+std::string html_statistics(const Page& pg) {
+  std::string g;
+  for (const auto& c : pg.o.group) g += (g.empty() ? "" : " &times; ") + html(c);
+  std::ostringstream h;
+  h << "<h2>Statistics</h2>\n<p>Cells: " << (g.empty() ? "all rows" : g)
+    << ". Mean of the replicas, 95 % confidence interval t<sub>0.975,&nu;</sub> u with u = &radic;(sem&sup2; + "
+       "tool error&sup2;) (Student 1908; effective dof &nu; by Welch&ndash;Satterthwaite), every cell and property in "
+       "<a href=\"summary.json\">summary.json</a>.</p>\n<table>\n<tr><th>cell</th><th>property</th><th>n</th><th>mean</th>"
+       "<th>95 % CI</th><th>&plusmn; %</th><th>stopped because</th><th>CPU s</th></tr>\n";
+  for (const auto& prop : pg.shown_props)
+    for (const auto& c : pg.cells) {
+      const stats::Estimate e = estimate_of(c.rows, prop);
+      if (e.n == 0) continue;
+      h << "<tr><td>" << html(cell_text(c.key)) << "</td><td>" << html(prop) << "</td><td>" << e.n << "</td><td>"
+        << number_text(e.mean) << "</td><td>"
+        << (std::isfinite(e.half95) ? number_text(e.mean - e.half95) + " &ndash; " + number_text(e.mean + e.half95) : "")
+        << "</td><td>" << (std::isfinite(e.rel_half95()) ? number_text(100 * e.rel_half95()) : "") << "</td><td>"
+        << html(c.stopped_because) << "</td><td>" << number_text(c.cpu_s) << "</td></tr>\n";
+    }
+  h << "</table>\n";
+  if (!pg.rankings.empty()) {
+    h << "<h3>Rankings</h3>\n<p>Welch's t-test (Welch 1947), two-sided; \"not resolved\" when p &ge; 0.05.</p>\n<ul>\n";
+    for (const auto& r : pg.rankings)
+      if (std::find(pg.shown_props.begin(), pg.shown_props.end(), r.property) != pg.shown_props.end())
+        h << "<li>" << html(r.text) << "</li>\n";
+    h << "</ul>\n";
+  }
+  for (const auto& stem : pg.error_plots) h << figure(stem, "error against CPU time: " + stem.substr(14));
+  return h.str();
+}
+
+std::string html_page(const Page& pg) {
+  const Table& t = pg.t;
+  std::vector<std::string> shown = pg.o.columns;
+  if (shown.empty()) {
+    for (const auto& p : pg.plots) {
+      for (const auto& c : {p.by, p.x})
+        if (!c.empty() && std::find(shown.begin(), shown.end(), c) == shown.end()) shown.push_back(c);
+      for (const auto& c : p.y)
+        if (std::find(shown.begin(), shown.end(), c) == shown.end()) shown.push_back(c);
+    }
+    if (shown.empty()) shown = t.all;
+  }
+  std::ostringstream h;
+  h << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>" << html(pg.o.title)
+    << "</title>\n<style>body{font-family:sans-serif;max-width:60em;margin:2em auto;padding:0 1em}"
+       "table{border-collapse:collapse;font-size:90%}td,th{border:1px solid #bbb;padding:2px 6px;text-align:right}"
+       "figure{margin:1em 0}img{max-width:100%}code{background:#f4f4f4}</style>\n</head>\n<body>\n<h1>"
+    << html(pg.o.title) << "</h1>\n<p>" << t.rows.size() << " rows, " << pg.columns.size()
+    << " columns: <a href=\"table.csv\">table.csv</a>. "
+    << "Made " << html(utc_now()) << " by " << html(version_string());
+  if (!pg.o.command.empty()) h << "; to make it again: <code>" << html(pg.o.command) << "</code>";
+  h << ".</p>\n";
+  if (!pg.plots.empty())
+    h << "<h2>Plots</h2>\n<p>Points are the mean over the rows (replicas) that share an x value; error bars are its "
+         "95 % confidence interval (see Statistics).</p>\n";
+  for (const auto& p : pg.plots) h << figure(p.name, p.title);
+  h << html_statistics(pg);
+  constexpr std::size_t kMaxRows = 500;
+  h << "<h2>Table</h2>\n";
+  if (shown.size() < t.all.size()) h << "<p>Selected columns; every column is in <a href=\"table.csv\">table.csv</a>.</p>\n";
+  h << "<table>\n<tr>";
+  for (const auto& c : shown) h << "<th>" << html(c) << "</th>";
+  h << "</tr>\n";
+  for (std::size_t i = 0; i < t.rows.size() && i < kMaxRows; ++i) {
+    h << "<tr>";
+    for (const auto& c : shown) {
+      const Value* v = find(t.rows[i], c);
+      h << "<td>" << (v ? html(v->number ? number_text(v->x) : v->text) : "") << "</td>";
+    }
+    h << "</tr>\n";
+  }
+  h << "</table>\n";
+  if (t.rows.size() > kMaxRows) h << "<p>(first " << kMaxRows << " of " << t.rows.size() << " rows)</p>\n";
+  h << "</body>\n</html>\n";
+  return h.str();
+}
+
+// The old report goes only once the new one is in place.
+void replace_folder(const fs::path& tmp, const fs::path& final_dir) {
+  write_text_atomic((tmp / kReportMarker).string(), "made by tomodem-run report; the folder is replaced on each run\n");
+  std::error_code ec;
+  const fs::path old = final_dir.string() + ".old" + std::to_string(::getpid());
+  if (!final_dir.parent_path().empty()) fs::create_directories(final_dir.parent_path());
+  if (fs::exists(final_dir, ec)) fs::rename(final_dir, old);
+  fs::rename(tmp, final_dir);
+  fs::remove_all(old, ec);
+}
+
+// Defaults of the statistics options, and their checks.
+void statistics_options(const Table& t, const std::vector<PlotRequest>& plots, ReportOptions& o) {
+  if (o.group.empty())
+    for (const auto& p : plots)
+      for (const auto& c : {p.by, p.x})
+        if (!c.empty() && std::find(o.group.begin(), o.group.end(), c) == o.group.end()) o.group.push_back(c);
+  for (const auto& c : o.group)
+    if (!t.known.count(c)) throw InputError("", "--group", c, "no row has this column");
+  for (const auto& c : o.stats)
+    if (!t.known.count(c)) throw InputError("", "--stats", c, "no row has this column");
+}
+
+// A column with one number in every row that has it (E_s, the solid's modulus): nothing to summarise.
+bool constant(const Table& t, const std::string& c) {
+  double first = NAN;
+  for (const auto& r : t.rows) {
+    const double x = number_in(r, c);
+    if (!std::isfinite(x)) continue;
+    if (std::isnan(first)) first = x;
+    else if (x != first) return false;
+  }
+  return true;
+}
+
+std::vector<std::string> properties(const Table& t, const ReportOptions& o) {
+  if (!o.stats.empty()) return o.stats;
+  std::vector<std::string> props;
+  for (const auto& c : t.all)
+    if (is_property(c, o.group) && !constant(t, c)) props.push_back(c);
+  return props;
+}
+
+json summary_of(const std::vector<Cell>& cells, const std::vector<std::string>& props, const std::vector<Ranking>& ranks,
+                const ReportOptions& o) {
+  json j = json::object();
+  j["format"] = "tomodem report summary 1";
+  j["group"] = o.group;
+  j["method"] =
+      "per cell and property: mean of the replicas; sem = sd/sqrt(n); tool_error = mean of the replicas' own "
+      "1-sigma errors (<key>_error, relative unless its unit says otherwise), taken as systematic; u = sqrt(sem^2 + "
+      "tool_error^2); dof = u^4/(sem^4/(n-1)) (Welch-Satterthwaite); ci95 = mean -/+ t(0.975, dof) u (Student 1908). "
+      "Rankings: Welch (1947) t-test between cells differing in the first group column, two-sided p; "
+      "resolved when p < 0.05.";
+  j["cells"] = json::array();
+  for (const auto& prop : props)
+    for (const auto& c : cells) {
+      const stats::Estimate e = estimate_of(c.rows, prop);
+      if (e.n) j["cells"].push_back(cell_json(c, prop, e));
+    }
+  j["rankings"] = json::array();
+  for (const auto& r : ranks) j["rankings"].push_back(r.j);
+  return j;
+}
+}  // namespace
+
+ReportFiles write_report(const std::string& dir, const std::vector<std::string>& row_files, const ReportOptions& options) {
+  if (row_files.empty()) throw InputError("", "rows", "", "no row files given");
+  refuse_report_folder(dir, row_files);
+  ReportOptions o = options;
+  Table t = read_rows(row_files);
+  add_ratios(t, o.ratios);
+  const std::vector<std::string> columns = o.columns.empty() ? t.all : o.columns;
+  for (const auto& c : columns)
+    if (!t.known.count(c)) throw InputError("", "--columns", c, "no row has this column");
+  const std::vector<PlotRequest> plots = plot_requests(t, o.plots);
+  statistics_options(t, plots, o);
+  const std::vector<std::string> props = properties(t, o);
+  const std::vector<Cell> cells = cells_of(t, o.group, read_stops(o.replicas));
+  const std::vector<Ranking> ranks = rankings_of(cells, props);
+  // The page shows the plotted (or asked-for) properties; summary.json has every one.
+  std::vector<std::string> shown = o.stats;
+  for (const auto& p : plots)
+    for (const auto& y : p.y)
+      if (options.stats.empty() && std::find(shown.begin(), shown.end(), y) == shown.end()) shown.push_back(y);
+  if (shown.empty()) shown = props;
+
   const fs::path final_dir = fs::path(dir).lexically_normal();
   const fs::path tmp = final_dir.string() + ".tmp" + std::to_string(::getpid());
   fs::remove_all(tmp);
   fs::create_directories(tmp);
   ReportFiles out;
-  out.rows = rows.size();
+  out.rows = t.rows.size();
   out.columns = columns.size();
+  out.cells = cells.size();
+  out.rankings = ranks.size();
   try {
-    std::ostringstream csv;
-    for (std::size_t k = 0; k < columns.size(); ++k) csv << (k ? "," : "") << csv_field(columns[k]);
-    csv << "\n";
-    for (const auto& r : rows) {
-      for (std::size_t k = 0; k < columns.size(); ++k) {
-        const Value* v = find(r, columns[k]);
-        csv << (k ? "," : "") << (v ? csv_field(v->text) : "");
-      }
-      csv << "\n";
-    }
-    write_text_atomic((tmp / "table.csv").string(), csv.str());
-
+    write_text_atomic((tmp / "table.csv").string(), csv_text(t, columns));
     for (const auto& p : plots) {
-      PlotSpec spec;
-      spec.title = p.title;
-      spec.xlabel = p.xlabel;
-      spec.ylabel = p.ylabel;
-      spec.logx = p.logx;
-      spec.logy = p.logy;
-      std::vector<std::string> groups;  // values of `by`, in order of appearance
-      for (const auto& r : rows) {
-        const Value* g = p.by.empty() ? nullptr : find(r, p.by);
-        const std::string key = g ? g->text : "";
-        if (std::find(groups.begin(), groups.end(), key) == groups.end()) groups.push_back(key);
-      }
-      for (const auto& g : groups)
-        for (const auto& ycol : p.y) {
-          std::map<double, std::pair<double, int>> sums;  // x -> (sum of y, count): the replica mean
-          for (const auto& r : rows) {
-            const Value* gv = p.by.empty() ? nullptr : find(r, p.by);
-            if ((gv ? gv->text : "") != g) continue;
-            const Value *xv = find(r, p.x), *yv = find(r, ycol);
-            if (!xv || !yv || !xv->number || !yv->number) continue;
-            if ((p.logx && xv->x <= 0) || (p.logy && yv->x <= 0)) continue;
-            auto& s = sums[xv->x];
-            s.first += yv->x;
-            s.second += 1;
-          }
-          if (sums.empty()) continue;
-          PlotSeries s;
-          s.title = g.empty() ? ycol : p.y.size() > 1 ? g + " " + ycol : g;
-          for (const auto& [x, sy] : sums) {
-            s.x.push_back(x);
-            s.y.push_back(sy.first / sy.second);
-          }
-          spec.series.push_back(std::move(s));
-        }
-      if (spec.series.empty())
-        throw InputError("", "--plot", p.name, "no row has numbers in both '" + p.x + "' and the y columns");
-      write_plot(tmp / p.name, spec);
+      write_plot(tmp / p.name, plot_spec(t, p));
       out.plots.push_back((final_dir / p.name).string());
     }
-
-    // ---- the HTML report ----------------------------------------------------------------
-    std::vector<std::string> shown = o.columns;
-    if (shown.empty()) {
-      for (const auto& p : plots) {
-        for (const auto& c : {p.by, p.x})
-          if (!c.empty() && std::find(shown.begin(), shown.end(), c) == shown.end()) shown.push_back(c);
-        for (const auto& c : p.y)
-          if (std::find(shown.begin(), shown.end(), c) == shown.end()) shown.push_back(c);
-      }
-      if (shown.empty()) shown = all;
+    std::vector<std::string> error_plots;
+    for (const auto& prop : shown) {
+      const PlotSpec spec = error_vs_cpu(cells, prop);
+      if (spec.series.empty()) continue;
+      const std::string stem = "error-vs-cpu_" + file_stem(prop);
+      write_plot(tmp / stem, spec);
+      error_plots.push_back(stem);
+      out.plots.push_back((final_dir / stem).string());
     }
-    std::ostringstream h;
-    h << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>" << html(o.title)
-      << "</title>\n<style>body{font-family:sans-serif;max-width:60em;margin:2em auto;padding:0 1em}"
-         "table{border-collapse:collapse;font-size:90%}td,th{border:1px solid #bbb;padding:2px 6px;text-align:right}"
-         "figure{margin:1em 0}img{max-width:100%}code{background:#f4f4f4}</style>\n</head>\n<body>\n<h1>"
-      << html(o.title) << "</h1>\n<p>" << rows.size() << " rows, " << columns.size() << " columns: <a href=\"table.csv\">table.csv</a>. "
-      << "Made " << html(utc_now()) << " by " << html(version_string());
-    if (!o.command.empty()) h << "; to make it again: <code>" << html(o.command) << "</code>";
-    h << ".</p>\n";
-    if (!plots.empty()) h << "<h2>Plots</h2>\n<p>Points are the mean over the rows (replicas) that share an x value.</p>\n";
-    for (const auto& p : plots)
-      h << "<figure>\n<img src=\"" << p.name << ".svg\" alt=\"" << html(p.title) << "\">\n<figcaption>" << html(p.title)
-        << ": <a href=\"" << p.name << ".png\">PNG</a>, <a href=\"" << p.name << ".svg\">SVG</a>, <a href=\"" << p.name
-        << ".gp\">gnuplot script</a>, <a href=\"" << p.name << ".dat\">data</a></figcaption>\n</figure>\n";
-    constexpr std::size_t kMaxRows = 500;
-    h << "<h2>Table</h2>\n";
-    if (shown.size() < all.size()) h << "<p>Selected columns; every column is in <a href=\"table.csv\">table.csv</a>.</p>\n";
-    h << "<table>\n<tr>";
-    for (const auto& c : shown) h << "<th>" << html(c) << "</th>";
-    h << "</tr>\n";
-    for (std::size_t i = 0; i < rows.size() && i < kMaxRows; ++i) {
-      h << "<tr>";
-      for (const auto& c : shown) {
-        const Value* v = find(rows[i], c);
-        h << "<td>" << (v ? html(v->number ? number_text(v->x) : v->text) : "") << "</td>";
-      }
-      h << "</tr>\n";
-    }
-    h << "</table>\n";
-    if (rows.size() > kMaxRows) h << "<p>(first " << kMaxRows << " of " << rows.size() << " rows)</p>\n";
-    h << "</body>\n</html>\n";
-    write_text_atomic((tmp / "index.html").string(), h.str());
-
-    write_text_atomic((tmp / kReportMarker).string(), "made by tomodem-run report; the folder is replaced on each run\n");
-    // The old report goes only once the new one is in place.
-    std::error_code ec;
-    const fs::path old = final_dir.string() + ".old" + std::to_string(::getpid());
-    if (!final_dir.parent_path().empty()) fs::create_directories(final_dir.parent_path());
-    if (fs::exists(final_dir, ec)) fs::rename(final_dir, old);
-    fs::rename(tmp, final_dir);
-    fs::remove_all(old, ec);
+    write_text_atomic((tmp / "summary.json").string(), summary_of(cells, props, ranks, o).dump(1) + "\n");
+    write_text_atomic((tmp / "index.html").string(),
+                      html_page(Page{t, columns, plots, error_plots, cells, shown, ranks, o}));
+    replace_folder(tmp, final_dir);
   } catch (...) {
     std::error_code ec;
     fs::remove_all(tmp, ec);
@@ -367,6 +765,7 @@ ReportFiles write_report(const std::string& dir, const std::vector<std::string>&
   }
   out.table = (final_dir / "table.csv").string();
   out.html = (final_dir / "index.html").string();
+  out.summary = (final_dir / "summary.json").string();
   return out;
 }
 

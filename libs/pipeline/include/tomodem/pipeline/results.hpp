@@ -44,17 +44,25 @@ struct ReportOptions {
   std::vector<std::string> ratios;   // "NAME=A/B": a column A/B (A, B columns or numbers)
   std::vector<std::string> plots;    // plot specs (parse_plot)
   std::string command;               // the command line, shown in the report
+  // Statistics (docs/pipelines.md, "Statistics"): rows sharing the values of `group` are the
+  // replicas of one cell (default: the plots' `by` and `x` columns); `stats` are the properties
+  // (default: every number column but the group, replica, seed, *_error*, *_time_s, *_bytes).
+  std::vector<std::string> group, stats;
+  std::string replicas;              // the runner's adaptive-replica record (${run.replicas}), or ""
 };
 
 /// What write_report wrote, for the caller's summary.
 struct ReportFiles {
-  std::string table, html;
-  std::vector<std::string> plots;  // stems; each has .png, .svg, .gp, .dat
+  std::string table, html, summary;  // summary.json: per cell and property mean, sem, ci95, n, ...
+  std::vector<std::string> plots;  // stems; each has .png, .svg, .gp, .dat (error-vs-cpu plots too)
+  std::size_t cells = 0, rankings = 0;
   std::size_t rows = 0, columns = 0;
 };
 
 /// Reads the row files (make_row's JSON), adds the ratio columns and writes `dir`/table.csv,
-/// `dir`/<plot>.{png,svg,gp,dat} and `dir`/index.html. The folder is built under a temporary
+/// `dir`/<plot>.{png,svg,gp,dat} (points: replica means with 95 % error bars),
+/// `dir`/summary.json (statistics per cell and property, rankings with Welch p-values),
+/// `dir`/error-vs-cpu_<property>.* and `dir`/index.html. The folder is built under a temporary
 /// name and renamed, so it never exists half-written. Bad specs, unknown columns and unreadable
 /// rows throw InputError before anything is written.
 ReportFiles write_report(const std::string& dir, const std::vector<std::string>& row_files, const ReportOptions& o);
