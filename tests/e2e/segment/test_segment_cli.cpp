@@ -110,5 +110,5 @@ TEST(SegmentCli, BadInputExitsTwoNamingTheFileWithNoOutput) {
   EXPECT_TRUE(only(d / "out", 0));
   // and the good stack goes through
   EXPECT_EQ(run(bin + "/tomodem-segment " + p + "/stack --spacing 1um --macropore-radius 2vox" + out), 0);
-  EXPECT_TRUE(only(d / "out", 2));
+  EXPECT_TRUE(only(d / "out", 3));  // the labels, their XDMF sidecar and the summary
 }
