@@ -41,6 +41,7 @@ void write_map(const std::string& path, const FractureSample& s, const FractureR
   const Packing& p = s.packing;
   const std::size_t n = p.particles.size();
   std::vector<int32_t> state(p.bonds.size(), -1), order(p.bonds.size(), -1);
+  std::vector<double> opening_at(p.bonds.size(), std::nan("")), force_at(p.bonds.size(), std::nan(""));
   for (std::size_t b = 0; b < p.bonds.size(); ++b) {
     if (s.bond_role[b] == BondRole::load) state[b] = 0;
     if (s.bond_role[b] == BondRole::precrack) state[b] = 3;
@@ -50,11 +51,14 @@ void write_map(const std::string& path, const FractureSample& s, const FractureR
     const std::size_t b = std::size_t(r.events[e].bond);
     state[b] = r.events[e].mode == dem::BondSet::shear ? 2 : 1;
     order[b] = int32_t(e);
+    opening_at[b] = r.events[e].displacement;  // the loading step at which the bond broke
+    force_at[b] = r.events[e].force;
     ++per_particle[std::size_t(p.bonds.i[b])];
     ++per_particle[std::size_t(p.bonds.j[b])];
   }
   std::vector<double> pos, rad, pts;
   std::vector<int32_t> role, st, ord, conn;
+  std::vector<double> brad, bopen, bforce;
   for (std::size_t i = 0; i < n; ++i) {
     const Vec3& x = p.particles.position[i];
     pos.insert(pos.end(), {x.x, x.y, x.z});
@@ -70,6 +74,9 @@ void write_map(const std::string& path, const FractureSample& s, const FractureR
     conn.insert(conn.end(), {k, k + 1});
     st.push_back(state[b]);
     ord.push_back(order[b]);
+    brad.push_back(p.bonds.radius[b]);
+    bopen.push_back(opening_at[b]);
+    bforce.push_back(force_at[b]);
   }
   const std::string tmp = temporary_path(path);
   try {
@@ -82,9 +89,13 @@ void write_map(const std::string& path, const FractureSample& s, const FractureR
     f.write("/bonds/connectivity", conn, {conn.size() / 2, 2});
     f.write("/bonds/state", st);
     f.write("/bonds/break_order", ord);
+    f.write("/bonds/radius", brad, {}, "m");
+    f.write("/bonds/broken_at_opening", bopen, {}, "m");  // NaN while intact
+    f.write("/bonds/force_at_break", bforce, {}, "N");
     f.set_attr("/bonds", "state_codes", "0 intact, 1 broken in tension, 2 broken in shear, 3 pre-crack");
     f.set_attr("/particles", "role_codes", "0 free, 1 bottom grip, 2 top grip, 3 not connected to a grip");
     f.set_attr("/", "method", r.method);
+    write_provenance(f);  // units = "m", tool, version, command line, time
     f.close();  // checked: a full disk shows here, before the rename
   } catch (...) {
     discard_and_rethrow(path, tmp);
@@ -121,6 +132,11 @@ void write_map(const std::string& path, const FractureSample& s, const FractureR
   x << "      </Geometry>\n";
   attr("state", "Cell", M, "/bonds/state");
   attr("break_order", "Cell", M, "/bonds/break_order");
+  for (const char* a : {"radius", "broken_at_opening", "force_at_break"}) {
+    x << "      <Attribute Name=\"" << a << "\" AttributeType=\"Scalar\" Center=\"Cell\">\n";
+    item(M, "Float", 8, std::string("/bonds/") + a);
+    x << "      </Attribute>\n";
+  }
   x << "    </Grid>\n  </Domain>\n</Xdmf>\n";
   write_text_atomic(stem_of(path) + ".xdmf", x.str());
 }
