@@ -79,7 +79,7 @@ void write_network(const std::string& path, const Network& net) {
     discard_and_rethrow(path, tmp);
   }
   commit_output(path);
-  write_xdmf_sidecar(path, net.packing.particles.size(), !net.packing.particles.velocity.empty());
+  write_xdmf_sidecar(path, net.packing.particles.size(), !net.packing.particles.velocity.empty(), net.packing.bonds.size());
 }
 
 std::vector<dem::BondLaw> bond_laws(const Packing& p, const std::string& file, const LawOptions& o,

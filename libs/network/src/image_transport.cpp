@@ -12,6 +12,7 @@
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/h5.hpp"
 #include "tomodem/core/output.hpp"
+#include "tomodem/core/packing_io.hpp"
 #include "tomodem/core/tool.hpp"
 
 namespace tomodem::network {
@@ -45,6 +46,7 @@ std::array<std::size_t, 3> label_image_shape(const std::string& path, const std:
 LabelImage read_label_image(const std::string& path, const std::string& dataset) {
   const auto n = label_image_shape(path, dataset);
   const h5::File f(path, h5::File::Mode::read);
+  const double unit = h5_length_unit(f, false);  // metres per unit of spacing and origin (m when unstated)
   LabelImage im;
   im.nx = n[0];
   im.ny = n[1];
@@ -56,7 +58,7 @@ LabelImage read_label_image(const std::string& path, const std::string& dataset)
       if (!(std::isfinite(sp[k]) && sp[k] > 0))
         throw InputError(path, dataset + "@spacing", num(sp[k]),
                          std::string("the ") + kAxis[k] + " voxel size must be finite and > 0 (m)");
-      im.spacing[k] = sp[k];
+      im.spacing[k] = sp[k] * unit;
     }
   } else {
     warn(path + ": " + dataset + " has no spacing attribute: 1 m voxels assumed (sigma_eff and tortuosity do not "
@@ -64,7 +66,8 @@ LabelImage read_label_image(const std::string& path, const std::string& dataset)
   }
   if (f.has_attr(dataset, "origin")) {
     const auto o = f.attr_doubles(dataset, "origin");
-    if (o.size() == 3 && std::isfinite(o[0]) && std::isfinite(o[1]) && std::isfinite(o[2])) im.origin = {o[0], o[1], o[2]};
+    if (o.size() == 3 && std::isfinite(o[0]) && std::isfinite(o[1]) && std::isfinite(o[2]))
+      im.origin = {o[0] * unit, o[1] * unit, o[2] * unit};
   }
   im.v = f.read_uint8(dataset);
   if (im.v.size() != im.size())
@@ -318,6 +321,7 @@ void write_image_fields(const std::string& path, const LabelImage& im, const std
     }
     f.set_attr("/", "parameters", parameters);
     f.set_attr("/", "tool", std::string("tomodem-conduct --image"));
+    write_provenance(f);  // units = "m", version, command line, time
     f.close();  // a full disk is found here, before the rename
   } catch (...) {
     std::remove(tmp.c_str());
@@ -335,7 +339,9 @@ void write_image_fields(const std::string& path, const LabelImage& im, const std
     x << "  <Grid Name=\"" << g << "\" GridType=\"Uniform\">\n"
       << "   <Topology TopologyType=\"3DCoRectMesh\" Dimensions=\"" << im.nz + 1 << " " << im.ny + 1 << " " << im.nx + 1
       << "\"/>\n   <Geometry GeometryType=\"ORIGIN_DXDYDZ\">\n"
-      << "    <DataItem Dimensions=\"3\" Format=\"XML\">" << im.origin[2] << " " << im.origin[1] << " " << im.origin[0]
+      // the mesh nodes are voxel corners: half a voxel below the centre of voxel (0,0,0)
+      << "    <DataItem Dimensions=\"3\" Format=\"XML\">" << im.origin[2] - 0.5 * im.spacing[2] << " "
+      << im.origin[1] - 0.5 * im.spacing[1] << " " << im.origin[0] - 0.5 * im.spacing[0]
       << "</DataItem>\n    <DataItem Dimensions=\"3\" Format=\"XML\">" << im.spacing[2] << " " << im.spacing[1] << " "
       << im.spacing[0] << "</DataItem>\n   </Geometry>\n";
     for (const char* ds : {"potential", "current_magnitude"})

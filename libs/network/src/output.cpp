@@ -55,6 +55,7 @@ void write_fields(const std::string& path, const Network& net, const std::vector
       if (!fs.potential.empty()) f.write("/fields/" + fs.name + "/potential", fs.potential, {}, "V");
       if (!fs.edge_current.empty()) f.write("/fields/" + fs.name + "/current", fs.edge_current, {}, "A");
     }
+    write_provenance(f);  // units = "m", version, command line
     f.close();  // checked: a full disk shows here, before the rename
   } catch (...) {
     discard_and_rethrow(path, tmp);
