@@ -9,7 +9,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <functional>
+#include <optional>
 #include <queue>
 #include <set>
 
@@ -229,6 +232,7 @@ struct Scope {
   const NamedPaths* outs = nullptr;
   const NamedPaths* deps = nullptr;
   std::function<std::vector<std::string>(const std::string&)> steps;
+  const std::string* replicas = nullptr;  // ${run.replicas}: only in deps, cmd and args of a pipeline that has one
 };
 
 std::vector<std::string> named(const NamedPaths* paths, const std::string& rest, const char* what) {
@@ -270,9 +274,15 @@ std::vector<std::string> lookup(const Scope& s, const std::string& name) {
     if (!s.steps) throw RefError{"other steps' outputs can be used only in deps, cmd and args"};
     return s.steps(name.substr(6));
   }
+  if (name == "run.replicas") {
+    if (!s.replicas)
+      throw RefError{"${run.replicas} is the runner's record of adaptive replicas: it needs a step with "
+                     "`replicas: {until: ...}` and can be used in deps, cmd and args"};
+    return {*s.replicas};
+  }
   throw RefError{"unknown reference '${" + name +
                  "}' (known: vars.*, matrix.*, params.*, outs[.*], deps[.*], steps.S.outs[.*], cell, replica, "
-                 "seed, threads, step; write $${ for a literal ${)"};
+                 "seed, threads, step, run.replicas; write $${ for a literal ${)"};
 }
 
 std::vector<std::string> resolve_list(const std::string& text, const Scope& s, const Location& where,
@@ -301,71 +311,145 @@ std::string resolve(const std::string& text, const Scope& s, const Location& whe
   }
 }
 
-std::vector<Cell> cells_of(const RawStep& st, const Vars& vars) {
+// The cell values without the replica, sorted: what the replicas of one cell share.
+std::string group_key(const std::vector<std::pair<std::string, std::string>>& values) {
+  std::map<std::string, std::string> m;
+  for (const auto& [k, v] : values)
+    if (k != "replica") m[k] = v;
+  std::string key;
+  for (const auto& [k, v] : m) key += (key.empty() ? "" : ",") + k + "=" + v;
+  return key;
+}
+
+std::string group_id(const std::string& step, const std::string& key) {
+  return key.empty() ? step : step + "[" + key + "]";
+}
+
+// How many replicas a cell group of an adaptive step gets in this expansion.
+using CountOf = std::function<int(const Adaptive&, const std::string& group_id)>;
+
+std::vector<Cell> matrix_cells(const RawStep& st, const Scope& vs, bool& swept) {
   const std::string& f = st.file;
   const std::string base = "steps." + st.name + ".";
   std::vector<Cell> cells{Cell{}};
-  Scope vs;
-  vs.vars = &vars;
-  bool swept = false;
-  if (const YAML::Node m = st.node["matrix"]) {
-    if (!m.IsMap() || m.size() == 0) fail(at(f, m), base + "matrix", "", "expected a map of key: [values]");
-    swept = true;
-    for (const auto& kv : m) {
-      const std::string key = kv.first.Scalar();
-      const std::string field = base + "matrix." + key;
-      if (!is_name(key) || key == "replica") fail(at(f, kv.first), field, "", "bad matrix key");
-      std::vector<std::string> values;
-      if (kv.second.IsSequence()) {
-        for (const auto& v : kv.second)
-          for (auto& x : resolve_list(scalar(v, f, field), vs, at(f, v), field)) values.push_back(x);
-      } else {
-        values = resolve_list(scalar(kv.second, f, field), vs, at(f, kv.second), field);
-      }
-      if (values.empty()) fail(at(f, kv.second), field, "", "a matrix key needs at least one value");
-      check_sweep_size(static_cast<double>(cells.size()) * static_cast<double>(values.size()), at(f, kv.second), field,
-                       std::to_string(values.size()) + " values");
-      std::vector<Cell> next;
-      for (const auto& c : cells)
-        for (const auto& v : values) {
-          Cell n = c;
-          n.values.emplace_back(key, v);
-          next.push_back(n);
-        }
-      cells = next;
+  const YAML::Node m = st.node["matrix"];
+  if (!m) return cells;
+  if (!m.IsMap() || m.size() == 0) fail(at(f, m), base + "matrix", "", "expected a map of key: [values]");
+  swept = true;
+  for (const auto& kv : m) {
+    const std::string key = kv.first.Scalar();
+    const std::string field = base + "matrix." + key;
+    if (!is_name(key) || key == "replica") fail(at(f, kv.first), field, "", "bad matrix key");
+    std::vector<std::string> values;
+    if (kv.second.IsSequence()) {
+      for (const auto& v : kv.second)
+        for (auto& x : resolve_list(scalar(v, f, field), vs, at(f, v), field)) values.push_back(x);
+    } else {
+      values = resolve_list(scalar(kv.second, f, field), vs, at(f, kv.second), field);
     }
-  }
-  if (const YAML::Node cs = st.node["cases"]) {
-    if (!cs.IsSequence() || cs.size() == 0) fail(at(f, cs), base + "cases", "", "expected a list of maps");
-    if (!swept) cells.clear();
-    swept = true;
-    for (const auto& c : cs) {
-      if (!c.IsMap()) fail(at(f, c), base + "cases", "", "each case is a map of key: value");
-      Cell cell;
-      for (const auto& kv : c) {
-        const std::string field = base + "cases." + kv.first.Scalar();
-        if (!is_name(kv.first.Scalar())) fail(at(f, kv.first), field, "", "bad case key");
-        cell.values.emplace_back(kv.first.Scalar(), resolve(scalar(kv.second, f, field), vs, at(f, kv.second), field));
-      }
-      cells.push_back(cell);
-    }
-  }
-  if (const YAML::Node r = st.node["replicas"]) {
-    const std::string field = base + "replicas";
-    const long long n = integer(resolve(scalar(r, f, field), vs, at(f, r), field), at(f, r), field, 1);
-    check_sweep_size(static_cast<double>(cells.size()) * static_cast<double>(n), at(f, r), field, std::to_string(n));
+    if (values.empty()) fail(at(f, kv.second), field, "", "a matrix key needs at least one value");
+    check_sweep_size(static_cast<double>(cells.size()) * static_cast<double>(values.size()), at(f, kv.second), field,
+                     std::to_string(values.size()) + " values");
     std::vector<Cell> next;
     for (const auto& c : cells)
-      for (int k = 0; k < n; ++k) {
-        Cell x = c;
-        x.values.emplace_back("replica", std::to_string(k));
-        x.replica = k;
-        next.push_back(x);
+      for (const auto& v : values) {
+        Cell n = c;
+        n.values.emplace_back(key, v);
+        next.push_back(n);
       }
     cells = next;
-    swept = true;
   }
-  if (!swept) return cells;
+  return cells;
+}
+
+void add_case_cells(const RawStep& st, const Scope& vs, std::vector<Cell>& cells, bool& swept) {
+  const std::string& f = st.file;
+  const std::string base = "steps." + st.name + ".";
+  const YAML::Node cs = st.node["cases"];
+  if (!cs) return;
+  if (!cs.IsSequence() || cs.size() == 0) fail(at(f, cs), base + "cases", "", "expected a list of maps");
+  if (!swept) cells.clear();
+  swept = true;
+  for (const auto& c : cs) {
+    if (!c.IsMap()) fail(at(f, c), base + "cases", "", "each case is a map of key: value");
+    Cell cell;
+    for (const auto& kv : c) {
+      const std::string field = base + "cases." + kv.first.Scalar();
+      if (!is_name(kv.first.Scalar())) fail(at(f, kv.first), field, "", "bad case key");
+      cell.values.emplace_back(kv.first.Scalar(), resolve(scalar(kv.second, f, field), vs, at(f, kv.second), field));
+    }
+    cells.push_back(cell);
+  }
+}
+
+// `replicas: {until: {KEY: target}, min: M, max: X}`; every bad value is refused here, at load.
+Adaptive adaptive_spec(const RawStep& st, const YAML::Node& r, const Scope& vs) {
+  const std::string& f = st.file;
+  const std::string field = "steps." + st.name + ".replicas";
+  Adaptive a;
+  a.step = st.name;
+  a.where = at(f, r);
+  for (const auto& kv : r)
+    if (kv.first.Scalar() != "until" && kv.first.Scalar() != "min" && kv.first.Scalar() != "max")
+      fail(at(f, kv.first), field + "." + kv.first.Scalar(), "", "unknown key (expected until, min, max)");
+  const YAML::Node u = r["until"];
+  if (!u || !u.IsMap() || u.size() == 0)
+    fail(u ? at(f, u) : a.where, field + ".until", "", "expected a map KEY: target (relative 95 % half-width, 0.02 = 2 %)");
+  for (const auto& kv : u) {
+    const std::string key = kv.first.Scalar(), kf = field + ".until." + key;
+    const std::string text = resolve(scalar(kv.second, f, kf), vs, at(f, kv.second), kf);
+    char* end = nullptr;
+    const double target = std::strtod(text.c_str(), &end);
+    if (text.empty() || *end != '\0' || !std::isfinite(target) || target <= 0)
+      fail(at(f, kv.second), kf, text, "a target is a relative 95 % half-width > 0 (0.02 = 2 %)");
+    a.until.emplace_back(key, target);
+    a.until_where.push_back(at(f, kv.first));
+  }
+  const auto bound = [&](const char* name, long long fallback) {
+    const YAML::Node n = r[name];
+    if (!n) return fallback;
+    const std::string nf = field + "." + name;
+    return integer(resolve(scalar(n, f, nf), vs, at(f, n), nf), at(f, n), nf, LLONG_MIN);
+  };
+  if (!r["max"]) fail(a.where, field + ".max", "", "adaptive replicas need max: (the most replicas per cell)");
+  const long long lo = bound("min", 2), hi = bound("max", 0);
+  if (lo < 2) fail(r["min"] ? at(f, r["min"]) : a.where, field + ".min", std::to_string(lo), "at least 2 replicas are needed for a spread");
+  if (hi < lo) fail(at(f, r["max"]), field + ".max", std::to_string(hi), "max must be at least min (" + std::to_string(lo) + ")");
+  check_sweep_size(static_cast<double>(hi), at(f, r["max"]), field + ".max", std::to_string(hi));
+  a.min = static_cast<int>(lo);
+  a.max = static_cast<int>(hi);
+  return a;
+}
+
+void add_replicas(const RawStep& st, const Scope& vs, const CountOf& count, std::vector<Cell>& cells,
+                  std::optional<Adaptive>& adaptive) {
+  const std::string& f = st.file;
+  const std::string field = "steps." + st.name + ".replicas";
+  const YAML::Node r = st.node["replicas"];
+  long long most = 0;
+  if (r.IsMap()) {
+    adaptive = adaptive_spec(st, r, vs);
+    most = adaptive->max;
+  } else {
+    most = integer(resolve(scalar(r, f, field), vs, at(f, r), field), at(f, r), field, 1);
+  }
+  check_sweep_size(static_cast<double>(cells.size()) * static_cast<double>(most), at(f, r), field, std::to_string(most));
+  std::vector<Cell> next;
+  for (const auto& c : cells) {
+    const long long n = adaptive ? count(*adaptive, group_id(st.name, group_key(c.values))) : most;
+    for (int k = 0; k < n; ++k) {
+      Cell x = c;
+      x.values.emplace_back("replica", std::to_string(k));
+      x.replica = k;
+      next.push_back(x);
+    }
+  }
+  cells = next;
+}
+
+void name_cells(const RawStep& st, const Scope& vs, std::vector<Cell>& cells) {
+  const std::string& f = st.file;
+  const std::string base = "steps." + st.name + ".";
   const YAML::Node tmpl = st.node["cell"];
   std::set<std::string> seen;
   for (auto& c : cells) {
@@ -382,6 +466,19 @@ std::vector<Cell> cells_of(const RawStep& st, const Vars& vars) {
     if (!seen.insert(c.name).second)
       fail(where, base + "cell", c.name, "two cells get the same name; put every swept key in the `cell:` template");
   }
+}
+
+std::vector<Cell> cells_of(const RawStep& st, const Vars& vars, const CountOf& count, std::optional<Adaptive>& adaptive) {
+  Scope vs;
+  vs.vars = &vars;
+  bool swept = false;
+  std::vector<Cell> cells = matrix_cells(st, vs, swept);
+  add_case_cells(st, vs, cells, swept);
+  if (st.node["replicas"]) {
+    add_replicas(st, vs, count, cells, adaptive);
+    swept = true;
+  }
+  if (swept) name_cells(st, vs, cells);
   return cells;
 }
 
@@ -532,6 +629,7 @@ class OutputRules {
     for (const auto& f : raw.files) kept_.push_back(resolved(f));
     kept_.push_back(resolved(p.lock_file));
     kept_.push_back(resolved(p.logs_dir));
+    kept_.push_back(resolved(p.replicas_file));
     lock_stem_ = resolved(p.lock_file).replace_extension("").string();  // <stem>.lock: shard locks too
   }
 
@@ -556,6 +654,470 @@ class OutputRules {
   std::string lock_stem_;
 };
 
+// ---- expanding the steps into instances ---------------------------------------------------
+
+// The pipeline's paths, before any step: the folder, lock file, logs and adaptive-replica record.
+Pipeline skeleton(const std::string& file, const Raw& raw, const Vars& vars, std::string& out_root) {
+  Pipeline p;
+  p.file = file;
+  const fs::path fp(file);
+  p.dir = fp.parent_path().empty() ? "." : fp.parent_path().string();
+  p.lock_file = (fp.parent_path() / (fp.stem().string() + ".lock.json")).string();
+  p.logs_dir = (fp.parent_path() / (raw.logs.empty() ? fp.stem().string() + ".logs" : raw.logs)).string();
+  p.replicas_file = (fp.parent_path() / (fp.stem().string() + ".replicas.json")).string();
+  if (!raw.out.empty()) {
+    Scope vs;
+    vs.vars = &vars;
+    out_root = resolve(raw.out, vs, raw.out_where, "out");
+  }
+  // The logs are rewritten on every run: they follow the rules of an output.
+  if (!raw.logs.empty()) {
+    const fs::path logs = resolved(p.logs_dir);
+    if (!strictly_inside(logs, resolved(p.dir)) && !(!out_root.empty() && strictly_inside(logs, resolved(fs::path(p.dir) / out_root))))
+      fail(raw.logs_where, "logs", raw.logs, "the log folder must be inside the pipeline's folder or the `out:` root");
+  }
+  return p;
+}
+
+void check_step_keys(const RawStep& st) {
+  const std::string& f = st.file;
+  const std::string base = "steps." + st.name + ".";
+  for (const auto& kv : st.node)
+    if (!kStepKeys.count(kv.first.Scalar()))
+      fail(at(f, kv.first), base + kv.first.Scalar(), "",
+           "unknown key (expected cmd, tool, args, deps, outs, params, threads, matrix, cases, cell, replicas, "
+           "seed, version, desc)");
+  if (!st.node["cmd"] == !st.node["tool"]) fail(st.where, "steps." + st.name, "", "a step needs one of cmd: or tool:");
+  if (st.node["args"] && !st.node["tool"]) fail(at(f, st.node["args"]), base + "args", "", "args: goes with tool:");
+}
+
+// The replica counts of the last run (<stem>.replicas.json), so `status` and `explain` see the
+// pipeline as it was last brought up to date.
+std::map<std::string, int> recorded_counts(const std::string& file) {
+  std::map<std::string, int> counts;
+  std::ifstream in(file);
+  if (!in) return counts;
+  try {
+    const nlohmann::json j = nlohmann::json::parse(in);
+    for (const auto& g : j.at("groups")) counts[g.at("id").get<std::string>()] = g.at("n").get<int>();
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(file, "", "", std::string("unreadable record of adaptive replicas (delete it to start afresh): ") + e.what());
+  }
+  return counts;
+}
+
+class Expander {
+ public:
+  Expander(const Raw& raw, const Vars& vars, const LoadOptions& options,
+           const std::map<std::string, std::map<std::string, std::string>>& param_sets, const Pipeline& base,
+           const std::string& out_root, CountOf count)
+      : raw_(raw), vars_(vars), options_(options), param_sets_(param_sets), p_(base), rules_(raw, base, out_root),
+        count_(std::move(count)) {
+    replicas_ref_ = fs::path(p_.replicas_file).filename().string();
+  }
+
+  Pipeline build() {
+    for (const auto& st : raw_.steps) add_step(st);
+    check_unique_outputs();
+    for (std::size_t i = 0; i < inst_.size(); ++i) resolve_inputs(i);
+    check_output_folders();
+    return finish(order(needed()));
+  }
+
+ private:
+  // Pass 1: cells, params and outputs of every step (outputs may not name other steps).
+  void add_step(const RawStep& st) {
+    p_.steps.push_back(st.name);
+    check_step_keys(st);
+    std::optional<Adaptive> adaptive;
+    for (auto& cell : cells_of(st, vars_, count_, adaptive)) {
+      Pending pe{&st, cell, 0, {}, {}};
+      Instance in = make_instance(st, pe);
+      of_step_[st.name].push_back(inst_.size());
+      inst_.push_back(std::move(in));
+      pend_.push_back(std::move(pe));
+    }
+    if (adaptive) {
+      adaptive_of_[st.name] = p_.adaptive.size();
+      p_.adaptive.push_back(*adaptive);
+    }
+  }
+
+  Instance make_instance(const RawStep& st, Pending& pe) {
+    const std::string& f = st.file;
+    const std::string base = "steps." + st.name + ".";
+    const Cell& cell = pe.cell;
+    Instance in;
+    in.step = st.name;
+    in.cell = cell.name;
+    in.id = cell.name.empty() ? st.name : st.name + "[" + cell.name + "]";
+    in.where = st.where;
+    in.replica = cell.replica;
+    for (const auto& [k, v] : cell.values) in.matrix[k] = v;
+    Scope s;
+    s.vars = &vars_;
+    s.cell = &pe.cell;
+    s.step = st.name;
+    if (const YAML::Node sd = st.node["seed"])
+      pe.seed = integer(resolve(scalar(sd, f, base + "seed"), s, at(f, sd), base + "seed"), at(f, sd), base + "seed", LLONG_MIN);
+    s.seed = pe.seed = pe.seed + std::max(cell.replica, 0);
+    if (const YAML::Node th = st.node["threads"])
+      in.threads = static_cast<int>(
+          integer(resolve(scalar(th, f, base + "threads"), s, at(f, th), base + "threads"), at(f, th), base + "threads", 1));
+    s.threads = in.threads;
+    in.params = params_of(st, s);
+    s.params = &in.params;
+    for (const auto& [name, text, where] : path_items(st.node["outs"], f, base + "outs")) {
+      for (auto& path : resolve_list(text, s, where, base + "outs." + name)) {
+        if (path.empty()) fail(where, base + "outs." + name, text, "empty path");
+        rules_.check(path, where, base + "outs." + name);
+        in.outs.emplace_back(name, normal_path(path));
+        pe.out_where.push_back(where);
+      }
+    }
+    return in;
+  }
+
+  std::map<std::string, std::string> params_of(const RawStep& st, const Scope& s) const {
+    const std::string& f = st.file;
+    const std::string base = "steps." + st.name + ".";
+    std::vector<std::pair<std::string, YAML::Node>> params;
+    if (const YAML::Node pn = st.node["params"]) {
+      if (!pn.IsMap()) fail(at(f, pn), base + "params", "", "expected a map of name: value");
+      flatten_params(pn, "", f, params);
+    }
+    std::map<std::string, std::string> sets, out;
+    if (const auto it = param_sets_.find(st.name); it != param_sets_.end()) sets = it->second;
+    for (const auto& [k, node] : params) {
+      const std::string field = base + "params." + k;
+      if (auto it = sets.find(k); it != sets.end()) {
+        out[k] = it->second;
+        sets.erase(it);
+        continue;
+      }
+      std::string v;
+      if (node.IsSequence()) {
+        for (const auto& e : node) v += (v.empty() ? "" : " ") + resolve(scalar(e, f, field), s, at(f, e), field);
+      } else if (!node.IsNull()) {
+        v = resolve(scalar(node, f, field), s, at(f, node), field);
+      }
+      out[k] = v;
+    }
+    if (!sets.empty()) fail({"--set", 0}, base + "params." + sets.begin()->first, "", "the step has no such param");
+    return out;
+  }
+
+  // Two instances writing one file would race and make staleness meaningless.
+  void check_unique_outputs() {
+    for (std::size_t i = 0; i < inst_.size(); ++i)
+      for (std::size_t k = 0; k < inst_[i].outs.size(); ++k) {
+        const auto [it, fresh] = producer_.emplace(inst_[i].outs[k].second, i);
+        if (!fresh)
+          fail(pend_[i].out_where[k], "steps." + inst_[i].step + ".outs." + inst_[i].outs[k].first, inst_[i].outs[k].second,
+               "output also written by '" + inst_[it->second].id + "' (" + pend_[it->second].out_where[0].str() + ")");
+      }
+  }
+
+  // ${steps.S.outs[.NAME]} from instance i: the outputs of the cells of S that agree with i on
+  // the swept keys both have; each also becomes an input of i.
+  std::vector<std::string> step_outputs(std::size_t i, const std::string& ref, NamedPaths& implicit) const {
+    const Instance& in = inst_[i];
+    const auto dot = ref.find('.');
+    const std::string step = ref.substr(0, dot);
+    const std::string rest = dot == std::string::npos ? "" : ref.substr(dot + 1);
+    const auto cells = of_step_.find(step);
+    if (cells == of_step_.end()) throw RefError{"unknown step '" + step + "'"};
+    if (step == in.step) throw RefError{"a step cannot read its own outputs"};
+    if (rest != "outs" && rest.rfind("outs.", 0) != 0)
+      throw RefError{"write ${steps." + step + ".outs} or ${steps." + step + ".outs.NAME}"};
+    const std::string key = rest.size() > 4 ? rest.substr(5) : "";
+    std::vector<std::string> paths;
+    bool matched = false;
+    for (const std::size_t j : cells->second) {
+      const bool agree = std::all_of(inst_[j].matrix.begin(), inst_[j].matrix.end(), [&](const auto& kv) {
+        const auto it = in.matrix.find(kv.first);
+        return it == in.matrix.end() || it->second == kv.second;
+      });
+      if (!agree) continue;
+      matched = true;
+      bool found = false;
+      for (const auto& [k, v] : inst_[j].outs)
+        if (key.empty() || k == key) {
+          paths.push_back(v);
+          found = true;
+          if (std::none_of(implicit.begin(), implicit.end(), [&](const auto& x) { return x.second == v; }))
+            implicit.emplace_back("steps." + step + ".outs." + k, v);
+        }
+      if (!found) {
+        std::string names;
+        for (const auto& o : inst_[j].outs) names += (names.empty() ? "" : ", ") + o.first;
+        throw RefError{"step '" + step + "' has no output '" + key + "' (outputs: " + names + ")"};
+      }
+    }
+    if (!matched) throw RefError{"no cell of step '" + step + "' matches cell '" + in.cell + "'"};
+    return paths;
+  }
+
+  // Pass 2: inputs, references to other steps, the command, the edges.
+  void resolve_inputs(std::size_t i) {
+    Instance& in = inst_[i];
+    Pending& pe = pend_[i];
+    const RawStep& st = *pe.raw;
+    const std::string base = "steps." + st.name + ".";
+    NamedPaths implicit;  // outputs of other steps named in cmd/args but not in deps
+    Scope s;
+    s.vars = &vars_;
+    s.cell = &pe.cell;
+    s.step = st.name;
+    s.seed = pe.seed;
+    s.threads = in.threads;
+    s.params = &in.params;
+    s.outs = &in.outs;
+    if (!adaptive_of_.empty()) s.replicas = &replicas_ref_;
+    s.steps = [&](const std::string& ref) { return step_outputs(i, ref, implicit); };
+    for (const auto& [name, text, where] : path_items(st.node["deps"], st.file, base + "deps")) {
+      for (auto& path : resolve_list(text, s, where, base + "deps." + name)) {
+        if (path.empty()) fail(where, base + "deps." + name, text, "empty path");
+        in.deps.emplace_back(name, normal_path(path));
+        pe.dep_where.push_back(where);
+      }
+    }
+    s.deps = &in.deps;
+    resolve_command(in, st, s);
+    for (const auto& d : implicit)
+      if (std::none_of(in.deps.begin(), in.deps.end(), [&](const auto& x) { return x.second == d.second; })) {
+        in.deps.push_back(d);
+        pe.dep_where.push_back(st.where);
+      }
+    add_edges(i);
+    if (const auto a = adaptive_of_.find(in.step); a != adaptive_of_.end()) check_until(in, p_.adaptive[a->second]);
+  }
+
+  void resolve_command(Instance& in, const RawStep& st, const Scope& s) const {
+    const std::string& f = st.file;
+    const std::string base = "steps." + st.name + ".";
+    if (const YAML::Node cmd = st.node["cmd"]) {
+      in.command = resolve_shell(scalar(cmd, f, base + "cmd"), s, at(f, cmd), base + "cmd");
+      in.argv = {"/bin/sh", "-c", in.command};
+      if (const YAML::Node v = st.node["version"]) in.version = resolve(scalar(v, f, base + "version"), s, at(f, v), base + "version");
+      return;
+    }
+    const YAML::Node tool = st.node["tool"];
+    in.tool = scalar(tool, f, base + "tool");
+    if (!is_name(in.tool)) fail(at(f, tool), base + "tool", in.tool, "a tool is a verb such as pack or young");
+    const std::string exe = find_tool("tomodem-" + in.tool, options_.tool_dir);
+    if (exe.empty())
+      fail(at(f, tool), base + "tool", in.tool, "unknown tool: no executable tomodem-" + in.tool + " beside tomodem-run or on PATH");
+    in.argv = {exe};
+    in.command = "tomodem-" + in.tool;
+    if (const YAML::Node args = st.node["args"]) {
+      if (!args.IsSequence()) fail(at(f, args), base + "args", "", "expected a list of arguments");
+      for (const auto& a : args)
+        for (auto& v : resolve_list(scalar(a, f, base + "args"), s, at(f, a), base + "args")) {
+          in.argv.push_back(v);
+          in.command += " " + detail::shell_quote(v);
+        }
+    }
+    in.version = tool_version(exe);
+  }
+
+  // An input another instance writes makes that instance upstream; any other must exist (the
+  // runner's record of adaptive replicas excepted: the runner writes it before any step runs).
+  void add_edges(std::size_t i) {
+    Instance& in = inst_[i];
+    const Pending& pe = pend_[i];
+    const std::string base = "steps." + in.step + ".";
+    for (std::size_t k = 0; k < in.deps.size(); ++k) {
+      const std::string& path = in.deps[k].second;
+      if (const auto it = producer_.find(path); it != producer_.end()) {
+        if (it->second == i) fail(pe.dep_where[k], base + "deps." + in.deps[k].first, path, "a step cannot read its own output");
+        if (std::find(in.upstream.begin(), in.upstream.end(), it->second) == in.upstream.end()) in.upstream.push_back(it->second);
+      } else if (options_.check_inputs && path != replicas_ref_ && !fs::exists(fs::path(p_.dir) / path)) {
+        fail(pe.dep_where[k], base + "deps." + in.deps[k].first, path, "missing input file (no such file, and no step writes it)");
+      }
+    }
+  }
+
+  // An `until` key must be one the step writes. Knowable for `tool: run` rows (their --value
+  // names and --summary NAME.* columns); for other steps the key is looked up when the first
+  // replica has finished. Either way the step needs a JSON output to read it from.
+  void check_until(const Instance& in, const Adaptive& a) const {
+    const bool json_out = std::any_of(in.outs.begin(), in.outs.end(), [](const auto& o) {
+      return o.second.size() > 5 && o.second.compare(o.second.size() - 5, 5, ".json") == 0;
+    });
+    std::vector<std::string> columns, prefixes;
+    const bool row = in.tool == "run" && in.argv.size() > 1 && in.argv[1] == "row";
+    for (std::size_t j = 1; row && j + 1 < in.argv.size(); ++j) {
+      const std::string name = in.argv[j + 1].substr(0, in.argv[j + 1].find('='));
+      if (in.argv[j] == "--value") columns.push_back(name);
+      if (in.argv[j] == "--summary") prefixes.push_back(name + ".");
+    }
+    for (std::size_t k = 0; k < a.until.size(); ++k) {
+      const std::string& key = a.until[k].first;
+      const std::string field = "steps." + in.step + ".replicas.until." + key;
+      if (!json_out)
+        fail(a.until_where[k], field, key, "the step declares no JSON output (an outs: path ending in .json) to read it from");
+      const bool known = std::find(columns.begin(), columns.end(), key) != columns.end() ||
+                         std::any_of(prefixes.begin(), prefixes.end(), [&](const std::string& pre) { return key.rfind(pre, 0) == 0; });
+      if (row && !known) {
+        std::string have;
+        for (const auto& c : columns) have += (have.empty() ? "" : ", ") + c;
+        for (const auto& c : prefixes) have += (have.empty() ? "" : ", ") + c + "*";
+        fail(a.until_where[k], field, key, "the step does not write this key (its row's columns: " + have + ")");
+      }
+    }
+  }
+
+  // An output folder must not hold a file the user made (an input no step writes): the runner
+  // would move it aside with the folder.
+  void check_output_folders() const {
+    std::map<std::string, std::pair<std::size_t, fs::path>> sources;  // input no step writes -> reader
+    for (std::size_t i = 0; i < inst_.size(); ++i)
+      for (const auto& d : inst_[i].deps)
+        if (!producer_.count(d.second) && !sources.count(d.second))
+          sources.emplace(d.second, std::make_pair(i, resolved(fs::path(p_.dir) / d.second)));
+    if (sources.empty()) return;
+    for (const auto& [path, j] : producer_) {
+      const fs::path out = resolved(fs::path(p_.dir) / path);
+      for (const auto& [dep, source] : sources)
+        if (strictly_inside(source.second, out)) {
+          const auto& o = inst_[j].outs;
+          const auto it = std::find_if(o.begin(), o.end(), [&](const auto& x) { return x.second == path; });
+          fail(pend_[j].out_where[static_cast<std::size_t>(it - o.begin())], "steps." + inst_[j].step + ".outs." + it->first,
+               path, "this output folder holds the input " + dep + " of '" + inst_[source.first].id +
+                         "', which no step makes: the runner would replace it");
+        }
+    }
+  }
+
+  // Replica cells of steps that adaptive steps read run only when a replica that runs reads
+  // them: pack[r7] waits until the adaptive step asks for replica 7.
+  std::vector<char> needed() const {
+    const std::size_t n = inst_.size();
+    std::vector<char> keep(n, 1);
+    if (adaptive_of_.empty()) return keep;
+    std::vector<char> feeds(n, 0);
+    std::vector<std::size_t> stack;
+    for (std::size_t i = 0; i < n; ++i)
+      if (adaptive_of_.count(inst_[i].step)) stack.push_back(i);
+    while (!stack.empty()) {
+      const std::size_t i = stack.back();
+      stack.pop_back();
+      for (const auto u : inst_[i].upstream)
+        if (!feeds[u]) feeds[u] = 1, stack.push_back(u);
+    }
+    std::set<std::string> feeding;
+    for (std::size_t i = 0; i < n; ++i)
+      if (feeds[i]) feeding.insert(inst_[i].step);
+    const auto optional = [&](std::size_t i) {
+      return inst_[i].replica >= 0 && feeding.count(inst_[i].step) && !adaptive_of_.count(inst_[i].step);
+    };
+    std::vector<int> readers(n, 0);
+    for (const auto& in : inst_)
+      for (const auto u : in.upstream) ++readers[u];
+    for (std::size_t i = 0; i < n; ++i)
+      if (optional(i) && readers[i] == 0) stack.push_back(i);
+    while (!stack.empty()) {
+      const std::size_t i = stack.back();
+      stack.pop_back();
+      keep[i] = 0;
+      for (const auto u : inst_[i].upstream)
+        if (--readers[u] == 0 && optional(u) && keep[u]) stack.push_back(u);
+    }
+    return keep;
+  }
+
+  // Topological order of the kept instances, stable in declaration order; a leftover is a cycle.
+  std::vector<std::size_t> order(const std::vector<char>& keep) const {
+    const std::size_t n = inst_.size();
+    std::vector<int> indegree(n, 0);
+    std::vector<std::vector<std::size_t>> down(n);
+    for (std::size_t i = 0; i < n; ++i)
+      if (keep[i])
+        for (const std::size_t u : inst_[i].upstream) {
+          ++indegree[i];
+          down[u].push_back(i);
+        }
+    std::priority_queue<std::size_t, std::vector<std::size_t>, std::greater<>> ready;
+    for (std::size_t i = 0; i < n; ++i)
+      if (keep[i] && !indegree[i]) ready.push(i);
+    std::vector<std::size_t> out;
+    while (!ready.empty()) {
+      const std::size_t i = ready.top();
+      ready.pop();
+      out.push_back(i);
+      for (const std::size_t d : down[i])
+        if (--indegree[d] == 0) ready.push(d);
+    }
+    if (out.size() != static_cast<std::size_t>(std::count(keep.begin(), keep.end(), 1))) fail_cycle(indegree);
+    return out;
+  }
+
+  // Walk upstream among the leftovers until an instance repeats: that is a cycle.
+  [[noreturn]] void fail_cycle(const std::vector<int>& indegree) const {
+    std::size_t cur = 0;
+    while (indegree[cur] == 0) ++cur;
+    std::vector<std::size_t> path;
+    while (std::find(path.begin(), path.end(), cur) == path.end()) {
+      path.push_back(cur);
+      for (const std::size_t u : inst_[cur].upstream)
+        if (indegree[u] > 0) {
+          cur = u;
+          break;
+        }
+    }
+    std::string text;
+    for (auto it = std::find(path.begin(), path.end(), cur); it != path.end(); ++it) text = " -> " + inst_[*it].id + text;
+    fail(inst_[cur].where, "steps." + inst_[cur].step, "", "cycle between steps: " + inst_[cur].id + text);
+  }
+
+  Pipeline finish(const std::vector<std::size_t>& order) {
+    std::vector<std::size_t> pos(inst_.size());
+    for (std::size_t k = 0; k < order.size(); ++k) pos[order[k]] = k;
+    for (const std::size_t i : order) {
+      Instance in = std::move(inst_[i]);
+      for (auto& u : in.upstream) u = pos[u];
+      std::sort(in.upstream.begin(), in.upstream.end());
+      p_.instances.push_back(std::move(in));
+    }
+    for (std::size_t i = 0; i < p_.instances.size(); ++i) {
+      const Instance& in = p_.instances[i];
+      const auto a = adaptive_of_.find(in.step);
+      if (a == adaptive_of_.end()) continue;
+      std::vector<std::pair<std::string, std::string>> values(in.matrix.begin(), in.matrix.end());
+      const std::string id = group_id(in.step, group_key(values));
+      auto g = std::find_if(p_.groups.begin(), p_.groups.end(), [&](const ReplicaGroup& x) { return x.id == id; });
+      if (g == p_.groups.end()) {
+        ReplicaGroup x;
+        x.id = id;
+        x.adaptive = a->second;
+        for (const auto& [k, v] : in.matrix)
+          if (k != "replica") x.matrix[k] = v;
+        g = p_.groups.insert(p_.groups.end(), x);
+      }
+      g->instances.push_back(i);
+    }
+    for (auto& g : p_.groups)
+      std::sort(g.instances.begin(), g.instances.end(),
+                [&](std::size_t a, std::size_t b) { return p_.instances[a].replica < p_.instances[b].replica; });
+    return std::move(p_);
+  }
+
+  const Raw& raw_;
+  const Vars& vars_;
+  const LoadOptions& options_;
+  const std::map<std::string, std::map<std::string, std::string>>& param_sets_;
+  Pipeline p_;
+  const OutputRules rules_;
+  const CountOf count_;
+  std::string replicas_ref_;  // the record's path as ${run.replicas} gives it
+  std::vector<Instance> inst_;
+  std::vector<Pending> pend_;
+  std::map<std::string, std::vector<std::size_t>> of_step_;
+  std::map<std::string, std::size_t> producer_;  // output path -> instance
+  std::map<std::string, std::size_t> adaptive_of_;  // step -> index into p_.adaptive
+};
+
 }  // namespace
 
 Pipeline load(const std::string& file, const LoadOptions& options) {
@@ -566,281 +1128,21 @@ Pipeline load(const std::string& file, const LoadOptions& options) {
   std::map<std::string, std::map<std::string, std::string>> param_sets;
   apply_overrides(options.overrides, raw, param_sets);
   const Vars vars(raw.vars);
-
-  Pipeline p;
-  p.file = file;
-  const fs::path fp(file);
-  p.dir = fp.parent_path().empty() ? "." : fp.parent_path().string();
-  p.lock_file = (fp.parent_path() / (fp.stem().string() + ".lock.json")).string();
-  p.logs_dir = (fp.parent_path() / (raw.logs.empty() ? fp.stem().string() + ".logs" : raw.logs)).string();
-
   std::string out_root;
-  if (!raw.out.empty()) {
-    Scope vs;
-    vs.vars = &vars;
-    out_root = resolve(raw.out, vs, raw.out_where, "out");
-  }
-  const OutputRules rules(raw, p, out_root);
-  // The logs are rewritten on every run: they follow the rules of an output.
-  if (!raw.logs.empty()) {
-    const fs::path logs = resolved(p.logs_dir);
-    if (!strictly_inside(logs, resolved(p.dir)) && !(!out_root.empty() && strictly_inside(logs, resolved(fs::path(p.dir) / out_root))))
-      fail(raw.logs_where, "logs", raw.logs, "the log folder must be inside the pipeline's folder or the `out:` root");
-  }
-
-  // Pass 1: cells, params and outputs of every step (outputs may not name other steps).
-  std::vector<Instance> inst;
-  std::vector<Pending> pend;
-  std::map<std::string, std::vector<std::size_t>> of_step;
-  for (const auto& st : raw.steps) {
-    p.steps.push_back(st.name);
-    const std::string& f = st.file;
-    const std::string base = "steps." + st.name + ".";
-    for (const auto& kv : st.node)
-      if (!kStepKeys.count(kv.first.Scalar()))
-        fail(at(f, kv.first), base + kv.first.Scalar(), "",
-             "unknown key (expected cmd, tool, args, deps, outs, params, threads, matrix, cases, cell, replicas, "
-             "seed, version, desc)");
-    if (!st.node["cmd"] == !st.node["tool"]) fail(st.where, "steps." + st.name, "", "a step needs one of cmd: or tool:");
-    if (st.node["args"] && !st.node["tool"]) fail(at(f, st.node["args"]), base + "args", "", "args: goes with tool:");
-    for (auto& cell : cells_of(st, vars)) {
-      Instance in;
-      Pending pe{&st, cell, 0, {}, {}};
-      in.step = st.name;
-      in.cell = cell.name;
-      in.id = cell.name.empty() ? st.name : st.name + "[" + cell.name + "]";
-      in.where = st.where;
-      for (const auto& [k, v] : cell.values) in.matrix[k] = v;
-      Scope s;
-      s.vars = &vars;
-      s.cell = &pe.cell;
-      s.step = st.name;
-      if (const YAML::Node sd = st.node["seed"])
-        pe.seed = integer(resolve(scalar(sd, f, base + "seed"), s, at(f, sd), base + "seed"), at(f, sd), base + "seed",
-                          LLONG_MIN);
-      s.seed = pe.seed = pe.seed + std::max(cell.replica, 0);
-      if (const YAML::Node th = st.node["threads"])
-        in.threads = static_cast<int>(integer(resolve(scalar(th, f, base + "threads"), s, at(f, th), base + "threads"),
-                                              at(f, th), base + "threads", 1));
-      s.threads = in.threads;
-      std::vector<std::pair<std::string, YAML::Node>> params;
-      if (const YAML::Node pn = st.node["params"]) {
-        if (!pn.IsMap()) fail(at(f, pn), base + "params", "", "expected a map of name: value");
-        flatten_params(pn, "", f, params);
-      }
-      auto sets = param_sets[st.name];
-      for (const auto& [k, node] : params) {
-        const std::string field = base + "params." + k;
-        if (auto it = sets.find(k); it != sets.end()) {
-          in.params[k] = it->second;
-          sets.erase(it);
-          continue;
-        }
-        std::string v;
-        if (node.IsSequence()) {
-          for (const auto& e : node) v += (v.empty() ? "" : " ") + resolve(scalar(e, f, field), s, at(f, e), field);
-        } else if (!node.IsNull()) {
-          v = resolve(scalar(node, f, field), s, at(f, node), field);
-        }
-        in.params[k] = v;
-      }
-      if (!sets.empty()) fail({"--set", 0}, base + "params." + sets.begin()->first, "", "the step has no such param");
-      s.params = &in.params;
-      for (const auto& [name, text, where] : path_items(st.node["outs"], f, base + "outs")) {
-        for (auto& path : resolve_list(text, s, where, base + "outs." + name)) {
-          if (path.empty()) fail(where, base + "outs." + name, text, "empty path");
-          rules.check(path, where, base + "outs." + name);
-          in.outs.emplace_back(name, normal_path(path));
-          pe.out_where.push_back(where);
-        }
-      }
-      of_step[st.name].push_back(inst.size());
-      inst.push_back(std::move(in));
-      pend.push_back(std::move(pe));
-    }
-  }
-
-  // Two instances writing one file would race and make staleness meaningless.
-  std::map<std::string, std::size_t> producer;
-  for (std::size_t i = 0; i < inst.size(); ++i)
-    for (std::size_t k = 0; k < inst[i].outs.size(); ++k) {
-      const auto [it, fresh] = producer.emplace(inst[i].outs[k].second, i);
-      if (!fresh)
-        fail(pend[i].out_where[k], "steps." + inst[i].step + ".outs." + inst[i].outs[k].first, inst[i].outs[k].second,
-             "output also written by '" + inst[it->second].id + "' (" + pend[it->second].out_where[0].str() + ")");
-    }
-
-  // Pass 2: inputs, references to other steps, the command.
-  for (std::size_t i = 0; i < inst.size(); ++i) {
-    Instance& in = inst[i];
-    Pending& pe = pend[i];
-    const RawStep& st = *pe.raw;
-    const std::string& f = st.file;
-    const std::string base = "steps." + st.name + ".";
-    NamedPaths implicit;  // outputs of other steps named in cmd/args but not in deps
-    Scope s;
-    s.vars = &vars;
-    s.cell = &pe.cell;
-    s.step = st.name;
-    s.seed = pe.seed;
-    s.threads = in.threads;
-    s.params = &in.params;
-    s.outs = &in.outs;
-    s.steps = [&](const std::string& ref) {
-      const auto dot = ref.find('.');
-      const std::string step = ref.substr(0, dot);
-      const std::string rest = dot == std::string::npos ? "" : ref.substr(dot + 1);
-      if (!of_step.count(step)) throw RefError{"unknown step '" + step + "'"};
-      if (step == in.step) throw RefError{"a step cannot read its own outputs"};
-      if (rest != "outs" && rest.rfind("outs.", 0) != 0)
-        throw RefError{"write ${steps." + step + ".outs} or ${steps." + step + ".outs.NAME}"};
-      const std::string key = rest.size() > 4 ? rest.substr(5) : "";
-      std::vector<std::string> paths;
-      bool matched = false;
-      for (const std::size_t j : of_step[step]) {
-        // A cell of the other step matches when it agrees on the swept keys both steps have.
-        const bool agree = std::all_of(inst[j].matrix.begin(), inst[j].matrix.end(), [&](const auto& kv) {
-          const auto it = in.matrix.find(kv.first);
-          return it == in.matrix.end() || it->second == kv.second;
-        });
-        if (!agree) continue;
-        matched = true;
-        bool found = false;
-        for (const auto& [k, v] : inst[j].outs)
-          if (key.empty() || k == key) {
-            paths.push_back(v);
-            found = true;
-            if (std::none_of(implicit.begin(), implicit.end(), [&](const auto& x) { return x.second == v; }))
-              implicit.emplace_back("steps." + step + ".outs." + k, v);
-          }
-        if (!found) {
-          std::string names;
-          for (const auto& o : inst[j].outs) names += (names.empty() ? "" : ", ") + o.first;
-          throw RefError{"step '" + step + "' has no output '" + key + "' (outputs: " + names + ")"};
-        }
-      }
-      if (!matched) throw RefError{"no cell of step '" + step + "' matches cell '" + in.cell + "'"};
-      return paths;
-    };
-    for (const auto& [name, text, where] : path_items(st.node["deps"], f, base + "deps")) {
-      for (auto& path : resolve_list(text, s, where, base + "deps." + name)) {
-        if (path.empty()) fail(where, base + "deps." + name, text, "empty path");
-        in.deps.emplace_back(name, normal_path(path));
-        pe.dep_where.push_back(where);
-      }
-    }
-    s.deps = &in.deps;
-    if (const YAML::Node cmd = st.node["cmd"]) {
-      in.command = resolve_shell(scalar(cmd, f, base + "cmd"), s, at(f, cmd), base + "cmd");
-      in.argv = {"/bin/sh", "-c", in.command};
-      if (const YAML::Node v = st.node["version"]) in.version = resolve(scalar(v, f, base + "version"), s, at(f, v), base + "version");
-    } else {
-      const YAML::Node tool = st.node["tool"];
-      in.tool = scalar(tool, f, base + "tool");
-      if (!is_name(in.tool)) fail(at(f, tool), base + "tool", in.tool, "a tool is a verb such as pack or young");
-      const std::string exe = find_tool("tomodem-" + in.tool, options.tool_dir);
-      if (exe.empty())
-        fail(at(f, tool), base + "tool", in.tool,
-             "unknown tool: no executable tomodem-" + in.tool + " beside tomodem-run or on PATH");
-      in.argv = {exe};
-      in.command = "tomodem-" + in.tool;
-      if (const YAML::Node args = st.node["args"]) {
-        if (!args.IsSequence()) fail(at(f, args), base + "args", "", "expected a list of arguments");
-        for (const auto& a : args)
-          for (auto& v : resolve_list(scalar(a, f, base + "args"), s, at(f, a), base + "args")) {
-            in.argv.push_back(v);
-            in.command += " " + detail::shell_quote(v);
-          }
-      }
-      in.version = tool_version(exe);
-    }
-    for (const auto& d : implicit)
-      if (std::none_of(in.deps.begin(), in.deps.end(), [&](const auto& x) { return x.second == d.second; })) {
-        in.deps.push_back(d);
-        pe.dep_where.push_back(st.where);
-      }
-    // Edges: an input another instance writes makes that instance upstream.
-    for (std::size_t k = 0; k < in.deps.size(); ++k) {
-      const std::string& path = in.deps[k].second;
-      if (const auto it = producer.find(path); it != producer.end()) {
-        if (it->second == i)
-          fail(pe.dep_where[k], base + "deps." + in.deps[k].first, path, "a step cannot read its own output");
-        if (std::find(in.upstream.begin(), in.upstream.end(), it->second) == in.upstream.end())
-          in.upstream.push_back(it->second);
-      } else if (options.check_inputs && !fs::exists(fs::path(p.dir) / path)) {
-        fail(pe.dep_where[k], base + "deps." + in.deps[k].first, path,
-             "missing input file (no such file, and no step writes it)");
-      }
-    }
-  }
-
-  // An output folder must not hold a file the user made (an input no step writes): the runner
-  // would move it aside with the folder.
-  std::map<std::string, std::pair<std::size_t, fs::path>> sources;  // input no step writes -> reader
-  for (std::size_t i = 0; i < inst.size(); ++i)
-    for (const auto& d : inst[i].deps)
-      if (!producer.count(d.second) && !sources.count(d.second))
-        sources.emplace(d.second, std::make_pair(i, resolved(fs::path(p.dir) / d.second)));
-  if (!sources.empty())
-    for (const auto& [path, j] : producer) {
-      const fs::path out = resolved(fs::path(p.dir) / path);
-      for (const auto& [dep, source] : sources)
-        if (strictly_inside(source.second, out)) {
-          const std::size_t i = source.first;
-          const auto& o = inst[j].outs;
-          const auto it = std::find_if(o.begin(), o.end(), [&](const auto& x) { return x.second == path; });
-          fail(pend[j].out_where[static_cast<std::size_t>(it - o.begin())], "steps." + inst[j].step + ".outs." + it->first,
-               path, "this output folder holds the input " + dep + " of '" + inst[i].id +
-                         "', which no step makes: the runner would replace it");
-        }
-    }
-
-  // Topological order, stable in declaration order; a leftover means a cycle.
-  const std::size_t n = inst.size();
-  std::vector<int> indegree(n, 0);
-  std::vector<std::vector<std::size_t>> down(n);
-  for (std::size_t i = 0; i < n; ++i)
-    for (const std::size_t u : inst[i].upstream) {
-      ++indegree[i];
-      down[u].push_back(i);
-    }
-  std::priority_queue<std::size_t, std::vector<std::size_t>, std::greater<>> ready;
-  for (std::size_t i = 0; i < n; ++i)
-    if (!indegree[i]) ready.push(i);
-  std::vector<std::size_t> order;
-  while (!ready.empty()) {
-    const std::size_t i = ready.top();
-    ready.pop();
-    order.push_back(i);
-    for (const std::size_t d : down[i])
-      if (--indegree[d] == 0) ready.push(d);
-  }
-  if (order.size() != n) {
-    // Walk upstream among the leftovers until an instance repeats: that is a cycle.
-    std::size_t cur = 0;
-    while (indegree[cur] == 0) ++cur;
-    std::vector<std::size_t> path;
-    while (std::find(path.begin(), path.end(), cur) == path.end()) {
-      path.push_back(cur);
-      for (const std::size_t u : inst[cur].upstream)
-        if (indegree[u] > 0) {
-          cur = u;
-          break;
-        }
-    }
-    std::string text;
-    for (auto it = std::find(path.begin(), path.end(), cur); it != path.end(); ++it) text = " -> " + inst[*it].id + text;
-    fail(inst[cur].where, "steps." + inst[cur].step, "", "cycle between steps: " + inst[cur].id + text);
-  }
-  std::vector<std::size_t> pos(n);
-  for (std::size_t k = 0; k < n; ++k) pos[order[k]] = k;
-  for (const std::size_t i : order) {
-    Instance in = std::move(inst[i]);
-    for (auto& u : in.upstream) u = pos[u];
-    std::sort(in.upstream.begin(), in.upstream.end());
-    p.instances.push_back(std::move(in));
-  }
-  return p;
+  Pipeline base = skeleton(file, raw, vars, out_root);
+  base.options = options;
+  const bool adaptive = std::any_of(raw.steps.begin(), raw.steps.end(), [](const RawStep& s) {
+    const YAML::Node r = s.node["replicas"];
+    return r && r.IsMap();
+  });
+  if (!adaptive) return Expander(raw, vars, options, param_sets, base, out_root, nullptr).build();
+  // Every replica an adaptive step may get is checked now, so no later round meets bad input.
+  Expander(raw, vars, options, param_sets, base, out_root, [](const Adaptive& a, const std::string&) { return a.max; }).build();
+  const std::map<std::string, int> counts = options.use_counts ? options.replica_counts : recorded_counts(base.replicas_file);
+  return Expander(raw, vars, options, param_sets, base, out_root, [&counts](const Adaptive& a, const std::string& id) {
+           const auto it = counts.find(id);
+           return std::clamp(it == counts.end() ? a.min : it->second, a.min, a.max);
+         }).build();
 }
 
 std::vector<std::size_t> select(const Pipeline& p, const std::string& name) {

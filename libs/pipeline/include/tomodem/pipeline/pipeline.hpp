@@ -32,17 +32,9 @@ struct Instance {
   NamedPaths outs;                           // outputs, relative to the pipeline folder
   std::map<std::string, std::string> params; // flattened "a.b" -> scalar text
   int threads = 1;
+  int replica = -1;                          // ${replica}, or -1 for a step without `replicas:`
   std::vector<std::size_t> upstream;         // indices of instances whose outputs this one reads
   Location where;                            // the step's declaration
-};
-
-struct Pipeline {
-  std::string file;       // the pipeline file as given
-  std::string dir;        // its folder: commands run there, paths are relative to it
-  std::string lock_file;  // <stem>.lock.json next to the pipeline file
-  std::string logs_dir;   // <stem>.logs/ next to the pipeline file (or `logs:` in the file)
-  std::vector<std::string> steps;   // step names in declaration order
-  std::vector<Instance> instances;  // in a topological order (upstream first)
 };
 
 struct LoadOptions {
@@ -52,6 +44,42 @@ struct LoadOptions {
   std::string tool_dir;
   /// Check that inputs no step produces exist (off for `dot` and `export`, which run nothing).
   bool check_inputs = true;
+  /// Adaptive replicas: how many replicas each group (ReplicaGroup::id) has now. Without
+  /// `use_counts`, the counts of the last run's record (<stem>.replicas.json), else `min`.
+  std::map<std::string, int> replica_counts;
+  bool use_counts = false;
+};
+
+/// `replicas: {until: {KEY: target, ...}, min: M, max: X}` of one step: replicas are added until
+/// the relative 95 % half-width of the mean of every KEY (read from the step's JSON outputs) is
+/// at most its target, or X replicas ran.
+struct Adaptive {
+  std::string step;
+  std::vector<std::pair<std::string, double>> until;
+  std::vector<Location> until_where;
+  int min = 0, max = 0;
+  Location where;
+};
+
+/// The replicas of one cell of an adaptive step (its cell without the replica).
+struct ReplicaGroup {
+  std::string id;                            // "draw[level=a]"; the step name when it has no sweep
+  std::size_t adaptive = 0;                  // index into Pipeline::adaptive
+  std::map<std::string, std::string> matrix; // the cell's values, without the replica
+  std::vector<std::size_t> instances;        // by replica: 0 .. count-1
+};
+
+struct Pipeline {
+  std::string file;       // the pipeline file as given
+  std::string dir;        // its folder: commands run there, paths are relative to it
+  std::string lock_file;  // <stem>.lock.json next to the pipeline file
+  std::string logs_dir;   // <stem>.logs/ next to the pipeline file (or `logs:` in the file)
+  std::string replicas_file;  // <stem>.replicas.json: the runner's record of adaptive replicas
+  std::vector<std::string> steps;   // step names in declaration order
+  std::vector<Instance> instances;  // in a topological order (upstream first)
+  std::vector<Adaptive> adaptive;   // steps with adaptive replicas
+  std::vector<ReplicaGroup> groups; // their cells, with the replicas expanded now
+  LoadOptions options;              // as loaded, so the runner can expand it again
 };
 
 /// Reads, expands and validates a pipeline. Throws tomodem::InputError (exit 2) naming the
