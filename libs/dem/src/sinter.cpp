@@ -19,7 +19,9 @@
 #include "sinter_law.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
+#include "tomodem/dem/law_registry.hpp"
 #include "tomodem/dem/yaml_fields.hpp"
+#include "tomodem/spatial/image.hpp"
 
 namespace tomodem::dem {
 
@@ -77,22 +79,48 @@ double SinterPhase::delta_b(double T) const {
   return atomic_volume * boundary_diffusion * std::exp(-activation_energy / (kGasConstant * T)) / (kBoltzmann * T);
 }
 
+namespace {
+/// Δ_b, γ_s, ψ, η of pair (a, b) at T: geometric mean of Δ_b, arithmetic means of the rest;
+/// Δ_b = 0 when either phase does not sinter.
+SinterValues pair_values(const std::vector<SinterPhase>& phases, int a, int b, double T, double initial_neck) {
+  SinterValues v;
+  v.initial_neck = initial_neck;
+  const bool both = a < int(phases.size()) && b < int(phases.size()) && phases[a].sinters && phases[b].sinters;
+  if (!both) return v;
+  const SinterPhase& pa = phases[a];
+  const SinterPhase& pb = phases[b];
+  v.delta_b = std::sqrt(pa.delta_b(T) * pb.delta_b(T));
+  v.gamma = 0.5 * (pa.surface_energy + pb.surface_energy);
+  v.dihedral = 0.5 * (pa.dihedral_angle + pb.dihedral_angle);
+  v.eta = 0.5 * (pa.tangential_viscosity + pb.tangential_viscosity);
+  return v;
+}
+}  // namespace
+
 void apply_temperature(ContactModel& model, const std::vector<SinterPhase>& phases, double T, double initial_neck) {
   for (int a = 0; a < model.n_phases; ++a)
     for (int b = 0; b < model.n_phases; ++b) {
+      const SinterValues v = pair_values(phases, a, b, T, initial_neck);
       PairParams& pp = model.pair(a, b);
-      const bool both = a < int(phases.size()) && b < int(phases.size()) && phases[a].sinters && phases[b].sinters;
-      pp.sinter_initial_neck = initial_neck;
-      if (!both) {
-        pp.sinter_delta_b = 0;
-        continue;
+      pp.sinter_initial_neck = v.initial_neck;
+      pp.sinter_delta_b = v.delta_b;
+      if (!(v.delta_b > 0)) continue;  // the other values stay (unused while Δ_b = 0)
+      pp.sinter_gamma = v.gamma;
+      pp.sinter_dihedral = v.dihedral;
+      pp.sinter_eta = v.eta;
+    }
+}
+
+void apply_temperature(Simulation& sim, const std::vector<SinterPhase>& phases, double T, double initial_neck) {
+  const int n = sim.model().n_phases;
+  for (int a = 0; a < n; ++a)
+    for (int b = a; b < n; ++b) {
+      SinterValues v = pair_values(phases, a, b, T, initial_neck);
+      if (!(v.delta_b > 0)) {  // keep the other values, as the model overload does
+        const PairParams& pp = sim.model().pair(a, b);
+        v.gamma = pp.sinter_gamma, v.dihedral = pp.sinter_dihedral, v.eta = pp.sinter_eta;
       }
-      const SinterPhase& pa = phases[a];
-      const SinterPhase& pb = phases[b];
-      pp.sinter_delta_b = std::sqrt(pa.delta_b(T) * pb.delta_b(T));
-      pp.sinter_gamma = 0.5 * (pa.surface_energy + pb.surface_energy);
-      pp.sinter_dihedral = 0.5 * (pa.dihedral_angle + pb.dihedral_angle);
-      pp.sinter_eta = 0.5 * (pa.tangential_viscosity + pb.tangential_viscosity);
+      sim.set_sinter_values(a, b, v);
     }
 }
 
@@ -119,27 +147,18 @@ SinterSettings read_sinter_settings(const Scene& scene) {
 }
 
 namespace {
-SinterSettings read_sinter_section(const Scene& scene, const YAML::Node& doc) {
-  const std::string& file = scene.file;
-  if (!doc["sintering"]) throw InputError(file, "sintering", "", "the scene has no sintering section (docs/sintering.md)");
-  if (scene.sim->model().normal != NormalLaw::sintering)
-    throw InputError(file, "physics.normal", to_string(scene.sim->model().normal),
-                     "sintering needs physics.normal: sintering");
-  const Sec root(doc["sintering"], "sintering", file);
-  root.allow({"temperature", "phases", "initial_neck_ratio", "stop", "constrained", "accuracy", "conserve_volume",
-              "output"});
-  SinterSettings s;
-
-  // Temperature program.
+/// sintering.temperature: the start temperature and the ramps and holds.
+TemperatureProgram read_program(const Sec& root, const std::string& file) {
+  TemperatureProgram program;
   const Sec tp = root.map("temperature");
   if (!root.has("temperature")) throw InputError(file, "sintering.temperature", "", "missing: the temperature program");
   tp.allow({"start", "segments"});
-  s.program.start = tp.required_positive("start", "the start temperature (K)");
+  program.start = tp.required_positive("start", "the start temperature (K)");
   const YAML::Node segs = tp.raw("segments");
   if (!segs || !segs.IsSequence() || segs.size() == 0)
     throw InputError(file, tp.where("segments"), tp.text("segments"),
                      "needs a list of segments, e.g. [{rate: 0.1667, to: 1600}, {hold: 3600}] (K/s, K, s)");
-  double T = s.program.start;
+  double T = program.start;
   for (std::size_t k = 0; k < segs.size(); ++k) {
     const Sec g = tp.item("segments", k);
     g.allow({"rate", "to", "hold"});
@@ -153,51 +172,61 @@ SinterSettings read_sinter_section(const Scene& scene, const YAML::Node& doc) {
       if (seg.target == T) throw InputError(file, g.where("to"), g.text("to"), "equals the temperature before the ramp");
       T = seg.target;
     }
-    s.program.segments.push_back(seg);
+    program.segments.push_back(seg);
   }
+  return program;
+}
 
-  // Phases: materials that sinter, with their diffusion parameters.
+/// One entry of sintering.phases: a material that sinters, with its diffusion parameters.
+void read_phase(const Sec& g, const Scene& scene, std::vector<SinterPhase>& phases) {
+  const std::string& file = scene.file;
   const auto& mats = scene.materials;
-  s.phases.assign(mats.size(), SinterPhase{});
+  g.allow({"material", "atomic_volume", "boundary_diffusion", "activation_energy", "surface_energy", "dihedral_angle",
+           "tangential_viscosity"});
+  const std::string name = g.string("material", "");
+  int idx = -1;
+  for (std::size_t m = 0; m < mats.size(); ++m)
+    if (mats[m].name == name) idx = int(m);
+  if (idx < 0) {
+    std::string list;
+    for (const auto& m : mats) list += (list.empty() ? "" : ", ") + m.name;
+    throw InputError(file, g.where("material"), name, "unknown material; the scene defines: " + list);
+  }
+  SinterPhase& p = phases[std::size_t(idx)];
+  if (p.sinters) throw InputError(file, g.where("material"), name, "this material is listed twice");
+  p.sinters = true;
+  p.atomic_volume = g.required_positive("atomic_volume", "the atomic volume Ω (m^3) of a sintering phase");
+  p.boundary_diffusion =
+      g.required_positive("boundary_diffusion", "δ_b D_b0, grain-boundary width times diffusion prefactor (m^3/s)");
+  if (!g.has("activation_energy"))
+    throw InputError(file, g.where("activation_energy"), "", "missing: the activation energy Q (J/mol)");
+  p.activation_energy = g.non_negative("activation_energy", 0);
+  p.surface_energy = g.has("surface_energy") ? g.positive("surface_energy", 0) : mats[std::size_t(idx)].surface_energy;
+  if (!(p.surface_energy > 0))
+    throw InputError(file, g.where("surface_energy"), "", "missing: the surface energy (here or in the material)");
+  const double psi = g.number("dihedral_angle", 150);
+  if (!(psi > 0 && psi <= 180))
+    throw InputError(file, g.where("dihedral_angle"), g.text("dihedral_angle"), "must lie in (0, 180] degrees");
+  p.dihedral_angle = psi * M_PI / 180;
+  p.tangential_viscosity = g.non_negative("tangential_viscosity", 0);
+  if (p.tangential_viscosity > 0 && scene.sim->model().tangential != TangentialLaw::viscous)
+    throw InputError(file, g.where("tangential_viscosity"), g.text("tangential_viscosity"),
+                     "needs physics.tangential: viscous");
+}
+
+/// sintering.phases: one SinterPhase per scene material (those not listed do not sinter).
+std::vector<SinterPhase> read_phases(const Sec& root, const Scene& scene) {
+  std::vector<SinterPhase> phases(scene.materials.size(), SinterPhase{});
   const YAML::Node ph = root.raw("phases");
   if (!ph || !ph.IsSequence() || ph.size() == 0)
-    throw InputError(file, root.where("phases"), root.text("phases"),
+    throw InputError(scene.file, root.where("phases"), root.text("phases"),
                      "needs a list of sintering phases with their diffusion parameters");
-  for (std::size_t k = 0; k < ph.size(); ++k) {
-    const Sec g = root.item("phases", k);
-    g.allow({"material", "atomic_volume", "boundary_diffusion", "activation_energy", "surface_energy", "dihedral_angle",
-             "tangential_viscosity"});
-    const std::string name = g.string("material", "");
-    int idx = -1;
-    for (std::size_t m = 0; m < mats.size(); ++m)
-      if (mats[m].name == name) idx = int(m);
-    if (idx < 0) {
-      std::string list;
-      for (const auto& m : mats) list += (list.empty() ? "" : ", ") + m.name;
-      throw InputError(file, g.where("material"), name, "unknown material; the scene defines: " + list);
-    }
-    SinterPhase& p = s.phases[std::size_t(idx)];
-    if (p.sinters) throw InputError(file, g.where("material"), name, "this material is listed twice");
-    p.sinters = true;
-    p.atomic_volume = g.required_positive("atomic_volume", "the atomic volume Ω (m^3) of a sintering phase");
-    p.boundary_diffusion =
-        g.required_positive("boundary_diffusion", "δ_b D_b0, grain-boundary width times diffusion prefactor (m^3/s)");
-    if (!g.has("activation_energy"))
-      throw InputError(file, g.where("activation_energy"), "", "missing: the activation energy Q (J/mol)");
-    p.activation_energy = g.non_negative("activation_energy", 0);
-    p.surface_energy = g.has("surface_energy") ? g.positive("surface_energy", 0) : mats[std::size_t(idx)].surface_energy;
-    if (!(p.surface_energy > 0))
-      throw InputError(file, g.where("surface_energy"), "", "missing: the surface energy (here or in the material)");
-    const double psi = g.number("dihedral_angle", 150);
-    if (!(psi > 0 && psi <= 180))
-      throw InputError(file, g.where("dihedral_angle"), g.text("dihedral_angle"), "must lie in (0, 180] degrees");
-    p.dihedral_angle = psi * M_PI / 180;
-    p.tangential_viscosity = g.non_negative("tangential_viscosity", 0);
-    if (p.tangential_viscosity > 0 && scene.sim->model().tangential != TangentialLaw::viscous)
-      throw InputError(file, g.where("tangential_viscosity"), g.text("tangential_viscosity"),
-                       "needs physics.tangential: viscous");
-  }
+  for (std::size_t k = 0; k < ph.size(); ++k) read_phase(root.item("phases", k), scene, phases);
+  return phases;
+}
 
+/// initial_neck_ratio, stop and constrained.
+void read_start_and_stop(const Sec& root, const std::string& file, SinterSettings& s) {
   s.initial_neck = root.positive("initial_neck_ratio", s.initial_neck);
   if (s.initial_neck >= 1)
     throw InputError(file, root.where("initial_neck_ratio"), root.text("initial_neck_ratio"), "must be below 1");
@@ -214,6 +243,10 @@ SinterSettings read_sinter_section(const Scene& scene, const YAML::Node& doc) {
       s.fixed[ax[0] - 'x'] = true;
     }
   }
+}
+
+/// sintering.accuracy: the adaptive step's limits.
+void read_accuracy(const Sec& root, const std::string& file, SinterSettings& s) {
   const Sec ac = root.map("accuracy");
   ac.allow({"strain_per_step", "neck_area_per_step", "temperature_per_step", "viscous_fraction", "update_interval"});
   s.strain_per_step = ac.positive("strain_per_step", s.strain_per_step);
@@ -223,7 +256,10 @@ SinterSettings read_sinter_section(const Scene& scene, const YAML::Node& doc) {
   if (s.viscous_fraction >= 1)
     throw InputError(file, ac.where("viscous_fraction"), ac.text("viscous_fraction"), "must be below 1 (stability)");
   s.update_interval = int(ac.integer("update_interval", s.update_interval, 1, INT_MAX));
-  s.conserve_volume = root.flag("conserve_volume", true);
+}
+
+/// sintering.output: file names inside the -o folder, rows of the curve, plots.
+void read_outputs(const Sec& root, const std::string& file, SinterSettings& s) {
   const Sec out = root.map("output");
   out.allow({"curve", "packing", "rows", "necks", "plots"});
   s.curve = out.string("curve", s.curve);
@@ -239,7 +275,24 @@ SinterSettings read_sinter_section(const Scene& scene, const YAML::Node& doc) {
     if (out.has(key)) refuse_output_outside(out.string(key, ""), "given by -o", file, out.where(key));
   if (s.curve == s.packing || s.curve == s.necks || s.packing == s.necks)
     throw InputError(file, out.where(""), out.text(""), "two outputs have the same name; one would overwrite the other");
+}
 
+SinterSettings read_sinter_section(const Scene& scene, const YAML::Node& doc) {
+  const std::string& file = scene.file;
+  if (!doc["sintering"]) throw InputError(file, "sintering", "", "the scene has no sintering section (docs/sintering.md)");
+  if (scene.sim->model().normal != NormalLaw::sintering)
+    throw InputError(file, "physics.normal", to_string(scene.sim->model().normal),
+                     "sintering needs physics.normal: sintering");
+  const Sec root(doc["sintering"], "sintering", file);
+  root.allow({"temperature", "phases", "initial_neck_ratio", "stop", "constrained", "accuracy", "conserve_volume",
+              "output"});
+  SinterSettings s;
+  s.program = read_program(root, file);
+  s.phases = read_phases(root, scene);
+  read_start_and_stop(root, file, s);
+  read_accuracy(root, file, s);
+  s.conserve_volume = root.flag("conserve_volume", true);
+  read_outputs(root, file, s);
   bool any = false;
   for (const auto& p : s.phases) any = any || p.sinters;
   if (!any) throw InputError(file, "sintering.phases", "", "no phase sinters");
@@ -247,18 +300,9 @@ SinterSettings read_sinter_section(const Scene& scene, const YAML::Node& doc) {
 }
 }  // namespace
 
-// ---------------------------------------------------------------- geometry
-double lens_volume(double r1, double r2, double d) {
-  if (d >= r1 + r2) return 0;
-  const double rmin = std::min(r1, r2);
-  if (d <= std::abs(r1 - r2)) return 4.0 / 3.0 * M_PI * rmin * rmin * rmin;  // one inside the other
-  const double s = r1 + r2 - d;
-  return M_PI * s * s * (d * d + 2 * d * (r1 + r2) - 3 * (r1 - r2) * (r1 - r2)) / (12 * d);
-}
-
 namespace {
 
-Vec3 image_of(int code) { return {double(code / 9 - 1), double((code / 3) % 3 - 1), double(code % 3 - 1)}; }
+Vec3 image_of(int code) { return spatial::image_vector(code); }
 
 /// One pass over the neighbour list: overlaps, necks and the per-particle lens shares.
 struct Scan {
@@ -429,269 +473,335 @@ void check_sinter_settings(const Scene& scene, const SinterSettings& s) {
 }
 
 // ---------------------------------------------------------------- the run
-SinterReport run_sintering(Simulation& sim, const SinterSettings& s, bool progress) {
-  const auto wall0 = std::chrono::steady_clock::now();
-  Particles& p = sim.particles();
-  const std::size_t n = p.size();
-  const std::vector<double> m_phys = p.m, inv_m_phys = p.inv_m, inv_I_phys = p.inv_I;
-  const bool rot = p.has_rotation();
-  SinterReport rep;
+namespace {
+/// One sintering run (run_sintering): the scaled masses, the automatic step, the viscous cell
+/// servo and the densification curve, over the temperature program. Each member does one part
+/// of a step; run() is the loop.
+class SinterRun {
+ public:
+  SinterRun(Simulation& sim, const SinterSettings& s, bool progress)
+      : sim_(sim), s_(s), progress_(progress), p_(sim.particles()), n_(p_.size()), m_phys_(p_.m),
+        inv_m_phys_(p_.inv_m), inv_I_phys_(p_.inv_I), rot_(p_.has_rotation()), cc_(sim.cell_control()) {}
+  SinterReport run();
 
-  // Rayleigh time of the particles of phases with an elastic (non-sintering) pair, physical mass;
-  // and which particles sinter (their scaled masses have the floor of a fresh neck, below).
-  std::vector<double> rayleigh(n, 0.0), fresh(n, 0.0);
-  {
-    apply_temperature(sim.model(), s.phases, s.program.temperature(sim.time()), s.initial_neck);
-    const ContactModel& m = sim.model();
-    for (std::size_t i = 0; i < n; ++i) {
-      const int ph = p.phase[i];
-      bool elastic = false;
-      for (int b = 0; b < m.n_phases; ++b) elastic = elastic || !(m.pair(ph, b).sinter_delta_b > 0);
-      const PairParams& self = m.pair(ph, ph);
-      if (self.sinter_delta_b > 0) fresh[i] = 1;  // filled per step below (Δ_b depends on T)
-      if (!elastic || ph >= int(m.materials.size())) continue;
-      const Material& mat = m.materials[std::size_t(ph)];
-      const double G = mat.youngs_modulus / (2 * (1 + mat.poisson_ratio));
-      const double rho = p.m[i] / (4.0 / 3.0 * M_PI * p.r[i] * p.r[i] * p.r[i]);
-      if (G > 0) rayleigh[i] = M_PI * p.r[i] * std::sqrt(rho / G) / (0.1631 * mat.poisson_ratio + 0.8766);
-    }
-  }
+ private:
+  void mark_particles();
+  void reference_state();
+  SinterRow make_row(const Scan& q, double dt_now, double mass_scale, double rho_prev, double t_prev) const;
+  void grow_radii(const Scan& q);
+  void choose_step(double t, double T);
+  void scale_masses();
+  void servo_cell();
+  void take_step(double T);
+  bool record_rows();
+  void print_progress();
+  void restore();
 
-  // Reference state.
-  sim.invalidate_neighbors();
-  sim.measure();  // builds the neighbour list at the current state
-  Scan sc = scan(sim, true);
-  std::vector<double> target(n);
-  for (std::size_t i = 0; i < n; ++i) target[i] = 4.0 / 3.0 * M_PI * p.r[i] * p.r[i] * p.r[i] - sc.share[i];
-  const double V0 = sim.cell().volume();
-  const double rho0 = sc.solid / V0;
-  double L0[3];
-  for (int k = 0; k < 3; ++k) L0[k] = axis_length(sim.cell(), k);
-  const double t_end = s.max_time > 0 ? sim.time() + s.max_time : s.program.duration();
-  const double t_start = sim.time();
-
-  const bool servo = !(s.fixed[0] && s.fixed[1] && s.fixed[2]);
-  CellControl& cc = sim.cell_control();
-  for (int a = 0; a < 3; ++a)
-    for (int b = 0; b < 3; ++b) {
-      cc.velocity_gradient(a, b) = 0;
-      cc.stress_controlled[a][b] = false;  // the viscous servo below sets the rates
-    }
-
-  auto make_row = [&](const Scan& q, double dt_now, double mass_scale, double rho_prev, double t_prev) {
-    SinterRow r;
-    r.step = sim.step_count();
-    r.time = sim.time();
-    r.temperature = s.program.temperature(sim.time());
-    const double V = sim.cell().volume();
-    r.density = q.solid / V;
-    r.density_cell = rho0 * V0 / V;
-    r.rate = (sim.time() > t_prev) ? (r.density - rho_prev) / (sim.time() - t_prev) : 0;
-    for (int k = 0; k < 3; ++k) r.shrinkage[k] = 1 - axis_length(sim.cell(), k) / L0[k];
-    r.mean_neck_ratio = q.necks ? q.neck_sum / double(q.necks) : 0;
-    r.coordination = 2.0 * double(q.contacts) / double(n);
-    r.time_step = dt_now;
-    r.mass_scaling = mass_scale;
-    return r;
-  };
-  rep.initial = make_row(sc, 0, 1, rho0, sim.time());
-  rep.rows.push_back(rep.initial);
-
-  double grown = 0;  // radius growth since the last neighbour rebuild, m
-  double skin = 0;
-  {
-    double dsum = 0;
-    for (double r : p.r) dsum += 2 * r;
-    skin = sim.settings().skin > 0 ? sim.settings().skin : 0.1 * dsum / double(n);
-  }
-  // Volume conservation: grow the radii of sintering particles so each keeps its share of the
-  // union (one Newton step on share(r) = 4/3 π r³ − ½ Σ lens, ∂share/∂r = exposed area).
-  auto grow_radii = [&](const Scan& q) {
-    const ContactModel& m = sim.model();
-    double dmax = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (!(m.pair(p.phase[i], p.phase[i]).sinter_delta_b > 0)) continue;
-      const double r = p.r[i];
-      const double cur = 4.0 / 3.0 * M_PI * r * r * r - q.share[i];
-      const double der = 4 * M_PI * r * r - q.dshare[i];
-      // A sphere almost enclosed by its necks (< 5 % of its surface exposed) cannot hold its volume
-      // by growing; and no update grows a radius by more than 1 % (a runaway guard).
-      if (der < 0.05 * 4 * M_PI * r * r) continue;
-      const double dr = std::clamp((target[i] - cur) / der, -0.01 * r, 0.01 * r);
-      p.r[i] = r + dr;
-      dmax = std::max(dmax, std::abs(dr));
-    }
-    grown += 2 * dmax;
-    if (grown > 0.25 * skin) {
-      sim.invalidate_neighbors();
-      grown = 0;
-    }
-  };
-
+  Simulation& sim_;
+  const SinterSettings& s_;
+  const bool progress_;
+  const std::chrono::steady_clock::time_point wall0_ = std::chrono::steady_clock::now();
+  Particles& p_;
+  const std::size_t n_;
+  const std::vector<double> m_phys_, inv_m_phys_, inv_I_phys_;
+  const bool rot_;
+  CellControl& cc_;
+  SinterReport rep_;
+  // Rayleigh time of the particles of phases with an elastic pair; which particles sinter.
+  std::vector<double> rayleigh_, fresh_;
+  // Reference state: each particle's share of the solid volume, density and cell lengths.
+  Scan sc_;
+  std::vector<double> target_;
+  double V0_ = 0, rho0_ = 0, L0_[3] = {0, 0, 0}, t_end_ = 0, t_start_ = 0;
+  bool servo_ = false;
+  double grown_ = 0;  // radius growth since the last neighbour rebuild, m
+  double skin_ = 0;
   // Per-particle Σ(η_n + 5η_t) of the necks, kept for the pair parameters (temperature) and radii
   // of the next force pass; after each step it also gives the stability ratio Δt Σ/m of that step.
-  std::vector<double> visc;
-  double T_visc = std::numeric_limits<double>::quiet_NaN();  // the temperature visc was summed at
-  bool visc_stale = true;                                    // radii grown since the last sum
-  double dt = 0, dt_free = 0, modulus = 0, T_at_update = -1, rho_last = rho0, t_last = sim.time();
-  rep.min_time_step = std::numeric_limits<double>::infinity();
-  const double row_dt = (t_end - t_start) / std::max(1, s.output_rows);
-  double next_row = t_start + row_dt;
-  long since_update = s.update_interval;  // update on the first step
-  double mass_scale = 1;
-  rep.stop_reason = s.max_time > 0 ? "time" : "program_end";
-  auto last_print = wall0;
+  std::vector<double> visc_;
+  double T_visc_ = std::numeric_limits<double>::quiet_NaN();  // the temperature visc was summed at
+  bool visc_stale_ = true;                                    // radii grown since the last sum
+  double dt_ = 0, dt_free_ = 0, modulus_ = 0, T_at_update_ = -1, rho_last_ = 0, t_last_ = 0;
+  double row_dt_ = 0, next_row_ = 0;
+  long since_update_ = 0;
+  double mass_scale_ = 1;
+  std::chrono::steady_clock::time_point last_print_ = wall0_;
+};
 
-  while (sim.time() < t_end * (1 - 1e-12)) {
-    const double t = sim.time();
-    const double T = s.program.temperature(t);
-    apply_temperature(sim.model(), s.phases, T, s.initial_neck);
-    if (visc_stale || T != T_visc) {
-      sim.viscous_sums(visc);
-      T_visc = T;
-      visc_stale = false;
+/// Rayleigh time of the particles of phases with an elastic (non-sintering) pair, physical mass;
+/// and which particles sinter (their scaled masses have the floor of a fresh neck, below).
+void SinterRun::mark_particles() {
+  rayleigh_.assign(n_, 0.0);
+  fresh_.assign(n_, 0.0);
+  apply_temperature(sim_, s_.phases, s_.program.temperature(sim_.time()), s_.initial_neck);
+  const ContactModel& m = sim_.model();
+  for (std::size_t i = 0; i < n_; ++i) {
+    const int ph = p_.phase[i];
+    bool elastic = false;
+    for (int b = 0; b < m.n_phases; ++b) elastic = elastic || !(m.pair(ph, b).sinter_delta_b > 0);
+    const PairParams& self = m.pair(ph, ph);
+    if (self.sinter_delta_b > 0) fresh_[i] = 1;  // filled per step below (Δ_b depends on T)
+    if (!elastic || ph >= int(m.materials.size())) continue;
+    const Material& mat = m.materials[std::size_t(ph)];
+    const double G = mat.youngs_modulus / (2 * (1 + mat.poisson_ratio));
+    const double rho = p_.m[i] / (4.0 / 3.0 * M_PI * p_.r[i] * p_.r[i] * p_.r[i]);
+    if (G > 0) rayleigh_[i] = M_PI * p_.r[i] * std::sqrt(rho / G) / (0.1631 * mat.poisson_ratio + 0.8766);
+  }
+}
+
+/// The reference state (target volumes, density, cell lengths), the cell control at rest, the
+/// first row of the curve and the step bookkeeping.
+void SinterRun::reference_state() {
+  sim_.invalidate_neighbors();
+  sim_.measure();  // builds the neighbour list at the current state
+  sc_ = scan(sim_, true);
+  target_.resize(n_);
+  for (std::size_t i = 0; i < n_; ++i) target_[i] = 4.0 / 3.0 * M_PI * p_.r[i] * p_.r[i] * p_.r[i] - sc_.share[i];
+  V0_ = sim_.cell().volume();
+  rho0_ = sc_.solid / V0_;
+  for (int k = 0; k < 3; ++k) L0_[k] = axis_length(sim_.cell(), k);
+  t_end_ = s_.max_time > 0 ? sim_.time() + s_.max_time : s_.program.duration();
+  t_start_ = sim_.time();
+
+  servo_ = !(s_.fixed[0] && s_.fixed[1] && s_.fixed[2]);
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) {
+      cc_.velocity_gradient(a, b) = 0;
+      cc_.stress_controlled[a][b] = false;  // the viscous servo below sets the rates
     }
+  rep_.initial = make_row(sc_, 0, 1, rho0_, sim_.time());
+  rep_.rows.push_back(rep_.initial);
 
-    // Automatic step (on update steps or when the temperature moved by more than 1 K).
-    const bool crosses = t + dt > std::min(s.program.next_boundary(t), t_end);
-    if (since_update >= s.update_interval || std::abs(T - T_at_update) > 1.0 || crosses) {
-      sc = scan(sim, s.conserve_volume);
-      modulus = sc.modulus;
-      const double V = sim.cell().volume();
-      // Mean-field strain rate of the necks: Σ F_s l / Σ η l² (affine viscous balance), or the
-      // cell's measured rate when larger.
-      double erate = sc.modulus > 0 ? sc.force_l / sc.modulus : 0;
-      for (int k = 0; k < 3; ++k) erate = std::max(erate, std::abs(cc.velocity_gradient(k, k)));
-      double dt_new = std::numeric_limits<double>::infinity();
-      if (erate > 0) {
-        dt_new = s.strain_per_step / erate;
-        // Relative neck-area growth per step: Δ(a²)/a² ≈ 2R (2R ε̇ Δt)/a².
-        if (sc.necks > 0) {
-          const double a2 = sc.area_sum / double(sc.necks), R = sc.r_sum / double(sc.necks);
-          dt_new = std::min(dt_new, s.neck_area_per_step * a2 / (4 * R * R * erate));
-        }
-      }
-      const double Tdot = std::abs(s.program.rate(t));
-      if (Tdot > 0) dt_new = std::min(dt_new, s.temperature_step / Tdot);
-      if (dt_free > 0) dt_new = std::min(dt_new, 1.5 * dt_free);
-      const double to_boundary = std::min(s.program.next_boundary(t), t_end) - t;
-      if (!std::isfinite(dt_new)) dt_new = to_boundary;
-      dt_free = dt_new;  // the growth limit applies to this, not to a step cut at a boundary
-      // Land on the segment boundaries and the end (a remainder below 1 % of a step joins it).
-      if (to_boundary > 0 && to_boundary < 1.01 * dt_new) dt_new = to_boundary;
-      dt = dt_new;
-      T_at_update = T;
-      since_update = 0;
+  double dsum = 0;
+  for (double r : p_.r) dsum += 2 * r;
+  skin_ = sim_.settings().skin > 0 ? sim_.settings().skin : 0.1 * dsum / double(n_);
 
-      if (s.conserve_volume) {
-        grow_radii(sc);
-        sim.viscous_sums(visc);  // overlaps (and contacts) changed with the radii
-      }
-      (void)V;
-    }
-    ++since_update;
+  rho_last_ = rho0_;
+  t_last_ = sim_.time();
+  rep_.min_time_step = std::numeric_limits<double>::infinity();
+  row_dt_ = (t_end_ - t_start_) / std::max(1, s_.output_rows);
+  next_row_ = t_start_ + row_dt_;
+  since_update_ = s_.update_interval;  // update on the first step
+  rep_.stop_reason = s_.max_time > 0 ? "time" : "program_end";
+}
 
-    // Mass scaling: m_i ≥ Σ(η_n + 5η_t) Δt / f (viscous limit) and the Rayleigh time of the
-    // elastic pairs ≥ Δt/0.2; physical masses are the floor. Rotational inertia follows.
-    // The floor of a fresh neck (fresh_neck_mass: its tangential rows and its first step's growth)
-    // keeps a contact that forms during the step on a particle with no neck yet (a rattler of the
-    // green packing) stable too: with the normal η_n(a_min r_i) alone as the floor, such a particle
-    // had Δt Σ/m ≈ f (1 + 5η/a_min²) ≈ 1 000 in the step its first neck formed (issue 9's 20 000-
-    // sphere benchmark: a blow-up at step 1 058, then the cell servo and the time step collapsed).
-    double r_max = 0;
-    for (std::size_t i = 0; i < n; ++i)
-      if (fresh[i] > 0) r_max = std::max(r_max, p.r[i]);
-    double msum = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      double m = m_phys[i];
-      const double c = visc[i];
-      if (c > 0) m = std::max(m, c * dt / s.viscous_fraction);
-      if (fresh[i] > 0) {
-        const double R = 2 * p.r[i] * r_max / (p.r[i] + r_max);
-        m = fresh_neck_mass(sim.model(), p.phase[i], R, s.initial_neck, dt, s.viscous_fraction, m);
-      }
-      if (rayleigh[i] > 0) {
-        const double need = dt / (0.2 * rayleigh[i]);
-        if (need > 1) m = std::max(m, m_phys[i] * need * need);
-      }
-      p.m[i] = m;
-      if (inv_m_phys[i] > 0) p.inv_m[i] = 1 / m;
-      if (rot && inv_I_phys[i] > 0) p.inv_I[i] = 1 / (0.4 * m * p.r[i] * p.r[i]);
-      msum += m / m_phys[i];
-    }
-    mass_scale = msum / double(n);
-    rep.max_mass_scaling = std::max(rep.max_mass_scaling, mass_scale);
-    if (sim.time_step() != dt) sim.set_time_step(dt);
-    rep.min_time_step = std::min(rep.min_time_step, dt);
-    rep.max_time_step = std::max(rep.max_time_step, dt);
+SinterRow SinterRun::make_row(const Scan& q, double dt_now, double mass_scale, double rho_prev, double t_prev) const {
+  SinterRow r;
+  r.step = sim_.step_count();
+  r.time = sim_.time();
+  r.temperature = s_.program.temperature(sim_.time());
+  const double V = sim_.cell().volume();
+  r.density = q.solid / V;
+  r.density_cell = rho0_ * V0_ / V;
+  r.rate = (sim_.time() > t_prev) ? (r.density - rho_prev) / (sim_.time() - t_prev) : 0;
+  for (int k = 0; k < 3; ++k) r.shrinkage[k] = 1 - axis_length(sim_.cell(), k) / L0_[k];
+  r.mean_neck_ratio = q.necks ? q.neck_sum / double(q.necks) : 0;
+  r.coordination = 2.0 * double(q.contacts) / double(n_);
+  r.time_step = dt_now;
+  r.mass_scaling = mass_scale;
+  return r;
+}
 
-    // Stress-free (or constrained) cell: viscous servo, ε̇_kk -= g σ_kk / C, C = Σ η l²/(5V).
-    if (servo) {
-      const Mat3 sig = cc.active() ? sim.contact_stress() : sim.measure().stress_contact;
-      const double C = modulus / (5 * sim.cell().volume());
-      for (int k = 0; k < 3; ++k) {
-        if (s.fixed[k] || C <= 0) {
-          cc.velocity_gradient(k, k) = 0;
-          continue;
-        }
-        cc.velocity_gradient(k, k) -= 0.5 * sig(k, k) / C;
-      }
-    }
+/// Volume conservation: grow the radii of sintering particles so each keeps its share of the
+/// union (one Newton step on share(r) = 4/3 π r³ − ½ Σ lens, ∂share/∂r = exposed area).
+void SinterRun::grow_radii(const Scan& q) {
+  const ContactModel& m = sim_.model();
+  double dmax = 0;
+  for (std::size_t i = 0; i < n_; ++i) {
+    if (!(m.pair(p_.phase[i], p_.phase[i]).sinter_delta_b > 0)) continue;
+    const double r = p_.r[i];
+    const double cur = 4.0 / 3.0 * M_PI * r * r * r - q.share[i];
+    const double der = 4 * M_PI * r * r - q.dshare[i];
+    // A sphere almost enclosed by its necks (< 5 % of its surface exposed) cannot hold its volume
+    // by growing; and no update grows a radius by more than 1 % (a runaway guard).
+    if (der < 0.05 * 4 * M_PI * r * r) continue;
+    const double dr = std::clamp((target_[i] - cur) / der, -0.01 * r, 0.01 * r);
+    p_.r[i] = r + dr;
+    dmax = std::max(dmax, std::abs(dr));
+  }
+  grown_ += 2 * dmax;
+  if (grown_ > 0.25 * skin_) {
+    sim_.invalidate_neighbors();
+    grown_ = 0;
+  }
+}
 
-    sim.step();
-    ++rep.steps;
-    // Stability of the step just taken: Δt Σ(η_n + 5η_t)/m_i over the contacts its force pass saw
-    // (same positions, radii and pair parameters), < 2 for leapfrog's viscous rows.
-    sim.viscous_sums(visc);
-    T_visc = T;
-    for (std::size_t i = 0; i < n; ++i)
-      rep.max_viscous_step_ratio = std::max(rep.max_viscous_step_ratio, dt * visc[i] * p.inv_m[i]);
-
-    const bool row_due = sim.time() >= next_row * (1 - 1e-12) || sim.time() >= t_end * (1 - 1e-12);
-    const bool check = s.target_density > 0 && since_update >= s.update_interval;
-    if (row_due || check) {
-      // Radii brought up to date first, so the density is not late by the update interval.
-      if (s.conserve_volume) {
-        grow_radii(scan(sim, true));
-        visc_stale = true;
-      }
-      const Scan q = scan(sim, false);
-      const double dens = q.solid / sim.cell().volume();
-      const bool reached = s.target_density > 0 && dens >= s.target_density;
-      if (row_due || reached) {
-        rep.rows.push_back(make_row(q, dt, mass_scale, rho_last, t_last));
-        rho_last = rep.rows.back().density;
-        t_last = sim.time();
-        while (next_row <= sim.time()) next_row += row_dt;
-      }
-      if (reached) {
-        rep.stop_reason = "target_density";
-        break;
-      }
-    }
-    const auto now = std::chrono::steady_clock::now();
-    if (progress && std::chrono::duration<double>(now - last_print).count() > 10) {
-      const SinterRow& r = rep.rows.back();
-      std::fprintf(stderr, "step %ld  t=%.4g s  T=%.1f K  rho=%.4f  a/R=%.3f  dt=%.3g s\n", sim.step_count(), r.time,
-                   r.temperature, r.density, r.mean_neck_ratio, dt);
-      last_print = now;
+/// Automatic step (on update steps or when the temperature moved by more than 1 K, or when the
+/// step would cross a segment boundary or the end).
+void SinterRun::choose_step(double t, double T) {
+  const bool crosses = t + dt_ > std::min(s_.program.next_boundary(t), t_end_);
+  if (!(since_update_ >= s_.update_interval || std::abs(T - T_at_update_) > 1.0 || crosses)) return;
+  sc_ = scan(sim_, s_.conserve_volume);
+  modulus_ = sc_.modulus;
+  // Mean-field strain rate of the necks: Σ F_s l / Σ η l² (affine viscous balance), or the
+  // cell's measured rate when larger.
+  double erate = sc_.modulus > 0 ? sc_.force_l / sc_.modulus : 0;
+  for (int k = 0; k < 3; ++k) erate = std::max(erate, std::abs(cc_.velocity_gradient(k, k)));
+  double dt_new = std::numeric_limits<double>::infinity();
+  if (erate > 0) {
+    dt_new = s_.strain_per_step / erate;
+    // Relative neck-area growth per step: Δ(a²)/a² ≈ 2R (2R ε̇ Δt)/a².
+    if (sc_.necks > 0) {
+      const double a2 = sc_.area_sum / double(sc_.necks), R = sc_.r_sum / double(sc_.necks);
+      dt_new = std::min(dt_new, s_.neck_area_per_step * a2 / (4 * R * R * erate));
     }
   }
-  if (rep.rows.back().step != sim.step_count()) {
-    rep.rows.push_back(make_row(scan(sim, false), dt, mass_scale, rho_last, t_last));
+  const double Tdot = std::abs(s_.program.rate(t));
+  if (Tdot > 0) dt_new = std::min(dt_new, s_.temperature_step / Tdot);
+  if (dt_free_ > 0) dt_new = std::min(dt_new, 1.5 * dt_free_);
+  const double to_boundary = std::min(s_.program.next_boundary(t), t_end_) - t;
+  if (!std::isfinite(dt_new)) dt_new = to_boundary;
+  dt_free_ = dt_new;  // the growth limit applies to this, not to a step cut at a boundary
+  // Land on the segment boundaries and the end (a remainder below 1 % of a step joins it).
+  if (to_boundary > 0 && to_boundary < 1.01 * dt_new) dt_new = to_boundary;
+  dt_ = dt_new;
+  T_at_update_ = T;
+  since_update_ = 0;
+
+  if (s_.conserve_volume) {
+    grow_radii(sc_);
+    sim_.viscous_sums(visc_);  // overlaps (and contacts) changed with the radii
   }
-  rep.final = rep.rows.back();
-  // Physical masses back, the cell at rest.
-  p.m = m_phys;
-  p.inv_m = inv_m_phys;
-  if (rot) p.inv_I = inv_I_phys;
-  for (int a = 0; a < 3; ++a) cc.velocity_gradient(a, a) = 0;
-  for (auto& v : p.v) v = Vec3{};
-  if (rot)
-    for (auto& w : p.omega) w = Vec3{};
-  sim.invalidate_neighbors();
-  rep.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-  return rep;
+}
+
+/// Mass scaling: m_i ≥ Σ(η_n + 5η_t) Δt / f (viscous limit) and the Rayleigh time of the
+/// elastic pairs ≥ Δt/0.2; physical masses are the floor. Rotational inertia follows.
+/// The floor of a fresh neck (fresh_neck_mass: its tangential rows and its first step's growth)
+/// keeps a contact that forms during the step on a particle with no neck yet (a rattler of the
+/// green packing) stable too: with the normal η_n(a_min r_i) alone as the floor, such a particle
+/// had Δt Σ/m ≈ f (1 + 5η/a_min²) ≈ 1 000 in the step its first neck formed (issue 9's 20 000-
+/// sphere benchmark: a blow-up at step 1 058, then the cell servo and the time step collapsed).
+void SinterRun::scale_masses() {
+  double r_max = 0;
+  for (std::size_t i = 0; i < n_; ++i)
+    if (fresh_[i] > 0) r_max = std::max(r_max, p_.r[i]);
+  double msum = 0;
+  for (std::size_t i = 0; i < n_; ++i) {
+    double m = m_phys_[i];
+    const double c = visc_[i];
+    if (c > 0) m = std::max(m, c * dt_ / s_.viscous_fraction);
+    if (fresh_[i] > 0) {
+      const double R = 2 * p_.r[i] * r_max / (p_.r[i] + r_max);
+      m = fresh_neck_mass(sim_.model(), p_.phase[i], R, s_.initial_neck, dt_, s_.viscous_fraction, m);
+    }
+    if (rayleigh_[i] > 0) {
+      const double need = dt_ / (0.2 * rayleigh_[i]);
+      if (need > 1) m = std::max(m, m_phys_[i] * need * need);
+    }
+    p_.m[i] = m;
+    if (inv_m_phys_[i] > 0) p_.inv_m[i] = 1 / m;
+    if (rot_ && inv_I_phys_[i] > 0) p_.inv_I[i] = 1 / (0.4 * m * p_.r[i] * p_.r[i]);
+    msum += m / m_phys_[i];
+  }
+  mass_scale_ = msum / double(n_);
+  rep_.max_mass_scaling = std::max(rep_.max_mass_scaling, mass_scale_);
+  if (sim_.time_step() != dt_) sim_.set_time_step(dt_);
+  rep_.min_time_step = std::min(rep_.min_time_step, dt_);
+  rep_.max_time_step = std::max(rep_.max_time_step, dt_);
+}
+
+/// Stress-free (or constrained) cell: viscous servo, ε̇_kk -= g σ_kk / C, C = Σ η l²/(5V).
+void SinterRun::servo_cell() {
+  if (!servo_) return;
+  const Mat3 sig = cc_.active() ? sim_.contact_stress() : sim_.measure().stress_contact;
+  const double C = modulus_ / (5 * sim_.cell().volume());
+  for (int k = 0; k < 3; ++k) {
+    if (s_.fixed[k] || C <= 0) {
+      cc_.velocity_gradient(k, k) = 0;
+      continue;
+    }
+    cc_.velocity_gradient(k, k) -= 0.5 * sig(k, k) / C;
+  }
+}
+
+void SinterRun::take_step(double T) {
+  sim_.step();
+  ++rep_.steps;
+  // Stability of the step just taken: Δt Σ(η_n + 5η_t)/m_i over the contacts its force pass saw
+  // (same positions, radii and pair parameters), < 2 for leapfrog's viscous rows.
+  sim_.viscous_sums(visc_);
+  T_visc_ = T;
+  for (std::size_t i = 0; i < n_; ++i)
+    rep_.max_viscous_step_ratio = std::max(rep_.max_viscous_step_ratio, dt_ * visc_[i] * p_.inv_m[i]);
+}
+
+/// A row of the curve when one is due, and the density check; true when the target is reached.
+bool SinterRun::record_rows() {
+  const bool row_due = sim_.time() >= next_row_ * (1 - 1e-12) || sim_.time() >= t_end_ * (1 - 1e-12);
+  const bool check = s_.target_density > 0 && since_update_ >= s_.update_interval;
+  if (!(row_due || check)) return false;
+  // Radii brought up to date first, so the density is not late by the update interval.
+  if (s_.conserve_volume) {
+    grow_radii(scan(sim_, true));
+    visc_stale_ = true;
+  }
+  const Scan q = scan(sim_, false);
+  const double dens = q.solid / sim_.cell().volume();
+  const bool reached = s_.target_density > 0 && dens >= s_.target_density;
+  if (row_due || reached) {
+    rep_.rows.push_back(make_row(q, dt_, mass_scale_, rho_last_, t_last_));
+    rho_last_ = rep_.rows.back().density;
+    t_last_ = sim_.time();
+    while (next_row_ <= sim_.time()) next_row_ += row_dt_;
+  }
+  if (reached) rep_.stop_reason = "target_density";
+  return reached;
+}
+
+void SinterRun::print_progress() {
+  const auto now = std::chrono::steady_clock::now();
+  if (progress_ && std::chrono::duration<double>(now - last_print_).count() > 10) {
+    const SinterRow& r = rep_.rows.back();
+    std::fprintf(stderr, "step %ld  t=%.4g s  T=%.1f K  rho=%.4f  a/R=%.3f  dt=%.3g s\n", sim_.step_count(), r.time,
+                 r.temperature, r.density, r.mean_neck_ratio, dt_);
+    last_print_ = now;
+  }
+}
+
+/// Physical masses back, the cell at rest.
+void SinterRun::restore() {
+  p_.m = m_phys_;
+  p_.inv_m = inv_m_phys_;
+  if (rot_) p_.inv_I = inv_I_phys_;
+  for (int a = 0; a < 3; ++a) cc_.velocity_gradient(a, a) = 0;
+  for (auto& v : p_.v) v = Vec3{};
+  if (rot_)
+    for (auto& w : p_.omega) w = Vec3{};
+  sim_.invalidate_neighbors();
+}
+
+SinterReport SinterRun::run() {
+  mark_particles();
+  reference_state();
+  while (sim_.time() < t_end_ * (1 - 1e-12)) {
+    const double t = sim_.time();
+    const double T = s_.program.temperature(t);
+    apply_temperature(sim_, s_.phases, T, s_.initial_neck);
+    if (visc_stale_ || T != T_visc_) {
+      sim_.viscous_sums(visc_);
+      T_visc_ = T;
+      visc_stale_ = false;
+    }
+    choose_step(t, T);
+    ++since_update_;
+    scale_masses();
+    servo_cell();
+    take_step(T);
+    if (record_rows()) break;
+    print_progress();
+  }
+  if (rep_.rows.back().step != sim_.step_count()) {
+    rep_.rows.push_back(make_row(scan(sim_, false), dt_, mass_scale_, rho_last_, t_last_));
+  }
+  rep_.final = rep_.rows.back();
+  restore();
+  rep_.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0_).count();
+  return rep_;
+}
+}  // namespace
+
+SinterReport run_sintering(Simulation& sim, const SinterSettings& s, bool progress) {
+  return SinterRun(sim, s, progress).run();
 }
 
 // ---------------------------------------------------------------- necks → bonds
@@ -776,8 +886,11 @@ SinteredPacking sinter_packing(const Packing& green, const std::string& source, 
   ContactModel model;
   model.normal = NormalLaw::sintering;
   const std::string tl = ph.string("tangential", "none");
-  if (!parse(tl, model.tangential) || (model.tangential != TangentialLaw::none && model.tangential != TangentialLaw::viscous))
-    throw InputError(settings_file, ph.where("tangential"), tl, "expected none or viscous (the sintering law has no spring)");
+  // The tangential laws that fit the sintering law, from the registry (law_registry.hpp).
+  if (!parse(tl, model.tangential) || !model.incompatibility().empty())
+    throw InputError(settings_file, ph.where("tangential"), tl,
+                     "expected " + law_names(Slot::tangential, [](const LawInfo& e) { return !e.needs_spring; }) +
+                         " (the sintering law has no spring)");
   model.materials = green.materials;
   model.n_phases = int(green.materials.size());
   model.finalize();

@@ -10,7 +10,7 @@
 #include <random>
 #include <sstream>
 
-#include "../../dem/src/hgrid.hpp"
+#include "tomodem/spatial/grid.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
 #include "tomodem/dem/fire.hpp"
@@ -354,101 +354,113 @@ void validate(const PackSpec& s) {
   if (!(s.rolling_friction >= 0)) throw InputError(f, "contact.rolling_friction", num(s.rolling_friction), "must be >= 0");
 }
 
-PackOutput make_packing(const PackSpec& spec, const std::function<void(const std::string&)>& progress) {
-  const auto t_start = std::chrono::steady_clock::now();
-  const auto say = [&](const std::string& m) {
-    if (progress) progress(m);
-  };
-  validate(spec);
-  const int np = int(spec.phases.size());
-  std::mt19937_64 rng(spec.seed);
-
-  // ---- particles per phase: N_p ∝ f_p / <v>_p
-  std::vector<SizeDistribution> psd;
-  for (const auto& ph : spec.phases) {
-    psd.push_back(ph.psd);
-    psd.back().prepare();
-  }
+namespace {
+/// The particles before densification: sizes, phases, positions in the cell, aggregates.
+struct Inserted {
   std::vector<double> radius;
   std::vector<int32_t> phase;
   std::vector<std::vector<int>> clusters;
   std::vector<std::pair<int, int>> bonded;  // aggregate members bonded to their parent
-  std::vector<Vec3> offsets;
-  PackOutput out;
-  PackReport& rep = out.report;
   Cell cell;
   std::vector<Vec3> pos;
-  if (spec.arrangement == "random") {
-    double wsum = 0;
-    for (int p = 0; p < np; ++p) wsum += spec.phases[std::size_t(p)].volume_fraction / psd[std::size_t(p)].mean_volume();
-    for (int p = 0; p < np; ++p) {
-      const auto& ph = spec.phases[std::size_t(p)];
-      const double share = ph.volume_fraction / psd[std::size_t(p)].mean_volume() / wsum;
-      std::size_t cnt = std::size_t(std::llround(share * double(spec.n_particles)));
-      if (ph.volume_fraction > 0) cnt = std::max<std::size_t>(cnt, 1);
-      const auto d = psd[std::size_t(p)].sample(cnt, spec.seed * 7919 + uint64_t(p));
-      const std::size_t first = radius.size();
-      for (double di : d) radius.push_back(0.5 * di), phase.push_back(p);
-      if (ph.aggregate_size > 1)
-        for (std::size_t a = first; a + std::size_t(ph.aggregate_size) <= radius.size(); a += std::size_t(ph.aggregate_size)) {
-          std::vector<int> members;
-          std::vector<double> rr;
-          for (int k = 0; k < ph.aggregate_size; ++k) members.push_back(int(a) + k), rr.push_back(radius[a + std::size_t(k)]);
-          clusters.push_back(members);
-        }
-    }
-    if (!clusters.empty()) {
-      offsets.assign(radius.size(), Vec3{});
-      for (const auto& c : clusters) {
-        std::vector<double> rr;
-        std::vector<int> parent;
-        for (int i : c) rr.push_back(radius[std::size_t(i)]);
-        const auto off = cluster_offsets(rr, rng, parent);
-        for (std::size_t k = 0; k < c.size(); ++k) {
-          offsets[std::size_t(c[k])] = off[k];
-          if (parent[k] >= 0) bonded.emplace_back(c[std::size_t(parent[k])], c[k]);
-        }
-      }
-    }
-    double vs = 0;
-    for (double r : radius) vs += sphere_volume(r);
-    const double L = std::cbrt(vs / spec.initial_solid_fraction);
-    cell = Cell::box({0, 0, 0}, {L, L, L}, true);
-    say("inserting " + std::to_string(radius.size()) + " particles at solid fraction " + num(spec.initial_solid_fraction));
-    pos = insert_random(radius, clusters, offsets, cell, spec.seed);
-    // Renumber in spatial order (clusters and bonds follow).
-    double dsum = 0;
-    for (double r : radius) dsum += 2 * r;
-    const std::vector<std::size_t> order = spatial_order(pos, cell, dsum / double(radius.size()));
-    std::vector<int> new_index(order.size());
-    for (std::size_t k = 0; k < order.size(); ++k) new_index[order[k]] = int(k);
-    const auto permute = [&](auto& v) {
-      auto old = v;
-      for (std::size_t k = 0; k < order.size(); ++k) v[k] = old[order[k]];
-    };
-    permute(pos);
-    permute(radius);
-    permute(phase);
-    for (auto& c : clusters)
-      for (int& i : c) i = new_index[std::size_t(i)];
-    for (auto& [a, b] : bonded) a = new_index[std::size_t(a)], b = new_index[std::size_t(b)];
-  } else {
-    const int basis = lattice_basis(spec.arrangement);
-    const int nc = std::max(1, int(std::lround(std::cbrt(double(spec.n_particles) / basis))));
-    const double d = spec.phases[0].psd.diameter;
-    const double phi = spec.target == Target::solid_fraction ? spec.target_solid_fraction : lattice_max_fraction(spec.arrangement);
-    const double a = d * std::cbrt(lattice_max_fraction(spec.arrangement) / phi) *
-                     (spec.arrangement == "simple_cubic" ? 1.0 : (spec.arrangement == "bcc" ? 2 / std::sqrt(3.0) : std::sqrt(2.0)));
-    pos = dem::lattice_sites(spec.arrangement, nc, a);
-    radius.assign(pos.size(), 0.5 * d);
-    phase.assign(pos.size(), 0);
-    cell = Cell::box({0, 0, 0}, {nc * a, nc * a, nc * a}, true);
-  }
-  const std::size_t n = radius.size();
-  rep.n_inserted = n;
-  rep.aggregates = clusters.size();
+};
 
-  // ---- contact model
+/// Diameters per phase, N_p ∝ f_p / <v>_p; phases with aggregate_size > 1 grouped into clusters.
+void sample_sizes(const PackSpec& spec, const std::vector<SizeDistribution>& psd, Inserted& in) {
+  const int np = int(spec.phases.size());
+  double wsum = 0;
+  for (int p = 0; p < np; ++p) wsum += spec.phases[std::size_t(p)].volume_fraction / psd[std::size_t(p)].mean_volume();
+  for (int p = 0; p < np; ++p) {
+    const auto& ph = spec.phases[std::size_t(p)];
+    const double share = ph.volume_fraction / psd[std::size_t(p)].mean_volume() / wsum;
+    std::size_t cnt = std::size_t(std::llround(share * double(spec.n_particles)));
+    if (ph.volume_fraction > 0) cnt = std::max<std::size_t>(cnt, 1);
+    const auto d = psd[std::size_t(p)].sample(cnt, spec.seed * 7919 + uint64_t(p));
+    const std::size_t first = in.radius.size();
+    for (double di : d) in.radius.push_back(0.5 * di), in.phase.push_back(p);
+    if (ph.aggregate_size > 1)
+      for (std::size_t a = first; a + std::size_t(ph.aggregate_size) <= in.radius.size(); a += std::size_t(ph.aggregate_size)) {
+        std::vector<int> members;
+        for (int k = 0; k < ph.aggregate_size; ++k) members.push_back(int(a) + k);
+        in.clusters.push_back(members);
+      }
+  }
+}
+
+/// Shapes of the aggregates: per-particle offsets from the cluster centroid (zero outside
+/// clusters), and the bonds of each member to the one it was grown on.
+std::vector<Vec3> shape_aggregates(Inserted& in, uint64_t seed) {
+  std::vector<Vec3> offsets;
+  if (in.clusters.empty()) return offsets;
+  std::mt19937_64 rng(seed);
+  offsets.assign(in.radius.size(), Vec3{});
+  for (const auto& c : in.clusters) {
+    std::vector<double> rr;
+    std::vector<int> parent;
+    for (int i : c) rr.push_back(in.radius[std::size_t(i)]);
+    const auto off = cluster_offsets(rr, rng, parent);
+    for (std::size_t k = 0; k < c.size(); ++k) {
+      offsets[std::size_t(c[k])] = off[k];
+      if (parent[k] >= 0) in.bonded.emplace_back(c[std::size_t(parent[k])], c[k]);
+    }
+  }
+  return offsets;
+}
+
+/// Renumbers the particles in spatial order (clusters and bonds follow).
+void renumber_spatially(Inserted& in) {
+  double dsum = 0;
+  for (double r : in.radius) dsum += 2 * r;
+  const std::vector<std::size_t> order = spatial_order(in.pos, in.cell, dsum / double(in.radius.size()));
+  std::vector<int> new_index(order.size());
+  for (std::size_t k = 0; k < order.size(); ++k) new_index[order[k]] = int(k);
+  const auto permute = [&](auto& v) {
+    auto old = v;
+    for (std::size_t k = 0; k < order.size(); ++k) v[k] = old[order[k]];
+  };
+  permute(in.pos);
+  permute(in.radius);
+  permute(in.phase);
+  for (auto& c : in.clusters)
+    for (int& i : c) i = new_index[std::size_t(i)];
+  for (auto& [a, b] : in.bonded) a = new_index[std::size_t(a)], b = new_index[std::size_t(b)];
+}
+
+/// Random arrangement: sampled sizes inserted without overlaps at the initial solid fraction.
+Inserted insert_particles(const PackSpec& spec, const std::vector<SizeDistribution>& psd,
+                          const std::function<void(const std::string&)>& say) {
+  Inserted in;
+  sample_sizes(spec, psd, in);
+  const std::vector<Vec3> offsets = shape_aggregates(in, spec.seed);
+  double vs = 0;
+  for (double r : in.radius) vs += sphere_volume(r);
+  const double L = std::cbrt(vs / spec.initial_solid_fraction);
+  in.cell = Cell::box({0, 0, 0}, {L, L, L}, true);
+  say("inserting " + std::to_string(in.radius.size()) + " particles at solid fraction " + num(spec.initial_solid_fraction));
+  in.pos = insert_random(in.radius, in.clusters, offsets, in.cell, spec.seed);
+  renumber_spatially(in);
+  return in;
+}
+
+/// Lattice arrangement of the single monodisperse phase, at the target (or touching) density.
+Inserted lattice_particles(const PackSpec& spec) {
+  Inserted in;
+  const int basis = lattice_basis(spec.arrangement);
+  const int nc = std::max(1, int(std::lround(std::cbrt(double(spec.n_particles) / basis))));
+  const double d = spec.phases[0].psd.diameter;
+  const double phi = spec.target == Target::solid_fraction ? spec.target_solid_fraction : lattice_max_fraction(spec.arrangement);
+  const double a = d * std::cbrt(lattice_max_fraction(spec.arrangement) / phi) *
+                   (spec.arrangement == "simple_cubic" ? 1.0 : (spec.arrangement == "bcc" ? 2 / std::sqrt(3.0) : std::sqrt(2.0)));
+  in.pos = dem::lattice_sites(spec.arrangement, nc, a);
+  in.radius.assign(in.pos.size(), 0.5 * d);
+  in.phase.assign(in.pos.size(), 0);
+  in.cell = Cell::box({0, 0, 0}, {nc * a, nc * a, nc * a}, true);
+  return in;
+}
+
+/// The densification's contact model: the spec's laws and per-pair parameters.
+dem::ContactModel contact_model(const PackSpec& spec, double dmean) {
+  const int np = int(spec.phases.size());
   dem::ContactModel model;
   model.normal = spec.normal;
   const bool hertz_family = spec.normal != dem::NormalLaw::linear;
@@ -458,9 +470,6 @@ PackOutput make_packing(const PackSpec& spec, const std::function<void(const std
   for (const auto& ph : spec.phases) model.materials.push_back(ph.material);
   model.n_phases = np;
   model.finalize();
-  double dmean = 0;
-  for (double r : radius) dmean += 2 * r;
-  dmean /= double(n);
   for (int a = 0; a < np; ++a)
     for (int b = 0; b < np; ++b) {
       auto& pp = model.pair(a, b);
@@ -477,184 +486,219 @@ PackOutput make_packing(const PackSpec& spec, const std::function<void(const std
       if (spec.work_of_adhesion > 0) pp.work_of_adhesion = spec.work_of_adhesion;
     }
   model.finalize();
+  return model;
+}
 
-  dem::Particles parts;
-  for (std::size_t i = 0; i < n; ++i)
-    parts.add(pos[i], radius[i], spec.phases[std::size_t(phase[i])].material.density, phase[i]);
-  dem::Settings set;
-  set.threads = std::max(1, spec.threads);
-  dem::Simulation sim(std::move(parts), cell, model, set);
-  if (!bonded.empty()) {
-    // Aggregates: each member bonded to the one it was grown on (at its insertion distance), by
-    // a bond of the phases' elastic constants; bonded pairs leave the contact list.
-    dem::BondSet bs;
-    const Mat3 hinv = cell.h.inverse();
-    for (const auto& [a, b] : bonded) {
-      const Vec3 d = pos[std::size_t(b)] - pos[std::size_t(a)];
-      const Vec3 s = hinv * d;
-      Vec3 img;
-      for (int k = 0; k < 3; ++k) img[k] = -std::round(s[k]);
-      const double ra = radius[std::size_t(a)], rb = radius[std::size_t(b)];
-      bs.add(a, b, img, spec.aggregate_bond_radius * std::min(ra, rb), norm(d + cell.h * img));
-    }
-    std::vector<dem::BondLaw> laws(std::size_t(np * np));
-    for (int a = 0; a < np; ++a)
-      for (int b = 0; b < np; ++b) {
-        laws[std::size_t(a * np + b)].E_star = model.pair(a, b).E_star;
-        laws[std::size_t(a * np + b)].G_star = model.pair(a, b).G_star;
-      }
-    sim.set_bonds(std::move(bs), laws, dem::BondFailure::none);
+/// Aggregates: each member bonded to the one it was grown on (at its insertion distance), by
+/// a bond of the phases' elastic constants; bonded pairs leave the contact list.
+void bond_aggregates(dem::Simulation& sim, const Inserted& in, const dem::ContactModel& model, const PackSpec& spec) {
+  const int np = int(spec.phases.size());
+  const Cell& cell = in.cell;
+  const auto& pos = in.pos;
+  const auto& radius = in.radius;
+  dem::BondSet bs;
+  const Mat3 hinv = cell.h.inverse();
+  for (const auto& [a, b] : in.bonded) {
+    const Vec3 d = pos[std::size_t(b)] - pos[std::size_t(a)];
+    const Vec3 s = hinv * d;
+    Vec3 img;
+    for (int k = 0; k < 3; ++k) img[k] = -std::round(s[k]);
+    const double ra = radius[std::size_t(a)], rb = radius[std::size_t(b)];
+    bs.add(a, b, img, spec.aggregate_bond_radius * std::min(ra, rb), norm(d + cell.h * img));
   }
-  const double dtc = sim.critical_time_step();
-  sim.set_time_step(spec.timestep_fraction * dtc);
-  const double dt = sim.time_step();
-  rep.time_step = dt;
-  rep.neighbor_search = dem::use_hgrid(radius) ? "hgrid" : "linked cells";
-  sim.body_forces().local_damping = spec.local_damping;
+  std::vector<dem::BondLaw> laws(std::size_t(np * np));
+  for (int a = 0; a < np; ++a)
+    for (int b = 0; b < np; ++b) {
+      laws[std::size_t(a * np + b)].E_star = model.pair(a, b).E_star;
+      laws[std::size_t(a * np + b)].G_star = model.pair(a, b).G_star;
+    }
+  sim.set_bonds(std::move(bs), laws, dem::BondFailure::none);
+}
 
-  double vsolid = 0;
-  for (double r : radius) vsolid += sphere_volume(r);
-  const auto phi_now = [&] { return vsolid / sim.cell().volume(); };
-  const double rate_fast = spec.strain_rate > 0 ? spec.strain_rate : 1e-4 / dtc;
-  const double rate_slow = spec.final_strain_rate > 0 ? spec.final_strain_rate : rate_fast / 20;
-  auto& ctl = sim.cell_control();
-  const auto set_rate = [&](double rate) {
+/// The dynamic protocol (and lattices): compression at a strain rate to a pressure (stress
+/// servo) or a solid fraction, then relaxation at fixed cell to mechanical equilibrium.
+class DynamicDensification {
+ public:
+  DynamicDensification(dem::Simulation& sim, const PackSpec& spec, double vsolid, double dtc, PackReport& rep,
+                       const std::function<void(const std::string&)>& say)
+      : sim_(sim), spec_(spec), vsolid_(vsolid), rep_(rep), say_(say), dt_(sim.time_step()) {
+    rate_fast_ = spec.strain_rate > 0 ? spec.strain_rate : 1e-4 / dtc;
+    rate_slow_ = spec.final_strain_rate > 0 ? spec.final_strain_rate : rate_fast_ / 20;
+  }
+  double phi_now() const { return vsolid_ / sim_.cell().volume(); }
+  void set_rate(double rate) {
+    auto& ctl = sim_.cell_control();
     for (int a = 0; a < 3; ++a) {
       ctl.stress_controlled[a][a] = false;
       ctl.velocity_gradient(a, a) = -rate;
     }
-  };
-  const auto t_dem = std::chrono::steady_clock::now();
-  long steps = 0;
-  const int chunk = 50;
-  dem::Measurements m;
-  const auto run = [&](long k) {
-    sim.run(k);
-    steps += k;
-  };
-  const bool lattice = spec.arrangement != "random";
-  const auto refuse_overlap = [&](const dem::Measurements& mm) {
+  }
+  void refuse_overlap(const dem::Measurements& mm) const {
     if (mm.max_overlap_ratio > 0.1)
-      throw InputError(spec.source, "target.solid_fraction", num(spec.target_solid_fraction),
+      throw InputError(spec_.source, "target.solid_fraction", num(spec_.target_solid_fraction),
                        "not reachable for this size distribution: the packing jammed and particles overlap by " +
                            num(100 * mm.max_overlap_ratio) + "% of a radius at solid fraction " + num(phi_now()));
-  };
-  rep.method = lattice ? "lattice" : spec.method;
-  const bool quasi = !lattice && spec.method == "quasistatic";
-  if (quasi) {
-    const QuasiStaticResult q = quasistatic(sim, spec, vsolid, dmean, clusters, rep, say);
-    steps = q.steps;
-    m = q.last;
-    if (spec.target == Target::solid_fraction) refuse_overlap(m);
-    rep.equilibrium = q.converged;
-  } else if (!lattice && spec.target == Target::pressure) {
-    // 1. fast isotropic compression until the contact pressure reaches a fraction of the target
-    say("compressing at strain rate " + num(rate_fast) + " 1/s to pressure " + num(spec.target_pressure) + " Pa");
-    set_rate(rate_fast);
-    int above = 0;  // consecutive measurements above the target: a jammed network, not a collision
-    while (steps < spec.max_steps) {
-      run(chunk);
-      m = sim.measure();
-      above = -m.stress_contact.trace() / 3 > 0.2 * spec.target_pressure ? above + 1 : 0;
-      if (above >= 3) break;
-      if (steps % 5000 == 0) say("step " + std::to_string(steps) + ": phi " + num(phi_now()) + ", p " + num(m.pressure) + " Pa");
-    }
-    // 2. stress servo (all three normal components) at a slow rate cap to the target pressure,
-    //    until the pressure is within 5 % and the unbalanced-force ratio below 10× the criterion.
-    say("servo to " + num(spec.target_pressure) + " Pa from solid fraction " + num(phi_now()));
-    for (int a = 0; a < 3; ++a) {
-      ctl.velocity_gradient(a, a) = 0;
-      ctl.stress_controlled[a][a] = true;
-      ctl.target_stress(a, a) = -spec.target_pressure;
-    }
-    ctl.max_strain_rate = rate_slow;
-    long settled = 0;
-    while (steps < spec.max_steps) {
-      run(chunk);
-      m = sim.measure();
-      rep.inertial_number = std::max(rep.inertial_number, m.inertial_number);
-      if (steps % 5000 == 0)
-        say("step " + std::to_string(steps) + ": phi " + num(phi_now()) + ", p " + num(m.pressure) + " Pa, Z " +
-            num(m.coordination) + ", unbalanced " + num(m.unbalanced_force_ratio));
-      const bool close = std::abs(m.pressure / spec.target_pressure - 1) < 0.05;
-      settled = close && m.unbalanced_force_ratio < 10 * spec.unbalanced_force_ratio ? settled + 1 : 0;
-      if (settled >= 4) break;
-    }
-  } else if (!lattice) {
-    const double target_v = vsolid / spec.target_solid_fraction;
-    say("compressing to solid fraction " + num(spec.target_solid_fraction));
-    // Fast to within 0.02 of the target fraction, then slow; the last chunk lands on it.
-    for (int stage = 0; stage < 2; ++stage) {
-      const double rate = stage == 0 ? rate_fast : rate_slow;
-      const double phi_stage = stage == 0 ? std::max(spec.target_solid_fraction - 0.02, phi_now()) : spec.target_solid_fraction;
-      set_rate(rate);
-      while (steps < spec.max_steps && phi_now() < phi_stage * (1 - 1e-12)) {
-        const double vstage = vsolid / phi_stage;
-        const long need = long(std::ceil(std::log(sim.cell().volume() / vstage) / (3 * rate * dt)));
-        if (need <= 0) break;
-        run(std::min<long>(chunk, need));
-        if (stage == 1) {
-          m = sim.measure();
-          rep.inertial_number = std::max(rep.inertial_number, m.inertial_number);
-          refuse_overlap(m);
-        }
+  }
+  void compress_to_pressure();
+  void compress_to_fraction();
+  void relax();
+
+  long steps = 0;
+  dem::Measurements m;
+
+ private:
+  static constexpr int kChunk = 50;
+  void run(long k) {
+    sim_.run(k);
+    steps += k;
+  }
+  dem::Simulation& sim_;
+  const PackSpec& spec_;
+  double vsolid_;
+  PackReport& rep_;
+  const std::function<void(const std::string&)>& say_;
+  double dt_, rate_fast_ = 0, rate_slow_ = 0;
+};
+
+void DynamicDensification::compress_to_pressure() {
+  // 1. fast isotropic compression until the contact pressure reaches a fraction of the target
+  say_("compressing at strain rate " + num(rate_fast_) + " 1/s to pressure " + num(spec_.target_pressure) + " Pa");
+  set_rate(rate_fast_);
+  int above = 0;  // consecutive measurements above the target: a jammed network, not a collision
+  while (steps < spec_.max_steps) {
+    run(kChunk);
+    m = sim_.measure();
+    above = -m.stress_contact.trace() / 3 > 0.2 * spec_.target_pressure ? above + 1 : 0;
+    if (above >= 3) break;
+    if (steps % 5000 == 0) say_("step " + std::to_string(steps) + ": phi " + num(phi_now()) + ", p " + num(m.pressure) + " Pa");
+  }
+  // 2. stress servo (all three normal components) at a slow rate cap to the target pressure,
+  //    until the pressure is within 5 % and the unbalanced-force ratio below 10× the criterion.
+  say_("servo to " + num(spec_.target_pressure) + " Pa from solid fraction " + num(phi_now()));
+  auto& ctl = sim_.cell_control();
+  for (int a = 0; a < 3; ++a) {
+    ctl.velocity_gradient(a, a) = 0;
+    ctl.stress_controlled[a][a] = true;
+    ctl.target_stress(a, a) = -spec_.target_pressure;
+  }
+  ctl.max_strain_rate = rate_slow_;
+  long settled = 0;
+  while (steps < spec_.max_steps) {
+    run(kChunk);
+    m = sim_.measure();
+    rep_.inertial_number = std::max(rep_.inertial_number, m.inertial_number);
+    if (steps % 5000 == 0)
+      say_("step " + std::to_string(steps) + ": phi " + num(phi_now()) + ", p " + num(m.pressure) + " Pa, Z " +
+           num(m.coordination) + ", unbalanced " + num(m.unbalanced_force_ratio));
+    const bool close = std::abs(m.pressure / spec_.target_pressure - 1) < 0.05;
+    settled = close && m.unbalanced_force_ratio < 10 * spec_.unbalanced_force_ratio ? settled + 1 : 0;
+    if (settled >= 4) break;
+  }
+}
+
+void DynamicDensification::compress_to_fraction() {
+  const double target_v = vsolid_ / spec_.target_solid_fraction;
+  say_("compressing to solid fraction " + num(spec_.target_solid_fraction));
+  // Fast to within 0.02 of the target fraction, then slow; the last chunk lands on it.
+  for (int stage = 0; stage < 2; ++stage) {
+    const double rate = stage == 0 ? rate_fast_ : rate_slow_;
+    const double phi_stage = stage == 0 ? std::max(spec_.target_solid_fraction - 0.02, phi_now()) : spec_.target_solid_fraction;
+    set_rate(rate);
+    while (steps < spec_.max_steps && phi_now() < phi_stage * (1 - 1e-12)) {
+      const double vstage = vsolid_ / phi_stage;
+      const long need = long(std::ceil(std::log(sim_.cell().volume() / vstage) / (3 * rate * dt_)));
+      if (need <= 0) break;
+      run(std::min<long>(kChunk, need));
+      if (stage == 1) {
+        m = sim_.measure();
+        rep_.inertial_number = std::max(rep_.inertial_number, m.inertial_number);
+        refuse_overlap(m);
       }
     }
-    set_rate(0);
-    // Land exactly on the target volume (a scaling of well under one step's strain).
-    const double s = std::cbrt(target_v / sim.cell().volume());
-    auto& c = sim.cell();
-    auto& x = sim.particles().x;
-    for (auto& xi : x) xi = c.origin + s * (xi - c.origin);
-    c.h *= s;
-    sim.invalidate_neighbors();
   }
+  set_rate(0);
+  // Land exactly on the target volume (a scaling of well under one step's strain).
+  const double s = std::cbrt(target_v / sim_.cell().volume());
+  auto& c = sim_.cell();
+  auto& x = sim_.particles().x;
+  for (auto& xi : x) xi = c.origin + s * (xi - c.origin);
+  c.h *= s;
+  sim_.invalidate_neighbors();
+}
+
+void DynamicDensification::relax() {
   // 3. relaxation at fixed cell to mechanical equilibrium (dynamic protocol and lattices)
   set_rate(0);
-  if (!quasi) say("relaxing to unbalanced-force ratio " + num(spec.unbalanced_force_ratio));
-  while (!quasi && steps < spec.max_steps) {
-    m = sim.measure();
-    if (spec.target == Target::solid_fraction) refuse_overlap(m);
+  say_("relaxing to unbalanced-force ratio " + num(spec_.unbalanced_force_ratio));
+  while (steps < spec_.max_steps) {
+    m = sim_.measure();
+    if (spec_.target == Target::solid_fraction) refuse_overlap(m);
     if (steps % 5000 == 0)
-      say("relax step " + std::to_string(steps) + ": phi " + num(phi_now()) + ", p " + num(m.pressure) + " Pa, unbalanced " + num(m.unbalanced_force_ratio));
-    if (m.contacts == 0 || m.unbalanced_force_ratio < spec.unbalanced_force_ratio) {
-      rep.equilibrium = true;
+      say_("relax step " + std::to_string(steps) + ": phi " + num(phi_now()) + ", p " + num(m.pressure) + " Pa, unbalanced " + num(m.unbalanced_force_ratio));
+    if (m.contacts == 0 || m.unbalanced_force_ratio < spec_.unbalanced_force_ratio) {
+      rep_.equilibrium = true;
       break;
     }
-    run(chunk);
+    run(kChunk);
   }
-  rep.steps = steps;
-  rep.pressure = m.pressure;
-  rep.unbalanced_force_ratio = m.unbalanced_force_ratio;
-  rep.densify_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_dem).count();
+}
 
-  // ---- structure (with pore formers, which carry load during packing)
-  const ContactTable contacts = sim.contacts();
-  const auto& P = sim.particles();
-  const Cell final_cell = sim.cell();
-  rep.solid_fraction_with_pore_formers = phi_now();
-  // Requested vs realised phases and size distributions (over all inserted particles).
-  {
-    std::vector<double> vol(std::size_t(np), 0.0);
-    std::vector<std::vector<double>> dia{std::size_t(np)};
-    for (std::size_t i = 0; i < n; ++i) {
-      vol[std::size_t(P.phase[i])] += sphere_volume(P.r[i]);
-      dia[std::size_t(P.phase[i])].push_back(2 * P.r[i]);
-    }
-    for (int p = 0; p < np; ++p) {
-      PhaseReport pr;
-      pr.name = spec.phases[std::size_t(p)].name;
-      pr.requested_fraction = spec.phases[std::size_t(p)].volume_fraction;
-      pr.realised_fraction = vol[std::size_t(p)] / vsolid;
-      pr.count = dia[std::size_t(p)].size();
-      pr.pore_former = spec.phases[std::size_t(p)].pore_former;
-      pr.psd_max_cdf_deviation = lattice ? 0.0 : max_cdf_deviation(psd[std::size_t(p)], dia[std::size_t(p)]);
-      rep.phases.push_back(pr);
-    }
+/// Densifies by the spec's protocol; returns the last measurement and counts the steps in `rep`.
+dem::Measurements densify(dem::Simulation& sim, const PackSpec& spec, double vsolid, double dmean, double dtc,
+                          const std::vector<std::vector<int>>& clusters, PackReport& rep,
+                          const std::function<void(const std::string&)>& say) {
+  const bool lattice = spec.arrangement != "random";
+  rep.method = lattice ? "lattice" : spec.method;
+  DynamicDensification dyn(sim, spec, vsolid, dtc, rep, say);
+  if (!lattice && spec.method == "quasistatic") {
+    const QuasiStaticResult q = quasistatic(sim, spec, vsolid, dmean, clusters, rep, say);
+    if (spec.target == Target::solid_fraction) dyn.refuse_overlap(q.last);
+    rep.equilibrium = q.converged;
+    rep.steps = q.steps;
+    // The cell control is left at rest, as after the dynamic protocol.
+    dyn.set_rate(0);
+    return q.last;
   }
-  // Keep the particles that are not pore formers; contacts among them.
+  if (!lattice && spec.target == Target::pressure)
+    dyn.compress_to_pressure();
+  else if (!lattice)
+    dyn.compress_to_fraction();
+  dyn.relax();
+  rep.steps = dyn.steps;
+  return dyn.m;
+}
+
+/// Requested vs realised phases and size distributions (over all inserted particles).
+void report_phases(const PackSpec& spec, const std::vector<SizeDistribution>& psd, const dem::Particles& P,
+                   double vsolid, PackReport& rep) {
+  const int np = int(spec.phases.size());
+  const std::size_t n = P.size();
+  const bool lattice = spec.arrangement != "random";
+  std::vector<double> vol(std::size_t(np), 0.0);
+  std::vector<std::vector<double>> dia{std::size_t(np)};
+  for (std::size_t i = 0; i < n; ++i) {
+    vol[std::size_t(P.phase[i])] += sphere_volume(P.r[i]);
+    dia[std::size_t(P.phase[i])].push_back(2 * P.r[i]);
+  }
+  for (int p = 0; p < np; ++p) {
+    PhaseReport pr;
+    pr.name = spec.phases[std::size_t(p)].name;
+    pr.requested_fraction = spec.phases[std::size_t(p)].volume_fraction;
+    pr.realised_fraction = vol[std::size_t(p)] / vsolid;
+    pr.count = dia[std::size_t(p)].size();
+    pr.pore_former = spec.phases[std::size_t(p)].pore_former;
+    pr.psd_max_cdf_deviation = lattice ? 0.0 : max_cdf_deviation(psd[std::size_t(p)], dia[std::size_t(p)]);
+    rep.phases.push_back(pr);
+  }
+}
+
+/// The output packing: the particles that are not pore formers, with the contacts and bonds
+/// among them, the final cell and the phases' materials.
+void keep_solids(const dem::Simulation& sim, const ContactTable& contacts, const PackSpec& spec, Packing& pk,
+                 PackReport& rep) {
+  const auto& P = sim.particles();
+  const std::size_t n = P.size();
   std::vector<int32_t> new_index(n, -1);
-  Packing& pk = out.packing;
   for (std::size_t i = 0; i < n; ++i) {
     if (spec.phases[std::size_t(P.phase[i])].pore_former) {
       ++rep.pore_formers_removed;
@@ -674,57 +718,53 @@ PackOutput make_packing(const PackSpec& spec, const std::function<void(const std
     pk.contacts.normal_force.push_back(contacts.normal_force[k]);
     pk.contacts.tangential_force.push_back(contacts.tangential_force[k]);
   }
-  {
-    const auto& B = sim.bonds();
-    for (std::size_t b = 0; b < B.size(); ++b) {
-      const int32_t a = new_index[std::size_t(B.i[b])], c = new_index[std::size_t(B.j[b])];
-      if (a < 0 || c < 0) continue;
-      pk.bonds.i.push_back(a);
-      pk.bonds.j.push_back(c);
-      pk.bonds.radius.push_back(B.radius[b]);
-      pk.bonds.rest_length.push_back(B.rest_length[b]);
-      pk.bonds.state.push_back(B.state[b]);
-      pk.bonds.broken_at.push_back(B.broken_at[b]);
-    }
-    rep.aggregate_bonds = pk.bonds.size();
+  const auto& B = sim.bonds();
+  for (std::size_t b = 0; b < B.size(); ++b) {
+    const int32_t a = new_index[std::size_t(B.i[b])], c = new_index[std::size_t(B.j[b])];
+    if (a < 0 || c < 0) continue;
+    pk.bonds.i.push_back(a);
+    pk.bonds.j.push_back(c);
+    pk.bonds.radius.push_back(B.radius[b]);
+    pk.bonds.rest_length.push_back(B.rest_length[b]);
+    pk.bonds.state.push_back(B.state[b]);
+    pk.bonds.broken_at.push_back(B.broken_at[b]);
   }
-  pk.cell = final_cell;
+  rep.aggregate_bonds = pk.bonds.size();
+  pk.cell = sim.cell();
   for (const auto& ph : spec.phases) pk.materials.push_back(ph.material);
   for (std::size_t p = 0; p < pk.materials.size(); ++p) pk.materials[p].name = spec.phases[p].name;
   rep.n_particles = pk.particles.size();
   double vkeep = 0;
   for (double r : pk.particles.radius) vkeep += sphere_volume(r);
-  rep.solid_fraction = vkeep / final_cell.volume();
-  // Coordination of the packing as it was densified (pore formers included: they carried load).
-  const ContactStructure cs = contact_structure(n, P.phase, np, contacts, spec.friction > 0 ? 2 : 4);
-  rep.coordination = cs.coordination;
-  rep.coordination_no_rattlers = cs.coordination_no_rattlers;
-  rep.rattler_fraction = cs.rattler_fraction;
-  rep.z_ij = cs.z_ij;
+  rep.solid_fraction = vkeep / pk.cell.volume();
+}
 
-  // ---- Laguerre cells of the output packing
-  if (spec.tessellate && rep.n_particles > 0) {
-    say("Laguerre tessellation of " + std::to_string(rep.n_particles) + " particles");
-    const auto t0 = std::chrono::steady_clock::now();
-    const Tessellation t = laguerre(pk.particles.position, pk.particles.radius, final_cell);
-    rep.tessellation_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    rep.tessellated = true;
-    rep.laguerre_volume_error = std::abs(t.total_volume - t.box_volume) / t.box_volume;
-    const auto& phi = t.local_solid_fraction;
-    double s1 = 0, s2 = 0;
-    rep.local_solid_fraction_histogram.assign(20, 0.0);
-    for (double v : phi) {
-      s1 += v, s2 += v * v;
-      rep.local_solid_fraction_histogram[std::size_t(std::clamp(int(v * 20), 0, 19))] += 1.0 / double(phi.size());
-    }
-    rep.local_solid_fraction_mean = s1 / double(phi.size());
-    rep.local_solid_fraction_std = std::sqrt(std::max(0.0, s2 / double(phi.size()) - rep.local_solid_fraction_mean * rep.local_solid_fraction_mean));
-    pk.results.series["laguerre"]["cell_volume_m3"] = t.cell_volume;
-    pk.results.series["laguerre"]["local_solid_fraction"] = t.local_solid_fraction;
-    pk.results.units["laguerre"] = "per particle (output order)";
-    pk.results.units["laguerre/cell_volume_m3"] = "m^3";
-    pk.results.units["laguerre/local_solid_fraction"] = "1";
+/// Laguerre cells of the output packing: volume check, local solid fractions and their histogram.
+void tessellate(Packing& pk, PackReport& rep, const std::function<void(const std::string&)>& say) {
+  say("Laguerre tessellation of " + std::to_string(rep.n_particles) + " particles");
+  const auto t0 = std::chrono::steady_clock::now();
+  const Tessellation t = laguerre(pk.particles.position, pk.particles.radius, pk.cell);
+  rep.tessellation_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  rep.tessellated = true;
+  rep.laguerre_volume_error = std::abs(t.total_volume - t.box_volume) / t.box_volume;
+  const auto& phi = t.local_solid_fraction;
+  double s1 = 0, s2 = 0;
+  rep.local_solid_fraction_histogram.assign(20, 0.0);
+  for (double v : phi) {
+    s1 += v, s2 += v * v;
+    rep.local_solid_fraction_histogram[std::size_t(std::clamp(int(v * 20), 0, 19))] += 1.0 / double(phi.size());
   }
+  rep.local_solid_fraction_mean = s1 / double(phi.size());
+  rep.local_solid_fraction_std = std::sqrt(std::max(0.0, s2 / double(phi.size()) - rep.local_solid_fraction_mean * rep.local_solid_fraction_mean));
+  pk.results.series["laguerre"]["cell_volume_m3"] = t.cell_volume;
+  pk.results.series["laguerre"]["local_solid_fraction"] = t.local_solid_fraction;
+  pk.results.units["laguerre"] = "per particle (output order)";
+  pk.results.units["laguerre/cell_volume_m3"] = "m^3";
+  pk.results.units["laguerre/local_solid_fraction"] = "1";
+}
+
+/// The report's key numbers as results of the packing file.
+void store_results(const PackReport& rep, Packing& pk) {
   auto& sc = pk.results.scalars;
   auto& un = pk.results.units;
   sc["solid_fraction"] = rep.solid_fraction, un["solid_fraction"] = "1";
@@ -734,6 +774,68 @@ PackOutput make_packing(const PackSpec& spec, const std::function<void(const std
   sc["pressure"] = rep.pressure, un["pressure"] = "Pa";
   sc["unbalanced_force_ratio"] = rep.unbalanced_force_ratio, un["unbalanced_force_ratio"] = "1";
   sc["inertial_number"] = rep.inertial_number, un["inertial_number"] = "1";
+}
+}  // namespace
+
+PackOutput make_packing(const PackSpec& spec, const std::function<void(const std::string&)>& progress) {
+  const auto t_start = std::chrono::steady_clock::now();
+  const auto say = [&](const std::string& m) {
+    if (progress) progress(m);
+  };
+  validate(spec);
+  const int np = int(spec.phases.size());
+  std::vector<SizeDistribution> psd;
+  for (const auto& ph : spec.phases) {
+    psd.push_back(ph.psd);
+    psd.back().prepare();
+  }
+  PackOutput out;
+  PackReport& rep = out.report;
+  const Inserted in = spec.arrangement == "random" ? insert_particles(spec, psd, say) : lattice_particles(spec);
+  const std::vector<double>& radius = in.radius;
+  const std::size_t n = radius.size();
+  rep.n_inserted = n;
+  rep.aggregates = in.clusters.size();
+
+  double dmean = 0;
+  for (double r : radius) dmean += 2 * r;
+  dmean /= double(n);
+  const dem::ContactModel model = contact_model(spec, dmean);
+  dem::Particles parts;
+  for (std::size_t i = 0; i < n; ++i)
+    parts.add(in.pos[i], radius[i], spec.phases[std::size_t(in.phase[i])].material.density, in.phase[i]);
+  dem::Settings set;
+  set.threads = std::max(1, spec.threads);
+  dem::Simulation sim(std::move(parts), in.cell, model, set);
+  if (!in.bonded.empty()) bond_aggregates(sim, in, model, spec);
+  const double dtc = sim.critical_time_step();
+  sim.set_time_step(spec.timestep_fraction * dtc);
+  rep.time_step = sim.time_step();
+  rep.neighbor_search = spatial::use_hgrid(radius) ? "hgrid" : "linked cells";
+  sim.body_forces().local_damping = spec.local_damping;
+
+  double vsolid = 0;
+  for (double r : radius) vsolid += sphere_volume(r);
+  const auto t_dem = std::chrono::steady_clock::now();
+  const dem::Measurements m = densify(sim, spec, vsolid, dmean, dtc, in.clusters, rep, say);
+  rep.pressure = m.pressure;
+  rep.unbalanced_force_ratio = m.unbalanced_force_ratio;
+  rep.densify_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_dem).count();
+
+  // ---- structure (with pore formers, which carry load during packing)
+  const ContactTable contacts = sim.contacts();
+  rep.solid_fraction_with_pore_formers = vsolid / sim.cell().volume();
+  report_phases(spec, psd, sim.particles(), vsolid, rep);
+  Packing& pk = out.packing;
+  keep_solids(sim, contacts, spec, pk, rep);
+  // Coordination of the packing as it was densified (pore formers included: they carried load).
+  const ContactStructure cs = contact_structure(n, sim.particles().phase, np, contacts, spec.friction > 0 ? 2 : 4);
+  rep.coordination = cs.coordination;
+  rep.coordination_no_rattlers = cs.coordination_no_rattlers;
+  rep.rattler_fraction = cs.rattler_fraction;
+  rep.z_ij = cs.z_ij;
+  if (spec.tessellate && rep.n_particles > 0) tessellate(pk, rep, say);
+  store_results(rep, pk);
   rep.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   return out;
 }
