@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "tomodem/core/error.hpp"
+#include "tomodem/dem/law_registry.hpp"
 
 namespace tomodem::dem {
 
@@ -16,7 +17,7 @@ namespace {
 /// The floor F_i is three contacts at the overlap a collision can make: a particle moving at
 /// most v Δt = max_move r_min per step into a neighbour, with mass set by the stiffness at that
 /// overlap, stops within δ = √(90/8) v Δt / c (energy balance ½ m v² = (8/15) E* √R* δ^{5/2}
-/// with m = 12 E* √(R* δ) Δt²/c²), at R* = r_i; for the linear law F_i = 3 k_n. Without it an
+/// with m = 12 E* √(R* δ) Δt²/c²), at R* = r_i; for spring laws F_i = 3 k (the law's stiffness). Without it an
 /// unjammed packing, whose relaxed contacts are almost unloaded (S ∝ √δ → 0), has light
 /// particles that one fast collision drives through each other (10⁶ particles at φ ≈ 0.45).
 /// f = 6 with rotations: the rotational inertia 0.4 m r² under tangential springs k_t ≤ S_n
@@ -30,12 +31,14 @@ class ScaledMasses {
     inv_m_ = p_.inv_m;
     if (p_.has_rotation()) inv_I_ = p_.inv_I;
     const ContactModel& model = sim.model();
-    double e_star = 0, k_n = 0;
-    for (const auto& pp : model.pairs) e_star = std::max(e_star, pp.E_star), k_n = std::max(k_n, pp.k_n);
+    const LawInfo& normal_law = law_info(model.normal);
     const double delta = std::sqrt(90.0 / 8.0) * max_move * rmin / kMargin;
     floor_.resize(p_.size());
-    for (std::size_t i = 0; i < p_.size(); ++i)
-      floor_[i] = model.normal == NormalLaw::linear ? 3 * k_n : 3 * 2 * e_star * std::sqrt(p_.r[i] * delta);
+    for (std::size_t i = 0; i < p_.size(); ++i) {
+      double k = 0;  // the stiffest pair of the normal law at that overlap
+      for (const auto& pp : model.pairs) k = std::max(k, normal_law.stiffness(pp, p_.r[i], delta));
+      floor_[i] = 3 * k;
+    }
   }
   ~ScaledMasses() { restore(); }
   void restore() {

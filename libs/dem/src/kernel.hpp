@@ -103,6 +103,21 @@ inline double released_energy(const PairParams& pp, const double* hist, double a
   return T::released(pp, hist + N::kHistory, a_last) + R::released(hist + N::kHistory + T::kHistory);
 }
 
+/// A law that is not its slot's `none` runs every contact step. One that keeps no history must
+/// say so (kStateless), so a law whose history was forgotten cannot compile into a law that does
+/// nothing.
+template <class L, class = void>
+struct stateless : std::false_type {};
+template <class L>
+struct stateless<L, std::void_t<decltype(L::kStateless)>> : std::bool_constant<L::kStateless> {};
+template <class L, class None>
+constexpr bool check_history() {
+  static_assert(std::is_same_v<L, None> || L::kHistory > 0 || stateless<L>::value,
+                "a tangential or rolling law without history: declare kHistory > 0, or kStateless = true "
+                "if it really keeps no state");
+  return true;
+}
+
 template <class N>
 inline law::Normal eval_normal(const law::Geometry& g, unsigned char* touch, double* hist) {
   if constexpr (N::kHistory > 0) return N::eval(g, touch, hist);
@@ -113,6 +128,7 @@ template <class N, class T, class R, bool kTally>
 inline void contact(const law::Geometry& g, double* hist, unsigned char* touch, double ri, double rj,
                     const Vec3* wi, const Vec3* wj, Vec3& fi, Vec3& ti, Vec3& tj, Tally* tally, double dist,
                     bool& active, double& sn) {
+  static_assert(check_history<T, law::TangentialNone>() && check_history<R, law::RollingNone>());
   const law::Normal nr = eval_normal<N>(g, touch, hist);
   active = nr.active;
   if (!nr.active) {
@@ -124,7 +140,7 @@ inline void contact(const law::Geometry& g, double* hist, unsigned char* touch, 
   }
   sn = nr.stiffness;
   fi = (-nr.fn) * g.n;  // on i
-  if constexpr (!std::is_same_v<T, law::TangentialNone>) {  // history-free laws (viscous) run too
+  if constexpr (!std::is_same_v<T, law::TangentialNone>) {
     const law::Tangential tr = T::template eval<kTally>(g, nr, hist + N::kHistory);
     fi += tr.force;
     // Torques of the tangential force about each centre (lever arms R_i n and -R_j n).
@@ -136,7 +152,7 @@ inline void contact(const law::Geometry& g, double* hist, unsigned char* touch, 
       tally->dissipated += tr.dissipation;
     }
   }
-  if constexpr (R::kHistory > 0) {
+  if constexpr (!std::is_same_v<R, law::RollingNone>) {
     const law::Tangential rr = R::template eval<kTally>(g, nr, *wi - *wj, hist + N::kHistory + T::kHistory);
     ti += rr.force;
     tj -= rr.force;

@@ -2,9 +2,10 @@
 // A four-contact-wide version of the Hertz + Mindlin force loop (the common dense-packing
 // physics). A scalar contact is one long chain of dependent square roots and divisions
 // (distance, contact radius, damping), so the scalar loop waits on latency; four independent
-// contacts per vector instruction hide it. Same formulas as laws.hpp, contact by contact
-// (checked against the scalar loop in tests/validation/dem/test_cross_path.cpp); forces are
-// summed in another order, so results agree to round-off. Used only for non-tally passes.
+// contacts per vector instruction hide it. Same formulas as laws.hpp, contact by contact:
+// tests/validation/dem/test_law_registry.cpp runs both on random contacts and compares forces,
+// torques and history to round-off (test_cross_path.cpp compares whole runs). Forces are summed
+// in another order. Used only for non-tally passes.
 #include <cmath>
 
 #include "kernel.hpp"
@@ -68,7 +69,7 @@ __attribute__((always_inline)) inline void hertz_mindlin_x4(const ForceJob& job,
     const PairParams& p = job.pairs[job.phase[ii[l]] * job.n_phases + job.phase[jj[l]]];
     E[l] = p.E_star;
     G[l] = p.G_star;
-    cdamp[l] = p.hertz_damping;
+    cdamp[l] = p.damping;
     mu[l] = p.friction;
     ratio[l] = p.tangential_damping_ratio;
   }

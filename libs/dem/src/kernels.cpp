@@ -1,15 +1,30 @@
-// The compiled law combinations: every normal × tangential × rolling choice, with and without
-// tallies, selected once when a Simulation is built.
+// The compiled law combinations: every normal × tangential × rolling law of the registry list
+// (law_list.hpp) that fits together, with and without tallies, selected once when a Simulation
+// is built. The product is generated from the type lists; nothing here names a law but the
+// one combination with a four-contact-wide loop.
+#include <string_view>
+
 #include "kernel.hpp"
 #include "kernel_simd.hpp"
-#include "sinter_law.hpp"
+#include "law_list.hpp"
 #include "tomodem/core/error.hpp"
 
 namespace tomodem::dem {
 
 namespace {
+using law::End;
+using law::List;
+
+/// The compile-time form of ContactModel::incompatibility(): the same declarations decide both.
+template <class N, class T>
+constexpr bool fits() {
+  constexpr std::string_view needs = T::kRequiresNormal;
+  if (!needs.empty() && needs != std::string_view(N::kKey)) return false;
+  return !(T::kNeedsSpring && N::kStiffness == StiffnessKind::viscous);
+}
+
 template <class N, class T, class R>
-KernelSet make() {
+KernelSet make(bool vectorised) {
   KernelSet k;
   k.pair[0] = &detail::pair_kernel<N, T, R, false>;
   k.pair[1] = &detail::pair_kernel<N, T, R, true>;
@@ -20,50 +35,69 @@ KernelSet make() {
   k.normal_history = N::kHistory;
   k.tangential_history = T::kHistory;
   k.rolling_history = R::kHistory;
+  if constexpr (std::is_same_v<N, law::NormalHertz> && std::is_same_v<T, law::TangentialMindlin> &&
+                std::is_same_v<R, law::RollingNone>) {
+    if (vectorised) {
+      k.pair[0] = &detail::pair_kernel_hertz_mindlin_x4;  // the four-contact-wide loop
+      k.vectorised = true;
+    }
+  }
   return k;
 }
 
+template <class N, class T, class R>
+bool pick_rolling(const ContactModel& m, bool vec, KernelSet& out) {
+  if constexpr (std::is_same_v<R, End>) {
+    return false;
+  } else {
+    if (m.rolling.key != R::kKey) return false;
+    out = make<N, T, R>(vec);
+    return true;
+  }
+}
+template <class N, class T, class... R>
+bool over_rolling(const ContactModel& m, bool vec, KernelSet& out, List<R...>) {
+  return (pick_rolling<N, T, R>(m, vec, out) || ...);
+}
+
 template <class N, class T>
-KernelSet pick_rolling(RollingLaw r) {
-  return r == RollingLaw::none ? make<N, T, law::RollingNone>() : make<N, T, law::RollingElasticPlastic>();
+bool pick_tangential(const ContactModel& m, bool vec, KernelSet& out) {
+  if constexpr (std::is_same_v<T, End>) {
+    return false;
+  } else {
+    if (m.tangential.key != T::kKey) return false;
+    if constexpr (fits<N, T>()) return over_rolling<N, T>(m, vec, out, law::RollingLaws{});
+    else return false;  // not compiled: incompatibility() says why
+  }
+}
+template <class N, class... T>
+bool over_tangential(const ContactModel& m, bool vec, KernelSet& out, List<T...>) {
+  return (pick_tangential<N, T>(m, vec, out) || ...);
 }
 
 template <class N>
-KernelSet pick_tangential(const ContactModel& m) {
-  switch (m.tangential) {
-    case TangentialLaw::none: return pick_rolling<N, law::TangentialNone>(m.rolling);
-    case TangentialLaw::linear: return pick_rolling<N, law::TangentialLinear>(m.rolling);
-    case TangentialLaw::mindlin: return pick_rolling<N, law::TangentialMindlin>(m.rolling);
-    case TangentialLaw::viscous: break;  // refused below (incompatibility())
+bool pick_normal(const ContactModel& m, bool vec, KernelSet& out) {
+  if constexpr (std::is_same_v<N, End>) {
+    return false;
+  } else {
+    if (m.normal.key != N::kKey) return false;
+    return over_tangential<N>(m, vec, out, law::TangentialLaws{});
   }
-  return pick_rolling<N, law::TangentialNone>(m.rolling);
 }
-/// The sintering law pairs only with the tangential laws it can drive (none, viscous).
-KernelSet pick_sintering(const ContactModel& m) {
-  using N = law::NormalSintering;
-  return m.tangential == TangentialLaw::viscous ? pick_rolling<N, law::TangentialViscous>(m.rolling)
-                                                : pick_rolling<N, law::TangentialNone>(m.rolling);
+template <class... N>
+bool over_normal(const ContactModel& m, bool vec, KernelSet& out, List<N...>) {
+  return (pick_normal<N>(m, vec, out) || ...);
 }
 }  // namespace
 
 KernelSet select_kernels(const ContactModel& m, bool vectorised) {
+  chosen_laws(m);  // an unregistered name throws, naming the registry's laws
   if (const std::string why = m.incompatibility(); !why.empty())
     throw InputError("", "physics", m.describe(), why);
-  if (vectorised && m.normal == NormalLaw::hertz && m.tangential == TangentialLaw::mindlin &&
-      m.rolling == RollingLaw::none) {
-    KernelSet k = pick_tangential<law::NormalHertz>(m);
-    k.pair[0] = &detail::pair_kernel_hertz_mindlin_x4;  // the four-contact-wide loop
-    k.vectorised = true;
-    return k;
-  }
-  switch (m.normal) {
-    case NormalLaw::linear: return pick_tangential<law::NormalLinear>(m);
-    case NormalLaw::hertz: return pick_tangential<law::NormalHertz>(m);
-    case NormalLaw::hertz_dmt: return pick_tangential<law::NormalDMT>(m);
-    case NormalLaw::hertz_jkr: return pick_tangential<law::NormalJKR>(m);
-    case NormalLaw::sintering: return pick_sintering(m);
-  }
-  return pick_tangential<law::NormalHertz>(m);
+  KernelSet k;
+  if (!over_normal(m, vectorised, k, law::NormalLaws{}))
+    throw InputError("", "physics", m.describe(), "no compiled kernel for this combination of laws");
+  return k;
 }
 
 }  // namespace tomodem::dem

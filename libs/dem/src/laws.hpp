@@ -2,12 +2,63 @@
 // Contact laws as policy structs, one per slot (P1/P2 of docs/architecture.md). Each law is a
 // pure function of the contact geometry and its own history; the loops in kernel.hpp own
 // neighbour lists, threads and tallies. Particle pairs and walls call the same functions.
+// Each law also describes itself (key, parameters, needs); law_registry.cpp turns that into the
+// registry entry every parser, message, time step and docs table reads.
+#include <array>
 #include <cmath>
+#include <limits>
 
 #include "tomodem/core/vec3.hpp"
+#include "tomodem/dem/law_registry.hpp"
 #include "tomodem/dem/model.hpp"
 
 namespace tomodem::dem::law {
+
+inline constexpr double kInf = std::numeric_limits<double>::infinity();
+
+/// Parameters more than one law takes (a law with parameters of its own declares them in its file).
+namespace param {
+inline constexpr LawParam normal_stiffness{"normal_stiffness", "N/m", "normal stiffness k_n", "required", 0, kInf,
+                                           true, false, [](PairParams& p) { return &p.k_n; }};
+inline constexpr LawParam tangential_stiffness{"tangential_stiffness", "N/m", "tangential stiffness k_t",
+                                               "2/7 of the normal stiffness", 0, kInf, true, false,
+                                               [](PairParams& p) { return &p.k_t; }};
+inline constexpr LawParam friction{"friction", "-", "Coulomb coefficient μ", "0", 0, kInf, false, false,
+                                   [](PairParams& p) { return &p.friction; }};
+inline constexpr LawParam rolling_friction{"rolling_friction", "-", "rolling coefficient μ_r", "0", 0, kInf, false,
+                                           false, [](PairParams& p) { return &p.rolling_friction; }};
+inline constexpr LawParam work_of_adhesion{"work_of_adhesion", "J/m²", "work of adhesion w", "2 sqrt(γ_a γ_b)", 0,
+                                           kInf, false, false, [](PairParams& p) { return &p.work_of_adhesion; }};
+// Below 1e-3 the damped Hertz contact barely separates: its damping is ill-conditioned and costs
+// seconds to find (kMinRestitution in model.hpp).
+inline constexpr LawParam restitution{"restitution", "-", "restitution e of a head-on collision", "1",
+                                      kMinRestitution, 1, false, false, [](PairParams& p) { return &p.restitution; }};
+inline constexpr LawParam damping_ratio{"damping_ratio", "-", "ζ: c = 2ζ instead of the calibration to e", "from e",
+                                        0, 1, false, true, [](PairParams& p) { return &p.damping_ratio; }};
+}  // namespace param
+
+/// Defaults of a law's self-description; each law overrides what applies to it.
+struct Described {
+  static constexpr std::array<LawParam, 0> kParams{};
+  static constexpr bool kNeedsModulus = false;
+  static constexpr bool kNeedsAdhesion = false;
+  static constexpr const char* kSource = "";
+  static LawProblem check(const PairParams&) { return {}; }
+};
+struct NormalBase : Described {
+  static constexpr bool kDriven = false;
+  static double reach(const PairParams&, double) { return 0; }
+  static void reset(double*) {}
+};
+/// Hertz-family laws: S_n = 2E*a, the Rayleigh time, the dashpot calibrated to the Hertz collision.
+struct HertzFamily : NormalBase {
+  static constexpr bool kNeedsModulus = true;
+  static constexpr StiffnessKind kStiffness = StiffnessKind::hertz;
+  static double stiffness(const PairParams& p, double r_star, double delta) {
+    return 2 * p.E_star * std::sqrt(r_star * std::max(delta, 0.0));
+  }
+  static double restitution_damping(double e) { return hertz_damping_for_restitution(e); }
+};
 
 /// What the driver knows about one contact before the laws run.
 struct Geometry {
@@ -32,14 +83,20 @@ struct Normal {
 };
 
 // ---------------------------------------------------------------- normal slot
-struct NormalLinear {
+struct NormalLinear : NormalBase {
+  static constexpr const char* kKey = "linear";
+  static constexpr const char* kSummary = "F = k_n δ + η_n δ̇";
+  static constexpr const char* kSource = "Cundall & Strack 1979";
+  static constexpr std::array<LawParam, 1> kParams{param::normal_stiffness};
+  static constexpr StiffnessKind kStiffness = StiffnessKind::spring;
   static constexpr int kHistory = 0;  ///< per-contact doubles (normal laws with state declare them)
   static constexpr bool kTouchFlag = false;
-  static double reach(const PairParams&, double) { return 0; }
+  static double stiffness(const PairParams& p, double, double) { return p.k_n; }
+  static double restitution_damping(double e) { return 2 * linear_damping_ratio_for_restitution(e); }
   static Normal eval(const Geometry& g, unsigned char*) {
     const PairParams& p = *g.pp;
     if (g.delta <= 0) return {false, 0, 0, 0, 0, 0, 0};
-    const double eta = 2 * p.damping_ratio * std::sqrt(g.m_star * p.k_n);
+    const double eta = p.damping * std::sqrt(g.m_star * p.k_n);  // c = 2ζ
     const double fel = p.k_n * g.delta;
     // δ̇ = -v_rel·n. No clamping of the damped force, so e = exp(-πζ/sqrt(1-ζ²)) holds exactly.
     return {true, fel - eta * dot(g.v_rel, g.n), fel, p.k_n, std::sqrt(g.r_star * g.delta), eta,
@@ -47,26 +104,32 @@ struct NormalLinear {
   }
 };
 
-struct NormalHertz {
+struct NormalHertz : HertzFamily {
+  static constexpr const char* kKey = "hertz";
+  static constexpr const char* kSummary = "F = (4/3) E* sqrt(R*) δ^{3/2} + η_n δ̇";
+  static constexpr const char* kSource = "Hertz 1882; Tsuji et al. 1992";
   static constexpr int kHistory = 0;
   static constexpr bool kTouchFlag = false;
-  static double reach(const PairParams&, double) { return 0; }
   static Normal eval(const Geometry& g, unsigned char*) {
     const PairParams& p = *g.pp;
     if (g.delta <= 0) return {false, 0, 0, 0, 0, 0, 0};
     const double a = std::sqrt(g.r_star * g.delta);
     const double fel = (4.0 / 3.0) * p.E_star * a * g.delta;  // (4/3) E* sqrt(R*) δ^{3/2}
     const double sn = 2 * p.E_star * a;
-    const double eta = p.hertz_damping * std::sqrt(g.m_star * sn);
+    const double eta = p.damping * std::sqrt(g.m_star * sn);
     return {true, fel - eta * dot(g.v_rel, g.n), fel, sn, a, eta, 0.4 * fel * g.delta};
   }
 };
 
 /// Hertz plus a constant Derjaguin attraction 2π w R* while in contact (δ ≥ 0).
-struct NormalDMT {
+struct NormalDMT : HertzFamily {
+  static constexpr const char* kKey = "dmt";
+  static constexpr const char* kSummary = "Hertz − 2π w R* while δ ≥ 0";
+  static constexpr const char* kSource = "Derjaguin, Muller & Toporov 1975";
+  static constexpr std::array<LawParam, 1> kParams{param::work_of_adhesion};
+  static constexpr bool kNeedsAdhesion = true;
   static constexpr int kHistory = 0;
   static constexpr bool kTouchFlag = false;
-  static double reach(const PairParams&, double) { return 0; }
   static Normal eval(const Geometry& g, unsigned char*) {
     const PairParams& p = *g.pp;
     if (g.delta < 0) return {false, 0, 0, 0, 0, 0, 0};
@@ -74,14 +137,19 @@ struct NormalDMT {
     const double fh = (4.0 / 3.0) * p.E_star * a * g.delta;
     const double fadh = 2 * M_PI * p.work_of_adhesion * g.r_star;
     const double sn = 2 * p.E_star * a;
-    const double eta = p.hertz_damping * std::sqrt(g.m_star * sn);
+    const double eta = p.damping * std::sqrt(g.m_star * sn);
     return {true, fh - fadh - eta * dot(g.v_rel, g.n), fh, sn, a, eta, 0.4 * fh * g.delta - fadh * g.delta};
   }
 };
 
 /// JKR with hysteresis: a contact forms at δ = 0 on approach and persists in tension until
 /// δ_c = -(3/4)(π² w² R*/E*²)^{1/3}; the flag per contact remembers which branch applies.
-struct NormalJKR {
+struct NormalJKR : HertzFamily {
+  static constexpr const char* kKey = "jkr";
+  static constexpr const char* kSummary = "F = 4E*a³/(3R*) − sqrt(8π w E* a³), breaks at δ_c < 0";
+  static constexpr const char* kSource = "Johnson, Kendall & Roberts 1971";
+  static constexpr std::array<LawParam, 1> kParams{param::work_of_adhesion};
+  static constexpr bool kNeedsAdhesion = true;
   static constexpr int kHistory = 0;
   static constexpr bool kTouchFlag = true;
   static double reach(const PairParams& p, double r_star) {
@@ -100,7 +168,7 @@ struct NormalJKR {
     const double a = jkr_contact_radius(g.delta, R, E, w);
     const double fj = jkr_force(a, R, E, w);
     const double sn = 2 * E * a;
-    const double eta = p.hertz_damping * std::sqrt(g.m_star * sn);
+    const double eta = p.damping * std::sqrt(g.m_star * sn);
     // U(a) = ∫F dδ = 8E a⁵/(15R²) - (4/3) sqrt(2πwE) a^{7/2}/R + π w a², zero at a = 0.
     const double energy = 8 * E * std::pow(a, 5) / (15 * R * R) -
                           (4.0 / 3.0) * std::sqrt(2 * M_PI * w * E) * std::pow(a, 3.5) / R + M_PI * w * a * a;
@@ -116,7 +184,11 @@ struct Tangential {
   double dissipation;  ///< J, this step (only meaningful when tallying)
 };
 
-struct TangentialNone {
+struct TangentialNone : Described {
+  static constexpr const char* kKey = "none";
+  static constexpr const char* kSummary = "no tangential force";
+  static constexpr bool kNeedsSpring = false;
+  static constexpr const char* kRequiresNormal = "";
   static constexpr int kHistory = 0;
   static constexpr bool kRotation = false;
   template <bool kTally>
@@ -130,7 +202,18 @@ struct TangentialNone {
 /// acts alongside; when |F_spring + F_dash| exceeds μ F_n^rep the total is scaled onto the cone
 /// and the spring takes the remainder (as in LAMMPS's granular styles).
 template <bool kMindlin>
-struct TangentialSpring {
+struct TangentialSpring : Described {
+  static constexpr const char* kKey = kMindlin ? "mindlin" : "linear";
+  static constexpr const char* kSummary =
+      kMindlin ? "incremental spring k_t = 8G*a, dashpot, Coulomb limit μ F_n" : "incremental spring k_t, dashpot, Coulomb limit μ F_n";
+  static constexpr const char* kSource = kMindlin ? "Mindlin & Deresiewicz 1953; Thornton et al. 2011" : "Cundall & Strack 1979";
+  static constexpr std::array<LawParam, kMindlin ? 1 : 2> kParams = [] {
+    if constexpr (kMindlin) return std::array<LawParam, 1>{param::friction};
+    else return std::array<LawParam, 2>{param::friction, param::tangential_stiffness};
+  }();
+  static constexpr bool kNeedsModulus = kMindlin;  // G* of the materials
+  static constexpr bool kNeedsSpring = true;
+  static constexpr const char* kRequiresNormal = "";
   static constexpr int kHistory = 3;
   static constexpr bool kRotation = true;
   static void reset(double* h) { h[0] = h[1] = h[2] = 0; }
@@ -196,7 +279,9 @@ using TangentialLinear = TangentialSpring<false>;
 using TangentialMindlin = TangentialSpring<true>;
 
 // ---------------------------------------------------------------- rolling slot
-struct RollingNone {
+struct RollingNone : Described {
+  static constexpr const char* kKey = "none";
+  static constexpr const char* kSummary = "no rolling resistance";
   static constexpr int kHistory = 0;
   static constexpr bool kRotation = false;
   static void reset(double*) {}
@@ -209,7 +294,11 @@ struct RollingNone {
 /// ΔM = -k_r Δθ_r with k_r = 2.25 S_n μ_r² R*², |M| ≤ μ_r R* F_n^rep. `w_rel` = ω_i - ω_j.
 /// History: the moment (3) and the k_r of the last step, so the stored energy |M|²/2k_r is
 /// known exactly when k_r follows the contact radius (Hertz family) and when the contact opens.
-struct RollingElasticPlastic {
+struct RollingElasticPlastic : Described {
+  static constexpr const char* kKey = "elastic_plastic";
+  static constexpr const char* kSummary = "ΔM = −k_r Δθ_r, k_r = 2.25 S_n μ_r² R*², |M| ≤ μ_r R* F_n";
+  static constexpr const char* kSource = "Ai, Chen, Rotter & Ooi 2011 (model C, no dashpot)";
+  static constexpr std::array<LawParam, 1> kParams{param::rolling_friction};
   static constexpr int kHistory = 4;
   static constexpr bool kRotation = true;
   static void reset(double* h) { h[0] = h[1] = h[2] = h[3] = 0; }
@@ -244,6 +333,25 @@ struct RollingElasticPlastic {
     // Mean moment over the step (trapezoid), as for the tangential spring.
     return {m, e_after, -dot(0.5 * (m_before + m), wr) * g.dt - (e_after - e_before)};
   }
+};
+
+// ---------------------------------------------------------------- damping slot
+// The normal laws apply η_n = c sqrt(m* S_n); a damping law only chooses c, once per pair, so
+// it costs the force loop nothing.
+struct DampingRestitution : Described {
+  static constexpr const char* kKey = "restitution";
+  static constexpr const char* kSummary =
+      "η_n = c sqrt(m* S_n), c calibrated per normal law to rebound at e (or c = 2ζ)";
+  static constexpr std::array<LawParam, 2> kParams{param::restitution, param::damping_ratio};
+  static double damping(const PairParams& p, double (*calibrate)(double)) {
+    if (p.damping_ratio > 0) return 2 * p.damping_ratio;
+    return p.restitution >= 1 ? 0 : calibrate(p.restitution);
+  }
+};
+struct DampingNone : Described {
+  static constexpr const char* kKey = "none";
+  static constexpr const char* kSummary = "no normal dashpot (η_n = 0; the tangential dashpot follows it)";
+  static double damping(const PairParams&, double (*)(double)) { return 0; }
 };
 
 }  // namespace tomodem::dem::law

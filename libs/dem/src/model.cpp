@@ -1,5 +1,8 @@
 #include "tomodem/dem/model.hpp"
 
+#include "tomodem/core/error.hpp"
+#include "tomodem/dem/law_registry.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -28,57 +31,31 @@ MaterialProblem material_problem(const Material& m, bool need_modulus) {
   return {};
 }
 
-std::string to_string(NormalLaw l) {
-  switch (l) {
-    case NormalLaw::linear: return "linear";
-    case NormalLaw::hertz: return "hertz";
-    case NormalLaw::hertz_dmt: return "dmt";
-    case NormalLaw::hertz_jkr: return "jkr";
-    case NormalLaw::sintering: return "sintering";
-  }
-  return "?";
-}
-std::string to_string(TangentialLaw l) {
-  switch (l) {
-    case TangentialLaw::none: return "none";
-    case TangentialLaw::linear: return "linear";
-    case TangentialLaw::mindlin: return "mindlin";
-    case TangentialLaw::viscous: return "viscous";
-  }
-  return "?";
-}
-std::string to_string(RollingLaw l) { return l == RollingLaw::none ? "none" : "elastic_plastic"; }
+std::string to_string(const NormalLaw& l) { return l.key; }
+std::string to_string(const TangentialLaw& l) { return l.key; }
+std::string to_string(const RollingLaw& l) { return l.key; }
+std::string to_string(const DampingLaw& l) { return l.key; }
 
-bool parse(const std::string& s, NormalLaw& out) {
-  static const std::map<std::string, NormalLaw> names{{"linear", NormalLaw::linear},
-                                                      {"hertz", NormalLaw::hertz},
-                                                      {"dmt", NormalLaw::hertz_dmt},
-                                                      {"jkr", NormalLaw::hertz_jkr},
-                                                      {"sintering", NormalLaw::sintering}};
-  auto it = names.find(s);
-  if (it == names.end()) return false;
-  out = it->second;
+namespace {
+template <class L>
+bool parse_slot(Slot slot, const std::string& s, L& out) {
+  if (!find_law(slot, s)) return false;
+  out = L{s};
   return true;
 }
-bool parse(const std::string& s, TangentialLaw& out) {
-  static const std::map<std::string, TangentialLaw> names{
-      {"none", TangentialLaw::none}, {"linear", TangentialLaw::linear}, {"mindlin", TangentialLaw::mindlin},
-      {"viscous", TangentialLaw::viscous}};
-  auto it = names.find(s);
-  if (it == names.end()) return false;
-  out = it->second;
-  return true;
-}
-bool parse(const std::string& s, RollingLaw& out) {
-  if (s == "none") out = RollingLaw::none;
-  else if (s == "elastic_plastic") out = RollingLaw::elastic_plastic;
-  else return false;
-  return true;
-}
+}  // namespace
+bool parse(const std::string& s, NormalLaw& out) { return parse_slot(Slot::normal, s, out); }
+bool parse(const std::string& s, TangentialLaw& out) { return parse_slot(Slot::tangential, s, out); }
+bool parse(const std::string& s, RollingLaw& out) { return parse_slot(Slot::rolling, s, out); }
+bool parse(const std::string& s, DampingLaw& out) { return parse_slot(Slot::damping, s, out); }
+
+bool ContactModel::needs_rotation() const { return law_info(tangential).rotation || law_info(rolling).rotation; }
 
 void ContactModel::finalize() {
   n_phases = std::max<int>(1, int(materials.size()));
   if (pairs.size() != std::size_t(n_phases) * n_phases) pairs.resize(std::size_t(n_phases) * n_phases);
+  const LawInfo& nl = law_info(normal);
+  const LawInfo& dl = law_info(damping);
   for (int a = 0; a < n_phases; ++a)
     for (int b = 0; b < n_phases; ++b) {
       PairParams& pp = pair(a, b);
@@ -95,14 +72,12 @@ void ContactModel::finalize() {
         if (pp.work_of_adhesion == 0 && ma.surface_energy > 0 && mb.surface_energy > 0)
           pp.work_of_adhesion = 2 * std::sqrt(ma.surface_energy * mb.surface_energy);
       }
-      if (pp.k_t == 0) pp.k_t = 2.0 / 7.0 * pp.k_n;
-      if (normal == NormalLaw::linear) {
-        if (pp.damping_ratio == 0) pp.damping_ratio = linear_damping_ratio_for_restitution(pp.restitution);
-      } else {
-        pp.hertz_damping = hertz_damping_for_restitution(pp.restitution);
-      }
+      // A spring law's stiffness at zero overlap (linear: k_n); 0 for the Hertz family.
+      const double k_normal = nl.stiffness_kind == StiffnessKind::spring ? nl.stiffness(pp, 0, 0) : 0;
+      if (pp.k_t == 0) pp.k_t = 2.0 / 7.0 * k_normal;
+      pp.damping = dl.damping(pp, nl.restitution_damping);
       pp.tangential_damping_ratio = 0;
-      if (normal != NormalLaw::linear && tangential == TangentialLaw::mindlin && pp.E_star > 0)
+      if (nl.stiffness_kind == StiffnessKind::hertz && tangential == TangentialLaw::mindlin && pp.E_star > 0)
         pp.tangential_damping_ratio = std::sqrt(4 * pp.G_star / pp.E_star);  // 8G*a / 2E*a
       if (normal == NormalLaw::linear && tangential == TangentialLaw::linear && pp.k_n > 0)
         pp.tangential_damping_ratio = std::sqrt(pp.k_t / pp.k_n);
@@ -110,16 +85,32 @@ void ContactModel::finalize() {
 }
 
 std::string ContactModel::incompatibility() const {
-  if (tangential == TangentialLaw::viscous && normal != NormalLaw::sintering)
-    return "the viscous tangential law acts on sintering necks: it needs normal: sintering";
-  if (normal == NormalLaw::sintering && (tangential == TangentialLaw::linear || tangential == TangentialLaw::mindlin))
-    return "the sintering law has no elastic spring for a tangential " + to_string(tangential) +
-           " law: use tangential: viscous or none";
+  const LawInfo& n = law_info(normal);
+  const LawInfo& t = law_info(tangential);
+  if (!t.requires_normal.empty() && t.requires_normal != n.key)
+    return "the " + t.key + " tangential law needs normal: " + t.requires_normal + " (it acts on " + t.requires_normal +
+           " contacts)";
+  if (t.needs_spring && n.stiffness_kind == StiffnessKind::viscous)
+    return "the " + n.key + " law has no elastic spring for a tangential " + t.key + " law: use tangential: " +
+           law_names(Slot::tangential, [](const LawInfo& e) { return !e.needs_spring; });
   return "";
 }
 
+void ContactModel::set(const std::string& key, double value) {
+  if (pairs.empty()) finalize();
+  std::string taken;
+  for (const LawInfo* e : chosen_laws(*this)) {
+    if (const LawParam* p = e->param(key)) {
+      for (auto& pp : pairs) *p->ref(pp) = value;
+      return;
+    }
+    taken += (taken.empty() ? "" : "; ") + to_string(e->slot) + " " + e->key + ": " + e->keys();
+  }
+  throw InputError("", key, value_text(value), "not a parameter of the chosen laws (" + taken + ")");
+}
+
 std::string ContactModel::describe() const {
-  return to_string(normal) + "+" + to_string(tangential) + "+" + to_string(rolling);
+  return to_string(normal) + "+" + to_string(tangential) + "+" + to_string(rolling) + "+" + to_string(damping);
 }
 
 // Dimensionless Hertz collision with damping η = c sqrt(m* S_n), S_n = 2E*a = 1.5 k δ^½:

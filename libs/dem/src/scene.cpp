@@ -4,6 +4,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <climits>
 #include <cmath>
 #include <filesystem>
@@ -15,6 +16,7 @@
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/packing_io.hpp"
+#include "tomodem/dem/law_registry.hpp"
 #include "tomodem/dem/yaml_fields.hpp"
 
 namespace tomodem::dem {
@@ -65,65 +67,130 @@ std::vector<Material> read_materials(const Map& root) {
   return mats;
 }
 
-void read_pair_keys(const Map& m, PairParams& pp) {
-  // Below 1e-3 the damped Hertz contact barely separates: its damping is ill-conditioned and
-  // costs seconds to find (kMinRestitution in model.hpp).
-  pp.restitution = m.in_range("restitution", pp.restitution, kMinRestitution, 1, false, false);
-  pp.damping_ratio = m.in_range("damping_ratio", pp.damping_ratio, 0, 1, false, true);
-  pp.friction = m.non_negative("friction", pp.friction);
-  pp.rolling_friction = m.non_negative("rolling_friction", pp.rolling_friction);
-  pp.work_of_adhesion = m.non_negative("work_of_adhesion", pp.work_of_adhesion);
-  pp.k_n = m.positive("normal_stiffness", pp.k_n);
-  pp.k_t = m.positive("tangential_stiffness", pp.k_t);
+// ---- physics: the laws of the four slots and their parameters, all from the registry
+// (tomodem/dem/law_registry.hpp), so the keys accepted and the messages follow the laws.
+
+/// Keys of `physics` that are not law parameters.
+const std::set<std::string> kPhysicsKeys = {"normal", "tangential", "rolling", "damping", "pairs",
+                                            "gravity", "local_damping", "fluid_viscosity"};
+
+template <class L>
+L read_law(const Map& ph, Slot slot, const std::string& fallback) {
+  const std::string key = to_string(slot);
+  const std::string name = ph.string(key, fallback);
+  L law;
+  if (!parse(name, law)) throw ph.error(key, name, "unknown " + key + " law; expected " + law_names(slot));
+  return law;
 }
 
-#define PAIR_KEYS "restitution", "damping_ratio", "friction", "rolling_friction", "work_of_adhesion", \
-                  "normal_stiffness", "tangential_stiffness"
+/// What the chosen laws take, for messages: "normal hertz: none; tangential mindlin: friction; …".
+std::string taken_keys(const ContactModel& model) {
+  std::string s;
+  for (const LawInfo* e : chosen_laws(model))
+    s += (s.empty() ? "" : "; ") + to_string(e->slot) + " " + e->key + ": " + e->keys();
+  return s;
+}
+
+/// The laws that take parameter `key`: "tangential linear, tangential mindlin".
+std::string laws_taking(const std::string& key) {
+  std::string s;
+  for (Slot slot : {Slot::normal, Slot::tangential, Slot::rolling, Slot::damping})
+    for (const auto& e : laws(slot))
+      if (e.param(key)) s += (s.empty() ? "" : ", ") + to_string(slot) + " " + e.key;
+  return s;
+}
+
+/// Every key of `m` must be one of `extra` or a parameter of a chosen law; a parameter of
+/// another law is refused with what the chosen laws take.
+void check_keys(const Map& m, const ContactModel& model, const std::set<std::string>& extra) {
+  if (!m.node() || !m.node().IsMap()) return;
+  std::set<std::string> ok = extra;
+  for (const LawInfo* e : chosen_laws(model))
+    for (const auto& p : e->params) ok.insert(p.key);
+  const std::vector<std::string> any = all_param_keys();
+  for (const auto& kv : m.node()) {
+    if (!kv.first.IsScalar()) throw m.error("", yaml::text(kv.first), "keys must be plain names");
+    const std::string key = kv.first.Scalar();
+    if (ok.count(key)) continue;
+    if (std::find(any.begin(), any.end(), key) != any.end())
+      throw m.error(key, m.text(key),
+                    "not a parameter of the chosen laws (" + taken_keys(model) + "); " + key + " belongs to " +
+                        laws_taking(key));
+    std::string list;
+    for (const auto& k : ok) list += (list.empty() ? "" : ", ") + k;
+    throw m.error(key, key, "unknown key; expected one of: " + list);
+  }
+}
+
+double read_param(const Map& m, const LawParam& p, double fallback) {
+  if (std::isinf(p.hi) && p.lo == 0) return p.lo_open ? m.positive(p.key, fallback) : m.non_negative(p.key, fallback);
+  return m.in_range(p.key, fallback, p.lo, p.hi, p.lo_open, p.hi_open);
+}
+
+/// The chosen laws' parameters present in `m` into `pp`, then the laws' own checks of the values.
+void read_pair_keys(const Map& m, const ContactModel& model, PairParams& pp) {
+  const auto laws = chosen_laws(model);
+  for (const LawInfo* e : laws)
+    for (const auto& p : e->params)
+      if (m.has(p.key)) *p.ref(pp) = read_param(m, p, *p.ref(pp));
+  for (const LawInfo* e : laws)
+    if (const LawProblem bad = e->check(pp); !bad.key.empty())
+      throw m.error(bad.key, m.has(bad.key) ? m.text(bad.key) : "", bad.why);
+}
+
+/// What the chosen laws need of the materials and of every pair.
+void check_needs(const Map& ph, const ContactModel& model, const std::vector<Material>& mats) {
+  for (const LawInfo* e : chosen_laws(model)) {
+    for (const auto& p : e->params)
+      if (p.required())
+        for (PairParams pp : model.pairs)
+          if (!(*p.ref(pp) > 0))
+            throw ph.error(p.key, "", "the " + e->key + " law needs " + p.key + " (" + p.unit + ")");
+    const std::string field = to_string(e->slot);
+    if (e->needs_modulus)
+      for (const auto& m : mats)
+        if (m.youngs_modulus <= 0)
+          throw ph.error(field, e->key,
+                         "the " + e->key + " law needs youngs_modulus for material '" + m.name + "'");
+    if (e->needs_adhesion) {
+      bool any = false;
+      for (const auto& pp : model.pairs) any = any || pp.work_of_adhesion > 0;
+      for (const auto& m : mats) any = any || m.surface_energy > 0;
+      if (!any) throw ph.error(field, e->key, "adhesive laws need work_of_adhesion or a material surface_energy");
+    }
+  }
+}
 
 ContactModel read_physics(const Map& ph, const std::vector<Material>& mats) {
-  ph.allow({"normal", "tangential", "rolling", PAIR_KEYS, "pairs", "gravity", "local_damping", "fluid_viscosity"});
   ContactModel model;
-  const std::string n = ph.string("normal", "hertz"), t = ph.string("tangential", "none"),
-                    r = ph.string("rolling", "none");
-  if (!parse(n, model.normal))
-    throw ph.error("normal", n, "unknown normal law; expected linear, hertz, dmt, jkr or sintering");
-  if (!parse(t, model.tangential))
-    throw ph.error("tangential", t, "unknown tangential law; expected none, linear, mindlin or viscous");
-  if (!parse(r, model.rolling)) throw ph.error("rolling", r, "unknown rolling law; expected none or elastic_plastic");
-  if (const std::string why = model.incompatibility(); !why.empty()) throw ph.error("tangential", t, why);
+  model.normal = read_law<NormalLaw>(ph, Slot::normal, "hertz");
+  model.tangential = read_law<TangentialLaw>(ph, Slot::tangential, "none");
+  model.rolling = read_law<RollingLaw>(ph, Slot::rolling, "none");
+  model.damping = read_law<DampingLaw>(ph, Slot::damping, "restitution");
+  if (const std::string why = model.incompatibility(); !why.empty())
+    throw ph.error("tangential", to_string(model.tangential), why);
+  check_keys(ph, model, kPhysicsKeys);
   model.materials = mats;
   model.finalize();
   PairParams defaults;
-  read_pair_keys(ph, defaults);
+  read_pair_keys(ph, model, defaults);
   for (auto& pp : model.pairs) pp = defaults;
   if (ph.has("pairs")) {
     const YAML::Node list = ph.list("pairs");
     for (std::size_t k = 0; k < list.size(); ++k) {
       const Map pm = ph.item("pairs", k);
-      pm.allow({"phases", PAIR_KEYS});
+      check_keys(pm, model, {"phases"});
       const std::vector<std::string> names = pm.strings("phases");
       if (names.size() != 2) throw pm.error("phases", pm.text("phases"), "must name two materials, e.g. [glass, steel]");
       const int a = phase_index(pm, "phases", names[0], mats);
       const int b = phase_index(pm, "phases", names[1], mats);
       PairParams pp = defaults;
-      read_pair_keys(pm, pp);
+      read_pair_keys(pm, model, pp);
       model.pair(a, b) = pp;
       model.pair(b, a) = pp;
     }
   }
-  if (model.normal == NormalLaw::linear)
-    for (const auto& pp : model.pairs)
-      if (pp.k_n <= 0) throw ph.error("normal_stiffness", "", "the linear law needs normal_stiffness (N/m)");
-  if (model.normal != NormalLaw::linear)
-    for (const auto& m : mats)
-      if (m.youngs_modulus <= 0)
-        throw ph.error("normal", n, "the Hertz family needs youngs_modulus for material '" + m.name + "'");
-  if ((model.normal == NormalLaw::hertz_dmt || model.normal == NormalLaw::hertz_jkr)) {
-    bool any = false;
-    for (const auto& pp : model.pairs) any = any || pp.work_of_adhesion > 0;
-    for (const auto& m : mats) any = any || m.surface_energy > 0;
-    if (!any) throw ph.error("normal", n, "adhesive laws need work_of_adhesion or a material surface_energy");
-  }
+  check_needs(ph, model, mats);
   model.finalize();
   return model;
 }
@@ -236,22 +303,92 @@ Scene load_scene(const std::string& path, int threads) {
 }
 
 namespace {
-void read_scene(Scene& scene, const YAML::Node& doc, const std::string& path, int threads) {
-  const std::string& file = scene.file;
-  const Map root(doc, "", file);
-  // `sintering` is read by the sintering driver (tomodem-sinter, docs/sintering.md) from scene.text.
-  root.allow({"particles", "materials", "physics", "cell", "walls", "boundary", "protocol", "settings", "output",
-              "sintering"});
 
-  // ---- materials and particles
+/// The generated particles (a lattice or random insertion) into `input`; the cell too when the
+/// scene gives none.
+void generate_particles(const Map& root, const Map& g, Scene& scene, Packing& input, bool& have_cell) {
+  const std::string& file = scene.file;
+  g.allow({"arrangement", "cells", "count", "radius", "solid_fraction", "spacing", "jitter", "velocity", "seed", "phase"});
+  const std::string arr = g.string("arrangement", "fcc");
+  const double r = g.positive("radius", 0);
+  if (!g.has("radius")) throw g.error("", "", "needs a radius (m)");
+  const double phi = g.in_range("solid_fraction", 0.5, 0, 1, true, true);
+  const double jitter = g.non_negative("jitter", 0);
+  const double vmax = g.non_negative("velocity", 0);
+  const unsigned seed = unsigned(g.integer("seed", 1, 0, 4294967295L));
+  std::vector<Vec3> sites;
+  if (arr == "random") {
+    if (!g.has("count")) throw g.error("count", "", "the random arrangement needs a count of particles");
+    const long count = g.integer("count", 0, 1);
+    // Before anything is allocated: the particles, and the index (int) that numbers them.
+    check_memory_request(double(count) * kBytesPerParticle, file, g.where("count"), g.text("count"),
+                         g.text("count") + " particles");
+    if (count > INT_MAX) throw g.error("count", g.text("count"), "at most 2147483647 particles");
+    const Map cm = root.map("cell");
+    Vec3 lo{0, 0, 0}, hi;
+    if (root.has("cell")) {
+      lo = cm.vec3("lower", lo);
+      hi = cm.vec3("upper", hi);
+    } else {
+      const double side = std::cbrt(double(count) * 4.0 / 3.0 * M_PI * r * r * r / phi);
+      hi = {side, side, side};
+      input.cell = Cell::box(lo, hi, true);
+      have_cell = true;
+    }
+    bool per = !root.has("cell");
+    if (root.has("cell")) {
+      const auto pn = cm.flags3("periodic", false);
+      per = pn[0] && pn[1] && pn[2];
+    }
+    sites = random_sites(int(count), r, lo, hi, per, seed);
+    if (long(sites.size()) < count)
+      throw g.error("count", std::to_string(count),
+                    "only " + std::to_string(sites.size()) + " spheres fit by random insertion; lower the solid fraction");
+  } else if (arr == "simple_cubic" || arr == "bcc" || arr == "fcc") {
+    if (!g.has("cells")) throw g.error("cells", "", "lattice arrangements need cells (per side) > 0");
+    const long n = g.integer("cells", 0, 1);
+    const int per_cell = arr == "simple_cubic" ? 1 : (arr == "bcc" ? 2 : 4);
+    const double sites_wanted = double(per_cell) * double(n) * double(n) * double(n);
+    check_memory_request(sites_wanted * kBytesPerParticle, file, g.where("cells"), g.text("cells"),
+                         g.text("cells") + "^3 " + arr + " cells (" + value_text(sites_wanted) + " particles)");
+    if (sites_wanted > INT_MAX) throw g.error("cells", g.text("cells"), "at most 2147483647 particles in all");
+    double a = g.has("spacing") ? g.positive("spacing", 0)
+                                : std::cbrt(per_cell * 4.0 / 3.0 * M_PI * r * r * r / phi);
+    sites = lattice_sites(arr, int(n), a);
+    if (!root.has("cell")) {
+      input.cell = Cell::box({0, 0, 0}, {n * a, n * a, n * a}, true);
+      have_cell = true;
+    }
+  } else {
+    throw g.error("arrangement", arr, "unknown; expected simple_cubic, bcc, fcc or random");
+  }
+  std::mt19937_64 rng(seed + 7919);
+  std::uniform_real_distribution<double> u(-1, 1);
+  input.particles.resize(sites.size());
+  input.particles.velocity.resize(sites.size());
+  const int phase = g.has("phase") ? -1 : 0;
+  for (std::size_t i = 0; i < sites.size(); ++i) {
+    const Vec3 jit{u(rng), u(rng), u(rng)};
+    input.particles.position[i] = sites[i] + (jitter * 2 * r) * jit;
+    input.particles.radius[i] = r;
+    input.particles.phase[i] = phase;
+    input.particles.velocity[i] = {vmax * u(rng), vmax * u(rng), vmax * u(rng)};
+  }
+  if (phase < 0) {
+    const int ph = phase_index(g, "phase", g.string("phase", ""), scene.materials);
+    for (auto& p : input.particles.phase) p = ph;
+  }
+}
+
+/// Particles from a packing file or the generator; their materials checked.
+Particles read_particles(const Map& root, Scene& scene, const std::string& path, Cell& cell, bool& have_cell) {
+  const std::string& file = scene.file;
   scene.materials = read_materials(root);
   const Map pm = root.map("particles");
   if (!root.has("particles")) throw root.error("particles", "", "the scene needs a particles section");
   pm.allow({"file", "generate"});
   Packing input;
-  bool have_cell = false;
   Particles particles;
-  std::vector<Vec3> velocity;
   if (pm.has("file")) {
     if (pm.has("generate")) throw pm.error("generate", "", "give either file or generate, not both");
     std::string pf = pm.string("file", "");
@@ -262,77 +399,7 @@ void read_scene(Scene& scene, const YAML::Node& doc, const std::string& path, in
     if (scene.materials.empty()) scene.materials = input.materials;
     have_cell = true;
   } else if (pm.has("generate")) {
-    const Map g = pm.map("generate");
-    g.allow({"arrangement", "cells", "count", "radius", "solid_fraction", "spacing", "jitter", "velocity", "seed", "phase"});
-    const std::string arr = g.string("arrangement", "fcc");
-    const double r = g.positive("radius", 0);
-    if (!g.has("radius")) throw g.error("", "", "needs a radius (m)");
-    const double phi = g.in_range("solid_fraction", 0.5, 0, 1, true, true);
-    const double jitter = g.non_negative("jitter", 0);
-    const double vmax = g.non_negative("velocity", 0);
-    const unsigned seed = unsigned(g.integer("seed", 1, 0, 4294967295L));
-    std::vector<Vec3> sites;
-    if (arr == "random") {
-      if (!g.has("count")) throw g.error("count", "", "the random arrangement needs a count of particles");
-      const long count = g.integer("count", 0, 1);
-      // Before anything is allocated: the particles, and the index (int) that numbers them.
-      check_memory_request(double(count) * kBytesPerParticle, file, g.where("count"), g.text("count"),
-                           g.text("count") + " particles");
-      if (count > INT_MAX) throw g.error("count", g.text("count"), "at most 2147483647 particles");
-      const Map cm = root.map("cell");
-      Vec3 lo{0, 0, 0}, hi;
-      if (root.has("cell")) {
-        lo = cm.vec3("lower", lo);
-        hi = cm.vec3("upper", hi);
-      } else {
-        const double side = std::cbrt(double(count) * 4.0 / 3.0 * M_PI * r * r * r / phi);
-        hi = {side, side, side};
-        input.cell = Cell::box(lo, hi, true);
-        have_cell = true;
-      }
-      bool per = !root.has("cell");
-      if (root.has("cell")) {
-        const auto pn = cm.flags3("periodic", false);
-        per = pn[0] && pn[1] && pn[2];
-      }
-      sites = random_sites(int(count), r, lo, hi, per, seed);
-      if (long(sites.size()) < count)
-        throw g.error("count", std::to_string(count),
-                      "only " + std::to_string(sites.size()) + " spheres fit by random insertion; lower the solid fraction");
-    } else if (arr == "simple_cubic" || arr == "bcc" || arr == "fcc") {
-      if (!g.has("cells")) throw g.error("cells", "", "lattice arrangements need cells (per side) > 0");
-      const long n = g.integer("cells", 0, 1);
-      const int per_cell = arr == "simple_cubic" ? 1 : (arr == "bcc" ? 2 : 4);
-      const double sites_wanted = double(per_cell) * double(n) * double(n) * double(n);
-      check_memory_request(sites_wanted * kBytesPerParticle, file, g.where("cells"), g.text("cells"),
-                           g.text("cells") + "^3 " + arr + " cells (" + value_text(sites_wanted) + " particles)");
-      if (sites_wanted > INT_MAX) throw g.error("cells", g.text("cells"), "at most 2147483647 particles in all");
-      double a = g.has("spacing") ? g.positive("spacing", 0)
-                                  : std::cbrt(per_cell * 4.0 / 3.0 * M_PI * r * r * r / phi);
-      sites = lattice_sites(arr, int(n), a);
-      if (!root.has("cell")) {
-        input.cell = Cell::box({0, 0, 0}, {n * a, n * a, n * a}, true);
-        have_cell = true;
-      }
-    } else {
-      throw g.error("arrangement", arr, "unknown; expected simple_cubic, bcc, fcc or random");
-    }
-    std::mt19937_64 rng(seed + 7919);
-    std::uniform_real_distribution<double> u(-1, 1);
-    input.particles.resize(sites.size());
-    input.particles.velocity.resize(sites.size());
-    const int phase = g.has("phase") ? -1 : 0;
-    for (std::size_t i = 0; i < sites.size(); ++i) {
-      const Vec3 jit{u(rng), u(rng), u(rng)};
-      input.particles.position[i] = sites[i] + (jitter * 2 * r) * jit;
-      input.particles.radius[i] = r;
-      input.particles.phase[i] = phase;
-      input.particles.velocity[i] = {vmax * u(rng), vmax * u(rng), vmax * u(rng)};
-    }
-    if (phase < 0) {
-      const int ph = phase_index(g, "phase", g.string("phase", ""), scene.materials);
-      for (auto& p : input.particles.phase) p = ph;
-    }
+    generate_particles(root, pm.map("generate"), scene, input, have_cell);
   } else {
     throw pm.error("", "", "needs file or generate");
   }
@@ -348,9 +415,12 @@ void read_scene(Scene& scene, const YAML::Node& doc, const std::string& path, in
     particles.add(input.particles.position[i], r, scene.materials[ph].density, ph);
     if (!input.particles.velocity.empty()) particles.v[i] = input.particles.velocity[i];
   }
+  cell = input.cell;
+  return particles;
+}
 
-  // ---- cell
-  Cell cell = input.cell;
+/// The scene's cell section, else the cell of the packing or the generator.
+void read_cell(const Map& root, Cell& cell, bool have_cell) {
   if (root.has("cell")) {
     const Map cm = root.map("cell");
     cm.allow({"lower", "upper", "periodic"});
@@ -364,8 +434,10 @@ void read_scene(Scene& scene, const YAML::Node& doc, const std::string& path, in
   } else if (!have_cell) {
     throw root.error("cell", "", "the scene needs a cell (lower, upper, periodic)");
   }
+}
 
-  // ---- physics and settings
+/// Physics, settings and body forces: builds the Simulation.
+void make_simulation(const Map& root, Scene& scene, Particles particles, const Cell& cell, int threads) {
   if (!root.has("physics")) throw root.error("physics", "", "the scene needs a physics section");
   const Map ph = root.map("physics");
   ContactModel model = read_physics(ph, scene.materials);
@@ -383,8 +455,11 @@ void read_scene(Scene& scene, const YAML::Node& doc, const std::string& path, in
   sim.body_forces().gravity = ph.vec3("gravity", {0, 0, 0});
   sim.body_forces().local_damping = ph.in_range("local_damping", 0, 0, 1, false, true);
   sim.body_forces().fluid_viscosity = ph.non_negative("fluid_viscosity", 0);
+}
 
-  // ---- walls
+void read_walls(const Map& root, Scene& scene, const Cell& cell) {
+  const std::string& file = scene.file;
+  Simulation& sim = *scene.sim;
   if (root.has("walls")) {
     const YAML::Node list = root.raw("walls");
     if (!list.IsSequence()) throw root.error("walls", yaml::text(list), "must be a list of walls");
@@ -407,8 +482,10 @@ void read_scene(Scene& scene, const YAML::Node& doc, const std::string& path, in
       sim.add_wall(w);
     }
   }
+}
 
-  // ---- boundary (periodic cell control)
+void read_boundary(const Map& root, Scene& scene, const Cell& cell) {
+  Simulation& sim = *scene.sim;
   if (root.has("boundary")) {
     const Map bm = root.map("boundary");
     bm.allow({"strain_rate", "stress", "max_strain_rate", "servo_gain"});
@@ -422,8 +499,12 @@ void read_scene(Scene& scene, const YAML::Node& doc, const std::string& path, in
     if (bm.has("stress") && cc.max_strain_rate <= 0)
       throw bm.error("max_strain_rate", "", "stress control needs max_strain_rate (1/s) to bound the servo");
   }
+}
 
-  // ---- protocol and outputs
+/// Time step, run length, stop criteria, time-series memory.
+void read_protocol(const Map& root, Scene& scene) {
+  const std::string& file = scene.file;
+  Simulation& sim = *scene.sim;
   const Map pr = root.map("protocol");
   pr.allow({"timestep", "timestep_fraction", "steps", "duration", "output_interval", "stop", "checkpoint_interval"});
   Protocol& p = scene.protocol;
@@ -468,7 +549,10 @@ void read_scene(Scene& scene, const YAML::Node& doc, const std::string& path, in
   p.stop_unbalanced_force = stop.positive("unbalanced_force_ratio", 0);
   p.stop_kinetic_energy = stop.positive("kinetic_energy", 0);
   p.checkpoint_interval = pr.integer("checkpoint_interval", 0);
+}
 
+void read_outputs(const Map& root, Scene& scene) {
+  const std::string& file = scene.file;
   const Map om = root.map("output");
   om.allow({"packing", "series", "checkpoint"});
   scene.outputs.packing = om.string("packing", "packing.h5");
@@ -482,8 +566,12 @@ void read_scene(Scene& scene, const YAML::Node& doc, const std::string& path, in
     for (std::size_t b = a + 1; b < names.size(); ++b)
       if (!names[a].empty() && fs::path(names[a]).lexically_normal() == fs::path(names[b]).lexically_normal())
         throw om.error(a == 0 ? "packing" : "series", names[a], "two outputs have the same name; one would overwrite the other");
+}
 
-  // Overlaps above half the smaller radius at start are bad input (the packing is broken).
+/// Overlaps above half the smaller radius at start are bad input (the packing is broken).
+void check_start_overlaps(Scene& scene) {
+  const std::string& file = scene.file;
+  Simulation& sim = *scene.sim;
   const ContactTable ct = sim.contacts();
   const auto& P = sim.particles();
   for (std::size_t c = 0; c < ct.size(); ++c) {
@@ -495,6 +583,23 @@ void read_scene(Scene& scene, const YAML::Node& doc, const std::string& path, in
       throw InputError(scene.inputs.empty() ? file : scene.inputs[0], "particles.position", std::to_string(ratio), s.str());
     }
   }
+}
+
+void read_scene(Scene& scene, const YAML::Node& doc, const std::string& path, int threads) {
+  const Map root(doc, "", scene.file);
+  // `sintering` is read by the sintering driver (tomodem-sinter, docs/sintering.md) from scene.text.
+  root.allow({"particles", "materials", "physics", "cell", "walls", "boundary", "protocol", "settings", "output",
+              "sintering"});
+  Cell cell;
+  bool have_cell = false;
+  Particles particles = read_particles(root, scene, path, cell, have_cell);
+  read_cell(root, cell, have_cell);
+  make_simulation(root, scene, std::move(particles), cell, threads);
+  read_walls(root, scene, cell);
+  read_boundary(root, scene, cell);
+  read_protocol(root, scene);
+  read_outputs(root, scene);
+  check_start_overlaps(scene);
 }
 }  // namespace
 

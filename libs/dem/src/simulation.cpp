@@ -13,6 +13,7 @@
 #include "sinter_law.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/tool.hpp"
+#include "tomodem/dem/law_registry.hpp"
 
 namespace tomodem::dem {
 
@@ -721,15 +722,15 @@ struct Simulation::Impl {
     }
   }
 
-  /// Sum of the normal stiffness of a wall's contacts, from the overlap (Hertz or linear).
+  /// Sum of the normal stiffness of a wall's contacts at their overlaps (the normal law's own).
   double wall_stiffness(std::size_t w) const {
+    const LawInfo& normal_law = law_info(model.normal);
     double k = 0;
     const Wall& wl = walls[w];
     for (int i : wall_data[w].candidates) {
       const double delta = p.r[i] - dot(p.x[i] - wl.point, wl.normal);
       if (delta <= 0) continue;
-      const PairParams& pp = model.pair(p.phase[i], wl.phase);
-      k += model.normal == NormalLaw::linear ? pp.k_n : 2 * pp.E_star * std::sqrt(p.r[i] * delta);
+      k += normal_law.stiffness(model.pair(p.phase[i], wl.phase), p.r[i], delta);
     }
     return k;
   }
@@ -770,7 +771,7 @@ struct Simulation::Impl {
       throw NumericalError(s.str());
     }
     // Sintering necks interpenetrate by design (Coble's a² = 2Rh): the overlap limit is elastic.
-    if (model.normal != NormalLaw::sintering && last.max_overlap_ratio > 0.5) {
+    if (law_info(model.normal).stiffness_kind != StiffnessKind::viscous && last.max_overlap_ratio > 0.5) {
       std::ostringstream s;
       // Name the pair (a scan of the list, only on this error path).
       std::size_t wi = 0, wj = 0;
@@ -913,7 +914,15 @@ const Particles& Simulation::particles() const { return impl_->p; }
 const Cell& Simulation::cell() const { return impl_->cell; }
 Cell& Simulation::cell() { return impl_->cell; }
 const ContactModel& Simulation::model() const { return impl_->model; }
-ContactModel& Simulation::model() { return impl_->model; }
+void Simulation::set_sinter_values(int a, int b, const SinterValues& v) {
+  for (PairParams* pp : {&impl_->model.pair(a, b), &impl_->model.pair(b, a)}) {
+    pp->sinter_delta_b = v.delta_b;
+    pp->sinter_gamma = v.gamma;
+    pp->sinter_dihedral = v.dihedral;
+    pp->sinter_eta = v.eta;
+    pp->sinter_initial_neck = v.initial_neck;
+  }
+}
 Mat3 Simulation::contact_stress() const {
   Mat3 s = impl_->last.virial;
   s *= -1.0 / impl_->cell.volume();
@@ -963,19 +972,22 @@ void Simulation::add_wall(const Wall& w) {
 double Simulation::critical_time_step() const {
   const Impl& s = *impl_;
   double best = std::numeric_limits<double>::infinity();
-  if (s.model.normal == NormalLaw::linear) {
-    // Two-particle Verlet limit of a damped linear spring: Δt < 2(sqrt(1+ζ²) - ζ)/ω, ω² = k/m*.
+  const LawInfo& normal_law = law_info(s.model.normal);
+  if (normal_law.stiffness_kind == StiffnessKind::spring) {
+    // Two-particle Verlet limit of a damped linear spring: Δt < 2(sqrt(1+ζ²) - ζ)/ω, ω² = k/m*,
+    // with the law's largest stiffness and ζ = c/2 of its dashpot.
     double mmin = std::numeric_limits<double>::infinity();
     for (std::size_t i = 0; i < s.p.size(); ++i)
       if (s.p.motion[i] == Motion::free) mmin = std::min(mmin, s.p.m[i]);
     for (const auto& pp : s.model.pairs) {
-      if (pp.k_n <= 0) continue;
-      const double z = pp.damping_ratio;
+      const double k = normal_law.stiffness(pp, 0, 0);
+      if (k <= 0) continue;
+      const double z = 0.5 * pp.damping;
       // m* of the two lightest particles (a wall contact has m* = m, twice as large: not limiting).
-      best = std::min(best, 2 * (std::sqrt(1 + z * z) - z) * std::sqrt(0.5 * mmin / pp.k_n));
+      best = std::min(best, 2 * (std::sqrt(1 + z * z) - z) * std::sqrt(0.5 * mmin / k));
     }
   } else {
-    if (s.model.normal == NormalLaw::sintering) {
+    if (normal_law.stiffness_kind == StiffnessKind::viscous) {
       // Explicit limit of the viscous necks (Gershgorin on M⁻¹C with the rotations): m_i/Σ(η_n + 5η_t).
       std::vector<double> visc;
       viscous_sums(visc);
@@ -984,7 +996,7 @@ double Simulation::critical_time_step() const {
     }
     // Rayleigh time of each particle: π R sqrt(ρ/G)/(0.1631ν + 0.8766), G and ν of its phase.
     // Under the sintering law only phases with a non-sintering (Hertz) pair have a spring.
-    std::vector<char> elastic(s.model.materials.size(), s.model.normal != NormalLaw::sintering);
+    std::vector<char> elastic(s.model.materials.size(), normal_law.stiffness_kind != StiffnessKind::viscous);
     for (int a = 0; a < int(elastic.size()); ++a)
       for (int b = 0; b < s.model.n_phases; ++b) elastic[a] = elastic[a] || !(s.model.pair(a, b).sinter_delta_b > 0);
     for (std::size_t i = 0; i < s.p.size(); ++i) {
@@ -1022,7 +1034,8 @@ void Simulation::set_time_step(double dt, bool check_limit) {
   if (dt > crit) {
     std::ostringstream s;
     s << "above the stable limit " << crit << " s ("
-      << (impl_->model.normal == NormalLaw::linear ? "two-particle Verlet limit" : "Rayleigh time")
+      << (law_info(impl_->model.normal).stiffness_kind == StiffnessKind::spring ? "two-particle Verlet limit"
+                                                                                 : "Rayleigh time")
       << "); use 'auto' or a smaller value";
     throw InputError("", "timestep", std::to_string(dt), s.str());
   }

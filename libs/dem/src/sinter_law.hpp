@@ -16,10 +16,15 @@
 
 namespace tomodem::dem::law {
 
-struct NormalSintering {
+struct NormalSintering : HertzFamily {
+  static constexpr const char* kKey = "sintering";
+  static constexpr const char* kSummary =
+      "viscous neck N = π a⁴ ḣ/(8Δ_b) − π γ_s [4R(1−cos ψ/2) + a sin ψ/2], Coble growth; Hertz for pairs that do not sinter";
+  static constexpr const char* kSource = "Bouvard & McMeeking 1996; Parhami & McMeeking 1998 (docs/sintering.md)";
+  static constexpr StiffnessKind kStiffness = StiffnessKind::viscous;
+  static constexpr bool kDriven = true;  // Δ_b, γ_s, ψ per temperature: tomodem-sinter sets them
   static constexpr int kHistory = 1;  ///< h[0]: neck radius a, m (0: not yet formed)
   static constexpr bool kTouchFlag = false;
-  static double reach(const PairParams&, double) { return 0; }
   static void reset(double* h) { h[0] = 0; }
 
   /// Normal viscous coefficient π a⁴/(8Δ_b), N s/m.
@@ -55,7 +60,13 @@ struct NormalSintering {
 };
 
 /// Viscous tangential force of a sintering neck; zero for pairs that do not sinter.
-struct TangentialViscous {
+struct TangentialViscous : Described {
+  static constexpr const char* kKey = "viscous";
+  static constexpr const char* kSummary = "T = −(π η a² R²/(8Δ_b)) u̇_t on sintering necks";
+  static constexpr const char* kSource = "Parhami & McMeeking 1998";
+  static constexpr bool kNeedsSpring = false;
+  static constexpr const char* kRequiresNormal = "sintering";
+  static constexpr bool kStateless = true;  // purely viscous: no history, by design
   static constexpr int kHistory = 0;
   static constexpr bool kRotation = true;
   static void reset(double*) {}

@@ -9,6 +9,7 @@
 
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
+#include "tomodem/dem/law_registry.hpp"
 #include "tomodem/dem/model.hpp"
 #include "tomodem/dem/yaml_fields.hpp"
 
@@ -106,13 +107,24 @@ void read_config(PackConfig& cfg, const YAML::Node& root, const std::string& pat
   const Node c = r.map("contact");
   c.allow({"normal", "friction", "restitution", "work_of_adhesion", "normal_stiffness", "aggregate_bond_radius",
            "rolling_friction"});
+  // The normal laws of the registry that a pack config can give parameters to (law_registry.hpp).
+  const auto packable = [](const dem::LawInfo& e) {
+    if (e.driven) return false;  // set per step by a driver (sintering: tomodem-sinter)
+    for (const auto& p : e.params)
+      if (p.required() && std::string(p.key) != "normal_stiffness" && std::string(p.key) != "work_of_adhesion")
+        return false;
+    return true;
+  };
   const std::string law = c.string("normal", "hertz");
-  if (!dem::parse(law, s.normal)) {
-    if (law == "dmt") s.normal = dem::NormalLaw::hertz_dmt;
-    else if (law == "jkr") s.normal = dem::NormalLaw::hertz_jkr;
-    else throw c.error("normal", law, "expected linear, hertz, dmt or jkr");
-  }
-  if (s.normal == dem::NormalLaw::sintering) throw c.error("normal", law, "expected linear, hertz, dmt or jkr");
+  const dem::LawInfo* known = dem::find_law(dem::Slot::normal, law);
+  if (!known) throw c.error("normal", law, "unknown normal law; expected " + dem::law_names(dem::Slot::normal, packable));
+  if (!packable(*known))
+    throw c.error("normal", law,
+                  known->driven ? "runs under its driver (tomodem-sinter), not in a packing; expected " +
+                                      dem::law_names(dem::Slot::normal, packable)
+                                : "takes parameters a pack config does not give (" + known->keys() + "); expected " +
+                                      dem::law_names(dem::Slot::normal, packable));
+  dem::parse(law, s.normal);
   s.friction = c.non_negative("friction", 0);
   s.rolling_friction = c.non_negative("rolling_friction", 0);
   s.restitution = c.in_range("restitution", s.restitution, dem::kMinRestitution, 1, false, false);

@@ -94,8 +94,9 @@ class Simulation {
   const Cell& cell() const;
   Cell& cell();  ///< the cell may be replaced between steps (e.g. on restart)
   const ContactModel& model() const;
-  /// Pair parameters may change between steps (temperature-dependent sintering, docs/sintering.md).
-  ContactModel& model();
+  /// The kernels were chosen from the model when the Simulation was built, so it is read-only;
+  /// the sintering driver changes only the per-temperature pair values (docs/sintering.md).
+  void set_sinter_values(int phase_a, int phase_b, const SinterValues& v);
   const Settings& settings() const;
   std::vector<Wall>& walls();
   const std::vector<Wall>& walls() const;

@@ -109,6 +109,8 @@ double lens_volume(double r1, double r2, double d);
 /// combine as: Δ_b geometric mean, γ_s, ψ and η arithmetic means; a pair with a non-sintering
 /// phase gets Δ_b = 0 (Hertz repulsion).
 void apply_temperature(ContactModel& model, const std::vector<SinterPhase>& phases, double T, double initial_neck);
+/// The same for a running simulation (through Simulation::set_sinter_values).
+void apply_temperature(Simulation& sim, const std::vector<SinterPhase>& phases, double T, double initial_neck);
 
 /// Checks the settings against the scene's packing (target above the start, the program reaches
 /// sintering temperatures); throws InputError naming the field.
