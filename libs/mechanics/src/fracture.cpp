@@ -4,6 +4,7 @@
 #include "tomodem/mechanics/fracture.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <numeric>
@@ -32,15 +33,11 @@ struct Components {
 };
 }  // namespace
 
-FractureSample make_sample(const Network& net, const CrackOptions& o, const std::string& file) {
-  FractureSample s;
-  s.packing = net.packing;
-  s.image = net.image;
-  Packing& p = s.packing;
+namespace {
+/// Refuses a packing the sample cannot be cut from: no bonds, fewer than two particles, a cell that
+/// is not an orthogonal box periodic along the crack front (y). Returns the cell lengths.
+std::array<double, 3> check_cell(const Packing& p, const std::string& file) {
   const std::size_t n = p.particles.size(), m = p.bonds.size();
-  if (o.geometry != "centre" && o.geometry != "edge")
-    throw InputError("", "--geometry", o.geometry, "expected centre (crack 2a in the middle) or edge (notch a at x = 0)");
-  s.geometry = o.geometry;
   if (m == 0) throw InputError(file, "/bonds", "missing", "a packing without bonds: make the network with tomodem-bond first");
   if (n < 2) throw InputError(file, "/particles/radius", std::to_string(n), "needs at least two particles");
   const Mat3& h = p.cell.h;
@@ -52,10 +49,16 @@ FractureSample make_sample(const Network& net, const CrackOptions& o, const std:
   if (!p.cell.periodic[1])
     throw InputError(file, "/cell/periodic", "y not periodic",
                      "the crack front runs along y, which must be periodic (plane strain)");
-  const double L[3] = {h(0, 0), h(1, 1), h(2, 2)};
+  const std::array<double, 3> L = {h(0, 0), h(1, 1), h(2, 2)};
   for (int k = 0; k < 3; ++k)
     if (!(L[k] > 0)) throw InputError(file, "/cell/h", num(L[k]), "cell lengths must be positive");
-  // Wrap the particles into the cell along periodic directions; the bond images follow.
+  return L;
+}
+
+/// Wraps the particles into the cell along periodic directions; the bond images follow.
+void wrap_into_cell(FractureSample& s, const std::array<double, 3>& L) {
+  Packing& p = s.packing;
+  const std::size_t n = p.particles.size(), m = p.bonds.size();
   std::vector<std::array<int32_t, 3>> w(n, {0, 0, 0});
   for (std::size_t i = 0; i < n; ++i)
     for (int k = 0; k < 3; ++k)
@@ -68,18 +71,12 @@ FractureSample make_sample(const Network& net, const CrackOptions& o, const std:
       }
   for (std::size_t b = 0; b < m; ++b)
     for (int k = 0; k < 3; ++k) s.image[b][k] += w[p.bonds.j[b]][k] - w[p.bonds.i[b]][k];
+}
 
-  double dsum = 0, zmin = HUGE_VAL, zmax = -HUGE_VAL;
-  for (std::size_t i = 0; i < n; ++i) {
-    dsum += 2 * p.particles.radius[i];
-    zmin = std::min(zmin, p.particles.position[i].z);
-    zmax = std::max(zmax, p.particles.position[i].z);
-  }
-  s.mean_diameter = dsum / double(n);
-  const double grip = o.grip > 0 ? o.grip : s.mean_diameter;
-  s.W = L[0];
-  s.B = L[1];
-  s.H = zmax - zmin;
+/// Crack length, plane and extent along x; the grip layers at the z ends. Refuses a crack longer
+/// than the sample, grips that leave no room, a crack plane outside the grips.
+void place_crack(FractureSample& s, const CrackOptions& o, double zmin, double zmax, double grip,
+                 const std::string& file) {
   if (!(o.a_over_w > 0)) throw InputError("", "--a-over-w", num(o.a_over_w), "the crack length must be > 0");
   s.a = o.a_over_w * s.W;
   const double total = o.geometry == "centre" ? 2 * s.a : s.a;
@@ -92,7 +89,7 @@ FractureSample make_sample(const Network& net, const CrackOptions& o, const std:
   if (!(std::abs(o.plane_offset) < 0.5 - grip / s.H))
     throw InputError("", "--crack-offset", num(o.plane_offset), "the crack plane must lie between the grips");
   s.crack_z = 0.5 * (zmin + zmax) + o.plane_offset * s.H;
-  const double x0 = p.cell.origin.x;
+  const double x0 = s.packing.cell.origin.x;
   if (o.geometry == "centre") {
     s.crack_x0 = x0 + 0.5 * s.W - s.a;
     s.crack_x1 = x0 + 0.5 * s.W + s.a;
@@ -100,13 +97,20 @@ FractureSample make_sample(const Network& net, const CrackOptions& o, const std:
     s.crack_x0 = x0 - s.W;  // from beyond the free face
     s.crack_x1 = x0 + s.a;
   }
-  s.role.assign(n, ParticleRole::free);
-  for (std::size_t i = 0; i < n; ++i) {
+  const Packing& p = s.packing;
+  s.role.assign(p.particles.size(), ParticleRole::free);
+  for (std::size_t i = 0; i < p.particles.size(); ++i) {
     const double z = p.particles.position[i].z;
     if (z < zmin + grip) s.role[i] = ParticleRole::bottom;
     else if (z > zmax - grip) s.role[i] = ParticleRole::top;
   }
-  // Bonds: across the x or z faces -> cut (free faces, grips); across the crack -> pre-crack.
+}
+
+/// Bonds: across the x or z faces -> cut (free faces, grips); across the crack -> pre-crack; a load
+/// bond across the crack plane outside the crack is part of the ligament.
+void classify_bonds(FractureSample& s) {
+  const Packing& p = s.packing;
+  const std::size_t m = p.bonds.size();
   s.bond_role.assign(m, BondRole::load);
   s.crosses_plane.assign(m, 0);
   for (std::size_t b = 0; b < m; ++b) {
@@ -132,7 +136,13 @@ FractureSample make_sample(const Network& net, const CrackOptions& o, const std:
       }
     }
   }
-  // Keep the particles connected to a grip; the grips must be connected to each other.
+}
+
+/// Keeps the particles connected to a grip (the others are removed); true when a cluster of load
+/// bonds connects the two grips.
+bool keep_gripped(FractureSample& s) {
+  const Packing& p = s.packing;
+  const std::size_t n = p.particles.size(), m = p.bonds.size();
   Components comp(n);
   for (std::size_t b = 0; b < m; ++b)
     if (s.bond_role[b] == BondRole::load) comp.join(p.bonds.i[b], p.bonds.j[b]);
@@ -148,9 +158,15 @@ FractureSample make_sample(const Network& net, const CrackOptions& o, const std:
       s.role[i] = ParticleRole::removed;
       ++s.removed_particles;
     }
+  return spans;
+}
+
+/// Drops the bonds of removed particles; counts the ligament bonds; the mean load-bond length.
+void count_ligament(FractureSample& s) {
+  const Packing& p = s.packing;
   double lsum = 0;
   long lcount = 0;
-  for (std::size_t b = 0; b < m; ++b) {
+  for (std::size_t b = 0; b < p.bonds.size(); ++b) {
     if (s.bond_role[b] != BondRole::load) continue;
     if (s.role[p.bonds.i[b]] == ParticleRole::removed) {
       s.bond_role[b] = BondRole::absent;
@@ -161,13 +177,43 @@ FractureSample make_sample(const Network& net, const CrackOptions& o, const std:
     ++lcount;
     s.ligament_bonds += s.crosses_plane[b];
   }
+  s.mean_bond_length = lsum / double(std::max(1L, lcount));
+}
+}  // namespace
+
+FractureSample make_sample(const Network& net, const CrackOptions& o, const std::string& file) {
+  FractureSample s;
+  s.packing = net.packing;
+  s.image = net.image;
+  Packing& p = s.packing;
+  const std::size_t n = p.particles.size();
+  if (o.geometry != "centre" && o.geometry != "edge")
+    throw InputError("", "--geometry", o.geometry, "expected centre (crack 2a in the middle) or edge (notch a at x = 0)");
+  s.geometry = o.geometry;
+  const std::array<double, 3> L = check_cell(p, file);
+  wrap_into_cell(s, L);
+
+  double dsum = 0, zmin = HUGE_VAL, zmax = -HUGE_VAL;
+  for (std::size_t i = 0; i < n; ++i) {
+    dsum += 2 * p.particles.radius[i];
+    zmin = std::min(zmin, p.particles.position[i].z);
+    zmax = std::max(zmax, p.particles.position[i].z);
+  }
+  s.mean_diameter = dsum / double(n);
+  const double grip = o.grip > 0 ? o.grip : s.mean_diameter;
+  s.W = L[0];
+  s.B = L[1];
+  s.H = zmax - zmin;
+  place_crack(s, o, zmin, zmax, grip, file);
+  classify_bonds(s);
+  const bool spans = keep_gripped(s);
+  count_ligament(s);
   if (s.ligament_bonds == 0)
     throw InputError(file, "/bonds", "0 intact bonds cross z = " + num(s.crack_z) + " m outside the crack",
                      "no bonds across the crack path: nothing holds the two halves together");
   if (!spans)
     throw InputError(file, "/bonds", "grips at z < " + num(zmin + grip) + " and z > " + num(zmax - grip) + " m",
                      "the grips are not connected by intact bonds (no load path)");
-  s.mean_bond_length = lsum / double(std::max(1L, lcount));
   for (std::size_t i = 0; i < n; ++i) {
     s.bottom_grip += s.role[i] == ParticleRole::bottom;
     s.top_grip += s.role[i] == ParticleRole::top;
