@@ -267,41 +267,42 @@ double relax(Packing& p, long steps, int threads, const std::string& file) {
   return m.unbalanced_force_ratio;
 }
 
-}  // namespace
-
-Result carve(const Packing& in, const Macropores& pores, const Options& opt) {
-  const auto t0 = std::chrono::steady_clock::now();
-  set_threads(opt.threads);
+/// Options that no packing or image can make valid.
+void check_options(const Packing& in, const Options& opt) {
   const std::string& pf = opt.packing_file;
-  const std::size_t n = in.particles.size();
-  if (n == 0) throw InputError(pf, "/particles", "0", "the packing has no particle");
+  if (in.particles.size() == 0) throw InputError(pf, "/particles", "0", "the packing has no particle");
   if (!(opt.fraction >= 0 && opt.fraction < 1)) throw InputError("", "--fraction", num(opt.fraction), "must lie in [0, 1)");
   if (opt.samples_per_diameter < 2) throw InputError("", "--samples", std::to_string(opt.samples_per_diameter), "must be >= 2");
   if (!(opt.contact_gap >= 0)) throw InputError("", "--contact-gap", num(opt.contact_gap), "must be >= 0");
-  const MappedPores mp(pores, opt.mapping, in.cell);
-  Result res;
-  Report& rep = res.report;
-  rep.scale = mp.scale();
+}
+
+/// The image must overlap the packing (tiling always does).
+void check_overlap(const MappedPores& mp, const Box& cb, const Macropores& pores, const Options& opt) {
+  if (opt.mapping.tile) return;
+  Box ib{mp.corners()[0], mp.corners()[0]};
+  for (const Vec3& c : mp.corners())
+    for (int k = 0; k < 3; ++k) ib.lo[k] = std::min(ib.lo[k], c[k]), ib.hi[k] = std::max(ib.hi[k], c[k]);
+  for (int k = 0; k < 3; ++k)
+    if (ib.hi[k] <= cb.lo[k] || ib.lo[k] >= cb.hi[k]) {
+      std::ostringstream o;
+      o << "image box [" << ib.lo.x << "," << ib.lo.y << "," << ib.lo.z << "]-[" << ib.hi.x << "," << ib.hi.y << ","
+        << ib.hi.z << "] m, packing cell [" << cb.lo.x << "," << cb.lo.y << "," << cb.lo.z << "]-[" << cb.hi.x << ","
+        << cb.hi.y << "," << cb.hi.z << "] m";
+      throw InputError(pores.describe(), "mapping", o.str(), "the mapped image does not overlap the packing");
+    }
+}
+
+/// A capped distance (narrow band) only says |d| >= band: for the fractions it is infinitely far.
+double uncap(double d, double band) {
+  return std::abs(d) >= band * (1 - 1e-6) ? std::copysign(std::numeric_limits<double>::infinity(), d) : d;
+}
+
+/// The integration grid over the cell: the target macroporosity, the outside region (farther than
+/// the margin from the pores) and the fraction of the cell the image covers.
+void integrate_target(const Packing& in, const MappedPores& mp, const Box& cb, const Macropores& pores,
+                      const Options& opt, Report& rep) {
+  const std::size_t n = in.particles.size();
   const double V = in.cell.volume();
-  if (!(V > 0)) throw InputError(pf, "/cell", "", "the cell has no volume");
-
-  // The image must overlap the packing (tiling always does).
-  const Box cb = cell_box(in.cell);
-  if (!opt.mapping.tile) {
-    Box ib{mp.corners()[0], mp.corners()[0]};
-    for (const Vec3& c : mp.corners())
-      for (int k = 0; k < 3; ++k) ib.lo[k] = std::min(ib.lo[k], c[k]), ib.hi[k] = std::max(ib.hi[k], c[k]);
-    for (int k = 0; k < 3; ++k)
-      if (ib.hi[k] <= cb.lo[k] || ib.lo[k] >= cb.hi[k]) {
-        std::ostringstream o;
-        o << "image box [" << ib.lo.x << "," << ib.lo.y << "," << ib.lo.z << "]-[" << ib.hi.x << "," << ib.hi.y << ","
-          << ib.hi.z << "] m, packing cell [" << cb.lo.x << "," << cb.lo.y << "," << cb.lo.z << "]-[" << cb.hi.x << ","
-          << cb.hi.y << "," << cb.hi.z << "] m";
-        throw InputError(pores.describe(), "mapping", o.str(), "the mapped image does not overlap the packing");
-      }
-  }
-
-  // ---- integration grid: the target macroporosity, the covered fraction, the outside region
   double rmax = 0, vsolid = 0;
   for (std::size_t i = 0; i < n; ++i) rmax = std::max(rmax, in.particles.radius[i]), vsolid += sphere_volume(in.particles.radius[i]);
   rep.solid_fraction_before = vsolid / V;
@@ -319,11 +320,8 @@ Result carve(const Packing& in, const Macropores& pores, const Options& opt) {
   }
   rep.target_grid = ng;
   const double rc = std::cbrt(3 * V / (4 * kPi * double(ng) * ng * ng));  // ball of one grid cell's volume
-  // A capped distance (narrow band) only says |d| >= band: for the fractions it is infinitely far.
   const double band = mp.band();
-  const auto uncap = [band](double d) {
-    return std::abs(d) >= band * (1 - 1e-6) ? std::copysign(std::numeric_limits<double>::infinity(), d) : d;
-  };
+  const double margin = rep.outside_margin;
   double sum_in = 0, sum_out = 0, sum_cov = 0;
   const Box ibox = opt.mapping.use_image_box ? opt.mapping.image_box : pores.bounds();
 #pragma omp parallel for reduction(+ : sum_in, sum_out, sum_cov) schedule(dynamic, 1)
@@ -332,9 +330,9 @@ Result carve(const Packing& in, const Macropores& pores, const Options& opt) {
       for (int i = 0; i < ng; ++i) {
         const Vec3 s{(i + 0.5) / ng, (j + 0.5) / ng, (k + 0.5) / ng};
         const Vec3 x = in.cell.origin + in.cell.h * s;
-        const double d = uncap(mp.distance(x));
+        const double d = uncap(mp.distance(x), band);
         sum_in += inside_fraction(d, rc, 0);
-        sum_out += 1 - inside_fraction(d - rep.outside_margin, rc, 0);
+        sum_out += 1 - inside_fraction(d - margin, rc, 0);
         if (!opt.mapping.tile) sum_cov += box_distance(ibox, mp.to_image(x)) < 0;
       }
   const double cells = double(ng) * ng * ng;
@@ -347,11 +345,15 @@ Result carve(const Packing& in, const Macropores& pores, const Options& opt) {
                      "no macropore of the mapped image lies inside the packing's cell: nothing to carve");
   if (rep.image_coverage < 0.999 && !opt.mapping.tile)
     warn("the mapped image covers " + num(100 * rep.image_coverage) + " % of the packing's cell; the rest stays solid (--tile repeats the image)");
+}
 
-  // ---- classification
-  const auto t_class = std::chrono::steady_clock::now();
+/// Which particles go: inside the pores, and the cut ones by the cut policy and rule.
+/// Returns the number of cut particles.
+long classify(const Packing& in, const MappedPores& mp, const Options& opt, std::vector<uint8_t>& removed) {
+  const std::size_t n = in.particles.size();
+  const double band = mp.band();
   FractionEval frac{mp, opt.method, unit_ball_points(opt.samples_per_diameter)};
-  res.removed.assign(n, 0);
+  removed.assign(n, 0);
   long n_cut = 0;
 #pragma omp parallel for reduction(+ : n_cut) schedule(dynamic, 1024)
   for (std::ptrdiff_t ii = 0; ii < std::ptrdiff_t(n); ++ii) {
@@ -377,20 +379,17 @@ Result carve(const Packing& in, const Macropores& pores, const Options& opt) {
       else if (opt.rule == Rule::centre) remove = d < 0;
       else remove = (f >= 0 ? f : frac(c, r, d)) > opt.fraction;
     }
-    res.removed[i] = remove;
+    removed[i] = remove;
   }
-  rep.time_classify_s = seconds_since(t_class);
-  rep.n_cut = std::size_t(n_cut);
-  double vremoved = 0;
-  for (std::size_t i = 0; i < n; ++i)
-    if (res.removed[i]) ++rep.n_removed, vremoved += sphere_volume(in.particles.radius[i]);
-  if (rep.n_removed == n)
-    throw InputError(pores.describe(), "mapping", "all " + std::to_string(n) + " particles",
-                     "the carve would remove every particle of " + pf);
-  rep.macroporosity_achieved = vremoved / (rep.solid_fraction_before * V);
+  return n_cut;
+}
 
-  // ---- connectivity before, carve, relax, connectivity after (the input's graph restricted to
-  // the kept particles unless the relaxation moved them)
+/// Connectivity before, carve, relax, connectivity after (the input's graph restricted to the
+/// kept particles unless the relaxation moved them), floating clusters removed on request.
+void carve_and_connect(const Packing& in, const Macropores& pores, const Options& opt, Result& res) {
+  const std::string& pf = opt.packing_file;
+  const std::size_t n = in.particles.size();
+  Report& rep = res.report;
   const auto t_conn = std::chrono::steady_clock::now();
   const ContactGraph graph = contact_graph(in, opt.contact_gap);
   rep.before = clusters(graph);
@@ -421,8 +420,13 @@ Result carve(const Packing& in, const Macropores& pores, const Options& opt) {
   rep.n_out = res.packing.particles.size();
   if (rep.n_out == 0)
     throw InputError(pores.describe(), "--remove-floating", "", "the carve would remove every particle of " + pf);
+}
 
-  // ---- solid fraction away from the pores (the region farther than the margin)
+/// Solid fraction of the carved packing, and away from the pores (the region farther than the margin).
+void solid_fraction_outside(const MappedPores& mp, double V, Result& res) {
+  Report& rep = res.report;
+  const double band = mp.band();
+  const double margin = rep.outside_margin;
   double vout = 0, vafter = 0;
   const auto& Q = res.packing.particles;
 #pragma omp parallel for reduction(+ : vout, vafter) schedule(static)
@@ -430,31 +434,68 @@ Result carve(const Packing& in, const Macropores& pores, const Options& opt) {
     const std::size_t i = std::size_t(ii);
     const double r = Q.radius[i], v = sphere_volume(r);
     vafter += v;
-    const double d = uncap(mp.distance(Q.position[i]));
-    vout += v * (1 - inside_fraction(d - rep.outside_margin, r, 0));
+    const double d = uncap(mp.distance(Q.position[i]), band);
+    vout += v * (1 - inside_fraction(d - margin, r, 0));
   }
   rep.solid_fraction_after = vafter / V;
   rep.solid_fraction_outside = rep.outside_volume_fraction > 0 ? vout / (rep.outside_volume_fraction * V) : 0;
-  // Spread of a volume average of the homogeneous packing: std over 4³ sub-boxes (particles
-  // assigned by centre), scaled by sqrt(V_box / V_outside).
-  {
-    const int kb = 4;
-    std::vector<double> vb(std::size_t(kb * kb * kb), 0.0);
-    const Mat3 hinv = in.cell.h.inverse();
-    for (std::size_t i = 0; i < n; ++i) {
-      Vec3 s = hinv * (in.particles.position[i] - in.cell.origin);
-      int b[3];
-      for (int k = 0; k < 3; ++k) b[k] = std::clamp(int(std::floor((s[k] - std::floor(s[k])) * kb)), 0, kb - 1);
-      vb[std::size_t((b[2] * kb + b[1]) * kb + b[0])] += sphere_volume(in.particles.radius[i]);
-    }
-    const double vbox = V / double(vb.size());
-    double s1 = 0, s2 = 0;
-    for (double v : vb) s1 += v / vbox, s2 += (v / vbox) * (v / vbox);
-    const double mean = s1 / double(vb.size());
-    const double sd = std::sqrt(std::max(0.0, s2 / double(vb.size()) - mean * mean));
-    const double vA = rep.outside_volume_fraction * V;
-    rep.solid_fraction_outside_spread = vA > 0 ? sd * std::sqrt(vbox / vA) : 0;
+}
+
+/// Spread of a volume average of the homogeneous packing: std over 4³ sub-boxes (particles
+/// assigned by centre), scaled by sqrt(V_box / V_outside).
+double outside_spread(const Packing& in, double outside_volume_fraction) {
+  const std::size_t n = in.particles.size();
+  const double V = in.cell.volume();
+  const int kb = 4;
+  std::vector<double> vb(std::size_t(kb * kb * kb), 0.0);
+  const Mat3 hinv = in.cell.h.inverse();
+  for (std::size_t i = 0; i < n; ++i) {
+    Vec3 s = hinv * (in.particles.position[i] - in.cell.origin);
+    int b[3];
+    for (int k = 0; k < 3; ++k) b[k] = std::clamp(int(std::floor((s[k] - std::floor(s[k])) * kb)), 0, kb - 1);
+    vb[std::size_t((b[2] * kb + b[1]) * kb + b[0])] += sphere_volume(in.particles.radius[i]);
   }
+  const double vbox = V / double(vb.size());
+  double s1 = 0, s2 = 0;
+  for (double v : vb) s1 += v / vbox, s2 += (v / vbox) * (v / vbox);
+  const double mean = s1 / double(vb.size());
+  const double sd = std::sqrt(std::max(0.0, s2 / double(vb.size()) - mean * mean));
+  const double vA = outside_volume_fraction * V;
+  return vA > 0 ? sd * std::sqrt(vbox / vA) : 0;
+}
+
+}  // namespace
+
+Result carve(const Packing& in, const Macropores& pores, const Options& opt) {
+  const auto t0 = std::chrono::steady_clock::now();
+  set_threads(opt.threads);
+  const std::string& pf = opt.packing_file;
+  const std::size_t n = in.particles.size();
+  check_options(in, opt);
+  const MappedPores mp(pores, opt.mapping, in.cell);
+  Result res;
+  Report& rep = res.report;
+  rep.scale = mp.scale();
+  const double V = in.cell.volume();
+  if (!(V > 0)) throw InputError(pf, "/cell", "", "the cell has no volume");
+  const Box cb = cell_box(in.cell);
+  check_overlap(mp, cb, pores, opt);
+  integrate_target(in, mp, cb, pores, opt, rep);
+
+  const auto t_class = std::chrono::steady_clock::now();
+  rep.n_cut = std::size_t(classify(in, mp, opt, res.removed));
+  rep.time_classify_s = seconds_since(t_class);
+  double vremoved = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    if (res.removed[i]) ++rep.n_removed, vremoved += sphere_volume(in.particles.radius[i]);
+  if (rep.n_removed == n)
+    throw InputError(pores.describe(), "mapping", "all " + std::to_string(n) + " particles",
+                     "the carve would remove every particle of " + pf);
+  rep.macroporosity_achieved = vremoved / (rep.solid_fraction_before * V);
+
+  carve_and_connect(in, pores, opt, res);
+  solid_fraction_outside(mp, V, res);
+  rep.solid_fraction_outside_spread = outside_spread(in, rep.outside_volume_fraction);
 
   auto& sc = res.packing.results.scalars;
   auto& un = res.packing.results.units;
