@@ -1,0 +1,48 @@
+#pragma once
+// tomodem-cg: read packings (one or a time series), coarse-grain, write HDF5 + XDMF, summarise
+// in JSON (docs/cg.md).
+#include <string>
+#include <vector>
+
+#include "tomodem/core/packing.hpp"
+#include "tomodem/fields/cg.hpp"
+
+namespace tomodem::fields {
+
+struct CgConfig {
+  std::vector<std::string> inputs;  ///< snapshots of one cell; the fields are their time average
+  std::string reference;            ///< packing the displacement is measured from ("" none)
+  std::string output;               ///< fields .h5 (and its .xdmf sidecar)
+  std::string json;                 ///< summary file ("" or "-": stdout only)
+  std::string kernel = "gaussian";  ///< gaussian | lucy
+  std::string width = "1";          ///< mean diameters, or a length with a unit ("20um")
+  double cutoff = 3;                ///< Gaussian cut-off in widths
+  std::string grid;                 ///< "N" or "NX,NY,NZ" nodes along the cell vectors; "" automatic
+  std::string slice;                ///< "z=0.5": the plane at this fraction of the cell vector
+  std::string profile;              ///< "z": profile along this cell vector
+  int quadrature = 0;               ///< points per branch (0: automatic)
+  double density = 0;               ///< kg/m^3 for every phase (0: from the materials)
+  std::string bond_forces = "auto"; ///< auto | stored | stretch | none
+  int threads = 0;
+};
+
+/// Runs the tool; returns the JSON summary text (also written to `json` when given).
+std::string run_cg(const CgConfig& c);
+
+/// How the snapshot gets its masses and pair forces (for tests that build packings in memory).
+struct SnapshotOptions {
+  double density = 0;                   ///< kg/m^3 for every phase; 0: the materials' densities
+  std::string bond_forces = "auto";     ///< auto | stored | stretch | none
+  std::vector<Vec3> stored_bond_force;  ///< /bonds/force rows (force on j from i), when read
+  std::vector<std::array<int32_t, 3>> bond_image;  ///< /bonds/image rows, when read
+};
+/// Masses, contact and bond forces and branch vectors of a packing; the displacement from
+/// `reference` when given. InputError naming `file` and the dataset for what is missing.
+/// `bond_source` receives where the bond forces came from.
+Snapshot make_snapshot(const Packing& p, const std::string& file, const SnapshotOptions& o, const Packing* reference,
+                       const std::string& reference_file, std::string* bond_source = nullptr);
+
+/// x_j + H·n − x_i over the periodic images (n ∈ {-1, 0, 1} along periodic axes), shortest.
+Vec3 minimum_image(const Cell& cell, const Vec3& xi, const Vec3& xj);
+
+}  // namespace tomodem::fields
