@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "tomodem/core/error.hpp"
+#include "tomodem/core/summary.hpp"
 #include "tomodem/core/tool.hpp"
 #include "template.hpp"
 #include "tomodem/pipeline/run.hpp"
@@ -78,6 +79,9 @@ void require_chars(const std::string& v, const std::string& option, const std::s
 }  // namespace
 
 SlurmFiles slurm_scripts(const Pipeline& p, const SlurmOptions& o) {
+  if (!p.adaptive.empty())  // the shards could not share the decisions of adaptive replicas
+    throw InputError(p.adaptive[0].where.str(), "steps." + p.adaptive[0].step + ".replicas", "until",
+                     "adaptive replicas are decided as replicas finish: run the pipeline without shards");
   const int leaves = static_cast<int>(sweep_leaves(p).size());
   if (leaves == 0)
     throw InputError(p.file, "matrix", "", "nothing to shard: the pipeline has no matrix:, cases: or replicas:");
@@ -135,9 +139,9 @@ SlurmFiles slurm_scripts(const Pipeline& p, const SlurmOptions& o) {
 }
 
 std::string summary_json(const Pipeline& p, const RunSummary& s) {
-  nlohmann::json j;
-  j["tool"] = "tomodem-run";
-  j["version"] = version_string();
+  Summary j("tomodem-run");  // the common keys (docs/cli.md "Summary")
+  j.input(p.file);
+  j.output("lock_file", p.lock_file);
   j["pipeline"] = p.file;
   j["lock_file"] = p.lock_file;
   j["wall_s"] = s.wall_s;
@@ -156,7 +160,7 @@ std::string summary_json(const Pipeline& p, const RunSummary& s) {
     j["steps"].push_back({{"id", r.id}, {"state", r.state}, {"reason", r.reason}, {"seconds", r.seconds},
                           {"exit_code", r.exit_code}, {"log", r.log}, {"outs", outs}});
   }
-  return j.dump(1) + "\n";
+  return j.text();
 }
 
 std::string summary_text(const RunSummary& s) {

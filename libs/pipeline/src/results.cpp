@@ -48,6 +48,8 @@ void flatten(const json& j, const std::string& prefix, Row& out) {
   for (auto it = j.begin(); it != j.end(); ++it) {
     const std::string key = prefix.empty() ? it.key() : prefix + "." + it.key();
     const json& v = it.value();
+    // A summary's provenance (command line, host, time) is not a result: no columns.
+    if (it.key() == "provenance" && v.is_object()) continue;
     if (v.is_object())
       flatten(v, key, out);
     else if (v.is_number())
@@ -99,6 +101,25 @@ std::string number_text(double x) {
   s << x;
   return s.str();
 }
+double number_in(const Row& r, const std::string& c) {
+  const Value* v = find(r, c);
+  return v && v->number ? v->x : NAN;
+}
+
+// A tool's own 1-sigma error of column `c` as an absolute number: `<c>_error` is relative
+// (issue 18's convention) unless the summary's units name another unit for it
+// (`<prefix>.units.<key>_error`: "Pa" makes it absolute); NaN when the row has none.
+double tool_error(const Row& r, const std::string& c, double value) {
+  const double e = number_in(r, c + "_error");
+  if (!std::isfinite(e)) return NAN;
+  const auto dot = c.rfind('.');
+  const std::string unit_col = dot == std::string::npos ? "units." + c + "_error"
+                                                        : c.substr(0, dot) + ".units." + c.substr(dot + 1) + "_error";
+  const Value* unit = find(r, unit_col);
+  const bool relative = !unit || unit->text.empty() || unit->text == "relative" || unit->text == "1";
+  return relative ? std::fabs(e * value) : std::fabs(e);
+}
+
 }  // namespace
 
 Row flatten_json(const std::string& json_text, const std::string& prefix, const std::string& file) {
@@ -127,6 +148,8 @@ std::string make_row(const std::vector<std::string>& values, const std::vector<s
   }
   return row.dump(1) + "\n";
 }
+
+double own_error(const Row& row, const std::string& column, double value) { return tool_error(row, column, value); }
 
 PlotRequest parse_plot(const std::string& spec) {
   PlotRequest p;
@@ -213,25 +236,6 @@ Table read_rows(const std::vector<std::string>& row_files) {
     t.rows.push_back(std::move(r));
   }
   return t;
-}
-
-double number_in(const Row& r, const std::string& c) {
-  const Value* v = find(r, c);
-  return v && v->number ? v->x : NAN;
-}
-
-// A tool's own 1-sigma error of column `c` as an absolute number: `<c>_error` is relative
-// (issue 18's convention) unless the summary's units name another unit for it
-// (`<prefix>.units.<key>_error`: "Pa" makes it absolute); NaN when the row has none.
-double tool_error(const Row& r, const std::string& c, double value) {
-  const double e = number_in(r, c + "_error");
-  if (!std::isfinite(e)) return NAN;
-  const auto dot = c.rfind('.');
-  const std::string unit_col = dot == std::string::npos ? "units." + c + "_error"
-                                                        : c.substr(0, dot) + ".units." + c.substr(dot + 1) + "_error";
-  const Value* unit = find(r, unit_col);
-  const bool relative = !unit || unit->text.empty() || unit->text == "relative" || unit->text == "1";
-  return relative ? std::fabs(e * value) : std::fabs(e);
 }
 
 void add_ratios(Table& t, const std::vector<std::string>& ratios) {

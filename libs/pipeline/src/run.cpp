@@ -21,6 +21,7 @@
 #include <set>
 #include <sstream>
 
+#include "adaptive.hpp"
 #include "state.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
@@ -60,6 +61,8 @@ class FileLock {
  private:
   int fd_ = -1;
 };
+
+std::string run_lock_path(const Pipeline& p) { return (fs::path(p.logs_dir) / ".run.lock").string(); }
 
 std::string step_lock_path(const Pipeline& p, const Instance& in) {
   char hex[17];
@@ -195,85 +198,234 @@ struct Running {
   std::shared_ptr<FileLock> step_lock;
 };
 
-RunSummary execute(const Pipeline& p, const RunOptions& o, std::ostream* progress) {
-  const auto t_start = std::chrono::steady_clock::now();
-  const std::size_t n = p.instances.size();
-  const int jobs = std::max(1, o.jobs);
-  RunSummary sum;
-  sum.steps.resize(n);
-  for (std::size_t i = 0; i < n; ++i) sum.steps[i].id = p.instances[i].id;
+// One pass of the scheduler over a loaded pipeline: decides each instance when its inputs are
+// final, starts what is stale as slots free up, and records every finished step.
+class Scheduler {
+ public:
+  // `only`: the instances this pass may touch (an adaptive round), or nullptr for all.
+  // `locked`: the caller already holds the pipeline's run lock.
+  Scheduler(const Pipeline& p, const RunOptions& o, std::ostream* progress, const std::vector<char>* only, bool locked)
+      : p_(p), o_(o), progress_(progress), n_(p.instances.size()), jobs_(std::max(1, o.jobs)), free_slots_(jobs_) {
+    sum_.steps.resize(n_);
+    for (std::size_t i = 0; i < n_; ++i) sum_.steps[i].id = p.instances[i].id;
+    select(only);
+    load_all_locks(p_, lock_, cache_);
+    shard_mode_ = o_.shards > 0;
+    lock_out_ = shard_mode_ ? shard_lock_file(p_, o_.shard) : p_.lock_file;
+    if (!o_.dry_run) take_locks(locked);
+    mark_outside(only);
+  }
 
-  // What this invocation may run: everything, or one shard; plus what that reads.
-  std::vector<int> owner(n, 1);
-  if (o.shards > 0) owner = shard_owners(p, o.shards);
-  std::vector<char> selected(n), needed(n);
-  for (std::size_t i = 0; i < n; ++i) needed[i] = selected[i] = o.shards <= 0 || owner[i] == o.shard;
-  for (std::size_t i = n; i-- > 0;)
-    if (needed[i])
-      for (const auto u : p.instances[i].upstream) needed[u] = 1;
-  std::vector<char> forced(n, o.force_all);
-  for (const auto& name : o.force)
-    for (const auto i : select(p, name)) forced[i] = 1;
-
-  LockFile lock;
-  HashCache cache;
-  load_all_locks(p, lock, cache);
-  std::optional<FileLock> guard, shard_guard;
-  const bool shard_mode = o.shards > 0;
-  const std::string lock_out = shard_mode ? shard_lock_file(p, o.shard) : p.lock_file;
-  std::set<std::string> touched;
-  const auto save = [&] {
-    if (!shard_mode) return write_text_atomic(lock_out, lock_json(lock, cache));
-    // A shard writes only what it ran, so shards never overwrite each other's records.
-    LockFile part;
-    for (const auto& id : touched) {
-      if (auto it = lock.steps.find(id); it != lock.steps.end()) part.steps[id] = it->second;
-      if (auto it = lock.failures.find(id); it != lock.failures.end()) part.failures[id] = it->second;
+  RunSummary run() {
+    const auto t_start = std::chrono::steady_clock::now();
+    SignalScope signals;
+    // However the loop ends (a lock file that cannot be written on a full disk, a failed fork),
+    // the running steps are stopped and their old outputs put back.
+    try {
+      for (;;) {
+        if (g_signal && !killed_) interrupt();
+        start_ready();
+        if (running_.empty()) break;
+        wait_one();
+      }
+    } catch (...) {
+      stop_all();
+      throw;
     }
-    write_text_atomic(lock_out, lock_json(part, cache));
-  };
-  if (!o.dry_run) {
-    fs::create_directories(p.logs_dir);
-    fs::create_directories(fs::path(p.logs_dir) / ".step-locks");
-    const std::string run_lock = (fs::path(p.logs_dir) / ".run.lock").string();
-    guard.emplace(run_lock, shard_mode ? LOCK_SH : LOCK_EX,
-                  shard_mode ? "a plain tomodem-run is running this pipeline; shards wait until it ends"
-                             : "another tomodem-run (plain or --shard) is running this pipeline");
-    if (shard_mode)
-      shard_guard.emplace((fs::path(p.logs_dir) / (".run-shard-" + std::to_string(o.shard) + ".lock")).string(), LOCK_EX,
-                          "another tomodem-run is running shard " + std::to_string(o.shard) + " of this pipeline");
-    const auto shard_files = shard_lock_files(p);
-    if (!shard_mode && !shard_files.empty()) {
+    sum_.files_hashed = cache_.files_hashed();
+    sum_.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+    return sum_;
+  }
+
+ private:
+  // What this invocation may run: everything, one shard or one adaptive round; plus what that reads.
+  void select(const std::vector<char>* only) {
+    owner_.assign(n_, 1);
+    if (o_.shards > 0) owner_ = shard_owners(p_, o_.shards);
+    selected_.assign(n_, 0);
+    needed_.assign(n_, 0);
+    for (std::size_t i = 0; i < n_; ++i)
+      needed_[i] = selected_[i] = (o_.shards <= 0 || owner_[i] == o_.shard) && (!only || (*only)[i]);
+    for (std::size_t i = n_; i-- > 0;)
+      if (needed_[i])
+        for (const auto u : p_.instances[i].upstream) needed_[u] = 1;
+    forced_.assign(n_, o_.force_all);
+    for (const auto& name : o_.force)
+      for (const auto i : pipeline::select(p_, name)) forced_[i] = 1;
+    total_ = static_cast<int>(std::count(selected_.begin(), selected_.end(), 1));
+  }
+
+  void take_locks(bool locked) {
+    fs::create_directories(p_.logs_dir);
+    fs::create_directories(fs::path(p_.logs_dir) / ".step-locks");
+    if (!locked) guard_.emplace(run_lock_path(p_), shard_mode_ ? LOCK_SH : LOCK_EX,
+                                shard_mode_ ? "a plain tomodem-run is running this pipeline; shards wait until it ends"
+                                            : "another tomodem-run (plain or --shard) is running this pipeline");
+    if (shard_mode_)
+      shard_guard_.emplace((fs::path(p_.logs_dir) / (".run-shard-" + std::to_string(o_.shard) + ".lock")).string(), LOCK_EX,
+                           "another tomodem-run is running shard " + std::to_string(o_.shard) + " of this pipeline");
+    const auto shard_files = shard_lock_files(p_);
+    if (!shard_mode_ && !shard_files.empty()) {
       save();  // fold the shards' records into the main lock, then drop them
       for (const auto& f : shard_files) fs::remove(f);
     }
   }
 
-  std::vector<St> st(n, St::waiting);
-  std::vector<char> would(n, 0);
-  for (std::size_t i = 0; i < n; ++i)
-    if (!needed[i]) {
-      st[i] = St::outside;
-      sum.steps[i].state = "not-in-shard";
-      sum.steps[i].reason = owner[i] < 0 ? "runs after the shards (gather)"
-                                         : owner[i] == 0 ? "shared upstream (--shard 0/" + std::to_string(o.shards) + ")"
-                                                         : "shard " + std::to_string(owner[i]);
+  void save() {
+    if (!shard_mode_) return write_text_atomic(lock_out_, lock_json(lock_, cache_));
+    // A shard writes only what it ran, so shards never overwrite each other's records.
+    LockFile part;
+    for (const auto& id : touched_) {
+      if (auto it = lock_.steps.find(id); it != lock_.steps.end()) part.steps[id] = it->second;
+      if (auto it = lock_.failures.find(id); it != lock_.failures.end()) part.failures[id] = it->second;
     }
-  const int total = static_cast<int>(std::count(selected.begin(), selected.end(), 1));
-  int decided = 0, free_slots = jobs;
-  std::string stop_after;
-  bool stop = false, killed = false;
-  std::vector<Running> running;
-  std::vector<std::optional<Verdict>> verdicts(n);
-  const auto say = [&](const std::string& line) {
-    if (progress && !o.quiet) *progress << line << std::endl;
-  };
-  const auto counter = [&] { return "[" + std::to_string(++decided) + "/" + std::to_string(total) + "] "; };
-  SignalScope signals;
+    write_text_atomic(lock_out_, lock_json(part, cache_));
+  }
 
-  const auto finish = [&](const Running& r, int status) {
-    const Instance& in = p.instances[r.idx];
-    StepResult& res = sum.steps[r.idx];
+  void mark_outside(const std::vector<char>* only) {
+    st_.assign(n_, St::waiting);
+    would_.assign(n_, 0);
+    verdicts_.assign(n_, std::nullopt);
+    for (std::size_t i = 0; i < n_; ++i)
+      if (!needed_[i]) {
+        st_[i] = St::outside;
+        StepResult& res = sum_.steps[i];
+        res.state = "not-in-shard";
+        res.reason = only && !(*only)[i] ? "after the adaptive replicas are decided"
+                     : owner_[i] < 0     ? "runs after the shards (gather)"
+                     : owner_[i] == 0    ? "shared upstream (--shard 0/" + std::to_string(o_.shards) + ")"
+                                         : "shard " + std::to_string(owner_[i]);
+      }
+  }
+
+  void say(const std::string& line) const {
+    if (progress_ && !o_.quiet) *progress_ << line << std::endl;
+  }
+  std::string counter() { return "[" + std::to_string(++decided_) + "/" + std::to_string(total_) + "] "; }
+
+  void interrupt() {
+    killed_ = stop_ = true;
+    stop_after_ = "an interrupt";
+    sum_.interrupted = true;
+    for (const auto& r : running_) ::kill(-r.pid, SIGTERM);
+  }
+
+  void start_ready() {
+    for (bool again = true; again;) {
+      again = false;
+      for (std::size_t i = 0; i < n_; ++i)
+        if (st_[i] == St::waiting && consider(i)) again = true;
+    }
+  }
+
+  // Why instance i cannot start: an upstream that failed or did not run ("" when none); sets
+  // `ready` false while an upstream is still waiting or running.
+  std::string blocked_by(const Instance& in, bool& ready, std::string& upstream_runs) const {
+    std::string blocked;
+    for (const auto u : in.upstream) {
+      if (st_[u] == St::waiting || st_[u] == St::running) ready = false;
+      else if (st_[u] == St::failed) blocked = "upstream " + p_.instances[u].id + " failed";
+      else if (st_[u] == St::skipped && selected_[u]) blocked = "upstream " + p_.instances[u].id + " did not run";
+      else if (st_[u] == St::skipped)
+        blocked = "upstream " + p_.instances[u].id + " is not up to date and belongs to " +
+                  (owner_[u] == 0 ? "the shared part: run --shard 0/" + std::to_string(o_.shards) + " first" : "another shard");
+      if (would_[u]) upstream_runs = p_.instances[u].id;
+    }
+    return blocked;
+  }
+
+  // Decides or starts waiting instance i; true when its state changed (others may now move).
+  bool consider(std::size_t i) {
+    const Instance& in = p_.instances[i];
+    StepResult& res = sum_.steps[i];
+    bool ready = true;
+    std::string upstream_runs;
+    const std::string blocked = blocked_by(in, ready, upstream_runs);
+    if (!ready) return false;
+    if (!blocked.empty() || stop_) {
+      st_[i] = St::skipped;
+      res.state = selected_[i] ? "skipped" : "not-in-shard";
+      res.reason = blocked.empty() ? "not started: the run stopped after " + stop_after_ : blocked;
+      if (selected_[i]) {
+        ++sum_.skipped;
+        say(counter() + "skipped " + in.id + ": " + res.reason);
+      }
+      return true;
+    }
+    // Decided once, when all its inputs are final: content hashes give early cut-off.
+    if (!verdicts_[i]) {
+      if (forced_[i]) verdicts_[i] = Verdict{true, {"forced"}};
+      else if (o_.dry_run && !upstream_runs.empty())
+        verdicts_[i] = Verdict{true, {"upstream " + upstream_runs + " would run (its new outputs decide)"}};
+      else {
+        const auto it = lock_.steps.find(in.id);
+        verdicts_[i] = check(in, it == lock_.steps.end() ? nullptr : &it->second, cache_, false);
+      }
+    }
+    const Verdict& v = *verdicts_[i];
+    if (!v.stale) {
+      st_[i] = St::done;
+      res.state = "up-to-date";
+      if (selected_[i]) ++sum_.up_to_date, ++decided_;
+      return true;
+    }
+    res.reason = v.reasons.front();
+    if (!selected_[i]) {
+      st_[i] = St::skipped;  // its dependants in this shard are blocked
+      res.state = "not-in-shard";
+      return true;
+    }
+    if (o_.dry_run) {
+      st_[i] = St::done;
+      would_[i] = 1;
+      res.state = "would-run";
+      ++sum_.would_run;
+      say(counter() + "would run " + in.id + ": " + res.reason);
+      return true;
+    }
+    return start(i);
+  }
+
+  bool start(std::size_t i) {
+    const Instance& in = p_.instances[i];
+    StepResult& res = sum_.steps[i];
+    const int slots = std::min(in.threads, jobs_);
+    if (slots > free_slots_) return false;  // wait for a slot; later, smaller steps may still fit
+    auto step_lock = std::make_shared<FileLock>(step_lock_path(p_, in), LOCK_EX, "");
+    if (!step_lock->held()) {
+      st_[i] = St::skipped;
+      res.state = "skipped";
+      res.reason = "another tomodem-run is running this step now";
+      ++sum_.skipped;
+      say(counter() + "skipped " + in.id + ": " + res.reason);
+      return true;
+    }
+    res.log = log_path(p_, in);
+    say("run  " + in.id + " (" + res.reason + ")");
+    running_.push_back(Running{i, spawn(p_, in, res.log), std::chrono::steady_clock::now(), utc_now(), slots, std::move(step_lock)});
+    free_slots_ -= slots;
+    st_[i] = St::running;
+    return true;
+  }
+
+  void wait_one() {
+    int status = 0;
+    const pid_t pid = ::waitpid(-1, &status, 0);
+    if (pid < 0) {
+      if (errno == EINTR) return;
+      throw RuntimeFailure(std::string("waitpid: ") + std::strerror(errno));
+    }
+    const auto it = std::find_if(running_.begin(), running_.end(), [&](const Running& r) { return r.pid == pid; });
+    if (it == running_.end()) return;
+    const Running r = *it;
+    running_.erase(it);
+    free_slots_ += r.slots;
+    finish(r, status);
+  }
+
+  void finish(const Running& r, int status) {
+    const Instance& in = p_.instances[r.idx];
+    StepResult& res = sum_.steps[r.idx];
     res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - r.t0).count();
     bool ok = WIFEXITED(status) && WEXITSTATUS(status) == 0;
     std::string why;
@@ -282,160 +434,83 @@ RunSummary execute(const Pipeline& p, const RunOptions& o, std::ostream* progres
             : WIFEXITED(status) ? "exit code " + std::to_string(WEXITSTATUS(status))
                                 : "killed by signal " + std::to_string(WTERMSIG(status));
     for (const auto& [name, path] : in.outs)
-      if (ok && !fs::exists(fs::path(p.dir) / path)) {
+      if (ok && !fs::exists(fs::path(p_.dir) / path)) {
         ok = false;
         why = "declared output " + path + " was not written";
       }
-    touched.insert(in.id);
-    settle_outputs(p, in, ok);
+    touched_.insert(in.id);
+    settle_outputs(p_, in, ok);
     if (ok) {
-      lock.steps[in.id] = record(in, cache, r.started, res.seconds);
-      lock.failures.erase(in.id);
-      st[r.idx] = St::done;
+      lock_.steps[in.id] = record(in, cache_, r.started, res.seconds);
+      lock_.failures.erase(in.id);
+      st_[r.idx] = St::done;
       res.state = "ran";
-      ++sum.ran;
+      ++sum_.ran;
       say(counter() + "done " + in.id + " in " + seconds_text(res.seconds));
     } else {
-      const std::string tail = last_line(res.log);
-      if (!tail.empty() && why != "interrupted") why += ": " + tail;
-      res.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-      lock.steps.erase(in.id);
-      lock.failures[in.id] = FailureRecord{res.exit_code, utc_now(), why, res.log};
-      st[r.idx] = St::failed;
-      res.state = "failed";
-      res.reason = why;
-      ++sum.failed;
-      say(counter() + "FAILED " + in.id + ": " + why + " (log: " + res.log + ")");
-      if (!o.keep_going && !stop) {
-        stop = true;
-        stop_after = in.id;
-      }
+      failed(r.idx, status, why);
     }
     save();
-  };
+  }
 
-  // However the loop ends (a lock file that cannot be written on a full disk, a failed fork),
-  // the running steps are stopped and their old outputs put back.
-  try {
-    for (;;) {
-      if (g_signal && !killed) {
-        killed = stop = true;
-        stop_after = "an interrupt";
-        sum.interrupted = true;
-        for (const auto& r : running) ::kill(-r.pid, SIGTERM);
-      }
-      for (bool again = true; again;) {
-        again = false;
-        for (std::size_t i = 0; i < n; ++i) {
-          if (st[i] != St::waiting) continue;
-          const Instance& in = p.instances[i];
-          StepResult& res = sum.steps[i];
-          bool ready = true;
-          std::string blocked, upstream_runs;
-          for (const auto u : in.upstream) {
-            if (st[u] == St::waiting || st[u] == St::running) ready = false;
-            else if (st[u] == St::failed) blocked = "upstream " + p.instances[u].id + " failed";
-            else if (st[u] == St::skipped && selected[u]) blocked = "upstream " + p.instances[u].id + " did not run";
-            else if (st[u] == St::skipped)
-              blocked = "upstream " + p.instances[u].id + " is not up to date and belongs to " +
-                        (owner[u] == 0 ? "the shared part: run --shard 0/" + std::to_string(o.shards) + " first"
-                                       : "another shard");
-            if (would[u]) upstream_runs = p.instances[u].id;
-          }
-          if (!ready) continue;
-          if (!blocked.empty() || stop) {
-            again = true;
-            st[i] = St::skipped;
-            res.state = selected[i] ? "skipped" : "not-in-shard";
-            res.reason = blocked.empty() ? "not started: the run stopped after " + stop_after : blocked;
-            if (selected[i]) {
-              ++sum.skipped;
-              say(counter() + "skipped " + in.id + ": " + res.reason);
-            }
-            continue;
-          }
-          // Decided once, when all its inputs are final: content hashes give early cut-off.
-          if (!verdicts[i]) {
-            if (forced[i]) verdicts[i] = Verdict{true, {"forced"}};
-            else if (o.dry_run && !upstream_runs.empty())
-              verdicts[i] = Verdict{true, {"upstream " + upstream_runs + " would run (its new outputs decide)"}};
-            else {
-              const auto it = lock.steps.find(in.id);
-              verdicts[i] = check(in, it == lock.steps.end() ? nullptr : &it->second, cache, false);
-            }
-          }
-          const Verdict& v = *verdicts[i];
-          if (!v.stale) {
-            again = true;
-            st[i] = St::done;
-            res.state = "up-to-date";
-            if (selected[i]) ++sum.up_to_date, ++decided;
-            continue;
-          }
-          res.reason = v.reasons.front();
-          if (!selected[i]) {
-            again = true;
-            st[i] = St::skipped;  // its dependants in this shard are blocked
-            res.state = "not-in-shard";
-            continue;
-          }
-          if (o.dry_run) {
-            again = true;
-            st[i] = St::done;
-            would[i] = 1;
-            res.state = "would-run";
-            ++sum.would_run;
-            say(counter() + "would run " + in.id + ": " + res.reason);
-            continue;
-          }
-          const int slots = std::min(in.threads, jobs);
-          if (slots > free_slots) continue;  // wait for a slot; later, smaller steps may still fit
-          auto step_lock = std::make_shared<FileLock>(step_lock_path(p, in), LOCK_EX, "");
-          if (!step_lock->held()) {
-            again = true;
-            st[i] = St::skipped;
-            res.state = "skipped";
-            res.reason = "another tomodem-run is running this step now";
-            ++sum.skipped;
-            say(counter() + "skipped " + in.id + ": " + res.reason);
-            continue;
-          }
-          res.log = log_path(p, in);
-          say("run  " + in.id + " (" + res.reason + ")");
-          running.push_back(
-              Running{i, spawn(p, in, res.log), std::chrono::steady_clock::now(), utc_now(), slots, std::move(step_lock)});
-          free_slots -= slots;
-          st[i] = St::running;
-          again = true;
-        }
-      }
-      if (running.empty()) break;
-      int status = 0;
-      const pid_t pid = ::waitpid(-1, &status, 0);
-      if (pid < 0) {
-        if (errno == EINTR) continue;
-        throw RuntimeFailure(std::string("waitpid: ") + std::strerror(errno));
-      }
-      const auto it = std::find_if(running.begin(), running.end(), [&](const Running& r) { return r.pid == pid; });
-      if (it == running.end()) continue;
-      const Running r = *it;
-      running.erase(it);
-      free_slots += r.slots;
-      finish(r, status);
+  void failed(std::size_t i, int status, std::string why) {
+    const Instance& in = p_.instances[i];
+    StepResult& res = sum_.steps[i];
+    const std::string tail = last_line(res.log);
+    if (!tail.empty() && why != "interrupted") why += ": " + tail;
+    res.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    lock_.steps.erase(in.id);
+    lock_.failures[in.id] = FailureRecord{res.exit_code, utc_now(), why, res.log};
+    st_[i] = St::failed;
+    res.state = "failed";
+    res.reason = why;
+    ++sum_.failed;
+    say(counter() + "FAILED " + in.id + ": " + why + " (log: " + res.log + ")");
+    if (!o_.keep_going && !stop_) {
+      stop_ = true;
+      stop_after_ = in.id;
     }
-  } catch (...) {
-    for (const auto& r : running) ::kill(-r.pid, SIGTERM);
-    for (const auto& r : running) {
+  }
+
+  void stop_all() {
+    for (const auto& r : running_) ::kill(-r.pid, SIGTERM);
+    for (const auto& r : running_) {
       int status = 0;
       while (::waitpid(r.pid, &status, 0) < 0 && errno == EINTR) {
       }
-      settle_outputs(p, p.instances[r.idx], false);
+      settle_outputs(p_, p_.instances[r.idx], false);
     }
-    throw;
   }
-  sum.files_hashed = cache.files_hashed();
-  sum.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
-  return sum;
+
+  const Pipeline& p_;
+  const RunOptions& o_;
+  std::ostream* progress_;
+  const std::size_t n_;
+  const int jobs_;
+  int free_slots_, total_ = 0, decided_ = 0;
+  RunSummary sum_;
+  std::vector<int> owner_;
+  std::vector<char> selected_, needed_, forced_, would_;
+  std::vector<St> st_;
+  std::vector<std::optional<Verdict>> verdicts_;
+  LockFile lock_;
+  HashCache cache_;
+  bool shard_mode_ = false, stop_ = false, killed_ = false;
+  std::string lock_out_, stop_after_;
+  std::optional<FileLock> guard_, shard_guard_;
+  std::set<std::string> touched_;
+  std::vector<Running> running_;
+};
+
+RunSummary execute(const Pipeline& p, const RunOptions& o, std::ostream* progress) {
+  return Scheduler(p, o, progress, nullptr, false).run();
+}
+
+// Adaptive replicas decide as replicas finish, which shards on separate machines cannot share.
+void refuse_shards(const Pipeline& p, const RunOptions& o) {
+  if (o.shards > 0 && !p.adaptive.empty())
+    throw InputError(p.adaptive[0].where.str(), "steps." + p.adaptive[0].step + ".replicas", "until",
+                     "adaptive replicas are decided as replicas finish: run without --shard (or give replicas: N)");
 }
 
 const char* fill(const std::string& state) {
@@ -446,8 +521,20 @@ const char* fill(const std::string& state) {
 
 }  // namespace
 
+namespace detail {
+RunSummary run_pass(const Pipeline& p, const RunOptions& o, std::ostream* progress, const std::vector<char>* only,
+                    bool locked) {
+  return Scheduler(p, o, progress, only, locked).run();
+}
+}  // namespace detail
+
 RunSummary run(const Pipeline& p, const RunOptions& options, std::ostream& progress) {
-  return execute(p, options, &progress);
+  refuse_shards(p, options);
+  if (p.adaptive.empty() || options.dry_run) return execute(p, options, &progress);
+  // One lock over every round, so no other runner slips in between them.
+  fs::create_directories(p.logs_dir);
+  const FileLock guard(run_lock_path(p), LOCK_EX, "another tomodem-run (plain or --shard) is running this pipeline");
+  return detail::run_adaptive(p, options, progress);
 }
 
 RunSummary status(const Pipeline& p, const RunOptions& options) {

@@ -28,6 +28,11 @@ Row flatten_json(const std::string& json_text, const std::string& prefix, const 
 /// Bad items (no '=', an unreadable or malformed file) throw InputError naming them.
 std::string make_row(const std::vector<std::string>& values, const std::vector<std::string>& summaries);
 
+/// A tool's own 1-sigma error of `column` in a row, as an absolute number: the column
+/// `<column>_error` is relative unless the summary's units (`<prefix>.units.<key>_error`) name
+/// another unit; NaN when the row has none. `value` is the column's value.
+double own_error(const Row& row, const std::string& column, double value);
+
 /// One plot, parsed from "name=N;x=COL;y=COL[,COL...][;by=COL][;logx][;logy][;title=T][;xlabel=L][;ylabel=L]".
 /// For every value of `by` (or once) and every y column, a series of the mean of y over the
 /// rows that share an x value (replicas), sorted by x.
