@@ -542,8 +542,14 @@ TEST_F(PackingIo, XdmfSidecarMatchesTheData) {
     for (auto d : f.shape(ds)) dims += (dims.empty() ? "" : " ") + std::to_string(d);
     EXPECT_EQ((*it)[1].str(), dims) << ds;
   }
+  // particles, then one line per bond (connectivity, the particle positions, four bond columns)
   EXPECT_EQ(paths, (std::vector<std::string>{"/particles/position", "/particles/radius", "/particles/phase",
-                                             "/particles/velocity"}));
+                                             "/particles/velocity", "/bonds/connectivity", "/particles/position",
+                                             "/bonds/radius", "/bonds/rest_length", "/bonds/state",
+                                             "/bonds/broken_at"}));
+  EXPECT_NE(x.find("TopologyType=\"Polyline\" NumberOfElements=\"" + std::to_string(full_packing().bonds.size()) +
+                   "\" NodesPerElement=\"2\""),
+            std::string::npos) << x;
 }
 
 TEST_F(PackingIo, XdmfSidecarWithoutVelocityAndOddNames) {
