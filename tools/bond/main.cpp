@@ -20,7 +20,7 @@ int main(int argc, char** argv) {
     app.add_option("--neck-ratio", c.neck_ratio, "rule ratio: a_b/R, R = 2R_iR_j/(R_i+R_j)")->capture_default_str();
     app.add_option("--min-neck-ratio", c.min_neck_ratio, "rules overlap/density: smallest a_b/R")->capture_default_str();
     app.add_option("--target-density", c.target_density, "rules density, sinter: relative density to reach");
-    app.add_option("--gap-tolerance", c.gap_tolerance, "bond when the gap is below tol * R (-)")->capture_default_str();
+    app.add_option("--gap-tolerance", c.gap_tolerance, "bond when the gap is at most tol * 2RiRj/(Ri+Rj) (-)")->capture_default_str();
     app.add_option("--exclude", c.exclude, "no bonds between these phases: A:B (names or indices), repeatable");
     app.add_option("--pair-ratio", c.pair_ratio, "rule ratio per phase pair: A:B=RATIO, repeatable");
     bool require = false, quiet = false;

@@ -24,7 +24,7 @@ int main(int argc, char** argv) {
     app.add_option("--bc", c.bc, "boundary conditions: electrodes | periodic")->capture_default_str();
     app.add_option("--axis", c.axes, "electrode axes: x, y, z, any combination (xz) or all")->capture_default_str();
     app.add_option("--contact-radius", c.contact_radius, "geometric | hertz | hertz-force (from /contacts/normal_force)")->capture_default_str();
-    app.add_option("--gap-tolerance", c.gap_tolerance, "contact when gap < tol * R* (-)")->capture_default_str();
+    app.add_option("--gap-tolerance", c.gap_tolerance, "contact when the gap is at most tol * 2RiRj/(Ri+Rj) (-)")->capture_default_str();
     app.add_option("--min-contact-ratio", c.min_contact_ratio, "floor of a/R* for touching contacts (-)")
         ->capture_default_str();
     app.add_option("--electrode-tolerance", c.electrode_tolerance,

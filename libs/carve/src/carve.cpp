@@ -12,14 +12,15 @@
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/dem/simulation.hpp"
-#include "tomodem/mechanics/bonding.hpp"
-#include "tomodem/mechanics/network.hpp"
+#include "tomodem/spatial/clusters.hpp"
+#include "tomodem/spatial/grid.hpp"
+#include "tomodem/spatial/overlap.hpp"
 
 namespace tomodem::carve {
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
-double sphere_volume(double r) { return 4 * kPi / 3 * r * r * r; }
+using spatial::kPi;
+using spatial::sphere_volume;
 std::string num(double v) {
   std::ostringstream s;
   s << v;
@@ -128,68 +129,66 @@ double MappedPores::distance(const Vec3& p_pack) const {
 double inside_fraction(double d, double r, double lap) {
   if (d >= r) return 0;
   if (d <= -r) return 1;
-  const double t = d / r;
-  const double plane = (1 - t) * (1 - t) * (2 + t) / 4;  // spherical cap beyond a plane at distance d
-  if (!(std::abs(lap) * r > 1e-6) || !std::isfinite(lap)) return plane;
   const double vp = sphere_volume(r);
+  const double plane = spatial::cap_volume(r, d) / vp;  // spherical cap beyond a plane at distance d
+  if (!(std::abs(lap) * r > 1e-6) || !std::isfinite(lap)) return plane;
   if (lap > 0) {  // pore locally a ball of radius R at centre distance R + d
     const double R = 2 / lap - d, D = R + d;
     if (!(R > 0 && D > 0)) return plane;
-    return std::clamp(mechanics::lens_volume(r, R, D) / vp, 0.0, 1.0);
+    return std::clamp(spatial::lens_volume(r, R, D) / vp, 0.0, 1.0);
   }
   // solid locally a ball of radius R at centre distance R − d; the pore is its complement
   const double R = -2 / lap + d, D = R - d;
   if (!(R > 0 && D > 0)) return plane;
-  return std::clamp(1 - mechanics::lens_volume(r, R, D) / vp, 0.0, 1.0);
+  return std::clamp(1 - spatial::lens_volume(r, R, D) / vp, 0.0, 1.0);
 }
 
 // ---------------------------------------------------------------- connectivity
 namespace {
-/// The contact graph as intact bonds of a copy of the packing (what mechanics::find_clusters
-/// reads), with the periodic image of each contact.
+/// The contact graph: the pairs in contact (spatial::in_contact) with the periodic image of j.
 struct ContactGraph {
-  Packing g;
-  std::vector<mechanics::Image> image;
+  std::size_t n = 0;
+  std::vector<int32_t> i, j;
+  std::vector<spatial::Image> image;
 };
 
 ContactGraph contact_graph(const Packing& p, double gap) {
   ContactGraph cg;
-  cg.g.particles = p.particles;
-  cg.g.cell = p.cell;
-  double rmax = 0;
-  for (double r : p.particles.radius) rmax = std::max(rmax, r);
-  if (p.particles.size() < 2) return cg;
-  auto& b = cg.g.bonds;
-  for (const auto& q : mechanics::neighbor_pairs(p, gap * rmax)) {
-    const double ri = p.particles.radius[std::size_t(q.i)], rj = p.particles.radius[std::size_t(q.j)];
-    if (q.distance > ri + rj + gap * 0.5 * (ri + rj)) continue;
-    b.i.push_back(q.i);
-    b.j.push_back(q.j);
-    b.state.push_back(BondTable::intact);
-    b.radius.push_back(0);
-    b.rest_length.push_back(q.distance);
-    b.broken_at.push_back(std::numeric_limits<double>::quiet_NaN());
+  cg.n = p.particles.size();
+  if (cg.n < 2) return cg;
+  const std::vector<double>& r = p.particles.radius;
+  const double rmax = *std::max_element(r.begin(), r.end());
+  for (const auto& q : spatial::pairs_within(p.particles.position, r, p.cell, spatial::contact_reach(rmax, gap))) {
+    if (!spatial::in_contact(q.distance, r[std::size_t(q.i)], r[std::size_t(q.j)], gap)) continue;
+    cg.i.push_back(q.i);
+    cg.j.push_back(q.j);
     cg.image.push_back(q.image);
   }
   return cg;
 }
 
-/// The graph of the kept particles: contacts among them (no new search).
+/// The graph of the kept particles, numbered in order as select_particles numbers them: the
+/// contacts among them (no new search).
 ContactGraph kept_graph(const ContactGraph& cg, const std::vector<uint8_t>& keep) {
   ContactGraph out;
-  // The contact's index rides in rest_length through select_particles, to carry its image.
-  Packing tagged = cg.g;
-  for (std::size_t k = 0; k < tagged.bonds.size(); ++k) tagged.bonds.rest_length[k] = double(k);
-  out.g = select_particles(tagged, keep);
-  for (double& k : out.g.bonds.rest_length) out.image.push_back(cg.image[std::size_t(k)]);
+  std::vector<int32_t> index(cg.n, -1);
+  for (std::size_t k = 0; k < cg.n; ++k)
+    if (keep[k]) index[k] = int32_t(out.n++);
+  for (std::size_t e = 0; e < cg.i.size(); ++e) {
+    const int32_t a = index[std::size_t(cg.i[e])], b = index[std::size_t(cg.j[e])];
+    if (a < 0 || b < 0) continue;
+    out.i.push_back(a);
+    out.j.push_back(b);
+    out.image.push_back(cg.image[e]);
+  }
   return out;
 }
 
 Connectivity clusters(const ContactGraph& cg) {
   Connectivity c;
-  const std::size_t n = cg.g.particles.size();
+  const std::size_t n = cg.n;
   if (n == 0) return c;
-  const mechanics::Clusters cl = mechanics::find_clusters(cg.g, cg.image);
+  const spatial::Clusters cl = spatial::find_clusters(n, cg.i, cg.j, cg.image);
   c.n_clusters = long(cl.size.size());
   c.n_floating_particles = cl.isolated;
   c.main_cluster_size = cl.main >= 0 ? long(cl.size[std::size_t(cl.main)]) : 0;

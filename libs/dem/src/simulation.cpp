@@ -7,12 +7,12 @@
 #include <limits>
 #include <sstream>
 
-#include "hgrid.hpp"
 #include "bond_kernel.hpp"
 #include "kernel.hpp"
 #include "sinter_law.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/tool.hpp"
+#include "tomodem/spatial/grid.hpp"
 #include "tomodem/dem/law_registry.hpp"
 
 namespace tomodem::dem {
@@ -25,9 +25,8 @@ bool CellControl::active() const {
 }
 
 namespace {
-constexpr int kCentreImage = 13;  // image code of (0, 0, 0)
-
-Vec3 image_vector(int code) { return {double(code / 9 - 1), double((code / 3) % 3 - 1), double(code % 3 - 1)}; }
+using spatial::image_vector;
+using spatial::kCentreImage;
 
 /// Frobenius norm, used to bound how far periodic images moved since the last build.
 double frobenius(const Mat3& m) {
@@ -111,38 +110,15 @@ struct Simulation::Impl {
   // ------------------------------------------------------------ neighbour search
   /// Cell vectors (integer, per particle) subtracted by the last wrap: a pair seen through image
   /// n before the wrap is seen through n + w_j − w_i after it (its history must follow).
-  std::vector<Vec3> wrapped;
+  std::vector<spatial::Image> wrapped;
 
-  void wrap_positions() {
-    wrapped.assign(p.size(), Vec3{});
-    if (!(cell.periodic[0] || cell.periodic[1] || cell.periodic[2])) return;
-    const Mat3 hinv = cell.h.inverse();
-    for (std::size_t i = 0; i < p.size(); ++i) {
-      Vec3& x = p.x[i];
-      Vec3 s = hinv * (x - cell.origin);
-      bool moved = false;
-      for (int k = 0; k < 3; ++k)
-        if (cell.periodic[k]) {
-          const double fl = std::floor(s[k]);
-          if (fl != 0) {
-            s[k] -= fl;
-            wrapped[i][k] = fl;
-            moved = true;
-          }
-        }
-      if (moved) x = cell.origin + cell.h * s;
-    }
-  }
+  void wrap_positions() { wrapped = spatial::wrap_into_cell(p.x, cell); }
 
   /// Image code of pair (i, j) after the wrap, from its code before; -1 when out of range.
   int image_after_wrap(std::size_t i, int j, int code) const {
-    const Vec3 n = image_vector(code) + wrapped[std::size_t(j)] - wrapped[i];
-    int c = 0;
-    for (int k = 0; k < 3; ++k) {
-      if (n[k] < -1 || n[k] > 1) return -1;
-      c = 3 * c + int(n[k]) + 1;
-    }
-    return c;
+    spatial::Image n = spatial::image_of_code(code);
+    for (int k = 0; k < 3; ++k) n[std::size_t(k)] += wrapped[std::size_t(j)][std::size_t(k)] - wrapped[i][std::size_t(k)];
+    return spatial::image_code(n);
   }
 
   void update_image_tables() {
@@ -154,54 +130,19 @@ struct Simulation::Impl {
     }
   }
 
-  /// Single-level linked cells (bins sized by the largest sphere) into the CSR half list.
-  void linked_cells(std::vector<int32_t>& new_start, std::vector<int32_t>& new_j, std::vector<uint8_t>& new_img) {
+  /// The half list (CSR) from the spatial grid. One level (narrow size distributions): each
+  /// thread lists the rows of a contiguous range of particles straight into the CSR, and the
+  /// ranges are joined in order, so the list is the same for every thread count. Several levels
+  /// (wide distributions): spatial::half_list.
+  void search_pairs(std::vector<int32_t>& new_start, std::vector<int32_t>& new_j, std::vector<uint8_t>& new_img) {
     const std::size_t n = p.size();
-    const double rmax = *std::max_element(p.r.begin(), p.r.end());
-    const double bin = 2 * rmax + skin + reach_max;
-    const Mat3 hinv = cell.h.inverse();
-    std::vector<Vec3> s(n);
-    for (std::size_t i = 0; i < n; ++i) s[i] = hinv * (p.x[i] - cell.origin);
-    // Bins in fractional coordinates; the perpendicular width of the cell along k is V/|a×b|.
-    int nb[3];
-    double lo[3], span[3];
-    const double vol = cell.volume();
-    for (int k = 0; k < 3; ++k) {
-      const Vec3 a = cell.h.col((k + 1) % 3), b = cell.h.col((k + 2) % 3);
-      const double width = vol / norm(cross(a, b));
-      if (cell.periodic[k]) {
-        lo[k] = 0;
-        span[k] = 1;
-      } else {
-        double smin = s[0][k], smax = s[0][k];
-        for (const auto& si : s) smin = std::min(smin, si[k]), smax = std::max(smax, si[k]);
-        lo[k] = smin;
-        span[k] = std::max(smax - smin, 1e-12);
-      }
-      nb[k] = std::max(1, int(std::floor(span[k] * width / bin)));
-      // Cap the bin count so a sparse open scene cannot ask for huge memory.
-      nb[k] = std::min(nb[k], std::max(1, int(4 * std::cbrt(double(n))) + 1));
-    }
-    const std::size_t nbins = std::size_t(nb[0]) * nb[1] * nb[2];
-    std::vector<int32_t> bin_of(n), bin_start(nbins + 1, 0), bin_items(n);
-    for (std::size_t i = 0; i < n; ++i) {
-      int c[3];
-      for (int k = 0; k < 3; ++k) {
-        c[k] = int(std::floor((s[i][k] - lo[k]) / span[k] * nb[k]));
-        c[k] = std::clamp(c[k], 0, nb[k] - 1);
-      }
-      bin_of[i] = (c[0] * nb[1] + c[1]) * nb[2] + c[2];
-      ++bin_start[bin_of[i] + 1];
-    }
-    for (std::size_t b = 0; b < nbins; ++b) bin_start[b + 1] += bin_start[b];
-    {
-      std::vector<int32_t> fill(bin_start.begin(), bin_start.end() - 1);
-      for (std::size_t i = 0; i < n; ++i) bin_items[fill[bin_of[i]]++] = int32_t(i);
-    }
+    const double extra = skin + reach_max;
+    const spatial::Grid grid(p.x, p.r, cell, extra);
     update_image_tables();
-
-    // Each thread lists the pairs of a contiguous range of particles; the ranges are joined in
-    // order, so the list is the same for every thread count.
+    if (grid.levels() > 1) {
+      spatial::half_list(grid, p.x, p.r, shift, extra, new_start, new_j, new_img, threads);
+      return;
+    }
     new_start.assign(n + 1, 0);
     std::vector<std::vector<int32_t>> part_j(threads);
     std::vector<std::vector<uint8_t>> part_img(threads);
@@ -217,37 +158,18 @@ struct Simulation::Impl {
       pj.reserve(pair_capacity_hint / parts);
       pimg.reserve(pair_capacity_hint / parts);
       for (std::size_t i = i0; i < i1; ++i) {
-        const int b = bin_of[i];
-        const int c0 = b / (nb[1] * nb[2]), c1 = (b / nb[2]) % nb[1], c2 = b % nb[2];
-        const int c[3] = {c0, c1, c2};
-        for (int o = 0; o < 27; ++o) {
-          const int off[3] = {o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1};
-          int cb[3], im[3];
-          bool skip = false;
-          for (int k = 0; k < 3 && !skip; ++k) {
-            cb[k] = c[k] + off[k];
-            im[k] = 0;
-            if (cb[k] < 0 || cb[k] >= nb[k]) {
-              if (!cell.periodic[k]) skip = true;
-              else if (cb[k] < 0) cb[k] += nb[k], im[k] = -1;
-              else cb[k] -= nb[k], im[k] = 1;
-            }
+        const Vec3 xi = p.x[i];
+        const double ri = p.r[i];
+        grid.visit(i, [&](int32_t j, int code) {
+          // Each pair once: i < j for any image, and i == j only for the positive half of images.
+          if (j < int32_t(i) || (j == int32_t(i) && code <= kCentreImage)) return;
+          const Vec3 d = p.x[std::size_t(j)] + shift[code] - xi;
+          const double rc = ri + p.r[std::size_t(j)] + extra;
+          if (dot(d, d) < rc * rc) {
+            pj.push_back(j);
+            pimg.push_back(uint8_t(code));
           }
-          if (skip) continue;
-          const int code = (im[0] + 1) * 9 + (im[1] + 1) * 3 + (im[2] + 1);
-          const int nbin = (cb[0] * nb[1] + cb[1]) * nb[2] + cb[2];
-          for (int q = bin_start[nbin]; q < bin_start[nbin + 1]; ++q) {
-            const int j = bin_items[q];
-            // Each pair once: i < j for any image, and i == j only for the positive half of images.
-            if (j < int(i) || (j == int(i) && code <= kCentreImage)) continue;
-            const Vec3 d = p.x[j] + shift[code] - p.x[i];
-            const double rc = p.r[i] + p.r[j] + skin + reach_max;
-            if (dot(d, d) < rc * rc) {
-              pj.push_back(j);
-              pimg.push_back(uint8_t(code));
-            }
-          }
-        }
+        });
         new_start[i + 1] = int32_t(pj.size());
       }
     }
@@ -304,7 +226,8 @@ struct Simulation::Impl {
 
   void build_neighbors() {
     wrap_positions();
-    for (std::size_t b = 0; b < bonds.size(); ++b) bonds.image[b] += wrapped[bonds.j[b]] - wrapped[bonds.i[b]];
+    for (std::size_t b = 0; b < bonds.size(); ++b)
+      bonds.image[b] += spatial::as_vector(wrapped[bonds.j[b]]) - spatial::as_vector(wrapped[bonds.i[b]]);
     const std::size_t n = p.size();
     const KeptHistory kept = keep_history();
     pair_capacity_hint = nj.size() + n;
@@ -315,12 +238,7 @@ struct Simulation::Impl {
     std::vector<uint8_t>().swap(touch);
     std::vector<int32_t> new_start, new_j;
     std::vector<uint8_t> new_img;
-    if (use_hgrid(p.r)) {  // wide size distributions: hierarchical grid (hgrid.hpp)
-      update_image_tables();
-      hgrid_half_list(p.x, p.r, cell, shift, skin, reach_max, new_start, new_j, new_img, threads);
-    } else {
-      linked_cells(new_start, new_j, new_img);
-    }
+    search_pairs(new_start, new_j, new_img);
     if (!bonds.i.empty()) exclude_bonded(new_start, new_j, new_img);
     // Carry the kept history to the pairs that stay in the list (short per-particle lists: linear
     // search); a pair whose particle crossed a periodic face keeps its spring and JKR flag.

@@ -7,6 +7,7 @@
 
 #include "tomodem/core/error.hpp"
 #include "tomodem/geometry/pack.hpp"
+#include "tomodem/spatial/grid.hpp"
 
 namespace tomodem::geometry {
 
@@ -18,13 +19,9 @@ std::vector<Vec3> insert_random(const std::vector<double>& radius, const std::ve
   const double rmin = *std::min_element(radius.begin(), radius.end());
   const double rmax = *std::max_element(radius.begin(), radius.end());
   // Levels of radius (rmin 2^l, rmin 2^(l+1)], each with a bin grid of side >= 2 r_max(level).
-  int L = 1;
-  for (double up = 2 * rmin; rmax > up; up *= 2) ++L;
-  const auto level_of = [&](double r) {
-    int l = 0;
-    for (double up = 2 * rmin; l < L - 1 && r > up; up *= 2) ++l;
-    return l;
-  };
+  // (spatial's levels; the bins here are filled one insertion at a time, as linked lists.)
+  const int L = spatial::level_count(rmin, rmax);
+  const auto level_of = [&](double r) { return spatial::level_of(r, rmin, L); };
   const Mat3 hinv = cell.h.inverse();
   double width[3];
   for (int k = 0; k < 3; ++k) width[k] = cell.volume() / norm(cross(cell.h.col((k + 1) % 3), cell.h.col((k + 2) % 3)));
@@ -66,7 +63,7 @@ std::vector<Vec3> insert_random(const std::vector<double>& radius, const std::ve
                       ic = (c % lv.nb[2] + lv.nb[2]) % lv.nb[2];
             for (int32_t j = lv.head[(std::size_t(ia) * lv.nb[1] + ib) * lv.nb[2] + ic]; j >= 0; j = next[std::size_t(j)]) {
               Vec3 ds = hinv * (x[std::size_t(j)] - p);
-              for (int k = 0; k < 3; ++k) ds[k] -= std::round(ds[k]);  // minimum image
+              for (int k = 0; k < 3; ++k) ds[k] -= std::round(ds[k]);  // minimum image (all directions periodic)
               const Vec3 d = cell.h * ds;
               const double rc = r + radius[std::size_t(j)];
               if (dot(d, d) < rc * rc) return false;

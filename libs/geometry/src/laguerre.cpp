@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "tomodem/core/error.hpp"
+#include "tomodem/spatial/image.hpp"
 
 namespace tomodem::geometry {
 
@@ -49,16 +50,16 @@ bool attempt(const std::vector<Vec3>& xw, const std::vector<double>& r, const Ce
   pts.reserve(n * 2);
   for (std::size_t i = 0; i < n; ++i) {
     const Vec3 s = hinv * (xw[i] - cell.origin);
-    for (int c = 0; c < 27; ++c) {
-      const int nv[3] = {c / 9 - 1, (c / 3) % 3 - 1, c % 3 - 1};
+    for (int c = 0; c < spatial::kImageCodes; ++c) {
+      const Vec3 nv = spatial::image_vector(c);
       bool keep = true;
       for (int k = 0; k < 3 && keep; ++k) {
         const double t = s[k] + nv[k];
         keep = t >= -mk[k] && t <= 1 + mk[k];
       }
       if (!keep) continue;
-      const Vec3 p = xw[i] + cell.h * Vec3{double(nv[0]), double(nv[1]), double(nv[2])};
-      pts.emplace_back(WP(P(p.x, p.y, p.z), r[i] * r[i]), c == 13 ? int(i) : -1);
+      const Vec3 p = xw[i] + cell.h * nv;
+      pts.emplace_back(WP(P(p.x, p.y, p.z), r[i] * r[i]), c == spatial::kCentreImage ? int(i) : -1);
     }
   }
   RT rt;

@@ -13,32 +13,16 @@
 
 namespace tomodem::mechanics {
 
-namespace {
-Mat3 inverse(const Mat3& h) {
-  const double d = h.det();
-  Mat3 r;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) {
-      const int i1 = (j + 1) % 3, i2 = (j + 2) % 3, j1 = (i + 1) % 3, j2 = (i + 2) % 3;
-      r(i, j) = (h(i1, j1) * h(i2, j2) - h(i1, j2) * h(i2, j1)) / d;
-    }
-  return r;
-}
-}  // namespace
-
 Vec3 bond_vector(const Packing& p, const Image& im, std::size_t b) {
-  const Vec3 shift = p.cell.h * Vec3{double(im[0]), double(im[1]), double(im[2])};
+  const Vec3 shift = p.cell.h * spatial::as_vector(im);
   return p.particles.position[p.bonds.j[b]] + shift - p.particles.position[p.bonds.i[b]];
 }
 
 std::vector<Image> minimum_images(const Packing& p) {
-  const Mat3 hinv = inverse(p.cell.h);
-  std::vector<Image> out(p.bonds.size(), Image{0, 0, 0});
-  for (std::size_t b = 0; b < p.bonds.size(); ++b) {
-    const Vec3 s = hinv * (p.particles.position[p.bonds.j[b]] - p.particles.position[p.bonds.i[b]]);
-    for (int k = 0; k < 3; ++k)
-      if (p.cell.periodic[k]) out[b][k] = int32_t(-std::lround(s[k]));
-  }
+  const Mat3 hinv = p.cell.h.inverse();
+  std::vector<Image> out(p.bonds.size());
+  for (std::size_t b = 0; b < p.bonds.size(); ++b)
+    out[b] = spatial::minimum_image(p.cell, hinv, p.particles.position[p.bonds.i[b]], p.particles.position[p.bonds.j[b]]);
   return out;
 }
 
@@ -166,91 +150,10 @@ BondStiffnesses bond_stiffnesses(const Packing& p, const std::vector<dem::BondLa
   return k;
 }
 
-namespace {
-// Rank of a set of integer vectors (Gaussian elimination in doubles; entries are small).
-int rank_of(std::vector<std::array<double, 3>> v) {
-  int rank = 0;
-  for (int col = 0; col < 3 && rank < int(v.size()); ++col) {
-    std::size_t piv = rank;
-    for (std::size_t r = rank; r < v.size(); ++r)
-      if (std::abs(v[r][col]) > std::abs(v[piv][col])) piv = r;
-    if (std::abs(v[piv][col]) < 1e-9) continue;
-    std::swap(v[piv], v[rank]);
-    for (std::size_t r = 0; r < v.size(); ++r)
-      if (r != std::size_t(rank)) {
-        const double f = v[r][col] / v[rank][col];
-        for (int k = 0; k < 3; ++k) v[r][k] -= f * v[rank][k];
-      }
-    ++rank;
-  }
-  return rank;
-}
-}  // namespace
-
 Clusters find_clusters(const Packing& p, const std::vector<Image>& image) {
-  const std::size_t n = p.particles.size(), m = p.bonds.size();
-  // Adjacency (CSR) over intact bonds.
-  std::vector<int64_t> start(n + 1, 0);
-  for (std::size_t b = 0; b < m; ++b)
-    if (p.bonds.state[b] == BondTable::intact) {
-      ++start[p.bonds.i[b] + 1];
-      ++start[p.bonds.j[b] + 1];
-    }
-  std::partial_sum(start.begin(), start.end(), start.begin());
-  std::vector<int64_t> fill(start.begin(), start.end() - 1);
-  std::vector<std::pair<int32_t, int32_t>> adj(start[n]);  // (other, signed bond: +b+1 i->j, -(b+1) j->i)
-  for (std::size_t b = 0; b < m; ++b)
-    if (p.bonds.state[b] == BondTable::intact) {
-      adj[fill[p.bonds.i[b]]++] = {p.bonds.j[b], int32_t(b + 1)};
-      adj[fill[p.bonds.j[b]]++] = {p.bonds.i[b], -int32_t(b + 1)};
-    }
-  Clusters c;
-  c.label.assign(n, -1);
-  std::vector<Image> offset(n, Image{0, 0, 0});
-  std::vector<int32_t> stack;
-  for (std::size_t s = 0; s < n; ++s) {
-    if (c.label[s] >= 0) continue;
-    const int id = int(c.size.size());
-    c.size.push_back(0);
-    std::vector<std::array<double, 3>> windings;
-    c.label[s] = id;
-    stack.push_back(int32_t(s));
-    while (!stack.empty()) {
-      const int32_t u = stack.back();
-      stack.pop_back();
-      ++c.size[id];
-      for (int64_t e = start[u]; e < start[u + 1]; ++e) {
-        const auto [v, sb] = adj[e];
-        const std::size_t b = std::size_t(std::abs(sb) - 1);
-        Image expect = offset[u];
-        for (int k = 0; k < 3; ++k) expect[k] += sb > 0 ? image[b][k] : -image[b][k];
-        if (c.label[v] < 0) {
-          c.label[v] = id;
-          offset[v] = expect;
-          stack.push_back(v);
-        } else if (expect != offset[v] && windings.size() < 3) {
-          // A closed loop that picks up a lattice vector: keep it when it is independent.
-          windings.push_back({double(expect[0] - offset[v][0]), double(expect[1] - offset[v][1]),
-                              double(expect[2] - offset[v][2])});
-          if (rank_of(windings) < int(windings.size())) windings.pop_back();
-        }
-      }
-    }
-    c.wrap_rank.push_back(windings.empty() ? 0 : rank_of(windings));
-    if (c.size[id] == 1) ++c.isolated;
-  }
-  // Main: the largest spanning cluster, else the largest.
-  int best = -1, largest = -1;
-  for (int k = 0; k < int(c.size.size()); ++k) {
-    if (c.wrap_rank[k] == 3) {
-      ++c.spanning_clusters;
-      if (best < 0 || c.size[k] > c.size[best]) best = k;
-    }
-    if (largest < 0 || c.size[k] > c.size[largest]) largest = k;
-  }
-  c.main = best >= 0 ? best : largest;
-  c.outside_main = c.main >= 0 ? long(n - c.size[c.main]) : 0;
-  return c;
+  std::vector<uint8_t> intact(p.bonds.size());
+  for (std::size_t b = 0; b < p.bonds.size(); ++b) intact[b] = p.bonds.state[b] == BondTable::intact;
+  return spatial::find_clusters(p.particles.size(), p.bonds.i, p.bonds.j, image, intact);
 }
 
 }  // namespace tomodem::mechanics

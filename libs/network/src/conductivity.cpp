@@ -65,7 +65,7 @@ class WrapFind {
     return v;
   }
   /// Edge a -> b with b in image `w` of a's frame.
-  void unite(int32_t a, int32_t b, const std::array<int8_t, 3>& w) {
+  void unite(int32_t a, int32_t b, const std::array<int32_t, 3>& w) {
     std::array<int32_t, 3> oa, ob;
     const int32_t ra = find(a, oa), rb = find(b, ob);
     if (ra == rb) {

@@ -10,9 +10,9 @@
 #include <fstream>
 #include <string>
 
-#include "../../../libs/dem/src/hgrid.hpp"
 #include "tomodem/dem/simulation.hpp"
 #include "tomodem/geometry/pack.hpp"
+#include "tomodem/spatial/grid.hpp"
 
 using namespace tomodem;
 using namespace tomodem::geometry;
@@ -63,8 +63,8 @@ PackSpec spec(std::size_t n, PsdKind kind) {
 }
 
 /// Times one neighbour-list build and `steps` steps on a packing with the given search.
-void time_search(const Packing& pk, dem::NeighborSearch search, const char* name, int steps, double& build_s, double& step_s) {
-  dem::set_neighbor_search(search);
+void time_search(const Packing& pk, spatial::NeighborSearch search, const char* name, int steps, double& build_s, double& step_s) {
+  spatial::set_neighbor_search(search);
   dem::Particles parts;
   for (std::size_t i = 0; i < pk.particles.size(); ++i) parts.add(pk.particles.position[i], pk.particles.radius[i], 3950, 0);
   dem::ContactModel m;
@@ -83,7 +83,7 @@ void time_search(const Packing& pk, dem::NeighborSearch search, const char* name
   step_s = seconds(t0) / steps;
   std::printf("  %-12s first step (list build) %.3f s, then %.4f s/step (%d steps), rebuilds %ld\n", name, build_s,
               step_s, steps, sim.measure().neighbor_rebuilds);
-  dem::set_neighbor_search(dem::NeighborSearch::automatic);
+  spatial::set_neighbor_search(spatial::NeighborSearch::automatic);
 }
 
 void bench_distribution(PsdKind kind, const char* label) {
@@ -98,11 +98,11 @@ void bench_distribution(PsdKind kind, const char* label) {
               "peak RSS %.0f MB, load %s\n",
               r.solid_fraction, r.neighbor_search.c_str(), t_pack, r.densify_time_s, r.steps, r.minimisations,
               peak_rss_mb(), load().c_str());
-  const auto levels = dem::hgrid_levels(out.packing.particles.radius);
+  const auto levels = spatial::hgrid_levels(out.packing.particles.radius);
   double b_h, s_h, b_c, s_c;
-  time_search(out.packing, dem::NeighborSearch::hgrid, "hgrid", 20, b_h, s_h);
+  time_search(out.packing, spatial::NeighborSearch::hgrid, "hgrid", 20, b_h, s_h);
   std::printf("  (%zu hgrid levels)\n", levels.size());
-  time_search(out.packing, dem::NeighborSearch::linked_cells, "linked cells", kind == PsdKind::bimodal ? 2 : 20, b_c, s_c);
+  time_search(out.packing, spatial::NeighborSearch::linked_cells, "linked cells", kind == PsdKind::bimodal ? 2 : 20, b_c, s_c);
   std::printf("  speed-up hgrid over linked cells: list build %.1fx, step %.1fx; load %s\n", b_c / b_h, s_c / s_h,
               load().c_str());
   EXPECT_GT(r.n_particles, n * 9 / 10);

@@ -1,6 +1,7 @@
-// The hierarchical grid (libs/dem/src/hgrid.*) must give exactly the pair set of the linked
-// cells, including periodic image codes, on wide polydisperse configurations: periodic,
-// sheared periodic, mixed and open boxes. Compared through Simulation's own neighbour list.
+// The hierarchical grid (libs/spatial, several levels) must give exactly the pair set of the
+// linked cells (one level: Simulation's own loop over the grid), including periodic image codes,
+// on wide polydisperse configurations: periodic, sheared periodic, mixed and open boxes.
+// Compared through Simulation's own neighbour list.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -8,11 +9,12 @@
 #include <set>
 #include <tuple>
 
-#include "../../../libs/dem/src/hgrid.hpp"
 #include "tomodem/dem/simulation.hpp"
+#include "tomodem/spatial/grid.hpp"
 
 using namespace tomodem;
 using namespace tomodem::dem;
+using namespace tomodem::spatial;
 
 namespace {
 

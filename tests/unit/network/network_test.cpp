@@ -31,8 +31,9 @@ std::set<Key> brute_force(const std::vector<Vec3>& x, const std::vector<double>&
             for (int k = 0; k < 3; ++k) ok = ok && (c.periodic[k] || w[k] == 0);
             if (!ok) continue;
             const Vec3 bvec = x[j] + c.h * Vec3(a, b, d) - x[i];
-            const double rs = r[i] * r[j] / (r[i] + r[j]);
-            if (norm(bvec) - r[i] - r[j] < tol * rs) out.insert({i, j, a, b, d});
+            // The contact definition: gap ≤ tol · R̄, R̄ = 2 R_i R_j / (R_i + R_j).
+            const double rbar = 2 * r[i] * r[j] / (r[i] + r[j]);
+            if (norm(bvec) - r[i] - r[j] <= tol * rbar) out.insert({i, j, a, b, d});
           }
   return out;
 }

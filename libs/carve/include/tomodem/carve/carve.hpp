@@ -108,13 +108,13 @@ struct Options {
   int target_grid = 0;                ///< integration grid per axis for the target (0: from the resolution, 64..256)
   long relax_steps = 0;               ///< DEM steps after carving (Hertz, Cundall damping 0.7, fixed cell)
   bool remove_floating = false;       ///< drop particles outside the main contact cluster
-  double contact_gap = 1e-3;          ///< contact when gap ≤ this × (R_i + R_j)/2
+  double contact_gap = 1e-3;          ///< contact when gap ≤ this × R̄ (spatial::in_contact)
   double outside_margin = 0;          ///< m; 0: 2 r_max (solid_fraction_outside region: distance > margin)
   int threads = 0;                    ///< OpenMP threads (0: default)
   std::string packing_file;           ///< names in messages
 };
 
-/// Contact-graph connectivity (contacts: gap ≤ contact_gap × mean radius).
+/// Contact-graph connectivity (contacts: spatial::in_contact with contact_gap).
 struct Connectivity {
   long n_clusters = 0;                 ///< connected components (isolated particles count)
   long n_floating_particles = 0;       ///< particles without any contact

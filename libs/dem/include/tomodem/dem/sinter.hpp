@@ -9,6 +9,7 @@
 #include "tomodem/dem/bonds.hpp"
 #include "tomodem/dem/scene.hpp"
 #include "tomodem/dem/simulation.hpp"
+#include "tomodem/spatial/overlap.hpp"
 
 namespace tomodem::dem {
 
@@ -103,7 +104,7 @@ struct DensityState {
 };
 DensityState density_state(const Simulation& sim);
 /// Volume of the lens shared by two spheres at centre distance d, m³ (0 when apart).
-double lens_volume(double r1, double r2, double d);
+using spatial::lens_volume;
 
 /// Sets Δ_b, γ_s, ψ and η of every phase pair for temperature T (K). Unlike sintering phases
 /// combine as: Δ_b geometric mean, γ_s, ψ and η arithmetic means; a pair with a non-sintering

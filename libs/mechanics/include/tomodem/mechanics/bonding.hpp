@@ -1,20 +1,31 @@
 #pragma once
 // Packing -> bonded network (tomodem-bond, docs/bond.md): bonds between particles in contact or
-// within a gap tolerance (periodic-aware linked cells, O(N)), neck radius by a rule, rules per
-// phase pair, relative density with the overlaps counted once.
+// within a gap tolerance (the contact definition and neighbour search of libs/spatial, O(N)),
+// neck radius by a rule, rules per phase pair, relative density with the overlaps counted once.
+#include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
+#include "tomodem/core/names.hpp"
 #include "tomodem/mechanics/network.hpp"
+#include "tomodem/spatial/grid.hpp"
+#include "tomodem/spatial/overlap.hpp"
 
 namespace tomodem::mechanics {
 
 enum class NeckRule { ratio, overlap, density, sinter };
+inline constexpr NameTable<NeckRule, 4> kNeckRuleNames = {{{NeckRule::ratio, "ratio"},
+                                                          {NeckRule::overlap, "overlap"},
+                                                          {NeckRule::density, "density"},
+                                                          {NeckRule::sinter, "sinter"}}};
+inline const char* to_string(NeckRule r) { return name_of(kNeckRuleNames, r); }
+inline std::optional<NeckRule> parse_neck_rule(std::string_view name) { return value_of(kNeckRuleNames, name); }
 
 struct BondingOptions {
   NeckRule rule = NeckRule::overlap;
-  double gap_tolerance = 0;     ///< bond when gap = d − R_i − R_j ≤ tol · R̄ (R̄ = 2R_iR_j/(R_i+R_j))
+  double gap_tolerance = 0;     ///< bond when in contact: spatial::in_contact, gap d − R_i − R_j ≤ tol · R̄
   double neck_ratio = 0.1;      ///< rule ratio: a_b = ratio · R̄
   double min_neck_ratio = 0.01; ///< rules overlap/density: floor of a_b/R̄ (touching or gapped pairs)
   double target_density = 0;    ///< rules density, sinter: union volume / cell volume after densification
@@ -27,18 +38,13 @@ struct BondingOptions {
   std::vector<std::pair<std::pair<int, int>, double>> pair_ratio;
 };
 
-struct Neighbor {
-  int32_t i, j;  ///< i < j
-  Image image;
-  double distance;
-};
-/// All pairs with d < R_i + R_j + reach (periodic-aware linked cells); i < j, one image each.
+/// A pair i < j, the image of j and the centre distance (spatial::Pair).
+using Neighbor = spatial::Pair;
+/// All pairs with d < R_i + R_j + reach (spatial::pairs_within: images −1..1); i < j.
 std::vector<Neighbor> neighbor_pairs(const Packing& p, double reach);
 
-/// Lens (intersection) volume of two spheres at centre distance d; 0 when apart.
-double lens_volume(double r1, double r2, double d);
-/// Radius of the intersection circle of two spheres; 0 when they do not overlap.
-double intersection_radius(double r1, double r2, double d);
+using spatial::intersection_radius;
+using spatial::lens_volume;
 /// Union volume of the spheres (pairwise lenses subtracted: triple overlaps neglected) over the
 /// cell volume.
 double relative_density(const Packing& p);

@@ -10,10 +10,12 @@
 
 #include "tomodem/core/packing.hpp"
 #include "tomodem/dem/bonds.hpp"
+#include "tomodem/spatial/clusters.hpp"
+#include "tomodem/spatial/image.hpp"
 
 namespace tomodem::mechanics {
 
-using Image = std::array<int32_t, 3>;
+using Image = spatial::Image;
 
 struct Network {
   Packing packing;
@@ -60,17 +62,8 @@ struct BondStiffnesses {
 };
 BondStiffnesses bond_stiffnesses(const Packing& p, const std::vector<dem::BondLaw>& laws);
 
-/// Connected components of the intact bonds. A cluster "wraps" the periodic cell along the
-/// lattice vectors its closed loops pick up; wrap_rank = 3 means it spans the cell in 3-D.
-struct Clusters {
-  std::vector<int32_t> label;   ///< per particle, cluster index (isolated particles have their own)
-  std::vector<int64_t> size;    ///< particles per cluster
-  std::vector<int> wrap_rank;   ///< 0..3 per cluster
-  int main = -1;                ///< largest cluster with wrap_rank 3, else the largest cluster
-  long isolated = 0;            ///< particles without intact bonds (rattlers, floating particles)
-  long spanning_clusters = 0;   ///< clusters with wrap_rank 3
-  long outside_main = 0;        ///< particles not in the main cluster
-};
+/// Connected components of the intact bonds (spatial::find_clusters).
+using Clusters = spatial::Clusters;
 Clusters find_clusters(const Packing& p, const std::vector<Image>& image);
 
 }  // namespace tomodem::mechanics

@@ -10,6 +10,7 @@
 
 #include "tomodem/core/packing.hpp"
 #include "tomodem/network/graph.hpp"
+#include "tomodem/spatial/image.hpp"
 
 namespace tomodem::network {
 
@@ -24,7 +25,7 @@ struct NetworkOptions {
   std::vector<std::string> phases;  ///< conducting phases by material name; empty = every phase
   bool use_bonds = true;            ///< intact bonds are edges with a = a_b
   bool use_contacts = true;         ///< detected contacts are edges (pairs with a bond use the bond)
-  double gap_tolerance = 1e-3;      ///< a pair is in contact when gap < gap_tolerance · R*
+  double gap_tolerance = 1e-3;      ///< contact: gap ≤ gap_tolerance · R̄ (spatial::in_contact)
   ContactRadius contact_radius = ContactRadius::geometric;
   /// Floor of the contact radius, as a fraction of R*: touching pairs (overlap ≤ 0 within the
   /// gap tolerance) would otherwise have a = 0 and no conductance.
@@ -44,7 +45,7 @@ struct Network {
   // Edges (graph.i/j index nodes; graph.g = conductance, S)
   Graph graph;
   std::vector<double> contact_radius;       ///< a, m
-  std::vector<std::array<int8_t, 3>> image;  ///< j is taken in the periodic image x_j + h·image
+  std::vector<spatial::Image> image;  ///< j is taken in the periodic image x_j + h·image
   std::vector<EdgeKind> kind;
   // Geometry
   Cell cell;
@@ -56,11 +57,12 @@ struct Network {
   Vec3 branch(std::size_t e) const;
 };
 
-/// Pairs of spheres closer than the gap tolerance, found with a cell list (O(N)); periodic
-/// images are searched along periodic cell directions. Returned with i < j and the image of j.
+/// Pairs of spheres in contact (spatial::in_contact with the gap tolerance), found with the grid
+/// of libs/spatial (O(N); images −1..1 along periodic cell directions). Returned with i < j and
+/// the image of j relative to the positions as given.
 struct ContactPairs {
   std::vector<int32_t> i, j;
-  std::vector<std::array<int8_t, 3>> image;
+  std::vector<spatial::Image> image;
 };
 ContactPairs find_contacts(const std::vector<Vec3>& position, const std::vector<double>& radius, const Cell& cell,
                            double gap_tolerance);
