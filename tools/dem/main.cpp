@@ -10,6 +10,7 @@
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/packing_io.hpp"
 #include "tomodem/core/tool.hpp"
+#include "tomodem/dem/law_registry.hpp"
 #include "tomodem/dem/scene.hpp"
 
 using namespace tomodem;
@@ -36,8 +37,14 @@ int run(int argc, char** argv) {
   app.add_flag("--restart-changed-physics", changed_physics,
                "with --restart: continue even though the scene's physics differs from the checkpoint's (warns what changed)");
   app.add_flag("-q,--quiet", quiet_flag, "no progress on stderr");
+  bool list_laws = false;
+  app.add_flag("--list-laws", list_laws, "print the contact-law table of the registry (markdown, docs/dem.md) and exit");
   tomodem::cli::add_version(app, "tomodem-dem");
   if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
+  if (list_laws) {
+    std::cout << dem::law_table_markdown();
+    return 0;
+  }
   if (scene_path.empty()) throw InputError("", "scene", "", "no scene file given (see --help)");
   if (changed_physics && restart.empty())
     throw InputError("", "--restart-changed-physics", "", "only means something with --restart <checkpoint>");

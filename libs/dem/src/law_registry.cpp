@@ -2,6 +2,7 @@
 // from them: names for messages, the chosen laws of a model, the docs table.
 #include "tomodem/dem/law_registry.hpp"
 
+#include <cmath>
 #include <set>
 #include <sstream>
 #include <type_traits>
@@ -137,7 +138,7 @@ std::vector<const LawInfo*> chosen_laws(const ContactModel& m) {
 namespace {
 std::string needs_of(const LawInfo& e) {
   std::vector<std::string> n;
-  if (e.history > 0) n.push_back(std::to_string(e.history) + " history");
+  if (e.history > 0) n.push_back("history " + std::to_string(e.history));
   if (e.rotation) n.push_back("rotation");
   if (e.touch_flag) n.push_back("contact flag");
   if (e.needs_modulus) n.push_back("youngs_modulus");
@@ -149,10 +150,18 @@ std::string needs_of(const LawInfo& e) {
   for (const auto& x : n) s += (s.empty() ? "" : ", ") + x;
   return s.empty() ? "–" : s;
 }
+std::string range_of(const LawParam& p) {
+  std::ostringstream s;
+  s << (p.lo_open ? "(" : "[") << p.lo << ", ";
+  if (std::isinf(p.hi)) s << "∞)";
+  else s << p.hi << (p.hi_open ? ")" : "]");
+  return s.str();
+}
 std::string params_of(const LawInfo& e) {
   std::string s;
   for (const auto& p : e.params)
-    s += (s.empty() ? "" : "; ") + std::string("`") + p.key + "` [" + p.unit + "] (" + p.fallback + ")";
+    s += (s.empty() ? "" : "; ") + std::string("`") + p.key + "` [" + p.unit + "] ∈ " + range_of(p) + ", " +
+         (p.required() ? std::string("required") : "default " + std::string(p.fallback));
   return s.empty() ? "–" : s;
 }
 std::string cell(const std::string& t) {  // a '|' inside a cell would end it
@@ -164,7 +173,7 @@ std::string cell(const std::string& t) {  // a '|' inside a cell would end it
 
 std::string law_table_markdown() {
   std::ostringstream s;
-  s << "| slot | law | parameters [unit] (default) | needs | force | source |\n";
+  s << "| slot | law | parameters [unit] ∈ range, default | needs | force | source |\n";
   s << "|---|---|---|---|---|---|\n";
   for (Slot sl : {Slot::normal, Slot::tangential, Slot::rolling, Slot::damping})
     for (const auto& e : laws(sl))
