@@ -212,9 +212,22 @@ std::vector<double> sample_level_set(const std::string& path, const std::vector<
   file.close();
   auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(base);
   if (!grid) throw InputError(path, "macropores", "", "not a float grid");
+  // The grid's own unit (write_level_set states mm); a grid that states none is taken in metres,
+  // as tomodem-carve does.
+  double unit = 1;
+  if (auto m = grid->getMetadata<openvdb::DoubleMetadata>("metres_per_unit")) {
+    unit = m->value();
+  } else if (auto u = grid->getMetadata<openvdb::StringMetadata>("units")) {
+    unit = metres_per_unit(u->value());
+    if (!(unit > 0)) throw InputError(path, "units", u->value(), "unknown length unit in the grid metadata (m, mm, um, nm)");
+  } else {
+    warn(path + ": the level set states no unit (metadata metres_per_unit or units): taken in metres");
+  }
+  if (!(unit > 0) || !std::isfinite(unit))
+    throw InputError(path, "metres_per_unit", std::to_string(unit), "must be finite and > 0");
   openvdb::tools::GridSampler<openvdb::FloatGrid, openvdb::tools::BoxSampler> sampler(*grid);
   std::vector<double> out;
-  for (const auto& p : pts) out.push_back(sampler.wsSample(openvdb::Vec3d(p.x, p.y, p.z) * kMmPerM) / kMmPerM);
+  for (const auto& p : pts) out.push_back(sampler.wsSample(openvdb::Vec3d(p.x, p.y, p.z) / unit) * unit);
   return out;
 }
 

@@ -214,3 +214,26 @@ TEST(UnitsOnDisk, GreyHdfVolumeAndPackingCarryUnitsAndProvenance) {
   const Packing q = read_packing((d / "p.h5").string());
   EXPECT_EQ(q.bonds.j, p.bonds.j);
 }
+
+TEST(UnitsOnDisk, LevelSetStatesMillimetresAndIsSampledInMetres) {
+  // A ball of radius 6 voxels of 10 um: the signed distance 1 voxel inside and outside its surface
+  // is -/+ 1e-5 m (within half a voxel: the surface is smoothed), whatever unit the file holds.
+  const auto d = tmpdir("vdb");
+  const double h = 10e-6, R = 6;
+  Mask m(Dims{24, 24, 24});
+  m.spacing = {h, h, h};
+  m.origin = {1e-3, 0, 0};
+  for (std::size_t z = 0; z < 24; ++z)
+    for (std::size_t y = 0; y < 24; ++y)
+      for (std::size_t x = 0; x < 24; ++x)
+        m.at(x, y, z) = std::hypot(double(x) - 12, double(y) - 12, double(z) - 12) <= R;
+  const std::string f = (d / "ball.vdb").string();
+  write_level_set(f, m);
+  const Vec3 c{1e-3 + 12 * h, 12 * h, 12 * h};
+  const auto s = sample_level_set(f, {c + Vec3{(R - 1) * h, 0, 0}, c + Vec3{0, (R + 1) * h, 0}});
+  EXPECT_NEAR(s[0], -h, 0.5 * h);
+  EXPECT_NEAR(s[1], h, 0.5 * h);
+  // the file states its unit: mm (OpenVDB cannot hold a 10 um voxel in metres)
+  const std::string bytes = slurp(f);
+  EXPECT_NE(bytes.find("metres_per_unit"), std::string::npos);
+}
