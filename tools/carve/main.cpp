@@ -2,22 +2,19 @@
 // packing (docs/carve.md); writes the carved packing and prints a JSON summary.
 #include <CLI/CLI.hpp>
 
-#include <iostream>
 
 #include "tomodem/carve/tool.hpp"
 #include "tomodem/core/cli.hpp"
 #include "tomodem/core/error.hpp"
+#include "tomodem/core/summary.hpp"
 #include "tomodem/core/tool.hpp"
-#include "tomodem/image/volume.hpp"
 
 using namespace tomodem;
 
 namespace {
-double length(const std::string& option, const std::string& text) {
-  if (text.empty()) return 0;
-  const double v = image::parse_length(option, text);
-  if (!(v > 0)) throw InputError("", option, text, "expected a length such as 1mm, 60.7um or 1e-3 (m)");
-  return v;
+// A length option that must be > 0 when given (0: not given).
+void require_positive_length(const CLI::App& app, const std::string& option, double v) {
+  if (app.count(option) && !(v > 0)) throw InputError("", option, app.get_option(option)->results().front(), "must be a length > 0");
 }
 // The value of an option as the user wrote it (several values joined by ',').
 std::string given(const CLI::App& app, const std::string& name) {
@@ -33,9 +30,9 @@ int main(int argc, char** argv) {
     auto& o = c.options;
     CLI::App app{"Carve macropores (level set, label volume, closed mesh or spheres) into a packing (docs/carve.md)",
                  "tomodem-carve"};
-    std::string unit_text, spacing_text, margin_text, rule = "centre", cut = "rule", method = "exact";
+    std::string rule = "centre", cut = "rule", method = "exact";
     std::vector<double> offset, rotate, image_box;
-    bool quiet = false, any_label = false;
+    bool any_label = false;
     app.add_option("packing", c.packing, "homogeneous packing (.h5)")->required();
     app.add_option("--level-set", c.level_set, "macropores: OpenVDB level set (tomodem-segment --vdb)");
     app.add_option("--grid", c.grid, "grid name in the .vdb (default: macropores, else the first float grid)");
@@ -45,13 +42,12 @@ int main(int argc, char** argv) {
     app.add_flag("--any-label", any_label, "every non-zero label is a macropore (e.g. --dataset /macropores)");
     app.add_option("--mesh", c.mesh, "macropores: closed surface mesh (STL, OFF, PLY, OBJ)");
     app.add_option("--spheres", c.spheres, "macropores: the particles of a packing file (e.g. pore formers)");
-    app.add_option("--image-unit", unit_text, "length of one image unit (level set: overrides its metadata; mesh: default 1 m), e.g. 1mm");
-    app.add_option("--spacing", spacing_text, "voxel size of the label volume (overrides the file), e.g. 60.7um");
+    cli::add_length(app, "--image-unit", c.image_unit, "length of one image unit (level set: overrides its metadata; mesh: default 1 m), e.g. 1mm");
+    cli::add_length(app, "--spacing", c.spacing, "voxel size of the label volume (overrides the file), e.g. 60.7um");
     app.add_option("--scale", o.mapping.scale, "packing length per image length")->capture_default_str();
-    app.add_option("--offset", offset, "shift of the image centre from the cell centre X,Y,Z (m)")->delimiter(',')->expected(3);
+    cli::add_lengths(app, "--offset", offset, 3, "shift of the image centre from the cell centre X,Y,Z");
     app.add_option("--rotate", rotate, "rotation of the image about x, then y, then z (degrees) AX,AY,AZ")->delimiter(',')->expected(3);
-    app.add_option("--image-box", image_box, "the image's box X0,Y0,Z0,X1,Y1,Z1 (m, image frame; default: its bounds)")
-        ->delimiter(',')->expected(6);
+    cli::add_lengths(app, "--image-box", image_box, 6, "the image's box X0,Y0,Z0,X1,Y1,Z1 (image frame; default: its bounds)");
     app.add_flag("--fit", o.mapping.fit, "scale the image so that it just fits the cell");
     app.add_flag("--tile", o.mapping.tile, "repeat the image periodically (packing larger than the image)");
     app.add_option("--rule", rule, "centre | fraction")->capture_default_str();
@@ -63,19 +59,18 @@ int main(int argc, char** argv) {
     app.add_option("--relax", o.relax_steps, "DEM relaxation steps after carving")->capture_default_str();
     app.add_flag("--remove-floating", o.remove_floating, "remove particles outside the main contact cluster");
     app.add_option("--contact-gap", o.contact_gap, "contact when the gap is at most this fraction of 2RiRj/(Ri+Rj)")->capture_default_str();
-    app.add_option("--margin", margin_text, "solid_fraction_outside: distance from the pores (default 2 r_max)");
+    cli::add_length(app, "--margin", o.outside_margin, "solid_fraction_outside: distance from the pores (default 2 r_max)");
     app.add_option("-o,--output", c.output, "carved packing (.h5; .xdmf sidecar beside it)")->required();
-    app.add_option("--json", c.json, "write the JSON summary to FILE (default: stdout)");
     app.add_option("--picture", c.picture, "mid-plane picture (.png)");
-    app.add_option("--threads", o.threads, "threads (default: OMP_NUM_THREADS or all cores)");
-    app.add_flag("-q,--quiet", quiet, "no progress messages");
-    cli::add_version(app, "tomodem-carve");
+    cli::Common common;
+    cli::add_common(app, "tomodem-carve", common);
     if (const auto code = cli::parse(app, argc, argv)) return *code;
-    set_quiet(quiet);
-    for (int k = 1; k < argc; ++k) c.command_line += std::string(k > 1 ? " " : "") + argv[k];
-    c.image_unit = length("--image-unit", unit_text);
-    c.spacing = length("--spacing", spacing_text);
-    o.outside_margin = length("--margin", margin_text);
+    c.json = common.json;
+    o.threads = common.threads;
+    c.command_line = command_line();
+    require_positive_length(app, "--image-unit", c.image_unit);
+    require_positive_length(app, "--spacing", c.spacing);
+    require_positive_length(app, "--margin", o.outside_margin);
     if (any_label) c.label_values.clear();
     if (offset.size() == 3) o.mapping.offset = {offset[0], offset[1], offset[2]};
     if (image_box.size() == 6) {
@@ -101,8 +96,7 @@ int main(int argc, char** argv) {
     if (!(o.mapping.scale > 0))
       throw InputError("", "--scale", given(app, "--scale"), "must be > 0 (packing length per image length)");
     if (o.relax_steps < 0) throw InputError("", "--relax", std::to_string(o.relax_steps), "must be >= 0");
-    const std::string summary = carve::run_carve(c);
-    if (c.json.empty() || c.json == "-") std::cout << summary << std::endl;
+    emit_summary(carve::run_carve(c), c.json);
     return exit_code::ok;
   });
 }

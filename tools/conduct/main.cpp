@@ -1,11 +1,11 @@
 // tomodem-conduct: effective conductivity of a particle network (resistor network), with
 // percolation analysis, composite electrodes and a voxel cross-check. See docs/conduct.md.
 #include <CLI/CLI.hpp>
-#include <iostream>
 #include <omp.h>
 
 #include "tomodem/core/cli.hpp"
 #include "tomodem/core/error.hpp"
+#include "tomodem/core/summary.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/network/conduct_tool.hpp"
 
@@ -19,7 +19,6 @@ int main(int argc, char** argv) {
     app.add_option("--phase-conductivity", c.phase_conductivity, "--image: several labels, e.g. 1:1.0,2:0.3");
     app.add_option("--sides", c.sides, "--image: faces parallel to the axis: noflux | periodic")->capture_default_str();
     app.add_option("-o,--output", c.output, "potentials and currents per particle and edge (.h5 + .xdmf)");
-    app.add_option("--json", c.json, "write the JSON summary to FILE (default: stdout)");
     app.add_option("--phases", c.phases, "conducting phases by material name (default: all)")->delimiter(',');
     app.add_option("--bc", c.bc, "boundary conditions: electrodes | periodic")->capture_default_str();
     app.add_option("--axis", c.axes, "electrode axes: x, y, z, any combination (xz) or all")->capture_default_str();
@@ -31,7 +30,7 @@ int main(int argc, char** argv) {
                    "a particle touches a face when its surface is within tol * r of it (-)")
         ->capture_default_str();
     app.add_option("--voltage", c.voltage, "potential difference between the faces (V)")->capture_default_str();
-    bool no_bonds = false, no_contacts = false, quiet = false;
+    bool no_bonds = false, no_contacts = false;
     app.add_flag("--no-bonds", no_bonds, "ignore /bonds");
     app.add_flag("--no-contacts", no_contacts, "ignore contacts (bonds only)");
     app.add_option("--tolerance", c.tolerance, "relative residual of the CG solve")->capture_default_str();
@@ -43,18 +42,15 @@ int main(int argc, char** argv) {
                    "composite electrode: charge-transfer conductance per TPB length (S/m)");
     app.add_option("--voxel", c.voxel, "voxel cross-check at these resolutions (voxels along the longest edge)")
         ->delimiter(',');
-    int threads = 0;
-    tomodem::cli::add_threads(app, threads);
-    app.add_flag("-q,--quiet", quiet, "no progress messages");
-    tomodem::cli::add_version(app, "tomodem-conduct");
+    tomodem::cli::Common common;
+    tomodem::cli::add_common(app, "tomodem-conduct", common);
     if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
+    c.json = common.json;
     c.bonds = !no_bonds;
     c.contacts = !no_contacts;
-    tomodem::set_quiet(quiet);
-    if (threads > 0) omp_set_num_threads(threads);
+    if (common.threads > 0) omp_set_num_threads(common.threads);
     if (!c.image.empty() || !c.input.empty()) tomodem::info("reading " + (c.image.empty() ? c.input : c.image));
-    const std::string summary = tomodem::network::run_conduct(c);
-    if (c.json.empty() || c.json == "-") std::cout << summary;
+    tomodem::emit_summary(tomodem::network::run_conduct(c), c.json);
     return tomodem::exit_code::ok;
   });
 }

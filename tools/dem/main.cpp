@@ -9,6 +9,7 @@
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/packing_io.hpp"
+#include "tomodem/core/summary.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/dem/law_registry.hpp"
 #include "tomodem/dem/scene.hpp"
@@ -22,34 +23,63 @@ json tensor(const Mat3& m) {
   return json::array({{m(0, 0), m(0, 1), m(0, 2)}, {m(1, 0), m(1, 1), m(1, 2)}, {m(2, 0), m(2, 1), m(2, 2)}});
 }
 
+// The scene's measurements at the end of the run, as summary keys.
+void measurement_keys(Summary& j, const dem::Measurements& m, bool energy) {
+  j["time_s"] = m.time;
+  j["stress"] = tensor(m.stress);
+  j["pressure"] = m.pressure;
+  j["coordination"] = m.coordination;
+  j["contacts"] = m.contacts;
+  j["kinetic_energy"] = m.kinetic_energy;
+  j["elastic_energy"] = m.elastic_energy;
+  if (energy) {
+    j["dissipated_energy"] = m.dissipated_energy;
+    j["external_work"] = m.external_work;
+    j["energy_balance_error"] = m.energy_balance_error;
+  }
+  j["unbalanced_force_ratio"] = m.unbalanced_force_ratio;
+  j["inertial_number"] = m.inertial_number;
+  j["neighbor_rebuilds"] = m.neighbor_rebuilds;
+  j["wall_forces"] = json::array();
+  for (const auto& f : m.wall_forces) j["wall_forces"].push_back({f.x, f.y, f.z});
+  for (const auto& [k, u] : std::vector<std::pair<const char*, const char*>>{
+           {"stress", "Pa"}, {"pressure", "Pa"}, {"kinetic_energy", "J"}, {"elastic_energy", "J"}, {"wall_forces", "N"},
+           {"time_step_s", "s"}, {"run_time_s", "s"}})
+    j.unit(k, u);
+}
+
 int run(int argc, char** argv) {
   CLI::App app{"tomodem-dem: run a DEM scene (YAML) and print a JSON summary"};
-  std::string scene_path, out_dir = ".", json_path, restart;
-  int threads = 0;
+  std::string scene_path, out_dir = ".", restart, o_value;
   long steps = 0;
-  bool quiet_flag = false, changed_physics = false;
+  bool changed_physics = false;
+  cli::Common common;
   app.add_option("scene", scene_path, "scene file (YAML, see docs/dem.md)");
-  app.add_option("-o,--output-dir", out_dir, "folder for the outputs (created if missing)");
-  app.add_option("--json", json_path, "also write the JSON summary to this file");
-  app.add_option("--threads", threads, "threads (default: the scene's, else 1)")->check(CLI::Range(1, 4096));
+  app.add_option("--output-dir", out_dir, "folder for the outputs the scene names (created if missing; default .)");
+  cli::refuse_o_as_folder(app, o_value);
+  cli::add_json(app, common.json);
+  cli::add_threads(app, common.threads, "default: the scene's simulation.threads, else 1");
   app.add_option("--steps", steps, "override the protocol's total steps")->check(CLI::PositiveNumber);
   app.add_option("--restart", restart, "continue from this checkpoint (same scene)");
   app.add_flag("--restart-changed-physics", changed_physics,
                "with --restart: continue even though the scene's physics differs from the checkpoint's (warns what changed)");
-  app.add_flag("-q,--quiet", quiet_flag, "no progress on stderr");
+  cli::add_quiet(app, common.quiet);
   bool list_laws = false;
   app.add_flag("--list-laws", list_laws, "print the contact-law table of the registry (markdown, docs/dem.md) and exit");
-  tomodem::cli::add_version(app, "tomodem-dem");
-  if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
+  cli::add_version(app, "tomodem-dem");
+  if (const auto code = cli::parse(app, argc, argv)) return *code;
   if (list_laws) {
     std::cout << dem::law_table_markdown();
     return 0;
   }
+  cli::check_o_as_folder(o_value, "tomodem-dem");
+  const std::string& json_path = common.json;
   if (scene_path.empty()) throw InputError("", "scene", "", "no scene file given (see --help)");
   if (changed_physics && restart.empty())
     throw InputError("", "--restart-changed-physics", "", "only means something with --restart <checkpoint>");
-  if (out_dir.empty()) throw InputError("", "-o", "", "the output folder must not be empty");
-  set_quiet(quiet_flag);
+  if (out_dir.empty()) throw InputError("", "--output-dir", "", "the output folder must not be empty");
+  // --threads given: it wins (0: every core); not given: the scene's setting.
+  const int threads = app.count("--threads") ? (common.threads > 0 ? common.threads : all_threads()) : 0;
 
   dem::Scene scene = dem::load_scene(scene_path, threads);
   if (steps > 0) {
@@ -68,7 +98,7 @@ int run(int argc, char** argv) {
     std::vector<std::string> with_restart = inputs;
     if (!restart.empty()) with_restart.push_back(restart);
     if (std::filesystem::exists(out_dir) && !std::filesystem::is_directory(out_dir))
-      throw InputError("", "-o", out_dir, "exists and is not a folder");
+      throw InputError("", "--output-dir", out_dir, "exists and is not a folder");
     const std::string packing = out(scene.outputs.packing);
     const std::string sidecar = std::filesystem::path(packing).replace_extension(".xdmf").string();
     refuse_output_over_input(packing, "output.packing", with_restart);
@@ -88,7 +118,7 @@ int run(int argc, char** argv) {
   info(scene.sim->describe() + "; " + std::to_string(scene.sim->particles().size()) + " particles, dt " +
        std::to_string(scene.sim->time_step()) + " s");
 
-  const dem::RunReport rep = dem::run_protocol(scene, out(scene.outputs.checkpoint), !quiet_flag);
+  const dem::RunReport rep = dem::run_protocol(scene, out(scene.outputs.checkpoint), !common.quiet);
   const dem::Measurements& m = rep.final;
 
   // Outputs: each written under a temporary name and renamed (core/output.hpp).
@@ -115,44 +145,25 @@ int run(int argc, char** argv) {
   write_text_atomic(out(scene.outputs.series), csv_table(kSeriesColumns, rows));
   if (!scene.outputs.checkpoint.empty()) dem::write_checkpoint(out(scene.outputs.checkpoint), *scene.sim, scene.text, rows);
 
-  json j;
-  j["tool"] = "tomodem-dem";
-  j["version"] = version_string();
-  j["scene"] = scene_path;
-  j["particles"] = scene.sim->particles().size();
+  Summary j("tomodem-dem");
+  j.input(scene_path, {{"reads", scene.inputs}});
+  if (!restart.empty()) j["input"]["restart"] = restart;
+  j.n_particles(scene.sim->particles().size());
   j["physics"] = scene.sim->describe();
   j["steps"] = rep.steps;
   j["step"] = scene.sim->step_count();
   j["stop_reason"] = rep.stop_reason;
   j["threads"] = scene.sim->settings().threads;
-  j["wall_time_s"] = rep.wall_time_s;
+  j["run_time_s"] = rep.wall_time_s;  // the protocol alone (wall_time_s: the whole process)
   j["particle_steps_per_second"] = rep.particle_steps_per_second;
   j["time_step_s"] = scene.sim->time_step();
   j["critical_time_step_s"] = scene.sim->critical_time_step();
-  j["time_s"] = m.time;
-  j["stress"] = tensor(m.stress);
-  j["pressure"] = m.pressure;
-  j["coordination"] = m.coordination;
-  j["contacts"] = m.contacts;
-  j["kinetic_energy"] = m.kinetic_energy;
-  j["elastic_energy"] = m.elastic_energy;
-  if (scene.sim->settings().track_energy) {
-    j["dissipated_energy"] = m.dissipated_energy;
-    j["external_work"] = m.external_work;
-    j["energy_balance_error"] = m.energy_balance_error;
-  }
-  j["unbalanced_force_ratio"] = m.unbalanced_force_ratio;
-  j["inertial_number"] = m.inertial_number;
-  j["neighbor_rebuilds"] = m.neighbor_rebuilds;
-  j["wall_forces"] = json::array();
-  for (const auto& f : m.wall_forces) j["wall_forces"].push_back({f.x, f.y, f.z});
-  j["units"] = {{"stress", "Pa"}, {"pressure", "Pa"}, {"kinetic_energy", "J"}, {"wall_time_s", "s"},
-                {"wall_forces", "N"}, {"time_step_s", "s"}};
-  j["outputs"] = {{"packing", out(scene.outputs.packing)}, {"series", out(scene.outputs.series)}};
-  if (!scene.outputs.checkpoint.empty()) j["outputs"]["checkpoint"] = out(scene.outputs.checkpoint);
-  const std::string text = j.dump(2);
-  if (!json_path.empty()) write_text_atomic(json_path, text + "\n");
-  std::cout << text << std::endl;
+  measurement_keys(j, m, scene.sim->settings().track_energy);
+  j.output("packing", out(scene.outputs.packing));
+  j.output("xdmf", std::filesystem::path(out(scene.outputs.packing)).replace_extension(".xdmf").string());
+  j.output("series", out(scene.outputs.series));
+  j.output("checkpoint", out(scene.outputs.checkpoint));
+  emit_summary(j.text(), json_path);
   return 0;
 }
 

@@ -4,12 +4,12 @@
 
 #include <cmath>
 #include <filesystem>
-#include <iostream>
 
 #include "tomodem/core/cli.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/packing_io.hpp"
+#include "tomodem/core/summary.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/geometry/config.hpp"
 
@@ -19,29 +19,30 @@ using json = nlohmann::json;
 namespace {
 int run(int argc, char** argv) {
   CLI::App app{"tomodem-pack: generate and densify a periodic sphere packing; prints a JSON summary"};
-  std::string config, out, json_path;
-  int threads = 0;
+  std::string config, out;
   long particles = 0, seed = -1;
   double pressure = 0, phi = 0, friction = -1;
-  bool quiet_flag = false, no_tess = false;
+  bool no_tess = false;
+  cli::Common common;
   app.add_option("config", config, "packing config (YAML, see docs/pack.md)");
   app.add_option("-o,--output", out, "packing file (.h5; an .xdmf sidecar is written next to it)");
-  app.add_option("--json", json_path, "also write the JSON summary to this file");
-  app.add_option("--threads", threads, "threads (default: the config's, else 1)")->check(CLI::Range(1, 4096));
+  cli::add_json(app, common.json);
+  cli::add_threads(app, common.threads, "default: the config's threads, else 1");
   app.add_option("--particles", particles, "override the particle count")->check(CLI::PositiveNumber);
   app.add_option("--seed", seed, "override the random seed")->check(CLI::NonNegativeNumber);
   app.add_option("--target-pressure", pressure, "override the target: pressure, Pa")->check(CLI::PositiveNumber);
   app.add_option("--target-solid-fraction", phi, "override the target: solid fraction");
   app.add_option("--friction", friction, "override the Coulomb friction coefficient")->check(CLI::NonNegativeNumber);
   app.add_flag("--no-tessellation", no_tess, "skip the Laguerre tessellation");
-  app.add_flag("-q,--quiet", quiet_flag, "no progress on stderr");
-  tomodem::cli::add_version(app, "tomodem-pack");
-  if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
+  cli::add_quiet(app, common.quiet);
+  cli::add_version(app, "tomodem-pack");
+  if (const auto code = cli::parse(app, argc, argv)) return *code;
+  const std::string& json_path = common.json;
   if (config.empty()) throw InputError("", "config", "", "no config file given (see --help)");
-  set_quiet(quiet_flag);
   geometry::PackConfig cfg = geometry::load_pack_config(config);
   auto& s = cfg.spec;
-  if (threads > 0) s.threads = threads;
+  // --threads given: it wins (0: every core); not given: the config's setting.
+  if (app.count("--threads")) s.threads = common.threads > 0 ? common.threads : all_threads();
   if (particles > 0) s.n_particles = std::size_t(particles);
   if (seed >= 0) s.seed = uint64_t(seed);
   if (pressure > 0) s.target = geometry::Target::pressure, s.target_pressure = pressure;
@@ -78,11 +79,9 @@ int run(int argc, char** argv) {
   for (const auto& in : cfg.inputs) pk.provenance.input_hashes[in] = file_hash(in);
   write_packing(out, pk);
 
-  json j;
-  j["tool"] = "tomodem-pack";
-  j["version"] = version_string();
-  j["config"] = config;
-  j["n_particles"] = r.n_particles;
+  Summary j("tomodem-pack");
+  j.input(config, {{"reads", cfg.inputs}});
+  j.n_particles(r.n_particles);
   j["n_inserted"] = r.n_inserted;
   j["solid_fraction"] = r.solid_fraction;
   j["solid_fraction_with_pore_formers"] = r.solid_fraction_with_pore_formers;
@@ -128,14 +127,15 @@ int run(int argc, char** argv) {
                      {"local_solid_fraction_histogram_20_bins", r.local_solid_fraction_histogram},
                      {"time_s", r.tessellation_time_s}};
   }
-  j["wall_time_s"] = r.wall_time_s;
+  j["run_time_s"] = r.wall_time_s;  // the packing alone (wall_time_s: the whole process)
   j["densify_time_s"] = r.densify_time_s;
   j["threads"] = s.threads;
-  j["units"] = {{"pressure", "Pa"}, {"wall_time_s", "s"}, {"time_step_s", "s"}};
-  j["outputs"] = {{"packing", out}};
-  const std::string text = j.dump(2);
-  if (!json_path.empty()) write_text_atomic(json_path, text + "\n");
-  std::cout << text << std::endl;
+  j.unit("pressure", "Pa");
+  j.unit("target_pressure", "Pa");
+  for (const char* k : {"time_step_s", "run_time_s", "densify_time_s"}) j.unit(k, "s");
+  j.output("packing", out);
+  j.output("xdmf", xdmf_sidecar_of(out));
+  emit_summary(j.text(), json_path);
   if (!reached) {
     warn("the target pressure " + std::to_string(s.target_pressure) + " Pa was not reached: the run ended at " +
          std::to_string(r.pressure) + " Pa" + (r.equilibrium ? "" : ", not in equilibrium") +

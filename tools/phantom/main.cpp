@@ -1,9 +1,9 @@
 // tomodem-phantom: synthetic tomography volumes with ground truth (docs/segment.md, "Phantoms").
 #include <CLI/CLI.hpp>
-#include <iostream>
 
 #include "tomodem/core/cli.hpp"
 #include "tomodem/core/error.hpp"
+#include "tomodem/core/summary.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/image/segment.hpp"
 #include "tomodem/image/tools.hpp"
@@ -22,7 +22,7 @@ int main(int argc, char** argv) {
     app.add_option("--truth", c.truth, "truth labels (.h5: /labels, /macropores); packing kind: also TRUTH.packing.h5");
     app.add_option("--kind", o.kind, "pores | lamellae | sphere | packing")->capture_default_str();
     app.add_option("--size", o.n, "cube edge (voxels)")->capture_default_str()->check(non_negative);
-    app.add_option("--voxel", o.voxel, "voxel size (m)")->capture_default_str();
+    tomodem::cli::add_length(app, "--voxel", o.voxel, "voxel size (default 10um)");
     app.add_option("--snr", o.snr, "contrast / noise sigma (0: no noise)")->capture_default_str();
     app.add_option("--blur", o.blur, "Gaussian blur sigma (voxels)")->capture_default_str();
     app.add_option("--rings", o.rings, "ring artefact amplitude (fraction of the contrast)")->capture_default_str();
@@ -34,19 +34,14 @@ int main(int argc, char** argv) {
     app.add_option("--grains", o.n_grains, "packing kind: number of grains (at most)")->capture_default_str();
     app.add_option("--sphere-radius", o.sphere_radius, "sphere kind: radius (voxels)")->capture_default_str();
     app.add_flag("--float", c.as_float, "write float32 instead of uint16");
-    app.add_option("--json", c.json, "write the JSON summary to FILE (default: stdout)");
-    int threads = 0;
-    bool quiet = false;
-    tomodem::cli::add_threads(app, threads);
-    app.add_flag("-q,--quiet", quiet, "no progress messages");
-    tomodem::cli::add_version(app, "tomodem-phantom");
+    tomodem::cli::Common common;
+    tomodem::cli::add_common(app, "tomodem-phantom", common);
     if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
+    c.json = common.json;
     o.as_written = tomodem::image::options_as_written(app);
     o.macropores_auto = macropores->count() == 0;
-    tomodem::set_quiet(quiet);
-    tomodem::image::set_threads(threads);
-    const std::string summary = tomodem::image::run_phantom(c);
-    if (c.json.empty() || c.json == "-") std::cout << summary;
+    tomodem::image::set_threads(common.threads);
+    tomodem::emit_summary(tomodem::image::run_phantom(c), c.json);
     return tomodem::exit_code::ok;
   });
 }

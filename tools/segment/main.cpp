@@ -1,9 +1,9 @@
 // tomodem-segment: X-ray tomography volume -> phases, macropores, grains (docs/segment.md).
 #include <CLI/CLI.hpp>
-#include <iostream>
 
 #include "tomodem/core/cli.hpp"
 #include "tomodem/core/error.hpp"
+#include "tomodem/core/summary.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/image/segment.hpp"
 #include "tomodem/image/tools.hpp"
@@ -19,8 +19,8 @@ int main(int argc, char** argv) {
     app.add_option("input", c.input, "volume: file, folder of TIFF slices, or a pattern (slices sorted by name)")->required();
     app.add_option("--format", c.read.format, "auto | tiff | mha | nrrd | nifti | raw | h5")->capture_default_str();
     app.add_option("--spacing", c.spacing_text, "voxel size (60.7um, 0.05mm, 6e-5); overrides the header");
-    app.add_option("--header-unit", c.read.header_unit, "metres per length unit of MetaImage/NRRD/NIfTI headers")
-        ->capture_default_str();
+    tomodem::cli::add_length(app, "--header-unit", c.read.header_unit,
+                             "length of one unit of MetaImage/NRRD/NIfTI headers (default 1mm)");
     app.add_option("--raw-dims", c.raw_dims_text, "raw: NX,NY,NZ");
     app.add_option("--raw-type", c.read.raw_type, "raw: uint8 | int8 | uint16 | int16 | uint32 | int32 | float32 | float64")
         ->capture_default_str();
@@ -54,19 +54,14 @@ int main(int argc, char** argv) {
     app.add_option("--mha", c.mha, "labels as MetaImage (.mha or .mhd)");
     app.add_option("--vdb", c.vdb, "macropores as an OpenVDB signed-distance level set (world unit mm, stated in its metadata)");
     app.add_option("--overlay", c.overlay, "mid-plane PNG overlays: PREFIX_xy.png, _xz, _yz");
-    app.add_option("--json", c.json, "write the JSON summary to FILE (default: stdout)");
-    int threads = 0;
-    bool quiet = false;
-    tomodem::cli::add_threads(app, threads);
-    app.add_flag("-q,--quiet", quiet, "no progress messages");
-    tomodem::cli::add_version(app, "tomodem-segment");
+    tomodem::cli::Common common;
+    tomodem::cli::add_common(app, "tomodem-segment", common);
     if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
+    c.json = common.json;
     c.as_written = tomodem::image::options_as_written(app);
-    tomodem::set_quiet(quiet);
-    tomodem::image::set_threads(threads);
+    tomodem::image::set_threads(common.threads);
     if (!c.packing.empty()) c.grains = true;
-    const std::string summary = tomodem::image::run_segment(c);
-    if (c.json.empty() || c.json == "-") std::cout << summary;
+    tomodem::emit_summary(tomodem::image::run_segment(c), c.json);
     return tomodem::exit_code::ok;
   });
 }

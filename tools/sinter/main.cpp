@@ -14,6 +14,7 @@
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/packing_io.hpp"
 #include "tomodem/core/plot.hpp"
+#include "tomodem/core/summary.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/dem/sinter.hpp"
 
@@ -76,62 +77,36 @@ void plot_outputs(const std::string& dir, const std::vector<std::vector<double>>
   write_plot(dir + "/necks", nk);
 }
 
-int run(int argc, char** argv) {
-  CLI::App app{"tomodem-sinter: sinter a packing (scene YAML with a sintering section, docs/sintering.md)"};
-  std::string scene_path, out_dir = ".", json_path;
-  int threads = 0;
-  bool quiet_flag = false;
-  app.add_option("scene", scene_path, "scene file (YAML, see docs/sintering.md)");
-  app.add_option("-o,--output-dir", out_dir, "folder for the outputs (created if missing)");
-  app.add_option("--json", json_path, "also write the JSON summary to this file");
-  app.add_option("--threads", threads, "threads (default: the scene's, else 1)")->check(CLI::Range(1, 4096));
-  app.add_flag("-q,--quiet", quiet_flag, "no progress on stderr");
-  bool no_plot = false;
-  app.add_flag("--no-plot", no_plot, "no PNG/SVG plots (also output.plots: false)");
-  tomodem::cli::add_version(app, "tomodem-sinter");
-  if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
-  if (scene_path.empty()) throw InputError("", "scene", "", "no scene file given (see --help)");
-  set_quiet(quiet_flag);
+const char* const kPlotStems[] = {"densification", "densification_temperature", "shrinkage", "necks"};
 
-  dem::Scene scene = dem::load_scene(scene_path, threads);
-  const dem::SinterSettings settings = dem::read_sinter_settings(scene);
-  dem::check_sinter_settings(scene, settings);
-  if (out_dir.empty()) throw InputError("", "-o", "", "the output folder must not be empty");
+// Never write over an input (the scene, the packing it reads), nor two outputs onto one file.
+void check_sinter_outputs(const std::string& scene_path, const dem::Scene& scene, const dem::SinterSettings& settings,
+                          const std::string& out_dir, bool plots, const std::string& json_path) {
   const auto out = [&](const std::string& name) { return out_dir + "/" + name; };
-  // Never write over an input (the scene, the packing it reads), nor two outputs onto one file.
-  {
-    std::vector<std::string> inputs = {scene_path};
-    inputs.insert(inputs.end(), scene.inputs.begin(), scene.inputs.end());
-    if (std::filesystem::exists(out_dir) && !std::filesystem::is_directory(out_dir))
-      throw InputError("", "-o", out_dir, "exists and is not a folder");
-    const std::string packing = out(settings.packing);
-    const std::string sidecar = std::filesystem::path(packing).replace_extension(".xdmf").string();
-    refuse_output_over_input(out(settings.curve), "sintering.output.curve", inputs);
-    refuse_output_over_input(out(settings.necks), "sintering.output.necks", inputs);
-    refuse_output_over_input(packing, "sintering.output.packing", inputs);
-    refuse_output_over_input(sidecar, "sintering.output.packing (its .xdmf sidecar)", inputs);
-    std::vector<std::string> written = {out(settings.curve), out(settings.necks), packing, sidecar};
-    if (settings.plots && !no_plot)
-      for (const char* stem : {"densification", "densification_temperature", "shrinkage", "necks"})
-        for (const char* ext : {".png", ".svg"}) {
-          written.push_back(out(std::string(stem) + ext));
-          refuse_output_over_input(written.back(), "-o (plot " + std::string(stem) + ext + ")", inputs);
-        }
-    refuse_output_over_input(json_path, "--json", inputs);
-    if (!json_path.empty()) refuse_output_over_input(json_path, "--json", written);
-  }
-  std::filesystem::create_directories(out_dir);
-  info(scene.sim->describe() + "; " + std::to_string(scene.sim->particles().size()) + " particles");
+  std::vector<std::string> inputs = {scene_path};
+  inputs.insert(inputs.end(), scene.inputs.begin(), scene.inputs.end());
+  if (std::filesystem::exists(out_dir) && !std::filesystem::is_directory(out_dir))
+    throw InputError("", "--output-dir", out_dir, "exists and is not a folder");
+  const std::string packing = out(settings.packing);
+  const std::string sidecar = std::filesystem::path(packing).replace_extension(".xdmf").string();
+  refuse_output_over_input(out(settings.curve), "sintering.output.curve", inputs);
+  refuse_output_over_input(out(settings.necks), "sintering.output.necks", inputs);
+  refuse_output_over_input(packing, "sintering.output.packing", inputs);
+  refuse_output_over_input(sidecar, "sintering.output.packing (its .xdmf sidecar)", inputs);
+  std::vector<std::string> written = {out(settings.curve), out(settings.necks), packing, sidecar};
+  if (plots)
+    for (const char* stem : kPlotStems)
+      for (const char* ext : {".png", ".svg"}) {
+        written.push_back(out(std::string(stem) + ext));
+        refuse_output_over_input(written.back(), "--output-dir (plot " + std::string(stem) + ext + ")", inputs);
+      }
+  refuse_output_over_input(json_path, "--json", inputs);
+  if (!json_path.empty()) refuse_output_over_input(json_path, "--json", written);
+}
 
-  const dem::SinterReport rep = dem::run_sintering(*scene.sim, settings, !quiet_flag);
-
-  std::vector<std::vector<double>> rows;
-  for (const auto& r : rep.rows) rows.push_back(row(r));
-  write_text_atomic(out(settings.curve), csv_table(kColumns, rows));
-  const std::vector<double> ratio = dem::neck_ratios(dem::necks_to_bonds(*scene.sim), scene.sim->particles().r);
-  const std::vector<std::vector<double>> necks = neck_histogram(ratio);
-  write_text_atomic(out(settings.necks), csv_table({"neck_ratio_lower", "neck_ratio_upper", "count", "fraction"}, necks));
-
+// The sintered packing: particles, necks as /bonds, the curve as a series, provenance.
+Packing sintered_packing(const std::string& scene_path, const dem::Scene& scene, const dem::SinterReport& rep,
+                         const std::vector<std::vector<double>>& rows) {
   Packing packing = dem::to_packing(*scene.sim, scene.materials);
   packing.bonds = dem::necks_to_bond_table(*scene.sim);
   packing.provenance.tool = "tomodem-sinter";
@@ -151,23 +126,12 @@ int run(int argc, char** argv) {
   auto& series = packing.results.series["sintering"];
   for (std::size_t c = 0; c < kColumns.size(); ++c)
     for (const auto& r : rows) series[kColumns[c]].push_back(r[c]);
-  write_packing(out(settings.packing), packing);
-  bool plotted = false;
-  if (settings.plots && !no_plot) {
-    if (plotting_available()) {
-      plot_outputs(out_dir, rows, necks);
-      plotted = true;
-    } else {
-      warn("gnuplot not found: no plots (install Debian's gnuplot-nox); the CSV files hold the data");
-    }
-  }
+  return packing;
+}
 
-  json j;
-  j["tool"] = "tomodem-sinter";
-  j["version"] = version_string();
-  j["scene"] = scene_path;
-  j["particles"] = scene.sim->particles().size();
-  j["physics"] = scene.sim->describe();
+// The run's results as summary keys.
+void result_keys(Summary& j, const dem::SinterReport& rep, std::vector<double> ratio) {
+  const dem::SinterRow& f = rep.final;
   j["stop_reason"] = rep.stop_reason;
   j["steps"] = rep.steps;
   j["relative_density"] = f.density;
@@ -178,26 +142,85 @@ int run(int argc, char** argv) {
   j["temperature_K"] = f.temperature;
   j["shrinkage"] = {f.shrinkage[0], f.shrinkage[1], f.shrinkage[2]};
   j["coordination"] = f.coordination;
-  {
-    std::vector<double> s = ratio;
-    std::sort(s.begin(), s.end());
-    auto q = [&](double p) { return s.empty() ? 0.0 : s[std::size_t(std::lround(p * double(s.size() - 1)))]; };
-    j["neck_ratio"] = {{"p10", q(0.1)}, {"p50", q(0.5)}, {"p90", q(0.9)}, {"max", s.empty() ? 0.0 : s.back()}};
-  }
-  j["bonds"] = packing.bonds.size();
-  j["wall_time_s"] = rep.wall_time_s;
+  std::sort(ratio.begin(), ratio.end());
+  auto q = [&](double p) { return ratio.empty() ? 0.0 : ratio[std::size_t(std::lround(p * double(ratio.size() - 1)))]; };
+  j["neck_ratio"] = {{"p10", q(0.1)}, {"p50", q(0.5)}, {"p90", q(0.9)}, {"max", ratio.empty() ? 0.0 : ratio.back()}};
+  j["run_time_s"] = rep.wall_time_s;  // the sintering alone (wall_time_s: the whole process)
   j["time_step_s"] = {{"min", rep.min_time_step}, {"max", rep.max_time_step}};
   j["max_mass_scaling"] = rep.max_mass_scaling;
   j["max_viscous_step_ratio"] = rep.max_viscous_step_ratio;
-  j["units"] = {{"relative_density", "1"}, {"mean_neck_ratio", "1"}, {"sintering_time_s", "s"},
-                {"temperature_K", "K"}, {"wall_time_s", "s"}, {"shrinkage", "1"}, {"time_step_s", "s"}};
-  j["outputs"] = {{"curve", out(settings.curve)}, {"packing", out(settings.packing)}, {"necks", out(settings.necks)}};
-  if (plotted)
-    for (const char* stem : {"densification", "densification_temperature", "shrinkage", "necks"})
-      j["outputs"]["plots"].push_back(out(std::string(stem) + ".png"));
-  const std::string text = j.dump(2);
-  if (!json_path.empty()) write_text_atomic(json_path, text + "\n");
-  std::cout << text << std::endl;
+  for (const auto& [k, u] : std::vector<std::pair<const char*, const char*>>{
+           {"relative_density", "1"}, {"mean_neck_ratio", "1"}, {"sintering_time_s", "s"}, {"temperature_K", "K"},
+           {"run_time_s", "s"}, {"shrinkage", "1"}, {"time_step_s", "s"}})
+    j.unit(k, u);
+}
+
+int run(int argc, char** argv) {
+  CLI::App app{"tomodem-sinter: sinter a packing (scene YAML with a sintering section, docs/sintering.md)"};
+  std::string scene_path, out_dir = ".", o_value;
+  cli::Common common;
+  app.add_option("scene", scene_path, "scene file (YAML, see docs/sintering.md)");
+  app.add_option("--output-dir", out_dir, "folder for the outputs the scene names (created if missing; default .)");
+  cli::refuse_o_as_folder(app, o_value);
+  cli::add_json(app, common.json);
+  cli::add_threads(app, common.threads, "default: the scene's simulation.threads, else 1");
+  cli::add_quiet(app, common.quiet);
+  bool no_plot = false;
+  app.add_flag("--no-plot", no_plot, "no PNG/SVG plots (also output.plots: false)");
+  cli::add_version(app, "tomodem-sinter");
+  if (const auto code = cli::parse(app, argc, argv)) return *code;
+  cli::check_o_as_folder(o_value, "tomodem-sinter");
+  const std::string& json_path = common.json;
+  if (scene_path.empty()) throw InputError("", "scene", "", "no scene file given (see --help)");
+  if (out_dir.empty()) throw InputError("", "--output-dir", "", "the output folder must not be empty");
+  // --threads given: it wins (0: every core); not given: the scene's setting.
+  const int threads = app.count("--threads") ? (common.threads > 0 ? common.threads : all_threads()) : 0;
+
+  dem::Scene scene = dem::load_scene(scene_path, threads);
+  const dem::SinterSettings settings = dem::read_sinter_settings(scene);
+  dem::check_sinter_settings(scene, settings);
+  const auto out = [&](const std::string& name) { return out_dir + "/" + name; };
+  const bool plots = settings.plots && !no_plot;
+  check_sinter_outputs(scene_path, scene, settings, out_dir, plots, json_path);
+  std::filesystem::create_directories(out_dir);
+  info(scene.sim->describe() + "; " + std::to_string(scene.sim->particles().size()) + " particles");
+
+  const dem::SinterReport rep = dem::run_sintering(*scene.sim, settings, !common.quiet);
+
+  std::vector<std::vector<double>> rows;
+  for (const auto& r : rep.rows) rows.push_back(row(r));
+  write_text_atomic(out(settings.curve), csv_table(kColumns, rows));
+  const std::vector<double> ratio = dem::neck_ratios(dem::necks_to_bonds(*scene.sim), scene.sim->particles().r);
+  const std::vector<std::vector<double>> necks = neck_histogram(ratio);
+  write_text_atomic(out(settings.necks), csv_table({"neck_ratio_lower", "neck_ratio_upper", "count", "fraction"}, necks));
+  const Packing packing = sintered_packing(scene_path, scene, rep, rows);
+  write_packing(out(settings.packing), packing);
+  bool plotted = false;
+  if (plots) {
+    if (plotting_available()) {
+      plot_outputs(out_dir, rows, necks);
+      plotted = true;
+    } else {
+      warn("gnuplot not found: no plots (install Debian's gnuplot-nox); the CSV files hold the data");
+    }
+  }
+
+  Summary j("tomodem-sinter");
+  j.input(scene_path, {{"reads", scene.inputs}});
+  j.n_particles(scene.sim->particles().size());
+  j["physics"] = scene.sim->describe();
+  result_keys(j, rep, ratio);
+  j["bonds"] = packing.bonds.size();
+  j.output("curve", out(settings.curve));
+  j.output("packing", out(settings.packing));
+  j.output("xdmf", xdmf_sidecar_of(out(settings.packing)));
+  j.output("necks", out(settings.necks));
+  if (plotted) {
+    json plots_out = json::array();
+    for (const char* stem : kPlotStems) plots_out.push_back(out(std::string(stem) + ".png"));
+    j.output("plots", plots_out);
+  }
+  emit_summary(j.text(), json_path);
   return 0;
 }
 

@@ -1,13 +1,13 @@
 // tomodem-carve driver: inputs, carve, outputs and the JSON summary (docs/carve.md).
 #include <nlohmann/json.hpp>
 
-#include <chrono>
 #include <filesystem>
 
 #include "tomodem/carve/tool.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/packing_io.hpp"
+#include "tomodem/core/summary.hpp"
 #include "tomodem/core/tool.hpp"
 
 namespace tomodem::carve {
@@ -77,7 +77,6 @@ void check_config(const CarveConfig& cfg) {
 }
 
 std::string run_carve(const CarveConfig& cfg) {
-  const auto t0 = std::chrono::steady_clock::now();
   if (cfg.packing.empty()) throw InputError("", "packing", "", "no packing file given (see --help)");
   if (cfg.output.empty()) throw InputError("", "--output", "", "no output packing given (-o carved.h5)");
   check_config(cfg);
@@ -88,7 +87,6 @@ std::string run_carve(const CarveConfig& cfg) {
   info("carving " + std::to_string(in.particles.size()) + " particles of " + cfg.packing + " with " + pores->describe());
   Result res = carve(in, *pores, opt);
   const Report& r = res.report;
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   const std::string source = !cfg.level_set.empty() ? cfg.level_set : !cfg.labels.empty() ? cfg.labels
                              : !cfg.mesh.empty()    ? cfg.mesh      : cfg.spheres;
@@ -97,16 +95,14 @@ std::string run_carve(const CarveConfig& cfg) {
   out.provenance.version = version_string();
   out.provenance.parameters = cfg.command_line;
   out.provenance.created_utc = utc_now();
-  out.provenance.wall_time_s = wall;
+  out.provenance.wall_time_s = process_wall_time_s();
   out.provenance.input_hashes.clear();
   out.provenance.input_hashes[cfg.packing] = file_hash(cfg.packing);
   if (std::filesystem::is_regular_file(source)) out.provenance.input_hashes[source] = file_hash(source);
 
   const auto& m = opt.mapping;
-  json j;
-  j["tool"] = "tomodem-carve";
-  j["version"] = version_string();
-  j["packing"] = cfg.packing;
+  Summary j("tomodem-carve");
+  j.input(cfg.packing);
   const Box ib = m.use_image_box ? m.image_box : pores->bounds();
   j["macropores"] = {{"source", source}, {"description", pores->describe()},
                      {"image_box_m", {{ib.lo.x, ib.lo.y, ib.lo.z}, {ib.hi.x, ib.hi.y, ib.hi.z}}},
@@ -119,7 +115,7 @@ std::string run_carve(const CarveConfig& cfg) {
   j["cut_particles"] = name(opt.cut);
   j["fraction_method"] = name(opt.method);
   j["n_particles_in"] = r.n_in;
-  j["n_particles"] = r.n_out;
+  j.n_particles(r.n_out);
   j["n_removed"] = r.n_removed + r.n_removed_floating;
   j["n_removed_carved"] = r.n_removed;
   j["n_removed_floating"] = r.n_removed_floating;
@@ -141,10 +137,12 @@ std::string run_carve(const CarveConfig& cfg) {
   j["relaxation"] = {{"steps", r.relax_steps}, {"unbalanced_force_ratio", r.relax_unbalanced_force_ratio}};
   j["times_s"] = {{"target", r.time_target_s}, {"classify", r.time_classify_s},
                   {"connectivity", r.time_connectivity_s}, {"relax", r.time_relax_s}, {"carve", r.wall_time_s}};
-  j["wall_time_s"] = wall;
-  j["units"] = {{"lengths", "m"}, {"fractions", "1 (volume fractions of the packing's cell)"}, {"times", "s"}};
-  j["outputs"] = {{"packing", cfg.output}};
-  if (!cfg.picture.empty()) j["outputs"]["picture"] = cfg.picture;
+  j.unit("lengths", "m");
+  j.unit("fractions", "1 (volume fractions of the packing's cell)");
+  j.unit("times", "s");
+  j.output("packing", cfg.output);
+  j.output("xdmf", xdmf_sidecar_of(cfg.output));
+  j.output("picture", cfg.picture);
 
   // Outputs, all after the work (each atomically).
   write_packing(cfg.output, out);
@@ -152,9 +150,7 @@ std::string run_carve(const CarveConfig& cfg) {
     const MappedPores mp(*pores, opt.mapping, out.cell);
     write_midplane_png(cfg.picture, out, mp, r.after.outside_main);
   }
-  const std::string text = j.dump(2);
-  if (!cfg.json.empty() && cfg.json != "-") write_text_atomic(cfg.json, text + "\n");
-  return text;
+  return j.text();
 }
 
 }  // namespace tomodem::carve

@@ -6,6 +6,8 @@
 #include <fstream>
 #include <iostream>
 #include <iterator>
+#include <thread>
+#include <algorithm>
 #include <vector>
 
 #include "tomodem/core/error.hpp"
@@ -28,6 +30,51 @@ void info(const std::string& m) {
   if (!g_quiet) std::cerr << g_tool << ": " << m << '\n';
 }
 void warn(const std::string& m) { std::cerr << g_tool << ": warning: " << m << '\n'; }
+const std::string& tool_name() { return g_tool; }
+
+namespace {
+std::string g_command_line;
+}  // namespace
+
+namespace {
+// One word of a command line, quoted where the shell would need it.
+std::string shell_word(const std::string& word) {
+  const bool plain = !word.empty() && word.find_first_not_of(
+      "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_./=,:+@%") == std::string::npos;
+  if (plain) return word;
+  std::string q = "'";
+  for (char c : word) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+}  // namespace
+
+void set_command_line(int argc, char** argv) {
+  std::string s;
+  for (int k = 0; k < argc; ++k) s += (k ? " " : "") + shell_word(argv[k]);
+  g_command_line = s;
+}
+
+const std::string& command_line() {
+  // Not recorded (a library call outside a tool's main): this process's own, from /proc.
+  if (g_command_line.empty()) {
+    std::ifstream in("/proc/self/cmdline", std::ios::binary);
+    const std::string all((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    for (std::size_t b = 0, e; b < all.size(); b = e + 1) {
+      e = all.find('\0', b);
+      if (e == std::string::npos) e = all.size();
+      g_command_line += (b ? " " : "") + shell_word(all.substr(b, e - b));
+    }
+  }
+  return g_command_line;
+}
+
+int all_threads() {
+  if (const char* s = std::getenv("OMP_NUM_THREADS")) {
+    const int n = std::atoi(s);  // "4,2": the first level's count
+    if (n > 0) return n;
+  }
+  return int(std::max(1u, std::thread::hardware_concurrency()));
+}
 
 namespace {
 // How long an idle OpenMP thread spins before it sleeps. libgomp's default (300 000 spins) and

@@ -8,12 +8,12 @@
 #include <cmath>
 #include <cstring>
 #include <sstream>
-#include <sys/resource.h>
 
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/h5.hpp"
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/packing_io.hpp"
+#include "tomodem/core/summary.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/image/outputs.hpp"
 #include "tomodem/image/segment.hpp"
@@ -45,13 +45,6 @@ std::vector<std::size_t> parse_list(const std::string& option, const std::string
 double to_voxels(const std::string& option, const std::string& text, double voxel) {
   const double L = parse_length(option, text);
   return L < 0 ? -L : L / voxel;
-}
-
-// Peak resident memory of this process so far (Linux reports kilobytes).
-double peak_rss_bytes() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return double(u.ru_maxrss) * 1024.0;
 }
 
 // Wall time of each stage, in the order run, for the summary.
@@ -169,11 +162,10 @@ void check_outputs(const std::vector<std::pair<std::string, std::string>>& outs,
 
 std::string phase_rule(const SegmentConfig& c) { return c.pores_bright ? "pores above the threshold" : "pores below the threshold"; }
 
-}  // namespace
-
-std::string run_segment(const SegmentConfig& cfgin) {
-  const auto t0 = std::chrono::steady_clock::now();
-  SegmentConfig cfg = cfgin;
+// Read options from the command line's texts, then every option and output checked before the
+// work, so a typo costs nothing and no output overwrites an input (a .mhd's data file, a
+// stack's slices included).
+ReadOptions prepare_segment(const SegmentConfig& cfg) {
   ReadOptions ro = cfg.read;
   if (!cfg.spacing_text.empty()) {
     const double s = parse_length("--spacing", cfg.spacing_text);
@@ -189,39 +181,29 @@ std::string run_segment(const SegmentConfig& cfgin) {
     const auto r = parse_list("--raw-dims", cfg.raw_dims_text, 3);
     std::copy(r.begin(), r.end(), ro.raw_dims.begin());
   }
-  // Check options and output names before the work, so a typo costs nothing and no output
-  // overwrites an input (a .mhd's data file, a stack's slices included).
   check_segment_options(cfg);
   check_read_options(ro);
-  {
-    std::vector<std::pair<std::string, std::string>> outs{{"-o", cfg.output}, {"--mha", cfg.mha}, {"--vdb", cfg.vdb},
-                                                          {"--json", cfg.json}, {"--packing", cfg.packing}};
-    if (cfg.mha.size() > 4 && cfg.mha.substr(cfg.mha.size() - 4) == ".mhd") outs.push_back({"--mha", sibling(cfg.mha, ".raw")});
-    if (!cfg.packing.empty()) outs.push_back({"--packing", sibling(cfg.packing, ".xdmf")});
-    if (!cfg.output.empty()) outs.push_back({"-o", sibling(cfg.output, ".xdmf")});  // the labels' XDMF sidecar
-    if (!cfg.overlay.empty())
-      for (const char* p : {"_xy.png", "_xz.png", "_yz.png"}) outs.push_back({"--overlay", cfg.overlay + p});
-    check_outputs(outs, input_files(cfg.input, ro));
-  }
+  std::vector<std::pair<std::string, std::string>> outs{{"-o", cfg.output}, {"--mha", cfg.mha}, {"--vdb", cfg.vdb},
+                                                        {"--json", cfg.json}, {"--packing", cfg.packing}};
+  if (cfg.mha.size() > 4 && cfg.mha.substr(cfg.mha.size() - 4) == ".mhd") outs.push_back({"--mha", sibling(cfg.mha, ".raw")});
+  if (!cfg.packing.empty()) outs.push_back({"--packing", sibling(cfg.packing, ".xdmf")});
+  if (!cfg.overlay.empty())
+    for (const char* p : {"_xy.png", "_xz.png", "_yz.png"}) outs.push_back({"--overlay", cfg.overlay + p});
+  check_outputs(outs, input_files(cfg.input, ro));
   ro.bytes_per_voxel = segment_bytes_per_voxel(cfg);
+  return ro;
+}
 
-  ReadInfo rinfo;
-  StageClock clock;
-  info("reading " + cfg.input);
-  Volume v = read_volume(cfg.input, ro, &rinfo);
-  const auto [mn, mx] = std::minmax_element(v.v.begin(), v.v.end());
-  if (!(*mx > *mn))
-    throw InputError(cfg.input, "volume", std::to_string(*mn), "constant volume (every voxel has this value): nothing to segment");
-  json summary;
-  summary["input"] = {{"path", cfg.input}, {"format", rinfo.format}, {"pixel_type", rinfo.pixel_type},
-                      {"files", rinfo.files.size()}, {"dims", {v.dims.nx, v.dims.ny, v.dims.nz}},
-                      {"spacing_m", v.spacing}, {"origin_m", v.origin}, {"spacing_source", rinfo.spacing_source}};
-  clock.done("read");
-  // ---- filtering
+// The filter in place; its parameters for the summary.
+json apply_filter(const SegmentConfig& cfg, Volume& v) {
   json filt{{"name", cfg.filter}};
-  if (cfg.filter == "median") { median_inplace(v, cfg.filter_radius); filt["radius_vox"] = cfg.filter_radius; }
-  else if (cfg.filter == "gaussian") { v = gaussian(v, cfg.sigma); filt["sigma_vox"] = cfg.sigma; }
-  else if (cfg.filter == "cad") {
+  if (cfg.filter == "median") {
+    median_inplace(v, cfg.filter_radius);
+    filt["radius_vox"] = cfg.filter_radius;
+  } else if (cfg.filter == "gaussian") {
+    v = gaussian(v, cfg.sigma);
+    filt["sigma_vox"] = cfg.sigma;
+  } else if (cfg.filter == "cad") {
     v = anisotropic_diffusion(v, cfg.iterations, cfg.conductance);
     filt["iterations"] = cfg.iterations;
     filt["conductance"] = cfg.conductance;
@@ -234,35 +216,36 @@ std::string run_segment(const SegmentConfig& cfgin) {
     throw InputError("", "--filter", cfg.filter, "expected none, median, gaussian, cad or nlm");
   }
   info("filter: " + cfg.filter);
-  clock.done("filter");
-  // ---- thresholds: solid (1) and an optional second solid phase (phase2)
+  return filt;
+}
+
+// The thresholds of the chosen method, ascending (Otsu's too, for peaks and intermeans).
+std::vector<double> thresholds(const SegmentConfig& cfg, const Volume& v, Summary& summary) {
   std::vector<double> t;
-  Mask solid, phase2;
-  const bool dark = !cfg.pores_bright;
   if (cfg.method == "otsu" || cfg.method == "multiotsu2") {
     t = {otsu_threshold(v)};
-  } else if (cfg.method == "peaks") {
+  } else if (cfg.method == "peaks" || cfg.method == "intermeans") {
     const double t_otsu = otsu_threshold(v);
-    t = {peaks_threshold(v, t_otsu)};
-    summary["otsu_threshold"] = t_otsu;
-  } else if (cfg.method == "intermeans") {
-    const double t_otsu = otsu_threshold(v);
-    t = {intermeans_threshold(v, t_otsu)};
+    t = {cfg.method == "peaks" ? peaks_threshold(v, t_otsu) : intermeans_threshold(v, t_otsu)};
     summary["otsu_threshold"] = t_otsu;
   } else if (cfg.method == "multiotsu3") {
     t = multi_otsu_thresholds(v, 3);
-  } else if (cfg.method == "manual") {
-    if (cfg.levels.empty() || cfg.levels.size() > 2)
+  } else if (cfg.method == "manual" || cfg.method == "hysteresis") {
+    if (cfg.method == "manual" && (cfg.levels.empty() || cfg.levels.size() > 2))
       throw InputError("", "--levels", "", "manual thresholding needs one or two --levels");
-    t = cfg.levels;
-    std::sort(t.begin(), t.end());
-  } else if (cfg.method == "hysteresis") {
-    if (cfg.levels.size() != 2) throw InputError("", "--levels", "", "hysteresis needs --levels LOW,HIGH");
+    if (cfg.method == "hysteresis" && cfg.levels.size() != 2)
+      throw InputError("", "--levels", "", "hysteresis needs --levels LOW,HIGH");
     t = cfg.levels;
     std::sort(t.begin(), t.end());
   } else {
     throw InputError("", "--method", cfg.method, "expected otsu, peaks, intermeans, multiotsu2, multiotsu3, manual or hysteresis");
   }
+  return t;
+}
+
+// The solid (and an optional second solid phase) from the thresholds t.
+void threshold_solid(const SegmentConfig& cfg, const Volume& v, const std::vector<double>& t, Mask& solid, Mask& phase2) {
+  const bool dark = !cfg.pores_bright;
   if (cfg.method == "hysteresis") {
     if (dark) solid = hysteresis(v, t[0], t[1]);
     else {  // solid is dark: hysteresis on the negated volume
@@ -277,13 +260,10 @@ std::string run_segment(const SegmentConfig& cfgin) {
     solid = threshold(v, t.back(), true);
     if (t.size() == 2) phase2 = threshold(v, t[0], true);
   }
-  // The grey values are not needed any more (but for the overlay's three planes): release them
-  // before the distance maps and labels (docs/segment.md, "Memory").
-  OverlayPlanes planes;
-  if (!cfg.overlay.empty()) planes = overlay_planes(v);
-  std::vector<float>().swap(v.v);
-  clock.done("threshold");
-  // ---- cleaning
+}
+
+// Opening, closing and island removal of the solid; returns the pores (its complement).
+Mask clean_solid(const SegmentConfig& cfg, Mask& solid, Summary& summary) {
   if (cfg.open_r > 0) solid = open_ball(solid, cfg.open_r);
   if (cfg.close_r > 0) solid = close_ball(solid, cfg.close_r);
   int removed_solid = 0, removed_pore = 0;
@@ -294,18 +274,19 @@ std::string run_segment(const SegmentConfig& cfgin) {
     removed_pore = remove_islands(pores, cfg.min_island, cfg.connectivity);
     for (std::size_t i = 0; i < pores.v.size(); ++i) solid.v[i] = !pores.v[i];
   }
+  summary["cleaning"] = {{"open_radius_vox", cfg.open_r}, {"close_radius_vox", cfg.close_r},
+                         {"min_island_vox", cfg.min_island}, {"solid_islands_removed", removed_solid},
+                         {"pore_islands_removed", removed_pore}, {"connectivity", cfg.connectivity}};
   Mask pores = solid;
   for (auto& x : pores.v) x = !x;
-  clock.done("clean");
-  // ---- macropores
-  const double macro_r = to_voxels("--macropore-radius", cfg.macro_radius_text, v.spacing[0]);
-  int n_macro = 0;
-  const Labels macro = macropores(pores, macro_r, cfg.macro_min_voxels, &n_macro);
-  info("macropores: " + std::to_string(n_macro));
-  clock.done("macropores");
+  return pores;
+}
+
+// Phase labels: 0 solid, 1 fine pore, 2 macropore, 3 second solid phase; porosities.
+Mask phase_labels(const Mask& pores, const Labels& macro, const Mask& phase2, Summary& summary) {
   Mask phases;
-  phases.copy_geometry(v);
-  phases.v.resize(v.dims.count());
+  phases.copy_geometry(pores);
+  phases.v.resize(pores.dims.count());
   std::size_t n_pore = 0, n_macro_vox = 0;
 #pragma omp parallel for schedule(static) reduction(+ : n_pore, n_macro_vox)
   for (std::size_t i = 0; i < phases.v.size(); ++i) {
@@ -316,21 +297,15 @@ std::string run_segment(const SegmentConfig& cfgin) {
     n_pore += pores.v[i];
     phases.v[i] = p;
   }
-  const double N = double(v.dims.count());
+  const double N = double(pores.dims.count());
   summary["porosity"] = double(n_pore) / N;
   summary["macroporosity"] = double(n_macro_vox) / N;
   summary["fine_porosity"] = double(n_pore - n_macro_vox) / N;
-  summary["n_macropores"] = n_macro;
-  summary["thresholds"] = t;
-  summary["threshold_rule"] = phase_rule(cfg) + " (value >= t is the brighter class)";
-  summary["method"] = cfg.method;
-  summary["filter"] = filt;
-  summary["cleaning"] = {{"open_radius_vox", cfg.open_r}, {"close_radius_vox", cfg.close_r},
-                         {"min_island_vox", cfg.min_island}, {"solid_islands_removed", removed_solid},
-                         {"pore_islands_removed", removed_pore}, {"connectivity", cfg.connectivity}};
-  summary["macropore_radius_m"] = macro_r * v.spacing[0];
-  summary["macropore_radius_vox"] = macro_r;
-  summary["specific_surface_per_m"] = specific_surface(solid);
+  return phases;
+}
+
+// Each macropore's size and place, and their size distribution.
+void macropore_keys(const Labels& macro, int n_macro, Summary& summary) {
   const auto regs = regions(macro, n_macro);
   json mp = json::array();
   std::vector<double> diam;
@@ -348,94 +323,146 @@ std::string run_segment(const SegmentConfig& cfgin) {
   summary["pore_size_distribution"] = {{"kind", "macropore equivalent diameters (6V/pi)^(1/3), ascending"},
                                        {"equivalent_diameters_m", diam},
                                        {"median_m", diam.empty() ? 0.0 : diam[diam.size() / 2]}};
-  std::vector<uint8_t>().swap(pores.v);
-  clock.done("measure");
-  // ---- grains
-  Labels grains;
-  Packing packing;
-  if (cfg.grains) {
-    int n = 0;
-    GrainOptions go;
-    go.h = cfg.h;
-    grains = watershed_grains(solid, go, &n);
-    const auto g = regions(grains, n);
-    const auto d2 = distance_squared(solid);
-    std::vector<float> inscribed(std::size_t(n) + 1, 0.0f);
-    std::vector<std::size_t> n_phase2(std::size_t(n) + 1, 0);
-    for (std::size_t i = 0; i < d2.size(); ++i) {
-      const auto k = std::size_t(grains.v[i]);
-      if (!k) continue;
-      inscribed[k] = std::max(inscribed[k], d2[i]);
-      if (phases.v[i] == 3) ++n_phase2[k];
-    }
-    std::vector<double> vols;
-    for (const auto& r : g) vols.push_back(double(r.voxels));
-    std::sort(vols.begin(), vols.end());
-    const double med = vols.empty() ? 0 : vols[vols.size() / 2];
-    int over = 0, under = 0, cut = 0;
-    packing.particles.resize(0);
-    for (const auto& r : g) {
-      if (!r.voxels) continue;
-      const double rin = std::sqrt(double(inscribed[std::size_t(r.label)]));
-      const double ratio = double(r.voxels) / (4.0 / 3.0 * M_PI * rin * rin * rin);
-      under += ratio > 2.0;               // much more volume than its largest inscribed ball: merged grains
-      over += double(r.voxels) < 0.2 * med;  // a fragment far below the typical grain
-      cut += r.touches_surface;
-      packing.particles.position.push_back(r.centroid);
-      packing.particles.radius.push_back(0.5 * r.equivalent_diameter_m);
-      packing.particles.phase.push_back(2 * n_phase2[std::size_t(r.label)] > r.voxels ? 1 : 0);
-    }
-    const Vec3 lo{v.origin[0] - 0.5 * v.spacing[0], v.origin[1] - 0.5 * v.spacing[1], v.origin[2] - 0.5 * v.spacing[2]};
-    packing.cell = Cell::box(lo, lo + Vec3{double(v.dims.nx) * v.spacing[0], double(v.dims.ny) * v.spacing[1],
-                                           double(v.dims.nz) * v.spacing[2]}, false);
-    Material m1, m2;
-    m1.name = "solid";
-    m2.name = "solid_phase_2";
-    packing.materials = {m1};
-    if (!phase2.v.empty()) packing.materials.push_back(m2);
-    summary["n_grains"] = packing.particles.size();
-    summary["grains"] = {{"h_vox", cfg.h}, {"median_voxels", med}, {"cut_by_surface", cut},
-                         {"over_segmentation_suspects", over}, {"under_segmentation_suspects", under},
-                         {"rules", "over: volume < 0.2 x median; under: volume > 2 x the ball of its largest inscribed radius"}};
-    clock.done("grains");
+}
+
+// Grain separation (distance map, h-maxima, watershed) and the grains as a packing: one sphere
+// of the grain's volume at its centroid, phase 1 where the second solid phase is the majority.
+Packing separate_grains(const SegmentConfig& cfg, const Mask& solid, const Mask& phases, bool two_phases, Labels& grains,
+                        Summary& summary) {
+  int n = 0;
+  GrainOptions go;
+  go.h = cfg.h;
+  grains = watershed_grains(solid, go, &n);
+  const auto g = regions(grains, n);
+  const auto d2 = distance_squared(solid);
+  std::vector<float> inscribed(std::size_t(n) + 1, 0.0f);
+  std::vector<std::size_t> n_phase2(std::size_t(n) + 1, 0);
+  for (std::size_t i = 0; i < d2.size(); ++i) {
+    const auto k = std::size_t(grains.v[i]);
+    if (!k) continue;
+    inscribed[k] = std::max(inscribed[k], d2[i]);
+    if (phases.v[i] == 3) ++n_phase2[k];
   }
-  // ---- outputs (everything computed: nothing is written before this point)
-  json outs;
-  if (!cfg.output.empty()) { write_labels_h5(cfg.output, phases, macro, cfg.grains ? &grains : nullptr, rinfo.files); outs["labels_h5"] = cfg.output; }
-  if (!cfg.mha.empty()) { write_metaimage(cfg.mha, phases); outs["labels_mha"] = cfg.mha; }
+  std::vector<double> vols;
+  for (const auto& r : g) vols.push_back(double(r.voxels));
+  std::sort(vols.begin(), vols.end());
+  const double med = vols.empty() ? 0 : vols[vols.size() / 2];
+  int over = 0, under = 0, cut = 0;
+  Packing packing;
+  for (const auto& r : g) {
+    if (!r.voxels) continue;
+    const double rin = std::sqrt(double(inscribed[std::size_t(r.label)]));
+    const double ratio = double(r.voxels) / (4.0 / 3.0 * M_PI * rin * rin * rin);
+    under += ratio > 2.0;                  // much more volume than its largest inscribed ball: merged grains
+    over += double(r.voxels) < 0.2 * med;  // a fragment far below the typical grain
+    cut += r.touches_surface;
+    packing.particles.position.push_back(r.centroid);
+    packing.particles.radius.push_back(0.5 * r.equivalent_diameter_m);
+    packing.particles.phase.push_back(2 * n_phase2[std::size_t(r.label)] > r.voxels ? 1 : 0);
+  }
+  const auto& sp = solid.spacing;
+  const Vec3 lo{solid.origin[0] - 0.5 * sp[0], solid.origin[1] - 0.5 * sp[1], solid.origin[2] - 0.5 * sp[2]};
+  packing.cell = Cell::box(lo, lo + Vec3{double(solid.dims.nx) * sp[0], double(solid.dims.ny) * sp[1],
+                                         double(solid.dims.nz) * sp[2]}, false);
+  Material m1, m2;
+  m1.name = "solid";
+  m2.name = "solid_phase_2";
+  packing.materials = {m1};
+  if (two_phases) packing.materials.push_back(m2);
+  summary["n_grains"] = packing.particles.size();
+  summary["grains"] = {{"h_vox", cfg.h}, {"median_voxels", med}, {"cut_by_surface", cut},
+                       {"over_segmentation_suspects", over}, {"under_segmentation_suspects", under},
+                       {"rules", "over: volume < 0.2 x median; under: volume > 2 x the ball of its largest inscribed radius"}};
+  return packing;
+}
+
+// Everything computed: the outputs now, each atomically.
+void write_segment_outputs(const SegmentConfig& cfg, const Mask& phases, const Labels& macro, const Labels& grains,
+                           const OverlayPlanes& planes, Packing& packing, Summary& summary) {
+  if (!cfg.output.empty()) write_labels_h5(cfg.output, phases, macro, cfg.grains ? &grains : nullptr);
+  summary.output("labels_h5", cfg.output);
+  if (!cfg.mha.empty()) write_metaimage(cfg.mha, phases);
+  summary.output("labels_mha", cfg.mha);
   if (!cfg.vdb.empty()) {
     Mask m;
     m.copy_geometry(phases);
     m.v.resize(phases.v.size());
     for (std::size_t i = 0; i < m.v.size(); ++i) m.v[i] = phases.v[i] == 2;
     write_level_set(cfg.vdb, m);
-    outs["macropores_vdb"] = cfg.vdb;
   }
-  if (!cfg.overlay.empty()) outs["overlays"] = write_overlays(cfg.overlay, planes, phases);
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  summary.output("macropores_vdb", cfg.vdb);
+  if (!cfg.overlay.empty()) summary.output("overlays", json(write_overlays(cfg.overlay, planes, phases)));
   if (cfg.grains && !cfg.packing.empty()) {
     packing.provenance.tool = "tomodem-segment";
     packing.provenance.version = version_string();
     packing.provenance.parameters = "input: " + cfg.input + "\nh_vox: " + std::to_string(cfg.h);
-    packing.provenance.wall_time_s = wall;
+    packing.provenance.wall_time_s = process_wall_time_s();
     packing.provenance.created_utc = utc_now();
     write_packing(cfg.packing, packing);
-    outs["packing"] = cfg.packing;
+    summary.output("packing", cfg.packing);
   }
-  summary["outputs"] = outs;
+}
+
+}  // namespace
+
+std::string run_segment(const SegmentConfig& cfg) {
+  const ReadOptions ro = prepare_segment(cfg);
+  ReadInfo rinfo;
+  StageClock clock;
+  info("reading " + cfg.input);
+  Volume v = read_volume(cfg.input, ro, &rinfo);
+  const auto [mn, mx] = std::minmax_element(v.v.begin(), v.v.end());
+  if (!(*mx > *mn))
+    throw InputError(cfg.input, "volume", std::to_string(*mn), "constant volume (every voxel has this value): nothing to segment");
+  Summary summary("tomodem-segment");
+  summary.input(cfg.input, {{"format", rinfo.format}, {"pixel_type", rinfo.pixel_type},
+                            {"files", rinfo.files.size()}, {"dims", {v.dims.nx, v.dims.ny, v.dims.nz}},
+                            {"spacing_m", v.spacing}, {"origin_m", v.origin}, {"spacing_source", rinfo.spacing_source}});
+  clock.done("read");
+  summary["filter"] = apply_filter(cfg, v);
+  clock.done("filter");
+  const std::vector<double> t = thresholds(cfg, v, summary);
+  Mask solid, phase2;
+  threshold_solid(cfg, v, t, solid, phase2);
+  // The grey values are not needed any more (but for the overlay's three planes): release them
+  // before the distance maps and labels (docs/segment.md, "Memory").
+  OverlayPlanes planes;
+  if (!cfg.overlay.empty()) planes = overlay_planes(v);
+  std::vector<float>().swap(v.v);
+  clock.done("threshold");
+  Mask pores = clean_solid(cfg, solid, summary);
+  clock.done("clean");
+  const double macro_r = to_voxels("--macropore-radius", cfg.macro_radius_text, v.spacing[0]);
+  int n_macro = 0;
+  const Labels macro = macropores(pores, macro_r, cfg.macro_min_voxels, &n_macro);
+  info("macropores: " + std::to_string(n_macro));
+  clock.done("macropores");
+  const Mask phases = phase_labels(pores, macro, phase2, summary);
+  summary["n_macropores"] = n_macro;
+  summary["thresholds"] = t;
+  summary["threshold_rule"] = phase_rule(cfg) + " (value >= t is the brighter class)";
+  summary["method"] = cfg.method;
+  summary["macropore_radius_m"] = macro_r * v.spacing[0];
+  summary["macropore_radius_vox"] = macro_r;
+  summary["specific_surface_per_m"] = specific_surface(solid);
+  macropore_keys(macro, n_macro, summary);
+  std::vector<uint8_t>().swap(pores.v);
+  clock.done("measure");
+  Labels grains;
+  Packing packing;
+  if (cfg.grains) {
+    packing = separate_grains(cfg, solid, phases, !phase2.v.empty(), grains, summary);
+    summary.n_particles(packing.particles.size());
+    clock.done("grains");
+  }
+  write_segment_outputs(cfg, phases, macro, grains, planes, packing, summary);
   clock.done("outputs");
   summary["stage_times_s"] = clock.times;
-  summary["peak_rss_bytes"] = peak_rss_bytes();
-  summary["wall_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  summary["tool"] = "tomodem-segment";
-  summary["version"] = version_string();
-  const std::string text = summary.dump(2) + "\n";
-  if (!cfg.json.empty() && cfg.json != "-") write_text_atomic(cfg.json, text);
-  return text;
+  summary.unit("stage_times_s", "s");
+  return summary.text();
 }
 
 std::string run_phantom(const PhantomConfig& c) {
-  const auto t0 = std::chrono::steady_clock::now();
   if (c.output.empty()) throw InputError("", "--output", "", "an output volume is required");
   // Everything checked before the work: options, the output's format, names that collide, missing
   // folders, and a TIFF-stack folder that holds anything but an earlier stack's slices.
@@ -459,7 +486,7 @@ std::string run_phantom(const PhantomConfig& c) {
     check_outputs(outs, {}, folder ? 1 : 0);
   }
   const Phantom P = make_phantom(c.opt);
-  json s;
+  Summary s("tomodem-phantom");
   s["kind"] = c.opt.kind;
   s["size"] = c.opt.n;
   s["voxel_m"] = c.opt.voxel;
@@ -473,8 +500,13 @@ std::string run_phantom(const PhantomConfig& c) {
   s["true_porosity"] = double(pore) / double(P.truth.v.size());
   s["n_macropores"] = P.macropore_voxels.size();
   s["macropore_voxels"] = P.macropore_voxels;
-  if (c.opt.kind == "packing") s["n_grains"] = P.packing.particles.size();
+  if (c.opt.kind == "packing") {
+    s["n_grains"] = P.packing.particles.size();
+    s.n_particles(P.packing.particles.size());
+  }
+  s.unit("voxel_m", "m");
   write_volume(c.output, P.grey, !c.as_float);
+  s.output("volume", c.output);
   if (!c.truth.empty()) {
     const std::string tmp = temporary_path(c.truth);
     {
@@ -489,7 +521,7 @@ std::string run_phantom(const PhantomConfig& c) {
       f.close();  // a full disk is found here, before the rename
     }
     commit_output(c.truth);
-    s["truth"] = c.truth;
+    s.output("truth", c.truth);
     if (c.opt.kind == "packing") {
       Packing pk = P.packing;
       pk.provenance.tool = "tomodem-phantom";
@@ -497,14 +529,10 @@ std::string run_phantom(const PhantomConfig& c) {
       pk.provenance.created_utc = utc_now();
       const std::string pp = c.truth + ".packing.h5";
       write_packing(pp, pk);
-      s["truth_packing"] = pp;
+      s.output("truth_packing", pp);
     }
   }
-  s["output"] = c.output;
-  s["wall_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const std::string text = s.dump(2) + "\n";
-  if (!c.json.empty() && c.json != "-") write_text_atomic(c.json, text);
-  return text;
+  return s.text();
 }
 
 }  // namespace tomodem::image

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "file_checks.hpp"
+#include "tomodem/core/units.hpp"
 #include "itk_bridge.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/h5.hpp"
@@ -199,23 +200,16 @@ Volume read_h5(const std::string& path, const ReadOptions& o, bool* has_spacing,
 }  // namespace
 
 double parse_length(const std::string& option, const std::string& text) {
-  std::size_t pos = 0;
+  // Voxels are the image tools' own unit; physical lengths go through core's one parser.
   double x = 0;
-  try {
-    x = std::stod(text, &pos);
-  } catch (const std::exception&) {
-    throw InputError("", option, text, "expected a length such as 60.7um, 0.05mm, 6e-5 (m) or 3vox");
-  }
-  const std::string unit = lower(text.substr(pos));
-  double f = 0;
-  if (unit.empty() || unit == "m") f = 1;
-  else if (unit == "mm") f = 1e-3;
-  else if (unit == "um" || unit == "µm") f = 1e-6;
-  else if (unit == "nm") f = 1e-9;
-  else if (unit == "vox" || unit == "voxel" || unit == "voxels") f = -1;
-  else throw InputError("", option, text, "unknown unit '" + unit + "' (m, mm, um, nm, vox)");
-  if (!(x > 0) || !std::isfinite(x)) throw InputError("", option, text, "must be finite and > 0");
-  return x * f;
+  std::string unit;
+  const bool number = split_number_unit(text, x, unit);
+  unit = lower(unit);
+  const bool voxels = number && (unit == "vox" || unit == "voxel" || unit == "voxels");
+  const double v = voxels ? x : tomodem::parse_length(option, text);
+  if (!(v > 0) || !std::isfinite(v))
+    throw InputError("", option, text, "must be finite and > 0 (a length such as 60.7um, or voxels such as 3vox)");
+  return voxels ? -v : v;
 }
 
 Volume crop(const Volume& v, const std::array<std::size_t, 6>& r) {

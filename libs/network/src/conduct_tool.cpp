@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <array>
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <set>
@@ -14,6 +13,7 @@
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/packing_io.hpp"
+#include "tomodem/core/summary.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/network/conductivity.hpp"
 #include "tomodem/network/electrode.hpp"
@@ -106,9 +106,20 @@ json image_axis_json(const ImageAxisResult& a) {
           {"wall_time_s", a.wall_time_s}};
 }
 
-// tomodem-conduct --image: transport in a segmented label volume (image_transport.hpp).
-std::string run_image_conduct(const ConductConfig& c) {
-  const auto t0 = std::chrono::steady_clock::now();
+// --axis: "x", "xz", "all"; `unique` drops repeated letters.
+std::vector<int> parse_axes(const std::string& text, bool unique) {
+  std::vector<int> axes;
+  const std::string ax = text == "all" ? "xyz" : text;
+  for (char ch : ax) {
+    if (ch < 'x' || ch > 'z') throw InputError("", "--axis", text, "expected letters from x, y, z or 'all'");
+    if (!unique || std::find(axes.begin(), axes.end(), ch - 'x') == axes.end()) axes.push_back(ch - 'x');
+  }
+  if (axes.empty()) throw InputError("", "--axis", text, "no axis given");
+  return axes;
+}
+
+// --image: every option before the volume is read; returns the conductivity of each label.
+std::array<double, 256> check_image_options(const ConductConfig& c) {
   if (!c.input.empty())
     throw InputError("", "--image", c.image, "give either a packing (positional input '" + c.input + "') or --image, not both");
   if (!c.voxel.empty()) throw InputError("", "--voxel", std::to_string(c.voxel.front()), "applies to a packing, not to --image");
@@ -118,13 +129,6 @@ std::string run_image_conduct(const ConductConfig& c) {
   if (c.bc != "electrodes") throw InputError("", "--bc", c.bc, "applies to a packing; with --image use --sides noflux|periodic");
   if (c.sides != "noflux" && c.sides != "periodic")
     throw InputError("", "--sides", c.sides, "expected 'noflux' or 'periodic'");
-  std::vector<int> axes;
-  const std::string ax = c.axes == "all" ? "xyz" : c.axes;
-  for (char ch : ax) {
-    if (ch < 'x' || ch > 'z') throw InputError("", "--axis", c.axes, "expected letters from x, y, z or 'all'");
-    if (std::find(axes.begin(), axes.end(), ch - 'x') == axes.end()) axes.push_back(ch - 'x');
-  }
-  if (axes.empty()) throw InputError("", "--axis", c.axes, "no axis given");
   require_range("--tolerance", c.tolerance, 0, true, 1, true, "relative residual of the CG solve");
   if (c.max_iterations < 0)
     throw InputError("", "--max-iterations", std::to_string(c.max_iterations), "must be >= 0 (0: automatic)");
@@ -142,30 +146,48 @@ std::string run_image_conduct(const ConductConfig& c) {
   }
   check_outputs({c.image}, {{"-o", c.output}, {"-o (its .xdmf sidecar)", c.output.empty() ? "" : xdmf_sidecar_of(c.output)},
                           {"--json", c.json}});
+  return table;
+}
+
+// Refuses a volume too large for the machine, before it is read.
+void check_image_memory(const ConductConfig& c, std::size_t n_axes) {
   const auto shape = label_image_shape(c.image);
   const double nv = static_cast<double>(shape[0]) * shape[1] * shape[2];
   char count[64];
   std::snprintf(count, sizeof count, "%zux%zux%zu voxels", shape[0], shape[1], shape[2]);
   check_memory_request(nv * image_transport_bytes_per_voxel(!c.output.empty()) +
-                           (c.output.empty() ? 0.0 : nv * 8.0 * (axes.size() - 1)),
+                           (c.output.empty() ? 0.0 : nv * 8.0 * (n_axes - 1)),
                        c.image, "/labels", count, "the transport solve of " + std::string(count));
-  const LabelImage im = read_label_image(c.image);
+}
+
+// Refuses a conducting phase the volume does not hold, naming the labels it does.
+void check_phases_present(const ConductConfig& c, const LabelImage& im, const std::array<double, 256>& table) {
   std::array<std::size_t, 256> hist{};
   for (uint8_t v : im.v) ++hist[v];
   std::string present;
-  for (int l = 0; l < 256; ++l)
-    if (hist[l]) present += (present.empty() ? "" : ", ") + std::to_string(l);
   std::size_t conducting = 0;
-  for (int l = 0; l < 256; ++l)
+  for (int l = 0; l < 256; ++l) {
+    if (hist[l]) present += (present.empty() ? "" : ", ") + std::to_string(l);
     if (table[l] > 0) conducting += hist[l];
+  }
   if (conducting == 0)
     throw InputError(c.image, "/labels",
                      c.phase >= 0 ? "phase " + std::to_string(c.phase) : "phases " + c.phase_conductivity,
                      "absent from the volume (labels present: " + present + ")");
+}
 
-  json out = {{"tool", "tomodem-conduct"}, {"version", version_string()}, {"image", c.image}, {"dataset", "/labels"},
-              {"grid", {im.nx, im.ny, im.nz}}, {"spacing_m", im.spacing}, {"sides", c.sides},
-              {"units", {{"sigma_eff", "relative to sigma0 (the largest conductivity given)"}, {"wall_time_s", "s"}}}};
+// tomodem-conduct --image: transport in a segmented label volume (image_transport.hpp).
+std::string run_image_conduct(const ConductConfig& c) {
+  const std::array<double, 256> table = check_image_options(c);
+  const std::vector<int> axes = parse_axes(c.axes, true);
+  check_image_memory(c, axes.size());
+  const LabelImage im = read_label_image(c.image);
+  check_phases_present(c, im, table);
+
+  Summary out("tomodem-conduct");
+  out.input(c.image, {{"dataset", "/labels"}, {"grid", {im.nx, im.ny, im.nz}}, {"spacing_m", im.spacing}});
+  out["sides"] = c.sides;
+  out.unit("sigma_eff", "relative to sigma0 (the largest conductivity given)");
   if (c.phase >= 0) out["phase"] = c.phase;
   json tab = json::object();
   for (int l = 0; l < 256; ++l)
@@ -204,35 +226,23 @@ std::string run_image_conduct(const ConductConfig& c) {
   if (!c.output.empty()) {
     std::ostringstream params;
     params << "image: " << c.image << "\nphase_conductivity: " << tab.dump() << "\nsides: " << c.sides
-           << "\naxes: " << ax << "\ntolerance: " << c.tolerance << "\n";
+           << "\naxes: " << c.axes << "\ntolerance: " << c.tolerance << "\n";
     write_image_fields(c.output, im, results, params.str());
-    out["outputs"] = {{"fields", c.output}, {"xdmf", xdmf_sidecar_of(c.output)}};
+    out.output("fields", c.output);
+    out.output("xdmf", xdmf_sidecar_of(c.output));
   }
-  out["wall_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const std::string text = out.dump(2) + "\n";
-  if (!c.json.empty() && c.json != "-") write_text_atomic(c.json, text);
-  return text;
+  return out.text();
 }
-}  // namespace
 
-std::string run_conduct(const ConductConfig& c) {
-  if (!c.image.empty()) return run_image_conduct(c);
+// A packing: every option is checked before the packing is read; out of range is refused, never ignored.
+void check_packing_options(const ConductConfig& c) {
   if (c.input.empty()) throw InputError("", "input", "", "give a packing (.h5) or --image LABELS.h5");
   if (c.phase >= 0 || !c.phase_conductivity.empty() || c.sides != "noflux")
     throw InputError("", c.phase >= 0 ? "--phase" : !c.phase_conductivity.empty() ? "--phase-conductivity" : "--sides",
                      c.phase >= 0 ? std::to_string(c.phase) : !c.phase_conductivity.empty() ? c.phase_conductivity : c.sides,
                      "applies to --image; a packing takes --phases and --bc");
-  const auto t0 = std::chrono::steady_clock::now();
   if (c.bc != "electrodes" && c.bc != "periodic")
     throw InputError("", "--bc", c.bc, "expected 'electrodes' or 'periodic'");
-  std::vector<int> axes;
-  const std::string ax = c.axes == "all" ? "xyz" : c.axes;
-  for (char ch : ax) {
-    if (ch < 'x' || ch > 'z') throw InputError("", "--axis", c.axes, "expected letters from x, y, z or 'all'");
-    axes.push_back(ch - 'x');
-  }
-  if (axes.empty()) throw InputError("", "--axis", c.axes, "no axis given");
-  // Every option is checked here, before the packing is read: out of range is refused, never ignored.
   require_range("--tolerance", c.tolerance, 0, true, 1, true, "relative residual of the CG solve");
   require_range("--voltage", c.voltage, 0, true, INFINITY, true, "V");
   require_range("--gap-tolerance", c.gap_tolerance, 0, false, 1, false,
@@ -249,6 +259,9 @@ std::string run_conduct(const ConductConfig& c) {
     if (res < 2) throw InputError("", "--voxel", std::to_string(res), "need at least 2 voxels along the longest edge");
   check_outputs({c.input}, {{"-o", c.output}, {"-o (its .xdmf sidecar)", c.output.empty() ? "" : xdmf_sidecar_of(c.output)},
                           {"--json", c.json}});
+}
+
+NetworkOptions network_options(const ConductConfig& c) {
   NetworkOptions no;
   no.phases = c.phases;
   no.use_bonds = c.bonds;
@@ -257,36 +270,39 @@ std::string run_conduct(const ConductConfig& c) {
   no.contact_radius = parse_contact_radius(c.contact_radius);
   no.min_contact_ratio = c.min_contact_ratio;
   no.source = c.input;
+  return no;
+}
+
+ConductOptions conduct_options(const ConductConfig& c) {
   ConductOptions co;
   co.electrode_tolerance = c.electrode_tolerance;
   co.voltage = c.voltage;
   co.solver.tolerance = c.tolerance;
   co.solver.max_iterations = c.max_iterations;
   co.solver.preconditioner = parse_preconditioner(c.preconditioner);
+  return co;
+}
 
-  const Packing pk = read_packing(c.input);
-  for (int res : c.voxel) {  // before the network solve: an impossible grid stops the run now
-    VoxelOptions vo;
-    vo.resolution = res;
-    vo.source = c.input;
-    check_voxel_grid(pk, vo);
-  }
-  const Network net = build_network(pk, no);
-  if (net.n_edges() == 0)
-    throw InputError(c.input, "/bonds", "0 edges",
-                     "empty network: no intact bond and no contact within the gap tolerance between conducting particles");
-  std::size_t nb = 0;
-  for (auto k : net.kind) nb += k == EdgeKind::bond;
-  json out = {{"tool", "tomodem-conduct"}, {"version", version_string()}, {"input", c.input}, {"boundary", c.bc},
-              {"units", {{"sigma_eff", "S/m"}, {"wall_time_s", "s"}, {"resistance_ohm", "ohm"}}}};
-  out["network"] = {{"nodes", net.n_nodes()},
-                    {"edges", net.n_edges()},
-                    {"bonds", nb},
-                    {"contacts", net.n_edges() - nb},
-                    {"phases", c.phases.empty() ? json("all") : json(c.phases)},
-                    {"contact_radius", c.contact_radius}};
-  out["solver"] = {{"method", "conjugate gradient"}, {"preconditioner", c.preconditioner}, {"tolerance", c.tolerance}};
-  std::vector<FieldSet> fields;
+json composite_json(const CompositeResult& r, int axis) {
+  return {{"axis", kAxis[axis]},
+          {"percolates", r.percolates},
+          {"resistance_ohm", finite(r.resistance_ohm)},
+          {"asr_ohm_m2", finite(r.asr_ohm_m2)},
+          {"current_A", r.current},
+          {"conservation_error", r.conservation_error},
+          {"tpb_length_m", r.tpb_length_m},
+          {"tpb_density_m_per_m3", r.tpb_density_m_per_m3},
+          {"tpb_active_density_m_per_m3", r.tpb_active_density_m_per_m3},
+          {"tpb_contacts", r.n_tpb_contacts},
+          {"electronic_percolating_fraction", r.electronic_percolating_fraction},
+          {"ionic_percolating_fraction", r.ionic_percolating_fraction},
+          {"solver", solver_json(r.solver)},
+          {"wall_time_s", r.wall_time_s}};
+}
+
+// The network's conductivity along the axes (electrodes) or the tensor (periodic).
+void solve_network(const ConductConfig& c, const Network& net, const ConductOptions& co, const std::vector<int>& axes,
+                   Summary& out, std::vector<FieldSet>& fields) {
   json sigma = json::object(), err = json::object(), perc = json::object(), dead = json::object(),
        per_axis = json::object();
   double residual = 0;
@@ -320,6 +336,131 @@ std::string run_conduct(const ConductConfig& c) {
   out["iterations"] = iterations;
   out["axes"] = per_axis;
   out["percolates"] = any;
+}
+
+// The voxel cross-check at each --voxel resolution, then its convergence (Richardson).
+json voxel_check(const ConductConfig& c, const Packing& pk, const Network& net, const ConductOptions& co, int axis,
+                 double network_sigma) {
+  json vx = json::array();
+  std::vector<double> s;
+  VoxelResult last;
+  for (int res : c.voxel) {
+    VoxelOptions vo;
+    vo.axis = axis;
+    vo.resolution = res;
+    vo.phases = c.phases;
+    vo.solver = co.solver;
+    vo.source = c.input;
+    vo.neck_radii = net.contact_radius;
+    last = voxel_conductivity(pk, vo);
+    const VoxelResult& r = last;
+    s.push_back(r.sigma_eff);
+    vx.push_back({{"resolution", res},
+                  {"grid", {r.nx, r.ny, r.nz}},
+                  {"voxel_size_m", r.voxel_size},
+                  {"voxels_per_diameter", r.voxels_per_diameter},
+                  {"neck_min_voxels", r.neck_min_voxels},
+                  {"neck_median_voxels", r.neck_median_voxels},
+                  {"solid_fraction", r.solid_fraction},
+                  {"sigma_eff", r.sigma_eff},
+                  {"percolates", r.percolates},
+                  {"conservation_error", r.conservation_error},
+                  {"solver", solver_json(r.solver)},
+                  {"wall_time_s", r.wall_time_s}});
+  }
+  json out = {{"axis", kAxis[axis]}, {"runs", vx}, {"sigma_eff_per_resolution", s}, {"resolutions", c.voxel}};
+  std::vector<std::string> problems;
+  // Of the finest grid (the last one given).
+  if (!last.necks_resolved) {
+    char msg[400];
+    std::snprintf(msg, sizeof msg,
+                  "the voxel grid does not resolve the necks: the smallest neck radius is %.2g voxels on the finest "
+                  "grid (need >= %.0f); --voxel must reach %ld voxels per longest edge for the smallest neck, %ld for "
+                  "the median one; until then the voxel answer is not converged",
+                  last.neck_min_voxels, kNeckVoxels, long(last.required_resolution_min), long(last.required_resolution_median));
+    problems.push_back(msg);
+  }
+  if (s.size() >= 3) {
+    const std::size_t k = s.size();
+    double order = 0, e = 0;
+    const double ratio = static_cast<double>(c.voxel[k - 1]) / c.voxel[k - 2];
+    const double ratio0 = static_cast<double>(c.voxel[k - 2]) / c.voxel[k - 3];
+    const double ext = richardson(s[k - 3], s[k - 2], s[k - 1], ratio, &order, &e);
+    const bool same_ratio = std::abs(ratio - ratio0) <= 1e-9 * ratio;
+    const bool converging = same_ratio && order > 0.5;
+    out["extrapolated_sigma_eff"] = ext;
+    out["observed_order"] = order;
+    out["discretisation_error"] = e;
+    out["converging"] = converging;
+    if (!same_ratio) problems.push_back("the last three --voxel resolutions are not refined by one factor: no Richardson extrapolation");
+    else if (!converging) {
+      char msg[200];
+      std::snprintf(msg, sizeof msg, "the voxel answers %.4g, %.4g, %.4g do not converge (observed order %.2f <= 0.5): "
+                    "the extrapolated value is the finest result, not a converged one", s[k - 3], s[k - 2], s[k - 1], order);
+      problems.push_back(msg);
+    }
+    if (c.bc == "electrodes" && ext != 0) out["network_minus_voxel_relative"] = (network_sigma - ext) / ext;
+  } else {
+    problems.push_back("fewer than three --voxel resolutions: no observed order, no extrapolation");
+  }
+  std::string message;
+  for (const auto& p : problems) {
+    warn(p);
+    message += (message.empty() ? "" : "; ") + p;
+  }
+  out["necks_resolved"] = last.necks_resolved;
+  out["required_resolution_smallest_neck"] = last.required_resolution_min;
+  out["required_resolution_median_neck"] = last.required_resolution_median;
+  out["warning"] = !problems.empty();
+  out["warning_message"] = message;
+  return out;
+}
+
+std::string parameters_text(const ConductConfig& c) {
+  std::ostringstream params;
+  params << "phases: [" << join(c.phases) << "]\nbc: " << c.bc << "\naxes: " << c.axes << "\ncontact_radius: "
+         << c.contact_radius << "\ngap_tolerance: " << c.gap_tolerance << "\nmin_contact_ratio: " << c.min_contact_ratio
+         << "\nelectrode_tolerance: " << c.electrode_tolerance << "\ntolerance: " << c.tolerance
+         << "\npreconditioner: " << c.preconditioner << "\n";
+  return params.str();
+}
+}  // namespace
+
+std::string run_conduct(const ConductConfig& c) {
+  if (!c.image.empty()) return run_image_conduct(c);
+  check_packing_options(c);
+  const std::vector<int> axes = parse_axes(c.axes, false);
+  const NetworkOptions no = network_options(c);
+  const ConductOptions co = conduct_options(c);
+
+  const Packing pk = read_packing(c.input);
+  for (int res : c.voxel) {  // before the network solve: an impossible grid stops the run now
+    VoxelOptions vo;
+    vo.resolution = res;
+    vo.source = c.input;
+    check_voxel_grid(pk, vo);
+  }
+  const Network net = build_network(pk, no);
+  if (net.n_edges() == 0)
+    throw InputError(c.input, "/bonds", "0 edges",
+                     "empty network: no intact bond and no contact within the gap tolerance between conducting particles");
+  std::size_t nb = 0;
+  for (auto k : net.kind) nb += k == EdgeKind::bond;
+  Summary out("tomodem-conduct");
+  out.input(c.input);
+  out.n_particles(pk.particles.size());
+  out["boundary"] = c.bc;
+  out.unit("sigma_eff", "S/m");
+  out.unit("resistance_ohm", "ohm");
+  out["network"] = {{"nodes", net.n_nodes()},
+                    {"edges", net.n_edges()},
+                    {"bonds", nb},
+                    {"contacts", net.n_edges() - nb},
+                    {"phases", c.phases.empty() ? json("all") : json(c.phases)},
+                    {"contact_radius", c.contact_radius}};
+  out["solver"] = {{"method", "conjugate gradient"}, {"preconditioner", c.preconditioner}, {"tolerance", c.tolerance}};
+  std::vector<FieldSet> fields;
+  solve_network(c, net, co, axes, out, fields);
 
   if (!c.electronic.empty() || !c.ionic.empty()) {
     CompositeOptions cp;
@@ -330,115 +471,17 @@ std::string run_conduct(const ConductConfig& c) {
     cp.network = no;
     cp.conduct = co;
     const CompositeResult r = solve_composite(pk, cp);
-    out["composite"] = {{"axis", kAxis[cp.axis]},
-                        {"percolates", r.percolates},
-                        {"resistance_ohm", finite(r.resistance_ohm)},
-                        {"asr_ohm_m2", finite(r.asr_ohm_m2)},
-                        {"current_A", r.current},
-                        {"conservation_error", r.conservation_error},
-                        {"tpb_length_m", r.tpb_length_m},
-                        {"tpb_density_m_per_m3", r.tpb_density_m_per_m3},
-                        {"tpb_active_density_m_per_m3", r.tpb_active_density_m_per_m3},
-                        {"tpb_contacts", r.n_tpb_contacts},
-                        {"electronic_percolating_fraction", r.electronic_percolating_fraction},
-                        {"ionic_percolating_fraction", r.ionic_percolating_fraction},
-                        {"solver", solver_json(r.solver)},
-                        {"wall_time_s", r.wall_time_s}};
+    out["composite"] = composite_json(r, cp.axis);
     if (!r.percolates) warn("composite electrode: no path from the current collector to the electrolyte");
   }
-  if (!c.voxel.empty()) {
-    json vx = json::array();
-    std::vector<double> s;
-    bool resolved = true;
-    long need_min = 0, need_median = 0;
-    double neck_min_vox = 0;
-    for (int res : c.voxel) {
-      VoxelOptions vo;
-      vo.axis = axes.front();
-      vo.resolution = res;
-      vo.phases = c.phases;
-      vo.solver = co.solver;
-      vo.source = c.input;
-      vo.neck_radii = net.contact_radius;
-      const VoxelResult r = voxel_conductivity(pk, vo);
-      s.push_back(r.sigma_eff);
-      resolved = r.necks_resolved;  // of the finest grid (the last one given)
-      need_min = r.required_resolution_min;
-      need_median = r.required_resolution_median;
-      neck_min_vox = r.neck_min_voxels;
-      vx.push_back({{"resolution", res},
-                    {"grid", {r.nx, r.ny, r.nz}},
-                    {"voxel_size_m", r.voxel_size},
-                    {"voxels_per_diameter", r.voxels_per_diameter},
-                    {"neck_min_voxels", r.neck_min_voxels},
-                    {"neck_median_voxels", r.neck_median_voxels},
-                    {"solid_fraction", r.solid_fraction},
-                    {"sigma_eff", r.sigma_eff},
-                    {"percolates", r.percolates},
-                    {"conservation_error", r.conservation_error},
-                    {"solver", solver_json(r.solver)},
-                    {"wall_time_s", r.wall_time_s}});
-    }
-    out["voxel"] = {{"axis", kAxis[axes.front()]}, {"runs", vx}, {"sigma_eff_per_resolution", s},
-                    {"resolutions", c.voxel}};
-    std::vector<std::string> problems;
-    if (!resolved) {
-      char msg[400];
-      std::snprintf(msg, sizeof msg,
-                    "the voxel grid does not resolve the necks: the smallest neck radius is %.2g voxels on the finest "
-                    "grid (need >= %.0f); --voxel must reach %ld voxels per longest edge for the smallest neck, %ld for "
-                    "the median one; until then the voxel answer is not converged",
-                    neck_min_vox, kNeckVoxels, need_min, need_median);
-      problems.push_back(msg);
-    }
-    if (s.size() >= 3) {
-      const std::size_t k = s.size();
-      double order = 0, e = 0;
-      const double ratio = static_cast<double>(c.voxel[k - 1]) / c.voxel[k - 2];
-      const double ratio0 = static_cast<double>(c.voxel[k - 2]) / c.voxel[k - 3];
-      const double ext = richardson(s[k - 3], s[k - 2], s[k - 1], ratio, &order, &e);
-      const bool same_ratio = std::abs(ratio - ratio0) <= 1e-9 * ratio;
-      const bool converging = same_ratio && order > 0.5;
-      out["voxel"]["extrapolated_sigma_eff"] = ext;
-      out["voxel"]["observed_order"] = order;
-      out["voxel"]["discretisation_error"] = e;
-      out["voxel"]["converging"] = converging;
-      if (!same_ratio) problems.push_back("the last three --voxel resolutions are not refined by one factor: no Richardson extrapolation");
-      else if (!converging) {
-        char msg[200];
-        std::snprintf(msg, sizeof msg, "the voxel answers %.4g, %.4g, %.4g do not converge (observed order %.2f <= 0.5): "
-                      "the extrapolated value is the finest result, not a converged one", s[k - 3], s[k - 2], s[k - 1], order);
-        problems.push_back(msg);
-      }
-      if (c.bc == "electrodes" && ext != 0)
-        out["voxel"]["network_minus_voxel_relative"] = (sigma[kAxis[axes.front()]].get<double>() - ext) / ext;
-    } else {
-      problems.push_back("fewer than three --voxel resolutions: no observed order, no extrapolation");
-    }
-    std::string message;
-    for (const auto& p : problems) {
-      warn(p);
-      message += (message.empty() ? "" : "; ") + p;
-    }
-    out["voxel"]["necks_resolved"] = resolved;
-    out["voxel"]["required_resolution_smallest_neck"] = need_min;
-    out["voxel"]["required_resolution_median_neck"] = need_median;
-    out["voxel"]["warning"] = !problems.empty();
-    out["voxel"]["warning_message"] = message;
-  }
-  std::ostringstream params;
-  params << "phases: [" << join(c.phases) << "]\nbc: " << c.bc << "\naxes: " << ax << "\ncontact_radius: "
-         << c.contact_radius << "\ngap_tolerance: " << c.gap_tolerance << "\nmin_contact_ratio: " << c.min_contact_ratio
-         << "\nelectrode_tolerance: " << c.electrode_tolerance << "\ntolerance: " << c.tolerance
-         << "\npreconditioner: " << c.preconditioner << "\n";
+  if (!c.voxel.empty())
+    out["voxel"] = voxel_check(c, pk, net, co, axes.front(), out["sigma_eff"][kAxis[axes.front()]].get<double>());
   if (!c.output.empty()) {
-    write_fields(c.output, net, fields, params.str());
-    out["outputs"] = {{"fields", c.output}};
+    write_fields(c.output, net, fields, parameters_text(c));
+    out.output("fields", c.output);
+    out.output("xdmf", xdmf_sidecar_of(c.output));
   }
-  out["wall_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const std::string text = out.dump(2) + "\n";
-  if (!c.json.empty() && c.json != "-") write_text_atomic(c.json, text);
-  return text;
+  return out.text();
 }
 
 }  // namespace tomodem::network

@@ -26,7 +26,7 @@ fi
 sed -e "s/@GREEN@/$green/" -e "s/@TARGET@/$TARGET/" "$here/sinter.yaml" > sinter.yaml
 load_before=$(cut -d' ' -f1-3 /proc/loadavg)
 /usr/bin/time -f "%e %M %U %S" -o sinter_time.txt \
-  "$bin/tomodem-sinter" sinter.yaml -o out --threads "$THREADS" --json summary.json -q > /dev/null
+  "$bin/tomodem-sinter" sinter.yaml --output-dir out --threads "$THREADS" --json summary.json -q > /dev/null
 load_after=$(cut -d' ' -f1-3 /proc/loadavg)
 
 python3 - "$N" "$TARGET" "$THREADS" "$load_before" "$load_after" <<'PY'
@@ -37,7 +37,7 @@ wall, rss_kb, user, system = open("sinter_time.txt").read().split()[-4:]
 g = json.load(open(f"green_{n}.json"))
 rho, rho_cell = s["relative_density"], s["relative_density_cell"]
 out = {
-    "particles": s["particles"], "threads": threads, "green_solid_fraction": g.get("solid_fraction"),
+    "particles": s["n_particles"], "threads": threads, "green_solid_fraction": g.get("solid_fraction"),
     "green_coordination": g.get("coordination"),
     "initial_relative_density": s["initial_relative_density"], "relative_density": rho,
     "relative_density_cell": rho_cell, "density_mismatch": abs(rho - rho_cell) / rho,

@@ -30,11 +30,11 @@ output: {packing: out.h5, series: series.csv, checkpoint: ck.h5}
 
 const std::string kCell = "cell: {lower: [0, 0, 0], upper: [2.0e-3, 2.0e-3, 2.0e-3], periodic: true}\nsettings:";
 
-/// A row whose scene is kScene with one mutation, run as `tomodem-dem scene.yaml -o out`.
+/// A row whose scene is kScene with one mutation, run as `tomodem-dem scene.yaml --output-dir out`.
 Case scene_row(const std::string& name, const std::string& from, const std::string& to,
                std::vector<std::string> needles) {
   needles.push_back("scene.yaml");
-  return {name, {{"scene.yaml", with(kScene, from, to)}}, "scene.yaml -o out", 2, needles};
+  return {name, {{"scene.yaml", with(kScene, from, to)}}, "scene.yaml --output-dir out", 2, needles};
 }
 
 }  // namespace
@@ -91,28 +91,28 @@ TEST(DemBadInput, EveryRowExits2NamingFileFieldAndValueAndWritesNothing) {
       scene_row("steps_absurd_rows", "steps: 40, output_interval: 10", "steps: 1e15, output_interval: 1",
                 {"protocol.output_interval", "memory", "time-series rows"}),
       scene_row("duration_absurd", "steps: 40", "duration: 1.0e30", {"protocol.duration", "1.0e30"}),
-      // Outputs named in the scene stay inside the -o folder, and do not collide.
+      // Outputs named in the scene stay inside the --output-dir folder, and do not collide.
       scene_row("packing_outside", "packing: out.h5", "packing: ../../x.h5", {"output.packing", "line 8", "../../x.h5"}),
       scene_row("series_absolute", "series: series.csv", "series: /tmp/tomodem_x.csv", {"output.series", "/tmp/tomodem_x.csv"}),
       scene_row("series_is_packing", "series: series.csv", "series: out.h5", {"output", "same name"}),
       // Outputs over inputs.
-      {"json_is_scene", {{"scene.yaml", kScene}}, "scene.yaml -o out --json scene.yaml", 2, {"--json", "scene.yaml"}},
-      {"series_over_scene", {{"scene.yaml", with(kScene, "series: series.csv", "series: scene.yaml")}}, "scene.yaml -o .", 2,
+      {"json_is_scene", {{"scene.yaml", kScene}}, "scene.yaml --output-dir out --json scene.yaml", 2, {"--json", "scene.yaml"}},
+      {"series_over_scene", {{"scene.yaml", with(kScene, "series: series.csv", "series: scene.yaml")}}, "scene.yaml --output-dir .", 2,
        {"output.series", "scene.yaml", "input"}},
-      {"packing_over_input_packing", {{"scene.yaml", with(kScene, "packing: out.h5", "packing: scene.yaml")}}, "scene.yaml -o .",
+      {"packing_over_input_packing", {{"scene.yaml", with(kScene, "packing: out.h5", "packing: scene.yaml")}}, "scene.yaml --output-dir .",
        2, {"output.packing", "scene.yaml"}},
       // Command-line options.
-      {"threads_zero_cli", {{"scene.yaml", kScene}}, "scene.yaml -o out --threads 0", 2, {"--threads", "0"}},
-      {"threads_text_cli", {{"scene.yaml", kScene}}, "scene.yaml -o out --threads abc", 2, {"--threads", "abc"}},
-      {"steps_negative_cli", {{"scene.yaml", kScene}}, "scene.yaml -o out --steps -3", 2, {"--steps", "-3"}},
-      {"steps_absurd_cli", {{"scene.yaml", kScene}}, "scene.yaml -o out --steps 1000000000000000000", 2, {"--steps", "memory"}},
-      {"changed_physics_without_restart", {{"scene.yaml", kScene}}, "scene.yaml -o out --restart-changed-physics", 2,
+      {"threads_negative_cli", {{"scene.yaml", kScene}}, "scene.yaml --output-dir out --threads -1", 2, {"--threads", "-1"}},
+      {"threads_text_cli", {{"scene.yaml", kScene}}, "scene.yaml --output-dir out --threads abc", 2, {"--threads", "abc"}},
+      {"steps_negative_cli", {{"scene.yaml", kScene}}, "scene.yaml --output-dir out --steps -3", 2, {"--steps", "-3"}},
+      {"steps_absurd_cli", {{"scene.yaml", kScene}}, "scene.yaml --output-dir out --steps 1000000000000000000", 2, {"--steps", "memory"}},
+      {"changed_physics_without_restart", {{"scene.yaml", kScene}}, "scene.yaml --output-dir out --restart-changed-physics", 2,
        {"--restart-changed-physics", "--restart"}},
-      {"restart_missing", {{"scene.yaml", kScene}}, "scene.yaml -o out --restart nowhere.h5", 2, {"nowhere.h5"}},
+      {"restart_missing", {{"scene.yaml", kScene}}, "scene.yaml --output-dir out --restart nowhere.h5", 2, {"nowhere.h5"}},
       {"restart_random_bytes", {{"scene.yaml", kScene}, {"ck.h5", std::string("\x89HDF\r\n\x1a\n garbage bytes \x01\x02\x03", 32)}},
-       "scene.yaml -o out --restart ck.h5", 2, {"ck.h5"}},
-      {"restart_is_a_scene", {{"scene.yaml", kScene}}, "scene.yaml -o out --restart scene.yaml", 2, {"scene.yaml"}},
-      {"output_folder_is_a_file", {{"scene.yaml", kScene}, {"f", "x"}}, "scene.yaml -o f", 2, {"-o", "f", "not a folder"}},
+       "scene.yaml --output-dir out --restart ck.h5", 2, {"ck.h5"}},
+      {"restart_is_a_scene", {{"scene.yaml", kScene}}, "scene.yaml --output-dir out --restart scene.yaml", 2, {"scene.yaml"}},
+      {"output_folder_is_a_file", {{"scene.yaml", kScene}, {"f", "x"}}, "scene.yaml --output-dir f", 2, {"--output-dir", "f", "not a folder"}},
   };
   // The placeholder row above is the periodic: maybe case, built here (kCell holds periodic: true).
   std::vector<Case> rows = cases;
@@ -178,7 +178,7 @@ class DemRestart : public ::testing::Test {
   /// A checkpoint at step 20 of kScene, in half/ck.h5.
   void half_run() {
     write("scene.yaml", kScene);
-    ASSERT_EQ(run("scene.yaml -o half --steps 20"), 0) << err;
+    ASSERT_EQ(run("scene.yaml --output-dir half --steps 20"), 0) << err;
   }
   std::vector<std::string> lines(const fs::path& p) {
     std::vector<std::string> out;
@@ -198,7 +198,7 @@ TEST_F(DemRestart, DamagedCheckpointsExit2NamingFileAndDataset) {
   ASSERT_GT(ck.size(), 1000u);
   // Truncated.
   std::ofstream(dir / "trunc.h5", std::ios::binary) << ck.substr(0, ck.size() / 2);
-  EXPECT_EQ(run("scene.yaml -o o1 --restart trunc.h5"), 2) << err;
+  EXPECT_EQ(run("scene.yaml --output-dir o1 --restart trunc.h5"), 2) << err;
   EXPECT_NE(err.find("trunc.h5"), std::string::npos) << err;
   EXPECT_FALSE(fs::exists(dir / "o1" / "out.h5"));
   // Wrong dataset shapes: the neighbour list's start offsets and the engine scalars.
@@ -210,23 +210,23 @@ TEST_F(DemRestart, DamagedCheckpointsExit2NamingFileAndDataset) {
                          Shape{"/particles/velocity", {1, 2, 3}}, Shape{"/engine/history", {1}},
                          Shape{"/engine/j", {1.0e6}}, Shape{"/cell/h", {1, 0, 0}}}) {
     rewrite((dir / "half" / "ck.h5").string(), (dir / "shape.h5").string(), s.dataset, s.values);
-    EXPECT_EQ(run("scene.yaml -o o2 --restart shape.h5"), 2) << s.dataset << ": " << err;
+    EXPECT_EQ(run("scene.yaml --output-dir o2 --restart shape.h5"), 2) << s.dataset << ": " << err;
     EXPECT_NE(err.find("shape.h5"), std::string::npos) << err;
     EXPECT_NE(err.find(s.dataset), std::string::npos) << err;
     EXPECT_FALSE(fs::exists(dir / "o2" / "out.h5"));
   }
   // A missing dataset.
   rewrite((dir / "half" / "ck.h5").string(), (dir / "missing.h5").string(), "/engine/force", {});
-  EXPECT_EQ(run("scene.yaml -o o4 --restart missing.h5"), 2) << err;
+  EXPECT_EQ(run("scene.yaml --output-dir o4 --restart missing.h5"), 2) << err;
   EXPECT_NE(err.find("/engine/force"), std::string::npos) << err;
   // A checkpoint of a different particle count (3^3 FCC cells instead of 2^3).
   write("big.yaml", with(kScene, "cells: 2", "cells: 3"));
-  ASSERT_EQ(run("big.yaml -o big --steps 10"), 0) << err;
-  EXPECT_EQ(run("scene.yaml -o o3 --restart big/ck.h5"), 2) << err;
+  ASSERT_EQ(run("big.yaml --output-dir big --steps 10"), 0) << err;
+  EXPECT_EQ(run("scene.yaml --output-dir o3 --restart big/ck.h5"), 2) << err;
   EXPECT_NE(err.find("big/ck.h5"), std::string::npos) << err;
   EXPECT_NE(err.find("particles.generate.cells: 3 -> 2"), std::string::npos) << err;
   // Even when told to accept changed physics, the particle count must match.
-  EXPECT_EQ(run("scene.yaml -o o3 --restart big/ck.h5 --restart-changed-physics"), 2) << err;
+  EXPECT_EQ(run("scene.yaml --output-dir o3 --restart big/ck.h5 --restart-changed-physics"), 2) << err;
   EXPECT_NE(err.find("big/ck.h5"), std::string::npos) << err;
   EXPECT_NE(err.find("/particles/position"), std::string::npos) << err;
   EXPECT_FALSE(fs::exists(dir / "o3" / "out.h5"));
@@ -244,7 +244,7 @@ TEST_F(DemRestart, ChangedPhysicsIsRefusedNamingTheChangeOrAcceptedWithTheFlagAn
                           Change{"timestep: auto", "timestep: 1.0e-7", "protocol.timestep: auto -> 1.0e-7"},
                           Change{"friction: 0.5}", "friction: 0.5, gravity: [0, 0, -9.81]}", "physics.gravity"}}) {
     write("changed.yaml", with(kScene, c.from, c.to));
-    EXPECT_EQ(run("changed.yaml -o o --restart half/ck.h5"), 2) << err;
+    EXPECT_EQ(run("changed.yaml --output-dir o --restart half/ck.h5"), 2) << err;
     EXPECT_NE(err.find("half/ck.h5"), std::string::npos) << err;
     EXPECT_NE(err.find(c.named), std::string::npos) << err;
     EXPECT_NE(err.find("--restart-changed-physics"), std::string::npos) << err;
@@ -252,24 +252,24 @@ TEST_F(DemRestart, ChangedPhysicsIsRefusedNamingTheChangeOrAcceptedWithTheFlagAn
   }
   // Not physics: more steps, another output name, other threads.
   write("same.yaml", with(with(kScene, "steps: 40", "steps: 60"), "series: series.csv", "series: s.csv"));
-  EXPECT_EQ(run("same.yaml -o same --restart half/ck.h5"), 0) << err;
+  EXPECT_EQ(run("same.yaml --output-dir same --restart half/ck.h5"), 0) << err;
   // With the flag: runs, and the warning says what changed.
   write("changed.yaml", with(kScene, "density: 2500", "density: 2600"));
-  EXPECT_EQ(run("changed.yaml -o o --restart half/ck.h5 --restart-changed-physics"), 0) << err;
+  EXPECT_EQ(run("changed.yaml --output-dir o --restart half/ck.h5 --restart-changed-physics"), 0) << err;
   EXPECT_NE(err.find("materials[0].density: 2500 -> 2600"), std::string::npos) << err;
 }
 
 TEST_F(DemRestart, TheTimeSeriesContinuesInTheSameFile) {
   write("scene.yaml", kScene);
-  ASSERT_EQ(run("scene.yaml -o full"), 0) << err;
-  ASSERT_EQ(run("scene.yaml -o run --steps 20"), 0) << err;
-  ASSERT_EQ(run("scene.yaml -o run --restart run/ck.h5"), 0) << err;
+  ASSERT_EQ(run("scene.yaml --output-dir full"), 0) << err;
+  ASSERT_EQ(run("scene.yaml --output-dir run --steps 20"), 0) << err;
+  ASSERT_EQ(run("scene.yaml --output-dir run --restart run/ck.h5"), 0) << err;
   // The restarted series holds every row from step 0, once each, as the uninterrupted run's.
   const auto full = lines(dir / "full" / "series.csv"), cont = lines(dir / "run" / "series.csv");
   ASSERT_EQ(full.size(), 6u);  // header + steps 0, 10, 20, 30, 40
   EXPECT_EQ(cont, full);
   // A restart into another folder carries the series too (it travels in the checkpoint).
-  ASSERT_EQ(run("scene.yaml -o half --steps 20"), 0) << err;
-  ASSERT_EQ(run("scene.yaml -o elsewhere --restart half/ck.h5"), 0) << err;
+  ASSERT_EQ(run("scene.yaml --output-dir half --steps 20"), 0) << err;
+  ASSERT_EQ(run("scene.yaml --output-dir elsewhere --restart half/ck.h5"), 0) << err;
   EXPECT_EQ(lines(dir / "elsewhere" / "series.csv"), full);
 }

@@ -79,7 +79,7 @@ std::string replace(std::string s, const std::string& from, const std::string& t
 TEST_F(DemCli, SummaryHasTheDocumentedKeysInSIUnits) {
   const std::string scene = write("scene.yaml", kScene);
   const std::string out = (dir / "out").string();
-  ASSERT_EQ(run(scene + " -o " + out + " --json " + out + "/summary.json").code, 0);
+  ASSERT_EQ(run(scene + " --output-dir " + out + " --json " + out + "/summary.json").code, 0);
   std::ifstream in(out + "/summary.json");
   const auto j = nlohmann::json::parse(in);
   for (const char* key : {"steps", "wall_time_s", "particle_steps_per_second", "threads", "stress", "coordination",
@@ -105,9 +105,9 @@ TEST_F(DemCli, SummaryHasTheDocumentedKeysInSIUnits) {
 TEST_F(DemCli, RestartReproducesTheUninterruptedRunBitForBit) {
   const std::string scene = write("scene.yaml", kScene);
   const std::string full = (dir / "full").string(), half = (dir / "half").string(), rest = (dir / "rest").string();
-  ASSERT_EQ(run(scene + " -o " + full).code, 0);
-  ASSERT_EQ(run(scene + " -o " + half + " --steps 200").code, 0);
-  ASSERT_EQ(run(scene + " -o " + rest + " --restart " + half + "/ck.h5").code, 0);
+  ASSERT_EQ(run(scene + " --output-dir " + full).code, 0);
+  ASSERT_EQ(run(scene + " --output-dir " + half + " --steps 200").code, 0);
+  ASSERT_EQ(run(scene + " --output-dir " + rest + " --restart " + half + "/ck.h5").code, 0);
   const tomodem::Packing a = tomodem::read_packing(full + "/out.h5");
   const tomodem::Packing b = tomodem::read_packing(rest + "/out.h5");
   ASSERT_EQ(a.particles.size(), b.particles.size());
@@ -144,7 +144,7 @@ TEST_F(DemCli, BadInputExitsWithCode2AndLeavesNoOutput) {
   for (const auto& c : cases) {
     const std::string scene = write(std::string(c.name) + ".yaml", c.scene);
     const std::string out = (dir / (std::string("out_") + c.name)).string();
-    const Result r = run(scene + " -o " + out);
+    const Result r = run(scene + " --output-dir " + out);
     EXPECT_EQ(r.code, 2) << c.name << ": " << r.err;
     EXPECT_NE(r.err.find(c.expect_field), std::string::npos) << c.name << ": " << r.err;
     if (!c.expect_value.empty()) EXPECT_NE(r.err.find(c.expect_value), std::string::npos) << c.name << ": " << r.err;

@@ -103,7 +103,7 @@ TEST(PackBadInput, EveryRowExits2NamingFileFieldAndValueAndWritesNothing) {
       cli("friction_cli_inf", "c.yaml -o p.h5 --friction inf", {"--friction"}),
       cli("particles_cli_zero", "c.yaml -o p.h5 --particles 0", {"--particles", "0"}),
       cli("particles_cli_huge", "c.yaml -o p.h5 --particles 1000000000000", {"--particles", "memory"}),
-      cli("threads_cli_zero", "c.yaml -o p.h5 --threads 0", {"--threads", "0"}),
+      cli("threads_cli_negative", "c.yaml -o p.h5 --threads -1", {"--threads", "-1"}),
       cli("seed_cli_negative", "c.yaml -o p.h5 --seed -4", {"--seed", "-4"}),
   };
   EXPECT_GE(bad_input::run_all("tomodem-pack", cases), 50);

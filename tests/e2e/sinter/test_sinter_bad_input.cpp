@@ -30,7 +30,7 @@ sintering:
 
 Case row(const std::string& name, const std::string& from, const std::string& to, std::vector<std::string> needles) {
   needles.push_back("scene.yaml");
-  return {name, {{"scene.yaml", with(kScene, from, to)}}, "scene.yaml -o out", 2, needles};
+  return {name, {{"scene.yaml", with(kScene, from, to)}}, "scene.yaml --output-dir out", 2, needles};
 }
 
 }  // namespace
@@ -81,14 +81,14 @@ TEST(SinterBadInput, EveryRowExits2NamingFileFieldAndValueAndWritesNothing) {
       row("curve_outside", "curve: curve.csv", "curve: ../../x.csv", {"sintering.output.curve", "line 16", "../../x.csv"}),
       row("packing_absolute", "packing: sintered.h5", "packing: /tmp/tomodem_x.h5", {"sintering.output.packing", "/tmp/tomodem_x.h5"}),
       row("curve_is_necks", "curve: curve.csv", "curve: necks.csv", {"sintering.output", "same name"}),
-      {"curve_over_scene", {{"scene.yaml", with(kScene, "curve: curve.csv", "curve: scene.yaml")}}, "scene.yaml -o .", 2,
+      {"curve_over_scene", {{"scene.yaml", with(kScene, "curve: curve.csv", "curve: scene.yaml")}}, "scene.yaml --output-dir .", 2,
        {"sintering.output.curve", "scene.yaml", "input"}},
-      {"json_over_scene", {{"scene.yaml", kScene}}, "scene.yaml -o out --json scene.yaml", 2, {"--json", "scene.yaml"}},
-      {"output_folder_is_file", {{"scene.yaml", kScene}, {"f", "x"}}, "scene.yaml -o f", 2, {"-o", "not a folder"}},
+      {"json_over_scene", {{"scene.yaml", kScene}}, "scene.yaml --output-dir out --json scene.yaml", 2, {"--json", "scene.yaml"}},
+      {"output_folder_is_file", {{"scene.yaml", kScene}, {"f", "x"}}, "scene.yaml --output-dir f", 2, {"--output-dir", "not a folder"}},
       // Command-line options.
-      {"threads_zero", {{"scene.yaml", kScene}}, "scene.yaml -o out --threads 0", 2, {"--threads", "0"}},
-      {"threads_text", {{"scene.yaml", kScene}}, "scene.yaml -o out --threads many", 2, {"--threads", "many"}},
-      {"no_scene", {}, "-o out", 2, {"scene"}},
+      {"threads_negative", {{"scene.yaml", kScene}}, "scene.yaml --output-dir out --threads -1", 2, {"--threads", "-1"}},
+      {"threads_text", {{"scene.yaml", kScene}}, "scene.yaml --output-dir out --threads many", 2, {"--threads", "many"}},
+      {"no_scene", {}, "--output-dir out", 2, {"scene"}},
   };
   EXPECT_GE(bad_input::run_all("tomodem-sinter", cases), 40);
 }

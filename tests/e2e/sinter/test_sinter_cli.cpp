@@ -62,7 +62,7 @@ class SinterCli : public ::testing::Test {
     return p.string();
   }
   Result run(const std::string& scene) {
-    const std::string cmd = std::string(TOMODEM_BIN_DIR) + "/tomodem-sinter " + scene + " -o " + (dir / "out").string() +
+    const std::string cmd = std::string(TOMODEM_BIN_DIR) + "/tomodem-sinter " + scene + " --output-dir " + (dir / "out").string() +
                             " -q > " + (dir / "stdout.txt").string() + " 2> " + (dir / "stderr.txt").string();
     const int status = std::system(cmd.c_str());
     return {WEXITSTATUS(status), slurp(dir / "stdout.txt"), slurp(dir / "stderr.txt")};

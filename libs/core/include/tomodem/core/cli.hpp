@@ -7,9 +7,11 @@
 #include <iostream>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/tool.hpp"
+#include "tomodem/core/units.hpp"
 
 namespace tomodem::cli {
 
@@ -24,16 +26,98 @@ inline void add_version(CLI::App& app, const std::string& tool) {
       "print the version and exit");
 }
 
-/// --threads N of the tools whose default is OpenMP's own (0: OMP_NUM_THREADS or all cores);
+/// --threads N: N threads; 0 (the default) is OMP_NUM_THREADS or every core (all_threads()).
 /// CLI11 refuses (exit 2, naming the option and the value) anything outside [0, 4096].
-inline CLI::Option* add_threads(CLI::App& app, int& threads) {
-  return app.add_option("--threads", threads, "threads (default 0: OMP_NUM_THREADS or all cores)")
+/// `default_text` replaces the default's description where an input file may name a count.
+inline CLI::Option* add_threads(CLI::App& app, int& threads,
+                                const std::string& default_text = "default 0: OMP_NUM_THREADS or all cores") {
+  return app.add_option("--threads", threads, "threads; 0: OMP_NUM_THREADS or all cores (" + default_text + ")")
       ->check(CLI::Range(0, 4096));
+}
+
+/// --json FILE: the summary goes to FILE (written atomically) and not to stdout; "-" or no
+/// --json: to stdout. One meaning in every tool (docs/cli.md).
+inline CLI::Option* add_json(CLI::App& app, std::string& path) {
+  return app.add_option("--json", path, "write the JSON summary to FILE (atomically) instead of stdout; '-': stdout");
+}
+
+/// -q/--quiet: no progress on stderr (warnings and errors stay); set as soon as it is parsed.
+inline CLI::Option* add_quiet(CLI::App& app, bool& quiet_flag) {
+  return app.add_flag_function(
+      "-q,--quiet",
+      [&quiet_flag](std::int64_t) {
+        quiet_flag = true;
+        set_quiet(true);
+      },
+      "no progress messages on stderr (warnings and errors stay)");
+}
+
+/// The options every tool has, with one meaning each (docs/cli.md).
+struct Common {
+  std::string json;  ///< --json FILE; "" or "-": stdout
+  bool quiet = false;
+  int threads = 0;   ///< --threads; 0: all_threads()
+};
+
+/// --json, -q/--quiet, --version and (when `threads`) --threads.
+inline void add_common(CLI::App& app, const std::string& tool, Common& c, bool threads = true) {
+  add_json(app, c.json);
+  add_quiet(app, c.quiet);
+  if (threads) add_threads(app, c.threads);
+  add_version(app, tool);
+}
+
+/// "--grip" from "-g,--grip": how messages name an option.
+inline std::string long_name(const std::string& names) {
+  std::string first;
+  for (const auto& n : CLI::detail::split_names(names)) {
+    if (n.rfind("--", 0) == 0) return n;
+    if (first.empty()) first = n;
+  }
+  return first;
+}
+
+/// A length option (docs/cli.md "Lengths"): "60.7um", "0.05mm", "2nm", "1e-3" (metres). A bad
+/// unit is an InputError naming the option (exit 2). `metres` keeps its default when not given.
+inline CLI::Option* add_length(CLI::App& app, const std::string& names, double& metres, const std::string& help) {
+  const std::string option = long_name(names);
+  return app.add_option_function<std::string>(
+      names, [&metres, option](const std::string& text) { metres = parse_length(option, text); },
+      help + " (length: m, mm, um, nm; bare number: m)");
+}
+
+/// Several lengths, comma separated (--offset 1mm,0,-2um); `count` of them.
+inline CLI::Option* add_lengths(CLI::App& app, const std::string& names, std::vector<double>& metres, int count,
+                                const std::string& help) {
+  const std::string option = long_name(names);
+  return app
+      .add_option_function<std::vector<std::string>>(
+          names,
+          [&metres, option](const std::vector<std::string>& texts) {
+            metres.clear();
+            for (const auto& t : texts) metres.push_back(parse_length(option, t));
+          },
+          help + " (lengths: m, mm, um, nm; bare numbers: m)")
+      ->delimiter(',')
+      ->expected(count);
+}
+
+/// Tools that write several files into a folder (dem, sinter) take --output-dir; -o names a file
+/// in every other tool, so here it is refused with a pointer instead of meaning a folder.
+inline void refuse_o_as_folder(CLI::App& app, std::string& o_value) {
+  app.add_option("-o,--output", o_value, "")->group("");  // hidden: only to say what to use instead
+}
+inline void check_o_as_folder(const std::string& o_value, const std::string& tool) {
+  if (!o_value.empty())
+    throw InputError("", "-o", o_value,
+                     "-o names an output file in every tomodem tool; " + tool +
+                         " writes the files its scene names into a folder: give it with --output-dir");
 }
 
 /// Parses the command line: the exit code to stop with (0 after --help or --version, 2 for bad
 /// usage, after CLI11's message), or nothing when the tool should go on.
 inline std::optional<int> parse(CLI::App& app, int argc, char** argv) {
+  set_command_line(argc, argv);
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {

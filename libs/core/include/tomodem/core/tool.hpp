@@ -18,5 +18,16 @@ void set_quiet(bool quiet);
 bool quiet();
 void info(const std::string& message);
 void warn(const std::string& message);
+/// The name messages start with ("tomodem-dem"; set by run_tool).
+const std::string& tool_name();
+
+/// The command line as typed, for provenance (recorded by cli::parse; words with spaces or
+/// shell characters in single quotes).
+void set_command_line(int argc, char** argv);
+const std::string& command_line();
+
+/// What --threads 0 means (docs/cli.md): OMP_NUM_THREADS when set (its first number), else every
+/// core of the machine.
+int all_threads();
 
 }  // namespace tomodem

@@ -8,7 +8,7 @@ namespace tomodem::network {
 struct ConductConfig {
   std::string input;                 ///< packing (.h5)
   std::string output;                ///< potentials and currents (.h5 + .xdmf); empty = none
-  std::string json;                  ///< summary file; empty = stdout
+  std::string json;                  ///< --json: checked against the other outputs (the tool writes it)
   std::vector<std::string> phases;   ///< conducting phases; empty = all
   std::string bc = "electrodes";     ///< "electrodes" | "periodic"
   std::string axes = "x";            ///< electrode axes: any of "xyz", or "all"
