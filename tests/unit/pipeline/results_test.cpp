@@ -141,3 +141,47 @@ TEST(Results, BadReportRequestsWriteNothing) {
   bad(o);
   EXPECT_THROW(tp::write_report(s.path("report"), {s.write("x.json", "{\"E\": {\"a\": 1}}")}, {}), tomodem::InputError);
 }
+
+// The worked example of docs/pipelines.md ("Statistics"): two families of five replicas.
+// a: E = 1..5 (mean 3, sd 1.5811, sem 0.70711), b: E = 3, 5, .., 11 (mean 7, sd 3.1623,
+// sem 1.4142). 95 % CI of a: 3 -/+ t_{0.975,4} sem = 3 -/+ 2.776 * 0.70711 = [1.037, 4.963].
+// Welch: t = 4 / sqrt(0.5 + 2) = 2.5298, dof = 5.8824, p = 0.045 -> "a < b in E: Welch p = 0.045".
+// b carries a tool error E_error = 0.1 (relative): tool = 0.1 * mean over replicas = 0.7, so
+// u = sqrt(2 + 0.49) = 1.5780 and dof = u^4 / (sem^4 / 4) = 6.2001.
+TEST(Results, WorkedExampleOfTheDocs) {
+  if (!tomodem::plotting_available()) GTEST_SKIP() << "gnuplot not installed";
+  Scratch s;
+  std::vector<std::string> files;
+  for (int r = 0; r < 5; ++r) {
+    files.push_back(s.write("a" + std::to_string(r) + ".json",
+                            "{\"family\": \"a\", \"replica\": " + std::to_string(r) + ", \"E\": " + std::to_string(1 + r) +
+                                ", \"cpu_time_s\": 2}"));
+    files.push_back(s.write("b" + std::to_string(r) + ".json",
+                            "{\"family\": \"b\", \"replica\": " + std::to_string(r) + ", \"E\": " + std::to_string(3 + 2 * r) +
+                                ", \"E_error\": 0.1, \"cpu_time_s\": 3}"));
+  }
+  tp::ReportOptions o;
+  o.group = {"family"};
+  const auto f = tp::write_report(s.path("report"), files, o);
+  EXPECT_EQ(f.cells, 2u);
+  EXPECT_EQ(f.rankings, 1u);
+  const std::string j = s.read("report/summary.json");
+  // Pull numbers out of the JSON text without a JSON library in this test.
+  const auto number_after = [&](std::size_t from, const std::string& key) {
+    const auto at = j.find("\"" + key + "\":", from);
+    return std::stod(j.substr(at + key.size() + 3));
+  };
+  const auto a = j.find("\"family\": \"a\""), b = j.find("\"family\": \"b\"");
+  ASSERT_NE(a, std::string::npos);
+  ASSERT_NE(b, std::string::npos);
+  EXPECT_NEAR(number_after(a, "mean"), 3, 1e-12);
+  EXPECT_NEAR(number_after(a, "sem"), 0.70711, 1e-5);
+  EXPECT_NEAR(number_after(a, "half_width95"), 2.776 * 0.70711, 5e-4);
+  EXPECT_NEAR(number_after(a, "cpu_s"), 10, 1e-12);
+  EXPECT_NEAR(number_after(b, "tool_error"), 0.7, 1e-12);
+  EXPECT_NEAR(number_after(b, "u"), 1.5780, 1e-4);
+  EXPECT_NEAR(number_after(b, "dof"), 6.2001, 1e-4);
+  EXPECT_NE(j.find("\"stopped_because\": \"fixed replicas\""), std::string::npos);
+  EXPECT_NE(j.find("a < b in E: Welch p = 0.045"), std::string::npos) << j;
+  EXPECT_NEAR(number_after(j.find("\"rankings\""), "dof"), 5.8824, 1e-4);
+}
