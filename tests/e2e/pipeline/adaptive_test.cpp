@@ -113,6 +113,7 @@ TEST(Adaptive, StopsWhenTheTargetIsMetAndNeverRerunsFinishedReplicas) {
   ASSERT_EQ(a.because, "target met");
   ASSERT_LT(a.n, 12);
   ASSERT_EQ(b.because, "max reached");
+  EXPECT_EQ(a.n, 8) << "docs/pipelines.md quotes 8";
 
   const auto r1 = run(s, "p.yaml -j 2");
   ASSERT_EQ(r1.code, 0) << r1.err;
