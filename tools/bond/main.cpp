@@ -1,10 +1,11 @@
 // tomodem-bond: a packing -> a bonded-particle network (docs/bond.md).
 #include <CLI/CLI.hpp>
-#include <iostream>
 #include <omp.h>
 
 #include "tomodem/core/cli.hpp"
+#include "tomodem/core/cli_choice.hpp"
 #include "tomodem/core/error.hpp"
+#include "tomodem/core/summary.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/mechanics/tools.hpp"
 
@@ -14,8 +15,8 @@ int main(int argc, char** argv) {
     CLI::App app{"Bond a packing: necks between touching (or nearly touching) particles (docs/bond.md)", "tomodem-bond"};
     app.add_option("input", c.input, "packing (.h5, shared data model)")->required();
     app.add_option("-o,--output", c.output, "bonded packing (.h5 + .xdmf), with /bonds and /bonds/image")->required();
-    app.add_option("--json", c.json, "write the JSON summary to FILE (default: stdout)");
-    app.add_option("--rule", c.rule, "neck radius: ratio | overlap | density | sinter")->capture_default_str();
+    tomodem::cli::add_choice(app, "--rule", c.rule, tomodem::mechanics::kNeckRuleNames,
+                             "neck radius: ratio | overlap | density | sinter");
     app.add_option("--sinter-config", c.sinter_config, "rule sinter: sintering settings YAML (docs/sintering.md)");
     app.add_option("--neck-ratio", c.neck_ratio, "rule ratio: a_b/R, R = 2R_iR_j/(R_i+R_j)")->capture_default_str();
     app.add_option("--min-neck-ratio", c.min_neck_ratio, "rules overlap/density: smallest a_b/R")->capture_default_str();
@@ -23,20 +24,17 @@ int main(int argc, char** argv) {
     app.add_option("--gap-tolerance", c.gap_tolerance, "bond when the gap is at most tol * 2RiRj/(Ri+Rj) (-)")->capture_default_str();
     app.add_option("--exclude", c.exclude, "no bonds between these phases: A:B (names or indices), repeatable");
     app.add_option("--pair-ratio", c.pair_ratio, "rule ratio per phase pair: A:B=RATIO, repeatable");
-    bool require = false, quiet = false;
+    bool require = false;
     app.add_flag("--require-spanning", require, "exit 2 when no bonded cluster spans the periodic cell");
-    int threads = 0;
-    tomodem::cli::add_threads(app, threads);
-    app.add_flag("-q,--quiet", quiet, "no progress messages");
-    tomodem::cli::add_version(app, "tomodem-bond");
+    tomodem::cli::Common common;
+    tomodem::cli::add_common(app, "tomodem-bond", common);
     if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
     c.allow_disconnected = !require;
-    tomodem::set_quiet(quiet);
-    if (threads > 0) omp_set_num_threads(threads);
-    c.threads = threads;
+    c.json = common.json;
+    c.threads = common.threads;
+    if (common.threads > 0) omp_set_num_threads(common.threads);
     tomodem::info("reading " + c.input);
-    const std::string summary = tomodem::mechanics::run_bond(c);
-    if (c.json.empty() || c.json == "-") std::cout << summary;
+    tomodem::emit_summary(tomodem::mechanics::run_bond(c), c.json);
     return tomodem::exit_code::ok;
   });
 }

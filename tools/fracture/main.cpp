@@ -2,11 +2,12 @@
 // quasi-static DEM test with bond failure (explicit) or the sequentially linear analysis with
 // the direct solver (sla). See docs/fracture.md.
 #include <CLI/CLI.hpp>
-#include <iostream>
 #include <omp.h>
 
 #include "tomodem/core/cli.hpp"
+#include "tomodem/core/cli_choice.hpp"
 #include "tomodem/core/error.hpp"
+#include "tomodem/core/summary.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/mechanics/fracture.hpp"
 
@@ -18,17 +19,17 @@ int main(int argc, char** argv) {
     CLI::App app{"Fracture toughness K_IC of a bonded network, pre-cracked, mode I (docs/fracture.md)",
                  "tomodem-fracture"};
     app.add_option("input", c.input, "bonded packing (.h5, from tomodem-bond)")->required();
-    app.add_option("--json", c.json, "write the JSON summary to FILE (default: stdout)");
-    app.add_option("--method", c.method, "sla | explicit | both")->capture_default_str();
-    app.add_option("--criterion", c.criterion, "bond failure: lefm (fracture energy) | stress (strengths)")
-        ->capture_default_str();
+    tomodem::cli::add_choice(app, "--method", c.method, tomodem::mechanics::kFractureMethodNames, "sla | explicit | both");
+    tomodem::cli::add_choice(app, "--criterion", fo.criterion, tomodem::mechanics::kFailureCriterionNames,
+                             "bond failure: lefm (fracture energy) | stress (strengths)");
     app.add_option("--fracture-energy", fo.fracture_energy, "lefm: Gamma = 2 gamma_s (J/m^2; 0: from the materials)");
     app.add_option("--tensile-strength", fo.tensile_strength, "stress: bond tensile strength (Pa)");
     app.add_option("--shear-strength", fo.shear_strength, "stress: bond shear strength (Pa)");
     app.add_option("--friction", fo.friction, "Coulomb friction between the faces of broken bonds")->capture_default_str();
-    app.add_option("--geometry", c.crack.geometry, "centre (crack 2a) | edge (notch a at x = 0)")->capture_default_str();
+    tomodem::cli::add_choice(app, "--geometry", c.crack.geometry, tomodem::mechanics::kCrackGeometryNames,
+                             "centre (crack 2a) | edge (notch a at x = 0)");
     app.add_option("--a-over-w", c.crack.a_over_w, "crack length a / sample width W")->capture_default_str();
-    app.add_option("--grip", c.crack.grip, "grip layer thickness (m; 0: one mean diameter)");
+    tomodem::cli::add_length(app, "--grip", c.crack.grip, "grip layer thickness (0: one mean diameter)");
     app.add_option("--crack-offset", c.crack.plane_offset, "crack plane above the middle, fraction of the grip distance")
         ->capture_default_str();
     app.add_option("--stop-fraction", c.stop_fraction, "stop after the peak once the load is below this x peak (0: cut through)")
@@ -40,7 +41,7 @@ int main(int argc, char** argv) {
     auto* rho_opt = app.add_option("--density", density, "override the density of every phase (kg/m^3)");
     app.add_option("--gn-coefficient", c.law.g_n_coefficient, "g_n = 1 + c (a/R)^2")->capture_default_str();
     app.add_option("--gt-coefficient", c.law.g_t_coefficient, "g_t = 1 + c (a/R)^2")->capture_default_str();
-    bool normal_only = false, no_elastic = false, quiet = false, no_energy = false;
+    bool normal_only = false, no_elastic = false, no_energy = false;
     app.add_flag("--normal-bonds", normal_only, "bonds without shear force and twist (G* = 0)");
     app.add_flag("--no-elastic", no_elastic, "skip E and nu of the periodic network (no G = K^2 (1-nu^2)/E check)");
     app.add_option("--woodbury-bonds", c.sla.woodbury_bonds, "sla: breaks handled by low-rank updates between factorisations")
@@ -57,23 +58,20 @@ int main(int argc, char** argv) {
     app.add_option("--curve", c.curve_csv, "write the load-opening curve as CSV");
     app.add_option("--plot", c.plot, "write the curve as STEM.png and STEM.svg (gnuplot)");
     app.add_option("--map", c.map, "write the broken-bond map (HDF5 + .xdmf for ParaView)");
-    int threads = 0;
-    tomodem::cli::add_threads(app, threads);
-    app.add_flag("-q,--quiet", quiet, "no progress messages");
-    tomodem::cli::add_version(app, "tomodem-fracture");
+    tomodem::cli::Common common;
+    tomodem::cli::add_common(app, "tomodem-fracture", common);
     if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
+    c.json = common.json;
     if (e_opt->count()) c.youngs_modulus = youngs_modulus;
     if (nu_opt->count()) c.poisson_ratio = poisson_ratio;
     if (rho_opt->count()) c.density = density;
     c.law.shear = !normal_only;
     c.elastic = !no_elastic;
     ex.track_energy = !no_energy;
-    tomodem::set_quiet(quiet);
-    if (threads > 0) omp_set_num_threads(threads);
-    ex.threads = threads > 0 ? threads : omp_get_max_threads();
+    if (common.threads > 0) omp_set_num_threads(common.threads);
+    ex.threads = common.threads > 0 ? common.threads : tomodem::all_threads();
     tomodem::info("reading " + c.input);
-    const std::string summary = tomodem::mechanics::run_fracture(c);
-    if (c.json.empty() || c.json == "-") std::cout << summary;
+    tomodem::emit_summary(tomodem::mechanics::run_fracture(c), c.json);
     return tomodem::exit_code::ok;
   });
 }

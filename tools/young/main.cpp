@@ -1,11 +1,12 @@
 // tomodem-young: E, ν and the elastic tensor of a bonded network, by a direct solve of its
 // stiffness matrix (implicit) or a quasi-static DEM test (explicit). See docs/young.md.
 #include <CLI/CLI.hpp>
-#include <iostream>
 #include <omp.h>
 
 #include "tomodem/core/cli.hpp"
+#include "tomodem/core/cli_choice.hpp"
 #include "tomodem/core/error.hpp"
+#include "tomodem/core/summary.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/mechanics/tools.hpp"
 
@@ -17,9 +18,8 @@ int main(int argc, char** argv) {
     CLI::App app{"Young's modulus, Poisson's ratio and elastic tensor of a bonded network (docs/young.md)",
                  "tomodem-young"};
     app.add_option("input", c.input, "bonded packing (.h5, from tomodem-bond)")->required();
-    app.add_option("--json", c.json, "write the JSON summary to FILE (default: stdout)");
-    app.add_option("--method", c.method, "implicit | explicit | both")->capture_default_str();
-    app.add_option("--axis", c.axis, "loading axis of E and nu: x, y or z")->capture_default_str();
+    tomodem::cli::add_choice(app, "--method", c.method, tomodem::mechanics::kYoungMethodNames, "implicit | explicit | both");
+    tomodem::cli::add_choice(app, "--axis", c.axis, tomodem::kAxisNames, "loading axis of E and nu: x, y or z");
     // Overrides: set when given (any value, checked in the library: 0 is refused, not "unset").
     double youngs_modulus = 0, poisson_ratio = 0, density = 0;
     auto* e_opt = app.add_option("--youngs-modulus", youngs_modulus, "override E of every phase (Pa)");
@@ -27,16 +27,17 @@ int main(int argc, char** argv) {
     auto* rho_opt = app.add_option("--density", density, "override the density of every phase (kg/m^3)");
     app.add_option("--gn-coefficient", c.law.g_n_coefficient, "g_n = 1 + c (a/R)^2")->capture_default_str();
     app.add_option("--gt-coefficient", c.law.g_t_coefficient, "g_t = 1 + c (a/R)^2")->capture_default_str();
-    bool normal_only = false, normal_cases = false, quiet = false;
+    bool normal_only = false, normal_cases = false;
     app.add_flag("--normal-bonds", normal_only, "bonds without shear force and twist (G* = 0)");
-    app.add_option("--solver", im.solver, "implicit: auto | ldlt | amg | cg | cg-ic")->capture_default_str();
+    tomodem::cli::add_choice(app, "--solver", im.solver, tomodem::mechanics::kElasticSolverNames,
+                             "implicit: auto | ldlt | amg | cg | cg-ic");
     app.add_option("--tolerance", im.tolerance, "implicit: relative residual of the iterative solve")->capture_default_str();
     app.add_option("--max-iterations", im.max_iterations, "implicit: CG iteration cap (0: automatic)");
     app.add_flag("--no-tensor", normal_cases, "implicit: only the three normal strain cases (E, nu; no shear moduli)");
-    app.add_option("--loading", ex.loading, "explicit: stress (uniaxial stress) | strain (uniaxial strain)")
-        ->capture_default_str();
-    app.add_option("--protocol", ex.protocol, "explicit: rate (constant rate, slopes) | increments (relaxed)")
-        ->capture_default_str();
+    tomodem::cli::add_choice(app, "--loading", ex.loading, tomodem::mechanics::kUniaxialLoadingNames,
+                             "explicit: stress (uniaxial stress) | strain (uniaxial strain)");
+    tomodem::cli::add_choice(app, "--protocol", ex.protocol, tomodem::mechanics::kLoadProtocolNames,
+                             "explicit: rate (constant rate, slopes) | increments (relaxed)");
     app.add_option("--strain", ex.strain, "explicit: total axial strain")->capture_default_str();
     app.add_option("--transits", ex.transits, "explicit: loading time in elastic-wave transits of the cell")
         ->capture_default_str();
@@ -52,24 +53,21 @@ int main(int argc, char** argv) {
     app.add_flag("--no-rate-check", no_rate_check,
                  "explicit: skip the second run over half the loading time (E_error is then the slope spread only)");
     app.add_option("--curve", c.output_csv, "explicit: write the stress-strain points as CSV");
-    int threads = 0;
-    tomodem::cli::add_threads(app, threads);
-    app.add_flag("-q,--quiet", quiet, "no progress messages");
-    tomodem::cli::add_version(app, "tomodem-young");
+    tomodem::cli::Common common;
+    tomodem::cli::add_common(app, "tomodem-young", common);
     if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
+    c.json = common.json;
     if (e_opt->count()) c.youngs_modulus = youngs_modulus;
     if (nu_opt->count()) c.poisson_ratio = poisson_ratio;
     if (rho_opt->count()) c.density = density;
     c.law.shear = !normal_only;
     im.full_tensor = !normal_cases;
-    tomodem::set_quiet(quiet);
-    if (threads > 0) omp_set_num_threads(threads);
-    ex.threads = threads > 0 ? threads : omp_get_max_threads();
-    ex.quiet = quiet;
+    if (common.threads > 0) omp_set_num_threads(common.threads);
+    ex.threads = common.threads > 0 ? common.threads : tomodem::all_threads();
+    ex.quiet = common.quiet;
     ex.rate_check = !no_rate_check;
     tomodem::info("reading " + c.input);
-    const std::string summary = tomodem::mechanics::run_young(c);
-    if (c.json.empty() || c.json == "-") std::cout << summary;
+    tomodem::emit_summary(tomodem::mechanics::run_young(c), c.json);
     return tomodem::exit_code::ok;
   });
 }

@@ -43,7 +43,7 @@ void read_config(PackConfig& cfg, const YAML::Node& root, const std::string& pat
   const long np = r.integer("particles", 1000, 1);
   s.n_particles = std::size_t(np);
   check_particle_memory(s.n_particles, path, r.where("particles"), r.text("particles"));
-  s.arrangement = r.choice("arrangement", "random", {"random", "simple_cubic", "bcc", "fcc"});
+  s.arrangement = *parse_arrangement(r.choice("arrangement", to_string(s.arrangement), name_list(kArrangementNames)));
   s.initial_solid_fraction = r.in_range("initial_solid_fraction", s.initial_solid_fraction, 0, 0.4, true, true);
   s.seed = uint64_t(r.integer("seed", 1, 0));
   s.threads = int(r.integer("threads", 1, 1, 4096));
@@ -140,7 +140,7 @@ void read_config(PackConfig& cfg, const YAML::Node& root, const std::string& pat
   else s.target = Target::pressure, s.target_pressure = t.positive("pressure", 0);
   const Node pr = r.map("protocol");
   pr.allow({"method", "strain_rate", "final_strain_rate", "local_damping", "timestep_fraction", "unbalanced_force_ratio", "max_steps"});
-  s.method = pr.choice("method", s.method, {"quasistatic", "dynamic"});
+  s.method = *parse_pack_method(pr.choice("method", to_string(s.method), name_list(kPackMethodNames)));
   s.strain_rate = pr.non_negative("strain_rate", 0);
   s.final_strain_rate = pr.non_negative("final_strain_rate", 0);
   s.local_damping = pr.in_range("local_damping", s.local_damping, 0, 1, false, true);

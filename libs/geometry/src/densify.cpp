@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "tomodem/spatial/grid.hpp"
+#include "tomodem/core/progress.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
 #include "tomodem/dem/fire.hpp"
@@ -30,13 +31,23 @@ std::string num(double v) {
 }
 double sphere_volume(double r) { return 4 * kPi / 3 * r * r * r; }
 
+// How far a pressure is on the way to the target, on a log scale from the first pressure seen
+// (pressures span decades while a packing is compressed): 0 at the start, 1 at the target. For
+// the progress line's time estimate only.
+double pressure_progress(double p, double target, double& log_start) {
+  if (!(p > 0)) return 0;
+  const double d = std::abs(std::log(p / target));
+  if (log_start <= 0) log_start = std::max(d, 1e-12);
+  return std::clamp(1 - d / log_start, 0.0, 1.0);
+}
+
 /// Densest packing a lattice arrangement allows (spheres touching).
-double lattice_max_fraction(const std::string& a) {
-  if (a == "simple_cubic") return kPi / 6;
-  if (a == "bcc") return kPi * std::sqrt(3.0) / 8;
+double lattice_max_fraction(Arrangement a) {
+  if (a == Arrangement::simple_cubic) return kPi / 6;
+  if (a == Arrangement::bcc) return kPi * std::sqrt(3.0) / 8;
   return kPi / (3 * std::sqrt(2.0));  // fcc
 }
-int lattice_basis(const std::string& a) { return a == "simple_cubic" ? 1 : (a == "bcc" ? 2 : 4); }
+int lattice_basis(Arrangement a) { return a == Arrangement::simple_cubic ? 1 : (a == Arrangement::bcc ? 2 : 4); }
 
 /// Isotropic affine rescale of the cell and the positions about its origin to solid fraction
 /// `phi` (an isotropic compression moves contacts only along their normals: tangential springs
@@ -160,6 +171,8 @@ QuasiStaticResult quasistatic(dem::Simulation& sim, const PackSpec& spec, double
     bool set = false;
   } upper;
   say("compress-relax (FIRE) to pressure " + num(pt) + " Pa from solid fraction " + num(phi));
+  Progress bar("pressure target " + num(pt) + " Pa", 1.0);
+  double log_start = 0;
   while (out.steps < spec.max_steps) {
     double floor = floor0;
     // Predicted downwards only (from a jammed state above the target), and not when bonds store
@@ -170,6 +183,7 @@ QuasiStaticResult quasistatic(dem::Simulation& sim, const PackSpec& spec, double
     const double p = r.below_floor ? 0.0 : std::max(r.last.pressure, 0.0);
     const Point pnt{phi, q_of(p), r.last.elastic_energy, true};
     if (p > 0 && r.converged) jammed.push_back(pnt);
+    bar.update(pressure_progress(p, pt, log_start), "phi " + num(phi) + ", p " + num(p) + " Pa");
     say("relaxed at phi " + num(phi) + ": p " + num(p) + " Pa, Z " + num(r.last.coordination) + ", " +
         std::to_string(r.steps) + " steps" + (r.converged ? "" : (r.below_floor ? " (below target)" : " (not converged)")));
     if (r.converged && std::abs(p / pt - 1) < 0.05) {
@@ -327,9 +341,7 @@ void validate(const PackSpec& s) {
   if (!(s.initial_solid_fraction > 0 && s.initial_solid_fraction < 0.4))
     throw InputError(f, "initial_solid_fraction", num(s.initial_solid_fraction),
                      "must lie in (0, 0.4): random sequential insertion jams near 0.38");
-  if (s.arrangement != "random" && s.arrangement != "simple_cubic" && s.arrangement != "bcc" && s.arrangement != "fcc")
-    throw InputError(f, "arrangement", s.arrangement, "expected random, simple_cubic, bcc or fcc");
-  if (s.target == Target::pressure && !(s.target_pressure > 0) && s.arrangement == "random")
+  if (s.target == Target::pressure && !(s.target_pressure > 0) && s.arrangement == Arrangement::random)
     throw InputError(f, "target.pressure", num(s.target_pressure), "must be > 0 (Pa)");
   if (s.target == Target::solid_fraction) {
     const double phi = s.target_solid_fraction;
@@ -337,10 +349,10 @@ void validate(const PackSpec& s) {
     // Bounds no packing of the distribution can pass: a single size cannot exceed the FCC
     // (Kepler) density; a lattice cannot exceed its touching density.
     bool mono = s.phases.size() == 1 && s.phases[0].psd.kind == PsdKind::monodisperse;
-    if (s.arrangement != "random") {
+    if (s.arrangement != Arrangement::random) {
       if (phi > lattice_max_fraction(s.arrangement) + 1e-12)
         throw InputError(f, "target.solid_fraction", num(phi),
-                         "above the touching density " + num(lattice_max_fraction(s.arrangement)) + " of a " + s.arrangement + " lattice");
+                         "above the touching density " + num(lattice_max_fraction(s.arrangement)) + " of a " + to_string(s.arrangement) + " lattice");
     } else if (mono && phi > kPi / (3 * std::sqrt(2.0))) {
       throw InputError(f, "target.solid_fraction", num(phi), "above the densest packing of equal spheres (0.7405, FCC)");
     } else if (phi <= s.initial_solid_fraction) {
@@ -348,8 +360,8 @@ void validate(const PackSpec& s) {
                        "must exceed initial_solid_fraction " + num(s.initial_solid_fraction) + " (compression only)");
     }
   }
-  if (s.arrangement != "random" && (s.phases.size() != 1 || s.phases[0].psd.kind != PsdKind::monodisperse))
-    throw InputError(f, "arrangement", s.arrangement, "lattices need one monodisperse phase");
+  if (s.arrangement != Arrangement::random && (s.phases.size() != 1 || s.phases[0].psd.kind != PsdKind::monodisperse))
+    throw InputError(f, "arrangement", to_string(s.arrangement), "lattices need one monodisperse phase");
   if (!(s.friction >= 0 && std::isfinite(s.friction))) throw InputError(f, "contact.friction", num(s.friction), "must be >= 0");
   if (!(s.rolling_friction >= 0)) throw InputError(f, "contact.rolling_friction", num(s.rolling_friction), "must be >= 0");
 }
@@ -450,8 +462,8 @@ Inserted lattice_particles(const PackSpec& spec) {
   const double d = spec.phases[0].psd.diameter;
   const double phi = spec.target == Target::solid_fraction ? spec.target_solid_fraction : lattice_max_fraction(spec.arrangement);
   const double a = d * std::cbrt(lattice_max_fraction(spec.arrangement) / phi) *
-                   (spec.arrangement == "simple_cubic" ? 1.0 : (spec.arrangement == "bcc" ? 2 / std::sqrt(3.0) : std::sqrt(2.0)));
-  in.pos = dem::lattice_sites(spec.arrangement, nc, a);
+                   (spec.arrangement == Arrangement::simple_cubic ? 1.0 : (spec.arrangement == Arrangement::bcc ? 2 / std::sqrt(3.0) : std::sqrt(2.0)));
+  in.pos = dem::lattice_sites(to_string(spec.arrangement), nc, a);
   in.radius.assign(in.pos.size(), 0.5 * d);
   in.phase.assign(in.pos.size(), 0);
   in.cell = Cell::box({0, 0, 0}, {nc * a, nc * a, nc * a}, true);
@@ -583,9 +595,13 @@ void DynamicDensification::compress_to_pressure() {
   }
   ctl.max_strain_rate = rate_slow_;
   long settled = 0;
+  Progress bar("pressure target " + num(spec_.target_pressure) + " Pa", 1.0);
+  double log_start = 0;
   while (steps < spec_.max_steps) {
     run(kChunk);
     m = sim_.measure();
+    bar.update(pressure_progress(m.pressure, spec_.target_pressure, log_start),
+               "phi " + num(phi_now()) + ", p " + num(m.pressure) + " Pa");
     rep_.inertial_number = std::max(rep_.inertial_number, m.inertial_number);
     if (steps % 5000 == 0)
       say_("step " + std::to_string(steps) + ": phi " + num(phi_now()) + ", p " + num(m.pressure) + " Pa, Z " +
@@ -647,10 +663,10 @@ void DynamicDensification::relax() {
 dem::Measurements densify(dem::Simulation& sim, const PackSpec& spec, double vsolid, double dmean, double dtc,
                           const std::vector<std::vector<int>>& clusters, PackReport& rep,
                           const std::function<void(const std::string&)>& say) {
-  const bool lattice = spec.arrangement != "random";
-  rep.method = lattice ? "lattice" : spec.method;
+  const bool lattice = spec.arrangement != Arrangement::random;
+  rep.method = lattice ? "lattice" : to_string(spec.method);
   DynamicDensification dyn(sim, spec, vsolid, dtc, rep, say);
-  if (!lattice && spec.method == "quasistatic") {
+  if (!lattice && spec.method == PackMethod::quasistatic) {
     const QuasiStaticResult q = quasistatic(sim, spec, vsolid, dmean, clusters, rep, say);
     if (spec.target == Target::solid_fraction) dyn.refuse_overlap(q.last);
     rep.equilibrium = q.converged;
@@ -673,7 +689,7 @@ void report_phases(const PackSpec& spec, const std::vector<SizeDistribution>& ps
                    double vsolid, PackReport& rep) {
   const int np = int(spec.phases.size());
   const std::size_t n = P.size();
-  const bool lattice = spec.arrangement != "random";
+  const bool lattice = spec.arrangement != Arrangement::random;
   std::vector<double> vol(std::size_t(np), 0.0);
   std::vector<std::vector<double>> dia{std::size_t(np)};
   for (std::size_t i = 0; i < n; ++i) {
@@ -791,7 +807,7 @@ PackOutput make_packing(const PackSpec& spec, const std::function<void(const std
   }
   PackOutput out;
   PackReport& rep = out.report;
-  const Inserted in = spec.arrangement == "random" ? insert_particles(spec, psd, say) : lattice_particles(spec);
+  const Inserted in = spec.arrangement == Arrangement::random ? insert_particles(spec, psd, say) : lattice_particles(spec);
   const std::vector<double>& radius = in.radius;
   const std::size_t n = radius.size();
   rep.n_inserted = n;

@@ -39,10 +39,6 @@ ExplicitResult run_once(const Packing& p, const std::vector<Image>& image, const
   ExplicitResult res;
   if (!(p.cell.periodic[0] && p.cell.periodic[1] && p.cell.periodic[2]))
     throw InputError(file, "/cell/periodic", "not periodic in x, y and z", "the explicit test runs on a periodic cell");
-  if (o.loading != "stress" && o.loading != "strain")
-    throw InputError("", "--loading", o.loading, "expected 'stress' or 'strain'");
-  if (o.protocol != "rate" && o.protocol != "increments")
-    throw InputError("", "--protocol", o.protocol, "expected 'rate' or 'increments'");
   if (o.points < 2) throw InputError("", "--points", std::to_string(o.points), "at least 2 measurements are needed");
   const Clusters cl = find_clusters(p, image);
   if (p.bonds.size() == 0 || cl.main < 0 || cl.wrap_rank[cl.main] < 3)
@@ -92,7 +88,7 @@ ExplicitResult run_once(const Packing& p, const std::vector<Image>& image, const
   res.strain_rate = o.strain / T;
 
   dem::CellControl& cc = sim.cell_control();
-  if (o.loading == "stress") {
+  if (o.loading == UniaxialLoading::stress) {
     cc.stress_controlled[b1][b1] = cc.stress_controlled[b2][b2] = true;
     cc.max_strain_rate = 1.0 / res.transit_time;
   }
@@ -109,7 +105,7 @@ ExplicitResult run_once(const Packing& p, const std::vector<Image>& image, const
   std::vector<double> lateral_stress;
   const long seg_steps = std::max(1L, long(T / o.points / res.time_step));
   std::size_t from = 0;
-  if (o.protocol == "rate") {
+  if (o.protocol == LoadProtocol::rate) {
     // Segment 0 builds up the viscous stress and the servo response; slopes from segment 1 on.
     cc.velocity_gradient(ax, ax) = res.strain_rate;
     for (int s = 0; s <= o.points; ++s) {
@@ -160,7 +156,7 @@ ExplicitResult run_once(const Packing& p, const std::vector<Image>& image, const
   }
   res.broken_bonds = long(sim.bond_events().size());
   const Fit fs = fit(res.strain, res.stress, from);
-  if (o.loading == "stress") {
+  if (o.loading == UniaxialLoading::stress) {
     const Fit fl = fit(res.strain, res.lateral_strain, from);
     res.E = fs.slope;
     res.nu = -fl.slope;

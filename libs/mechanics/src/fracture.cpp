@@ -79,7 +79,7 @@ void place_crack(FractureSample& s, const CrackOptions& o, double zmin, double z
                  const std::string& file) {
   if (!(o.a_over_w > 0)) throw InputError("", "--a-over-w", num(o.a_over_w), "the crack length must be > 0");
   s.a = o.a_over_w * s.W;
-  const double total = o.geometry == "centre" ? 2 * s.a : s.a;
+  const double total = o.geometry == CrackGeometry::centre ? 2 * s.a : s.a;
   if (total >= s.W)
     throw InputError("", "--a-over-w", num(o.a_over_w),
                      "the crack (" + num(total) + " m) is longer than the sample width W = " + num(s.W) + " m");
@@ -90,7 +90,7 @@ void place_crack(FractureSample& s, const CrackOptions& o, double zmin, double z
     throw InputError("", "--crack-offset", num(o.plane_offset), "the crack plane must lie between the grips");
   s.crack_z = 0.5 * (zmin + zmax) + o.plane_offset * s.H;
   const double x0 = s.packing.cell.origin.x;
-  if (o.geometry == "centre") {
+  if (o.geometry == CrackGeometry::centre) {
     s.crack_x0 = x0 + 0.5 * s.W - s.a;
     s.crack_x1 = x0 + 0.5 * s.W + s.a;
   } else {
@@ -187,8 +187,6 @@ FractureSample make_sample(const Network& net, const CrackOptions& o, const std:
   s.image = net.image;
   Packing& p = s.packing;
   const std::size_t n = p.particles.size();
-  if (o.geometry != "centre" && o.geometry != "edge")
-    throw InputError("", "--geometry", o.geometry, "expected centre (crack 2a in the middle) or edge (notch a at x = 0)");
   s.geometry = o.geometry;
   const std::array<double, 3> L = check_cell(p, file);
   wrap_into_cell(s, L);
@@ -223,15 +221,15 @@ FractureSample make_sample(const Network& net, const CrackOptions& o, const std:
   return s;
 }
 
-double geometry_factor(const std::string& geometry, double a) {
-  if (geometry == "centre") return std::sqrt(1 / std::cos(M_PI * a));
+double geometry_factor(CrackGeometry geometry, double a) {
+  if (geometry == CrackGeometry::centre) return std::sqrt(1 / std::cos(M_PI * a));
   return 1.12 - 0.231 * a + 10.55 * a * a - 21.72 * a * a * a + 30.39 * a * a * a * a;
 }
 
-double dlnK_da(const std::string& geometry, double a, double W) {
+double dlnK_da(CrackGeometry geometry, double a, double W) {
   const double al = a / W;
   double dlnY;  // d ln Y / d α
-  if (geometry == "centre") {
+  if (geometry == CrackGeometry::centre) {
     dlnY = 0.5 * M_PI * std::tan(M_PI * al);
   } else {
     const double dY = -0.231 + 2 * 10.55 * al - 3 * 21.72 * al * al + 4 * 30.39 * al * al * al;
@@ -290,7 +288,7 @@ void finish_result(const FractureSample& s, FractureResult& r, double dynamic_er
   r.K_IC_error = std::sqrt(discrete * discrete + dynamic_error * dynamic_error);
   // Each broken bond opens, on average, the share of the section that one bond of the intact
   // ligament carries: the created crack area (rough cracks and off-plane breaks count).
-  const double ligament = (s.W - (s.geometry == "centre" ? 2 * s.a : s.a)) * s.B;
+  const double ligament = (s.W - (s.geometry == CrackGeometry::centre ? 2 * s.a : s.a)) * s.B;
   r.crack_area = double(r.events.size()) * ligament / double(s.ligament_bonds);
   r.work_of_fracture = r.cut_through ? r.dissipated_energy / ligament : std::nan("");
 }

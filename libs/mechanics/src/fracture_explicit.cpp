@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "tomodem/core/progress.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/dem/simulation.hpp"
@@ -17,7 +18,7 @@ FractureResult run_explicit_fracture(const FractureSample& s, const std::vector<
                                      const FailureOptions& f, const ExplicitFractureOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
   FractureResult r;
-  r.method = "explicit";
+  r.method = FractureMethod::explicit_test;
   const Packing& p = s.packing;
   const std::size_t n = p.particles.size(), m = p.bonds.size();
   if (!(o.transits > 0) && !(o.strain_rate > 0))
@@ -111,6 +112,9 @@ FractureResult run_explicit_fracture(const FractureSample& s, const std::vector<
   std::vector<Energy> budget;
   double peak = 0, peak_imbalance = 0, t_peak = 0;
   dem::Measurements last{};
+  // Progress for the time estimate: the opening towards its cap, or after the peak the load
+  // towards the stop fraction, whichever is further.
+  Progress bar("explicit fracture test", 1.0);
   for (;;) {
     const double t = sim.time() + 0.5 * double(chunk) * r.time_step;
     const double v = t_ramp > 0 ? v_max * std::min(1.0, t / t_ramp) : v_max;
@@ -134,6 +138,10 @@ FractureResult run_explicit_fracture(const FractureSample& s, const std::vector<
       t_peak = sim.time();
       peak_imbalance = std::abs(ftop - fbot) / std::max(std::abs(ftop + fbot), 1e-300);
     }
+    double done = std::max(opening / opening_cap, double(r.steps) / double(o.max_steps));
+    if (broken > 0 && sim.time() > t_peak && peak > 0 && o.stop_fraction < 1)
+      done = std::max(done, (1 - force / peak) / (1 - o.stop_fraction));
+    bar.update(done, std::to_string(broken) + " bonds broken");
     if (broken > 0 && sim.time() > t_peak && force < o.stop_fraction * peak) {
       r.stop_reason = "load below " + std::to_string(o.stop_fraction) + " of the peak";
       r.cut_through = force <= 1e-3 * peak;

@@ -1,7 +1,6 @@
 // tomodem-fracture: read, check every input before any output, run the chosen methods, write the
 // curve (CSV, plot), the broken-bond map (HDF5 + XDMF for ParaView) and the JSON summary.
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
@@ -11,8 +10,9 @@
 #include "tomodem/core/h5.hpp"
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/packing_io.hpp"
-#include "tomodem/core/tool.hpp"
 #include "tomodem/core/plot.hpp"
+#include "tomodem/core/summary.hpp"
+#include "tomodem/core/tool.hpp"
 #include "tomodem/mechanics/fracture.hpp"
 
 namespace tomodem::mechanics {
@@ -94,7 +94,7 @@ void write_map(const std::string& path, const FractureSample& s, const FractureR
     f.write("/bonds/force_at_break", bforce, {}, "N");
     f.set_attr("/bonds", "state_codes", "0 intact, 1 broken in tension, 2 broken in shear, 3 pre-crack");
     f.set_attr("/particles", "role_codes", "0 free, 1 bottom grip, 2 top grip, 3 not connected to a grip");
-    f.set_attr("/", "method", r.method);
+    f.set_attr("/", "method", std::string(to_string(r.method)));
     write_provenance(f);  // units = "m", tool, version, command line, time
     f.close();  // checked: a full disk shows here, before the rename
   } catch (...) {
@@ -156,7 +156,7 @@ json result_json(const FractureResult& r, const FractureSample& s) {
             {"cut_through", r.cut_through},
             {"stop_reason", r.stop_reason},
             {"wall_time_s", r.wall_time_s}};
-  if (r.method == "sla") {
+  if (r.method == FractureMethod::sla) {
     j["initial_stiffness"] = r.initial_stiffness;
     j["solves"] = r.solves;
     j["factorizations"] = r.factorizations;
@@ -177,28 +177,18 @@ json result_json(const FractureResult& r, const FractureSample& s) {
   return j;
 }
 
-}  // namespace
-
-std::string run_fracture(const FractureConfig& c) {
-  const auto t0 = std::chrono::steady_clock::now();
-  // Options first: a bad value stops the run before anything is read or written.
-  if (c.method != "sla" && c.method != "explicit" && c.method != "both")
-    throw InputError("", "--method", c.method, "expected sla, explicit or both");
+// Every option first: a bad value stops the run before anything is read or written. Returns the
+// failure options with the criterion set.
+FailureOptions check_fracture_options(const FractureConfig& c) {
   FailureOptions fo = c.failure;
-  if (c.criterion == "lefm") fo.criterion = dem::BondFailure::lefm;
-  else if (c.criterion == "stress") fo.criterion = dem::BondFailure::stress;
-  else throw InputError("", "--criterion", c.criterion, "expected lefm or stress");
   require_range("--stop-fraction", c.stop_fraction, 0, false, 1, true, "of the peak load");
-  const bool want_sla = c.method != "explicit", want_explicit = c.method != "sla";
   // Every option is checked whatever the method and criterion: out of range is refused, never ignored.
   require_non_negative("--fracture-energy", fo.fracture_energy, "J/m^2; 0: from the materials");
   require_non_negative("--tensile-strength", fo.tensile_strength, "Pa");
   require_non_negative("--shear-strength", fo.shear_strength, "Pa");
   require_non_negative("--friction", fo.friction, "Coulomb friction coefficient");
-  if (c.crack.geometry != "centre" && c.crack.geometry != "edge")
-    throw InputError("", "--geometry", c.crack.geometry, "expected centre (crack 2a in the middle) or edge (notch a at x = 0)");
   {
-    const bool centre = c.crack.geometry == "centre";
+    const bool centre = c.crack.geometry == CrackGeometry::centre;
     const double a = c.crack.a_over_w, amax = centre ? 0.5 : 1;
     if (!(std::isfinite(a) && a > 0 && a < amax))
       throw InputError("", "--a-over-w", value_text(a),
@@ -220,21 +210,129 @@ std::string run_fracture(const FractureConfig& c) {
     throw InputError("", "--max-steps", std::to_string(c.explicit_.max_steps), "must be >= 1");
   check_material_overrides(c.youngs_modulus, c.poisson_ratio, c.density);
   check_law_options(c.law);
-  // Outputs before any work: none may overwrite the input, nor two share a file.
-  {
-    std::vector<OutputName> outs = {{"--json", c.json}, {"--curve", c.curve_csv}};
-    if (!c.curve_csv.empty() && want_sla && want_explicit)
-      outs.push_back({"--curve (its _explicit.csv)", stem_of(c.curve_csv) + "_explicit.csv"});
-    if (!c.plot.empty()) {
-      outs.push_back({"--plot (its .png)", c.plot + ".png"});
-      outs.push_back({"--plot (its .svg)", c.plot + ".svg"});
-    }
-    if (!c.map.empty()) {
-      outs.push_back({"--map", c.map});
-      outs.push_back({"--map (its .xdmf sidecar)", stem_of(c.map) + ".xdmf"});
-    }
-    check_outputs({c.input}, outs);
+  return fo;
+}
+
+// Outputs before any work: none may overwrite the input, nor two share a file.
+void check_fracture_outputs(const FractureConfig& c) {
+  std::vector<OutputName> outs = {{"--json", c.json}, {"--curve", c.curve_csv}};
+  if (!c.curve_csv.empty() && c.method == FractureMethod::both)
+    outs.push_back({"--curve (its _explicit.csv)", stem_of(c.curve_csv) + "_explicit.csv"});
+  if (!c.plot.empty()) {
+    outs.push_back({"--plot (its .png)", c.plot + ".png"});
+    outs.push_back({"--plot (its .svg)", c.plot + ".svg"});
   }
+  if (!c.map.empty()) {
+    outs.push_back({"--map", c.map});
+    outs.push_back({"--map (its .xdmf sidecar)", stem_of(c.map) + ".xdmf"});
+  }
+  check_outputs({c.input}, outs);
+}
+
+// E and nu of the periodic network (implicit), for the check G = K^2 (1 - nu^2) / E; NaN when
+// the network has none (a warning says why).
+std::pair<double, double> elastic_constants(const Network& net, const std::vector<dem::BondLaw>& laws,
+                                            const std::string& source) {
+  try {
+    ImplicitOptions io;
+    io.full_tensor = false;
+    io.axis = 2;
+    info("elastic constants of the periodic network (implicit, for G = K^2 (1 - nu^2) / E)");
+    const ImplicitResult ir = solve_implicit(net.packing, net.image, bond_stiffnesses(net.packing, laws), io, source);
+    return {ir.E, ir.nu};
+  } catch (const InputError& e) {
+    warn(std::string("no elastic constants: ") + e.what());
+  }
+  return {std::nan(""), std::nan("")};
+}
+
+json sample_json(const FractureSample& s, std::size_t particles) {
+  return {{"particles", particles},
+          {"particles_removed", s.removed_particles},
+          {"bottom_grip", s.bottom_grip},
+          {"top_grip", s.top_grip},
+          {"precrack_bonds", s.precrack_bonds},
+          {"ligament_bonds", s.ligament_bonds},
+          {"face_cut_bonds", s.face_cut_bonds},
+          {"mean_bond_length", s.mean_bond_length},
+          {"crack_plane_z", s.crack_z}};
+}
+
+// The results of the primary method (SLA when it ran) as the summary's top-level keys.
+void primary_keys(Summary& out, const FractureResult& r, const FractureSample& s, double E, double nu) {
+  const double ligament = (s.W - (s.geometry == CrackGeometry::centre ? 2 * s.a : s.a)) * s.B;
+  out["geometry"] = to_string(s.geometry);
+  out["a_over_W"] = s.a / s.W;
+  out["crack_length"] = s.a;
+  out["crack_total_length"] = s.geometry == CrackGeometry::centre ? 2 * s.a : s.a;
+  out["width"] = s.W;
+  out["thickness"] = s.B;
+  out["height"] = s.H;
+  out["ligament_area"] = ligament;
+  out["Y"] = r.Y;
+  out["K_IC"] = r.K_IC;
+  out["K_IC_error"] = r.K_IC_error;
+  out["peak_stress"] = r.peak_stress;
+  out["peak_force"] = r.peak_force;
+  out["broken_bonds"] = r.events.size();
+  out["dissipated_energy"] = r.dissipated_energy;
+  out["energy_release_rate"] = r.crack_area > 0 ? finite(r.dissipated_energy / r.crack_area) : json(nullptr);
+  out["work_of_fracture"] = finite(r.work_of_fracture);
+  out["E"] = finite(E);
+  out["nu"] = finite(nu);
+  out["G_from_K_IC"] = finite(r.K_IC * r.K_IC * (1 - nu * nu) / E);
+  out.unit("K_IC", "Pa m^0.5");
+  out.unit("peak_stress", "Pa (load / (W B))");
+  out.unit("crack_length", "m (a in K = Y sigma sqrt(pi a))");
+  out.unit("energy", "J");
+  out.unit("energy_release_rate", "J/m^2");
+  out.unit("K_IC_error", "relative");
+  out.unit("E", "Pa");
+}
+
+// The curve (CSV, plot) and the broken-bond map, each atomic; their names go into the summary.
+void write_fracture_outputs(const FractureConfig& c, const FractureSample& s, const FractureResult& sla,
+                            const FractureResult& ex, const FractureResult& primary, Summary& out) {
+  if (!c.curve_csv.empty()) {
+    write_text_atomic(c.curve_csv, curve_csv(primary));
+    out.output("curve", c.curve_csv);
+    if (!sla.curve.empty() && !ex.curve.empty()) {
+      write_text_atomic(stem_of(c.curve_csv) + "_explicit.csv", curve_csv(ex));
+      out.output("curve_explicit", stem_of(c.curve_csv) + "_explicit.csv");
+    }
+  }
+  if (!c.plot.empty()) {
+    PlotSpec spec;
+    spec.title = "tomodem-fracture: " + std::string(to_string(s.geometry)) + " crack, a/W = " + std::to_string(s.a / s.W);
+    spec.xlabel = "grip opening (um)";
+    spec.ylabel = "load (N)";
+    for (const FractureResult* r : {&sla, &ex}) {
+      if (r->curve.empty()) continue;
+      PlotSeries se;
+      se.title = to_string(r->method);
+      for (const FracturePoint& q : r->curve) se.x.push_back(q.displacement * 1e6), se.y.push_back(q.force);
+      spec.series.push_back(se);
+    }
+    try {
+      write_plot(c.plot, spec);
+      out.output("plot", json::array({c.plot + ".png", c.plot + ".svg"}));
+    } catch (const RuntimeFailure& e) {
+      warn(std::string("no plot: ") + e.what());
+    }
+  }
+  if (!c.map.empty()) {
+    write_map(c.map, s, primary);
+    out.output("map", c.map);
+    out.output("map_xdmf", stem_of(c.map) + ".xdmf");
+  }
+}
+
+}  // namespace
+
+std::string run_fracture(const FractureConfig& c) {
+  FailureOptions fo = check_fracture_options(c);
+  check_fracture_outputs(c);
+  const bool want_sla = c.method != FractureMethod::explicit_test, want_explicit = c.method != FractureMethod::sla;
 
   Network net = read_network(c.input);
   Packing& p = net.packing;
@@ -253,19 +351,7 @@ std::string run_fracture(const FractureConfig& c) {
        " across the ligament");
 
   double E = std::nan(""), nu = std::nan("");
-  if (c.elastic) {
-    try {
-      ImplicitOptions io;
-      io.full_tensor = false;
-      io.axis = 2;
-      info("elastic constants of the periodic network (implicit, for G = K^2 (1 - nu^2) / E)");
-      const ImplicitResult ir = solve_implicit(net.packing, net.image, bond_stiffnesses(net.packing, laws), io, c.input);
-      E = ir.E;
-      nu = ir.nu;
-    } catch (const InputError& e) {
-      warn(std::string("no elastic constants: ") + e.what());
-    }
-  }
+  if (c.elastic) std::tie(E, nu) = elastic_constants(net, laws, c.input);
   FractureResult sla, ex;
   if (want_sla) {
     info("sequentially linear analysis");
@@ -280,76 +366,18 @@ std::string run_fracture(const FractureConfig& c) {
     ex = run_explicit_fracture(s, laws, fo, eo);
   }
   const FractureResult& primary = want_sla ? sla : ex;
-  const double ligament = (s.W - (s.geometry == "centre" ? 2 * s.a : s.a)) * s.B;
-  json out = {{"tool", "tomodem-fracture"},
-              {"version", version_string()},
-              {"input", c.input},
-              {"method", c.method},
-              {"criterion", c.criterion},
-              {"geometry", s.geometry},
-              {"a_over_W", s.a / s.W},
-              {"crack_length", s.a},
-              {"crack_total_length", s.geometry == "centre" ? 2 * s.a : s.a},
-              {"width", s.W},
-              {"thickness", s.B},
-              {"height", s.H},
-              {"ligament_area", ligament},
-              {"Y", primary.Y},
-              {"K_IC", primary.K_IC},
-              {"K_IC_error", primary.K_IC_error},
-              {"peak_stress", primary.peak_stress},
-              {"peak_force", primary.peak_force},
-              {"broken_bonds", primary.events.size()},
-              {"dissipated_energy", primary.dissipated_energy},
-              {"energy_release_rate", primary.crack_area > 0 ? finite(primary.dissipated_energy / primary.crack_area) : json(nullptr)},
-              {"work_of_fracture", finite(primary.work_of_fracture)},
-              {"E", finite(E)},
-              {"nu", finite(nu)},
-              {"G_from_K_IC", finite(primary.K_IC * primary.K_IC * (1 - nu * nu) / E)},
-              {"sample",
-               {{"particles", p.particles.size()},
-                {"particles_removed", s.removed_particles},
-                {"bottom_grip", s.bottom_grip},
-                {"top_grip", s.top_grip},
-                {"precrack_bonds", s.precrack_bonds},
-                {"ligament_bonds", s.ligament_bonds},
-                {"face_cut_bonds", s.face_cut_bonds},
-                {"mean_bond_length", s.mean_bond_length},
-                {"crack_plane_z", s.crack_z}}}};
+  Summary out("tomodem-fracture");
+  out.input(c.input);
+  out.n_particles(p.particles.size());
+  out["method"] = to_string(c.method);
+  out["criterion"] = to_string_criterion(c.failure.criterion);
+  primary_keys(out, primary, s, E, nu);
+  out["sample"] = sample_json(s, p.particles.size());
   if (want_sla) out["sla"] = result_json(sla, s);
   if (want_explicit) out["explicit"] = result_json(ex, s);
   if (want_sla && want_explicit) out["explicit_vs_sla"] = ex.K_IC / sla.K_IC - 1;
-  out["units"] = {{"K_IC", "Pa m^0.5"}, {"peak_stress", "Pa (load / (W B))"}, {"crack_length", "m (a in K = Y sigma sqrt(pi a))"},
-                  {"energy", "J"}, {"energy_release_rate", "J/m^2"}, {"K_IC_error", "relative"}};
-
-  // Outputs, each atomic.
-  if (!c.curve_csv.empty()) {
-    write_text_atomic(c.curve_csv, curve_csv(primary));
-    if (want_sla && want_explicit) write_text_atomic(stem_of(c.curve_csv) + "_explicit.csv", curve_csv(ex));
-  }
-  if (!c.plot.empty()) {
-    PlotSpec spec;
-    spec.title = "tomodem-fracture: " + s.geometry + " crack, a/W = " + std::to_string(s.a / s.W);
-    spec.xlabel = "grip opening (um)";
-    spec.ylabel = "load (N)";
-    for (const FractureResult* r : {&sla, &ex}) {
-      if (r->curve.empty()) continue;
-      PlotSeries se;
-      se.title = r->method;
-      for (const FracturePoint& q : r->curve) se.x.push_back(q.displacement * 1e6), se.y.push_back(q.force);
-      spec.series.push_back(se);
-    }
-    try {
-      write_plot(c.plot, spec);
-    } catch (const RuntimeFailure& e) {
-      warn(std::string("no plot: ") + e.what());
-    }
-  }
-  if (!c.map.empty()) write_map(c.map, s, primary);
-  out["wall_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const std::string text = out.dump(2) + "\n";
-  if (!c.json.empty() && c.json != "-") write_text_atomic(c.json, text);
-  return text;
+  write_fracture_outputs(c, s, sla, ex, primary, out);
+  return out.text();
 }
 
 }  // namespace tomodem::mechanics

@@ -62,7 +62,7 @@ struct StiffnessSystem::Impl {
   SpMatR K;
   Eigen::MatrixXd f;                      // right-hand side per unit strain (ndof × 6)
   double shift = 0;
-  std::string kind;                       // ldlt | amg | cg | cg-ic
+  ElasticSolver kind = ElasticSolver::ldlt;  // never automatic
   long cap = 0;
   std::unique_ptr<Amg> amg;
   std::unique_ptr<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double, Eigen::ColMajor, int>, Eigen::Lower>> ldlt;
@@ -141,7 +141,7 @@ void StiffnessSystem::Impl::assemble(bool first) {
     // A tiny shift keeps the direct factorisation regular in mechanisms that the load does not
     // excite (e.g. the floppy shear of a lattice with normal bonds only); its relative effect on
     // loaded modes is below 1e-12 times the condition number's share (docs/young.md).
-    shift = kind == "ldlt" ? 1e-12 * diag_mean : 0.0;
+    shift = kind == ElasticSolver::ldlt ? 1e-12 * diag_mean : 0.0;
   }
   K = SpMatR(ndof, ndof);
   Eigen::VectorXi per_row(ndof);
@@ -176,11 +176,11 @@ void StiffnessSystem::Impl::assemble(bool first) {
 
 void StiffnessSystem::Impl::prepare(bool first) {
   const auto t0 = Clock::now();
-  if (kind == "ldlt") {
+  if (kind == ElasticSolver::ldlt) {
     ldlt = std::make_unique<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double, Eigen::ColMajor, int>, Eigen::Lower>>(
         Eigen::SparseMatrix<double, Eigen::ColMajor, int>(K));
     if (ldlt->info() != Eigen::Success) throw RuntimeFailure("stiffness matrix: LDLT factorisation failed");
-  } else if (kind == "amg") {
+  } else if (kind == ElasticSolver::amg) {
     if (first) {
       NearNullspace ns;
       ns.node.resize(std::size_t(ndof));
@@ -205,7 +205,7 @@ void StiffnessSystem::Impl::prepare(bool first) {
     } else {
       amg->replace_finest(view());
     }
-  } else if (kind == "cg-ic") {
+  } else if (kind == ElasticSolver::cg_ic) {
     ic = std::make_unique<Eigen::ConjugateGradient<SpMatR, Eigen::Lower | Eigen::Upper, Eigen::IncompleteCholesky<double>>>();
     ic->setTolerance(o.tolerance);
     ic->setMaxIterations(cap);
@@ -266,12 +266,10 @@ StiffnessSystem::StiffnessSystem(const Packing& p, const std::vector<Image>& ima
     m.nbr[a].erase(std::unique(m.nbr[a].begin(), m.nbr[a].end()), m.nbr[a].end());
     m.bstart[a + 1] = m.bstart[a] + int64_t(m.nbr[a].size());
   }
-  if (o.solver == "auto")
-    m.kind = m.np < 2000 ? "ldlt" : "amg";
-  else if (o.solver == "ldlt" || o.solver == "amg" || o.solver == "cg" || o.solver == "cg-ic")
-    m.kind = o.solver;
+  if (o.solver == ElasticSolver::automatic)
+    m.kind = m.np < 2000 ? ElasticSolver::ldlt : ElasticSolver::amg;
   else
-    throw InputError("", "--solver", o.solver, "expected auto, ldlt, amg, cg or cg-ic");
+    m.kind = o.solver;
   m.info.solver = m.kind;
   m.assemble(true);
   m.info.dofs = m.ndof;
@@ -303,9 +301,9 @@ LinearResponse StiffnessSystem::solve(const std::array<double, 6>& strain) const
   Eigen::VectorXd q = Eigen::VectorXd::Zero(m.ndof);
   const double fn = rhs.norm();
   if (fn > 0) {
-    if (m.kind == "ldlt") {
+    if (m.kind == ElasticSolver::ldlt) {
       q = m.ldlt->solve(rhs);
-    } else if (m.kind == "cg-ic") {
+    } else if (m.kind == ElasticSolver::cg_ic) {
       q = m.ic->solve(rhs);
       out.iterations = m.ic->iterations();
     } else {
@@ -368,7 +366,7 @@ ImplicitResult solve_implicit(const Packing& p, const std::vector<Image>& image,
     for (int x = 0; x < 6; ++x) C(x, c) = r.stress[x];
     res.iterations += r.iterations;
     res.residual = std::max(res.residual, r.residual);
-    if (res.solver != "ldlt")
+    if (res.solver != ElasticSolver::ldlt)
       info("  strain case " + std::to_string(c + 1) + "/" + std::to_string(ncase) + ": " +
            std::to_string(r.iterations) + " iterations, residual " + std::to_string(r.residual));
   }

@@ -2,14 +2,13 @@
 #include "tomodem/mechanics/tools.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <nlohmann/json.hpp>
-#include <omp.h>
 #include <sstream>
 
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
+#include "tomodem/core/summary.hpp"
 #include "tomodem/core/tool.hpp"
 
 namespace tomodem::mechanics {
@@ -50,26 +49,18 @@ double quantile(std::vector<double> v, double q) {
 std::string parameters_text(const json& j) { return j.dump(); }
 }  // namespace
 
-std::string run_bond(const BondConfig& c) {
-  const auto t0 = std::chrono::steady_clock::now();
+namespace {
+// Every option of tomodem-bond before anything is read or written.
+BondingOptions bonding_options(const BondConfig& c) {
   if (c.output.empty()) throw InputError("", "--output", "", "an output packing is needed");
   BondingOptions o;
-  if (c.rule == "ratio")
-    o.rule = NeckRule::ratio;
-  else if (c.rule == "overlap")
-    o.rule = NeckRule::overlap;
-  else if (c.rule == "density")
-    o.rule = NeckRule::density;
-  else if (c.rule == "sinter")
-    o.rule = NeckRule::sinter;
-  else
-    throw InputError("", "--rule", c.rule, "expected ratio, overlap, density or sinter");
+  o.rule = c.rule;
   require_range("--gap-tolerance", c.gap_tolerance, 0, false, 1, false,
                 "gap / mean radius; a gap wider than a radius is no neck");
   require_range("--neck-ratio", c.neck_ratio, 0, true, 1, false, "a_b / R");
   require_range("--min-neck-ratio", c.min_neck_ratio, 0, true, 1, false, "a_b / R");
   if (o.rule == NeckRule::density || o.rule == NeckRule::sinter)
-    require_range("--target-density", c.target_density, 0, true, 1, true, "relative density, for --rule " + c.rule);
+    require_range("--target-density", c.target_density, 0, true, 1, true, "relative density, for --rule " + std::string(to_string(c.rule)));
   else if (c.target_density != 0)
     require_range("--target-density", c.target_density, 0, true, 1, true, "relative density");
   if (c.threads < 0) throw InputError("", "--threads", std::to_string(c.threads), "must be >= 0");
@@ -81,15 +72,16 @@ std::string run_bond(const BondConfig& c) {
     throw InputError("", "--sinter-config", "", "rule sinter needs a sintering settings file (docs/sintering.md)");
   o.sinter_file = c.sinter_config;
   o.source = c.input;
-  o.threads = std::max(1, c.threads > 0 ? c.threads : omp_get_max_threads());
+  o.threads = c.threads > 0 ? c.threads : all_threads();
   o.gap_tolerance = c.gap_tolerance;
   o.neck_ratio = c.neck_ratio;
   o.min_neck_ratio = c.min_neck_ratio;
   o.target_density = c.target_density;
+  return o;
+}
 
-  Network net = read_network(c.input);
-  Packing& p = net.packing;
-  if (p.particles.size() < 2) throw InputError(c.input, "/particles/radius", std::to_string(p.particles.size()), "needs at least two particles");
+// --exclude and --pair-ratio name phases, so they are read once the packing is.
+void phase_options(const BondConfig& c, const Packing& p, BondingOptions& o) {
   for (const std::string& e : c.exclude) o.excluded.push_back(phase_pair(p, e, "--exclude"));
   for (const std::string& e : c.pair_ratio) {
     const auto eq = e.find('=');
@@ -103,6 +95,67 @@ std::string run_bond(const BondConfig& c) {
     if (!(r > 0 && r <= 1)) throw InputError("", "--pair-ratio", e, "the ratio must lie in (0, 1]");
     o.pair_ratio.push_back({phase_pair(p, e.substr(0, eq), "--pair-ratio"), r});
   }
+}
+
+json neck_ratio_json(const std::vector<double>& ratio) {
+  std::vector<double> hist(10, 0);
+  double amin = 1e300, amax = 0, amean = 0;
+  for (double a : ratio) {
+    amin = std::min(amin, a);
+    amax = std::max(amax, a);
+    amean += a;
+  }
+  amean /= double(ratio.size());
+  const double width = (amax - amin) / 10;
+  for (double a : ratio) hist[std::min<std::size_t>(9, width > 0 ? std::size_t((a - amin) / width) : 0)] += 1;
+  return {{"definition", "a_b / R, R = 2 R_i R_j / (R_i + R_j)"},
+          {"min", amin},
+          {"mean", amean},
+          {"max", amax},
+          {"p10", quantile(ratio, 0.1)},
+          {"p50", quantile(ratio, 0.5)},
+          {"p90", quantile(ratio, 0.9)},
+          {"histogram", {{"lower", amin}, {"upper", amax}, {"counts", hist}}}};
+}
+
+json clusters_json(const Clusters& cl, bool spans) {
+  long other_clusters = 0;
+  for (std::size_t k = 0; k < cl.size.size(); ++k)
+    if (int(k) != cl.main && cl.size[k] > 1) ++other_clusters;
+  return {{"count", cl.size.size()},
+          {"main_size", cl.main >= 0 ? cl.size[cl.main] : 0},
+          {"main_spans_cell", spans},
+          {"main_wrap_rank", cl.main >= 0 ? cl.wrap_rank[cl.main] : 0},
+          {"spanning_clusters", cl.spanning_clusters},
+          {"other_clusters", other_clusters},
+          {"isolated_particles", cl.isolated},
+          {"particles_outside_main", cl.outside_main}};
+}
+
+// The bonded packing's own results and provenance (HDF5 attributes).
+void stamp_bonded(Packing& p, const BondConfig& c, const BondingReport& rep, const json& params, bool sinter) {
+  p.results = Results{};
+  p.results.scalars = {{"n_bonds", double(rep.n_bonds)},
+                       {"bonds_per_particle", rep.bonds_per_particle},
+                       {"relative_density", rep.relative_density},
+                       {"particles_outside_main_cluster", double(rep.clusters.outside_main)}};
+  for (const auto& [k, v] : p.results.scalars) p.results.units[k] = "1";
+  p.provenance.tool = "tomodem-bond";
+  p.provenance.version = version_string();
+  p.provenance.parameters = parameters_text(params);
+  p.provenance.input_hashes = {{c.input, file_hash(c.input)}};
+  if (sinter) p.provenance.input_hashes[c.sinter_config] = file_hash(c.sinter_config);
+  p.provenance.created_utc = utc_now();
+  p.provenance.wall_time_s = process_wall_time_s();
+}
+}  // namespace
+
+std::string run_bond(const BondConfig& c) {
+  BondingOptions o = bonding_options(c);
+  Network net = read_network(c.input);
+  Packing& p = net.packing;
+  if (p.particles.size() < 2) throw InputError(c.input, "/particles/radius", std::to_string(p.particles.size()), "needs at least two particles");
+  phase_options(c, p, o);
   if (p.bonds.size()) warn("replacing the " + std::to_string(p.bonds.size()) + " bonds of " + c.input);
   const BondingReport rep = bond_network(net, o);
   if (rep.n_bonds == 0)
@@ -113,75 +166,34 @@ std::string run_bond(const BondConfig& c) {
   if (!c.allow_disconnected && !spans)
     throw InputError(c.input, "/bonds", "largest cluster wraps along " + std::to_string(cl.wrap_rank[cl.main]) + " directions",
                      "no bonded cluster spans the periodic cell (--require-spanning)");
-
-  json params = {{"rule", c.rule},          {"gap_tolerance", c.gap_tolerance}, {"neck_ratio", c.neck_ratio},
+  const bool sinter = o.rule == NeckRule::sinter;
+  json params = {{"rule", to_string(c.rule)},          {"gap_tolerance", c.gap_tolerance}, {"neck_ratio", c.neck_ratio},
                  {"min_neck_ratio", c.min_neck_ratio}, {"target_density", c.target_density},
                  {"exclude", c.exclude},    {"pair_ratio", c.pair_ratio}};
-  if (o.rule == NeckRule::sinter) params["sinter_config"] = c.sinter_config;
-  std::vector<double> hist(10, 0);
-  double amin = 1e300, amax = 0, amean = 0;
-  for (double a : rep.neck_ratio) {
-    amin = std::min(amin, a);
-    amax = std::max(amax, a);
-    amean += a;
-  }
-  amean /= double(rep.neck_ratio.size());
-  const double width = (amax - amin) / 10;
-  for (double a : rep.neck_ratio)
-    hist[std::min<std::size_t>(9, width > 0 ? std::size_t((a - amin) / width) : 0)] += 1;
-  long other_clusters = 0;
-  for (std::size_t k = 0; k < cl.size.size(); ++k)
-    if (int(k) != cl.main && cl.size[k] > 1) ++other_clusters;
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  p.results = Results{};
-  p.results.scalars = {{"n_bonds", double(rep.n_bonds)},
-                       {"bonds_per_particle", rep.bonds_per_particle},
-                       {"relative_density", rep.relative_density},
-                       {"particles_outside_main_cluster", double(cl.outside_main)}};
-  for (const auto& [k, v] : p.results.scalars) p.results.units[k] = "1";
-  p.provenance.tool = "tomodem-bond";
-  p.provenance.version = version_string();
-  p.provenance.parameters = parameters_text(params);
-  p.provenance.input_hashes = {{c.input, file_hash(c.input)}};
-  if (o.rule == NeckRule::sinter) p.provenance.input_hashes[c.sinter_config] = file_hash(c.sinter_config);
-  p.provenance.created_utc = utc_now();
-  p.provenance.wall_time_s = wall;
+  if (sinter) params["sinter_config"] = c.sinter_config;
+  stamp_bonded(p, c, rep, params, sinter);
   write_network(c.output, net);
 
-  json out = {{"tool", "tomodem-bond"},
-              {"version", version_string()},
-              {"input", c.input},
-              {"output", c.output},
-              {"parameters", params},
-              {"n_particles", p.particles.size()},
-              {"n_bonds", rep.n_bonds},
-              {"bonds_per_particle", rep.bonds_per_particle},
-              {"relative_density", rep.relative_density},
-              {"initial_relative_density", rep.initial_relative_density},
-              {"densification_scale", rep.scale},
-              {"neck_ratio",
-               {{"definition", "a_b / R, R = 2 R_i R_j / (R_i + R_j)"},
-                {"min", amin},
-                {"mean", amean},
-                {"max", amax},
-                {"p10", quantile(rep.neck_ratio, 0.1)},
-                {"p50", quantile(rep.neck_ratio, 0.5)},
-                {"p90", quantile(rep.neck_ratio, 0.9)},
-                {"histogram", {{"lower", amin}, {"upper", amax}, {"counts", hist}}}}},
-              {"clusters",
-               {{"count", cl.size.size()},
-                {"main_size", cl.main >= 0 ? cl.size[cl.main] : 0},
-                {"main_spans_cell", spans},
-                {"main_wrap_rank", cl.main >= 0 ? cl.wrap_rank[cl.main] : 0},
-                {"spanning_clusters", cl.spanning_clusters},
-                {"other_clusters", other_clusters},
-                {"isolated_particles", cl.isolated},
-                {"particles_outside_main", cl.outside_main}}},
-              {"wall_time_s", wall}};
-  if (o.rule == NeckRule::sinter) out["sintering"] = {{"time_s", rep.sintering_time_s}, {"steps", rep.sintering_steps}};
-  const std::string text = out.dump(2) + "\n";
-  if (!c.json.empty() && c.json != "-") write_text_atomic(c.json, text);
-  return text;
+  Summary out("tomodem-bond");
+  out.input(c.input);
+  out.output("packing", c.output);
+  out.output("xdmf", xdmf_sidecar_of(c.output));
+  out.n_particles(p.particles.size());
+  out["parameters"] = params;
+  out["n_bonds"] = rep.n_bonds;
+  out["bonds_per_particle"] = rep.bonds_per_particle;
+  out["relative_density"] = rep.relative_density;
+  out["initial_relative_density"] = rep.initial_relative_density;
+  out["densification_scale"] = rep.scale;
+  out["neck_ratio"] = neck_ratio_json(rep.neck_ratio);
+  out["clusters"] = clusters_json(cl, spans);
+  out.unit("neck_ratio", "1 (a_b / R)");
+  out.unit("relative_density", "1");
+  if (sinter) {
+    out["sintering"] = {{"time_s", rep.sintering_time_s}, {"steps", rep.sintering_steps}};
+    out.unit("sintering.time_s", "s");
+  }
+  return out.text();
 }
 
 namespace {
@@ -196,17 +208,10 @@ json tensor_json(const Matrix6& C, bool full) {
 }
 }  // namespace
 
-std::string run_young(const YoungConfig& c) {
-  const auto t0 = std::chrono::steady_clock::now();
-  if (c.method != "implicit" && c.method != "explicit" && c.method != "both")
-    throw InputError("", "--method", c.method, "expected implicit, explicit or both");
-  if (c.axis.size() != 1 || c.axis[0] < 'x' || c.axis[0] > 'z') throw InputError("", "--axis", c.axis, "expected x, y or z");
-  const int axis = c.axis[0] - 'x';
-  if (c.implicit.solver != "auto" && c.implicit.solver != "ldlt" && c.implicit.solver != "amg" &&
-      c.implicit.solver != "cg" && c.implicit.solver != "cg-ic")
-    throw InputError("", "--solver", c.implicit.solver, "expected auto, ldlt, amg, cg or cg-ic");
-  // Every option is checked here, whatever the method: a value that is out of range is refused,
-  // never ignored.
+namespace {
+// Every option of tomodem-young, whatever the method: out of range is refused, never ignored.
+void check_young_options(const YoungConfig& c) {
+  if (c.axis < 0 || c.axis > 2) throw InputError("", "--axis", std::to_string(c.axis), "expected x, y or z");
   require_range("--tolerance", c.implicit.tolerance, 0, true, 1, true, "relative residual");
   if (c.implicit.max_iterations < 0)
     throw InputError("", "--max-iterations", std::to_string(c.implicit.max_iterations), "must be >= 0 (0: automatic)");
@@ -216,10 +221,6 @@ std::string run_young(const YoungConfig& c) {
   require_range("--local-damping", c.explicit_.local_damping, 0, false, 1, true, "Cundall local damping");
   require_range("--relax-ratio", c.explicit_.relax_ratio, 0, true, 1, true, "unbalanced-force ratio");
   require_range("--timestep-fraction", c.explicit_.timestep_fraction, 0, true, 1, false, "of the critical step");
-  if (c.explicit_.loading != "stress" && c.explicit_.loading != "strain")
-    throw InputError("", "--loading", c.explicit_.loading, "expected 'stress' or 'strain'");
-  if (c.explicit_.protocol != "rate" && c.explicit_.protocol != "increments")
-    throw InputError("", "--protocol", c.explicit_.protocol, "expected 'rate' or 'increments'");
   if (c.explicit_.points < 2 || c.explicit_.points > 100000)
     throw InputError("", "--points", std::to_string(c.explicit_.points),
                      "must lie in [2, 100000] (at least 2 measurements are needed)");
@@ -227,101 +228,109 @@ std::string run_young(const YoungConfig& c) {
     throw InputError("", "--max-steps", std::to_string(c.explicit_.max_steps), "must be >= 1");
   check_material_overrides(c.youngs_modulus, c.poisson_ratio, c.density);
   check_law_options(c.law);
-  if (!c.output_csv.empty() && c.method == "implicit")
+  if (!c.output_csv.empty() && c.method == YoungMethod::implicit)
     throw InputError("", "--curve", c.output_csv, "the stress-strain curve comes from --method explicit or both");
   check_outputs({c.input}, {{"--json", c.json}, {"--curve", c.output_csv}});
+}
 
+json implicit_json(const ImplicitResult& ir, double tolerance) {
+  return {{"E", ir.E},
+          {"nu", ir.nu},
+          {"E_axes", ir.E_axes},
+          {"nu_axes", ir.nu_axes},
+          {"E_error", ir.E_error},
+          {"C", tensor_json(ir.C, ir.full_tensor)},
+          {"residual", ir.residual},
+          {"solver", to_string(ir.solver)},
+          {"tolerance", tolerance},
+          {"iterations", ir.iterations},
+          {"multigrid_levels", ir.levels},
+          {"operator_complexity", ir.operator_complexity},
+          {"setup_s", ir.setup_s},
+          {"dofs", ir.dofs},
+          {"particles_used", ir.particles_used},
+          {"particles_removed", ir.particles_removed},
+          {"bonds_used", ir.bonds_used},
+          {"bonds_removed", ir.bonds_removed},
+          {"prestressed_bonds", ir.prestress_bonds},
+          {"assembly_s", ir.assembly_s},
+          {"solve_s", ir.solve_s},
+          {"wall_time_s", ir.wall_time_s}};
+}
+
+json explicit_json(const ExplicitResult& er, const ExplicitOptions& eo) {
+  return {{"E", er.E},
+          {"nu", er.nu},
+          {"E_error", er.E_error},
+          {"E_error_spread", er.E_error_spread},
+          {"E_error_rate", er.E_error_rate},
+          {"E_error_strain", er.E_error_strain},
+          {"E_half_time", er.E_half_time},
+          {"rate_check", eo.rate_check},
+          {"nu_error", er.nu_error},
+          {"loading", to_string(eo.loading)},
+          {"protocol", to_string(eo.protocol)},
+          {"strain", eo.strain},
+          {"strain_rate", er.strain_rate},
+          {"transits", eo.transits},
+          {"transit_time_s", er.transit_time},
+          {"time_step_s", er.time_step},
+          {"steps", er.steps},
+          {"inertial_number", er.inertial_number},
+          {"unbalanced_force_ratio", er.unbalanced_force_ratio},
+          {"lateral_stress_ratio", er.lateral_stress_ratio},
+          {"broken_bonds", er.broken_bonds},
+          {"curve", {{"strain", er.strain}, {"stress_Pa", er.stress}, {"lateral_strain", er.lateral_strain}}},
+          {"wall_time_s", er.wall_time_s}};
+}
+}  // namespace
+
+std::string run_young(const YoungConfig& c) {
+  check_young_options(c);
+  const int axis = c.axis;
   Network net = read_network(c.input);
   Packing& p = net.packing;
   if (p.bonds.size() == 0)
     throw InputError(c.input, "/bonds", "missing", "a packing without bonds: make the network with tomodem-bond first");
   override_materials(p, c.youngs_modulus, c.poisson_ratio, c.density);  // every phase
-  const bool want_explicit = c.method != "implicit", want_implicit = c.method != "explicit";
+  const bool want_explicit = c.method != YoungMethod::implicit, want_implicit = c.method != YoungMethod::explicit_test;
   const std::vector<dem::BondLaw> laws = bond_laws(p, c.input, c.law, want_explicit);
-  json out = {{"tool", "tomodem-young"}, {"version", version_string()}, {"input", c.input},
-              {"method", c.method},      {"axis", c.axis},                {"n_particles", p.particles.size()},
-              {"n_bonds", p.bonds.size()}};
+  Summary out("tomodem-young");
+  out.input(c.input);
+  out.n_particles(p.particles.size());
+  out["method"] = to_string(c.method);
+  out["axis"] = name_of(kAxisNames, c.axis);
+  out["n_bonds"] = p.bonds.size();
   ImplicitResult ir;
   ExplicitResult er;
   if (want_implicit) {
     ImplicitOptions io = c.implicit;
     io.axis = axis;
-    info("implicit: assembling and solving (" + io.solver + ")");
+    info("implicit: assembling and solving (" + std::string(to_string(io.solver)) + ")");
     ir = solve_implicit(p, net.image, bond_stiffnesses(p, laws), io, c.input);
-    out["implicit"] = {{"E", ir.E},
-                       {"nu", ir.nu},
-                       {"E_axes", ir.E_axes},
-                       {"nu_axes", ir.nu_axes},
-                       {"E_error", ir.E_error},
-                       {"C", tensor_json(ir.C, ir.full_tensor)},
-                       {"residual", ir.residual},
-                       {"solver", ir.solver},
-                       {"tolerance", c.implicit.tolerance},
-                       {"iterations", ir.iterations},
-                       {"multigrid_levels", ir.levels},
-                       {"operator_complexity", ir.operator_complexity},
-                       {"setup_s", ir.setup_s},
-                       {"dofs", ir.dofs},
-                       {"particles_used", ir.particles_used},
-                       {"particles_removed", ir.particles_removed},
-                       {"bonds_used", ir.bonds_used},
-                       {"bonds_removed", ir.bonds_removed},
-                       {"prestressed_bonds", ir.prestress_bonds},
-                       {"assembly_s", ir.assembly_s},
-                       {"solve_s", ir.solve_s},
-                       {"wall_time_s", ir.wall_time_s}};
+    out["implicit"] = implicit_json(ir, c.implicit.tolerance);
   }
   if (want_explicit) {
     ExplicitOptions eo = c.explicit_;
     eo.axis = axis;
-    info("explicit: quasi-static " + eo.loading + " test (" + eo.protocol + ")");
+    info("explicit: quasi-static " + std::string(to_string(eo.loading)) + " test (" + to_string(eo.protocol) + ")");
     er = run_explicit(p, net.image, laws, eo, c.input);
-    out["explicit"] = {{"E", er.E},
-                       {"nu", er.nu},
-                       {"E_error", er.E_error},
-                       {"E_error_spread", er.E_error_spread},
-                       {"E_error_rate", er.E_error_rate},
-                       {"E_error_strain", er.E_error_strain},
-                       {"E_half_time", er.E_half_time},
-                       {"rate_check", eo.rate_check},
-                       {"nu_error", er.nu_error},
-                       {"loading", eo.loading},
-                       {"protocol", eo.protocol},
-                       {"strain", eo.strain},
-                       {"strain_rate", er.strain_rate},
-                       {"transits", eo.transits},
-                       {"transit_time_s", er.transit_time},
-                       {"time_step_s", er.time_step},
-                       {"steps", er.steps},
-                       {"inertial_number", er.inertial_number},
-                       {"unbalanced_force_ratio", er.unbalanced_force_ratio},
-                       {"lateral_stress_ratio", er.lateral_stress_ratio},
-                       {"broken_bonds", er.broken_bonds},
-                       {"curve", {{"strain", er.strain}, {"stress_Pa", er.stress}, {"lateral_strain", er.lateral_strain}}},
-                       {"wall_time_s", er.wall_time_s}};
+    out["explicit"] = explicit_json(er, eo);
     if (!c.output_csv.empty()) {
       std::vector<std::vector<double>> rows;
       for (std::size_t k = 0; k < er.strain.size(); ++k) rows.push_back({er.strain[k], er.lateral_strain[k], er.stress[k]});
       write_text_atomic(c.output_csv, csv_table({"axial_strain", "lateral_strain", "axial_stress_Pa"}, rows));
+      out.output("curve", c.output_csv);
     }
   }
-  if (want_implicit) {
-    out["E"] = ir.E;
-    out["nu"] = ir.nu;
-    out["E_error"] = ir.E_error;
-    out["C"] = tensor_json(ir.C, ir.full_tensor);
-  } else {
-    out["E"] = er.E;
-    out["nu"] = er.nu;
-    out["E_error"] = er.E_error;
-    out["C"] = nullptr;
-  }
+  out["E"] = want_implicit ? ir.E : er.E;
+  out["nu"] = want_implicit ? ir.nu : er.nu;
+  out["E_error"] = want_implicit ? ir.E_error : er.E_error;
+  out["C"] = want_implicit ? tensor_json(ir.C, ir.full_tensor) : json(nullptr);
   if (want_implicit && want_explicit) out["explicit_vs_implicit"] = (er.E - ir.E) / ir.E;
-  out["units"] = {{"E", "Pa"}, {"C", "Pa (Voigt xx, yy, zz, yz, xz, xy; engineering shear strains)"}};
-  out["wall_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const std::string text = out.dump(2) + "\n";
-  if (!c.json.empty() && c.json != "-") write_text_atomic(c.json, text);
-  return text;
+  out.unit("E", "Pa");
+  out.unit("C", "Pa (Voigt xx, yy, zz, yz, xz, xy; engineering shear strains)");
+  return out.text();
 }
 
 }  // namespace tomodem::mechanics

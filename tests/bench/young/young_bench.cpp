@@ -26,7 +26,7 @@ namespace {
 ImplicitResult implicit(const Network& net, const std::vector<dem::BondLaw>& laws, const std::string& solver,
                         double tol, bool tensor = true) {
   ImplicitOptions o;
-  o.solver = solver;
+  o.solver = *parse_elastic_solver(solver);
   o.tolerance = tol;
   o.full_tensor = tensor;
   return solve_implicit(net.packing, net.image, bond_stiffnesses(net.packing, laws), o);

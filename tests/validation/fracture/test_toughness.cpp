@@ -20,7 +20,7 @@ namespace {
 
 FractureSample centre(const Network& net, double a_over_w) {
   CrackOptions c;
-  c.geometry = "centre";
+  c.geometry = CrackGeometry::centre;
   c.a_over_w = a_over_w;
   return make_sample(net, c);
 }

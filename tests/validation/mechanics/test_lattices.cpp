@@ -39,7 +39,7 @@ TEST(ImplicitLattice, SimpleCubicNormalBondsHasKnOver2R) {
   for (bool shear : {false, true}) {
     Sc sc(shear);
     ImplicitOptions o;
-    o.solver = "ldlt";
+    o.solver = ElasticSolver::ldlt;
     const ImplicitResult r = solve_implicit(sc.net.packing, sc.net.image, bond_stiffnesses(sc.net.packing, sc.laws), o);
     const double E = sc.kn() / (2 * sc.R);
     std::printf("SC implicit (shear %d): E/E_expected - 1 = %.3e, nu = %.3e, C44/E = %.3e, %.3f s\n", shear,
@@ -62,7 +62,7 @@ TEST(ImplicitLattice, SimpleCubicByConjugateGradient) {
   Sc sc(true);
   for (const char* solver : {"cg", "amg"}) {
     ImplicitOptions o;
-    o.solver = solver;
+    o.solver = *parse_elastic_solver(solver);
     o.tolerance = 1e-10;
     const ImplicitResult r = solve_implicit(sc.net.packing, sc.net.image, bond_stiffnesses(sc.net.packing, sc.laws), o);
     std::printf("SC %s: E/E_expected - 1 = %.3e, %ld iterations, %d levels\n", solver, r.E / (sc.kn() / (2 * sc.R)) - 1,
@@ -79,7 +79,7 @@ TEST(StiffnessSystem, SimpleCubicBondForcesUnderStrain) {
   Sc sc(true);
   BondStiffnesses k = bond_stiffnesses(sc.net.packing, sc.laws);
   ImplicitOptions o;
-  o.solver = "amg";
+  o.solver = ElasticSolver::amg;
   o.tolerance = 1e-12;
   StiffnessSystem sys(sc.net.packing, sc.net.image, k, o);
   const double eps = 1e-3, kn = sc.kn();

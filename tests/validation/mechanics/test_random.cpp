@@ -13,7 +13,7 @@ namespace {
 double implicit_E(const Network& net, const std::vector<dem::BondLaw>& laws, const std::string& solver = "ldlt",
                   ImplicitResult* out = nullptr) {
   ImplicitOptions o;
-  o.solver = solver;
+  o.solver = *parse_elastic_solver(solver);
   o.tolerance = 1e-10;
   const ImplicitResult r = solve_implicit(net.packing, net.image, bond_stiffnesses(net.packing, laws), o);
   if (out) *out = r;

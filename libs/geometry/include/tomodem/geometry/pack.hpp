@@ -5,9 +5,12 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
+#include "tomodem/core/names.hpp"
 #include "tomodem/core/packing.hpp"
 #include "tomodem/dem/model.hpp"
 #include "tomodem/geometry/psd.hpp"
@@ -25,10 +28,28 @@ struct PhaseSpec {
 
 enum class Target { pressure, solid_fraction };
 
+/// Initial arrangement: random insertion, or a lattice (one monodisperse phase).
+enum class Arrangement : uint8_t { random, simple_cubic, bcc, fcc };
+inline constexpr NameTable<Arrangement, 4> kArrangementNames = {{{Arrangement::random, "random"},
+                                                                {Arrangement::simple_cubic, "simple_cubic"},
+                                                                {Arrangement::bcc, "bcc"},
+                                                                {Arrangement::fcc, "fcc"}}};
+inline const char* to_string(Arrangement a) { return name_of(kArrangementNames, a); }
+inline std::optional<Arrangement> parse_arrangement(std::string_view name) { return value_of(kArrangementNames, name); }
+
+/// Densification protocol. quasistatic: compress in steps, each relaxed by FIRE energy
+/// minimisation (pressure targets bracket p(φ)); dynamic: compression at a strain rate, stress
+/// servo, relaxation.
+enum class PackMethod : uint8_t { quasistatic, dynamic };
+inline constexpr NameTable<PackMethod, 2> kPackMethodNames = {
+    {{PackMethod::quasistatic, "quasistatic"}, {PackMethod::dynamic, "dynamic"}}};
+inline const char* to_string(PackMethod m) { return name_of(kPackMethodNames, m); }
+inline std::optional<PackMethod> parse_pack_method(std::string_view name) { return value_of(kPackMethodNames, name); }
+
 struct PackSpec {
   std::vector<PhaseSpec> phases;
   std::size_t n_particles = 1000;      ///< total count (approximate: phases are rounded)
-  std::string arrangement = "random";  ///< random, simple_cubic, bcc, fcc
+  Arrangement arrangement = Arrangement::random;
   double initial_solid_fraction = 0.25;  ///< random insertion density
   // Contact physics of the densification.
   dem::NormalLaw normal = dem::NormalLaw::hertz;
@@ -40,9 +61,7 @@ struct PackSpec {
   /// Bond radius of aggregate members, fraction of the smaller radius of the pair.
   double aggregate_bond_radius = 0.3;
   // Protocol.
-  /// "quasistatic": compress in steps, each relaxed by FIRE energy minimisation (pressure
-  /// targets bracket p(φ)); "dynamic": compression at a strain rate, stress servo, relaxation.
-  std::string method = "quasistatic";
+  PackMethod method = PackMethod::quasistatic;
   Target target = Target::pressure;
   double target_pressure = 0;          ///< Pa
   double target_solid_fraction = 0;
@@ -90,7 +109,7 @@ struct PackReport {
   double local_solid_fraction_mean = 0, local_solid_fraction_std = 0;
   std::vector<double> local_solid_fraction_histogram;  ///< 20 bins over [0, 1]
   std::string neighbor_search;          ///< "hgrid" or "linked cells"
-  std::string method;                   ///< quasistatic or dynamic
+  std::string method;                   ///< quasistatic, dynamic or lattice (a lattice arrangement)
   /// Quasistatic pressure target: φ extrapolated to p → 0 along the last two relaxed jammed
   /// states (p^(1/(α−1)) is linear in φ near jamming, α = 2 linear law, 5/2 Hertz); NaN if
   /// fewer than two jammed states were relaxed.

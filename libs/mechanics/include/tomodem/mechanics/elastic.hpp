@@ -2,10 +2,14 @@
 // Elastic properties of a bonded network on the periodic cell, two ways (docs/young.md):
 // implicit (assemble the stiffness matrix, solve) and explicit (quasi-static DEM test).
 #include <array>
+#include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
+#include "tomodem/core/names.hpp"
 #include "tomodem/mechanics/network.hpp"
 
 namespace tomodem::mechanics {
@@ -17,12 +21,23 @@ using Matrix6 = std::array<std::array<double, 6>, 6>;
 /// nu = mean of the two lateral ratios.
 void uniaxial_from_tensor(const Matrix6& C, int axis, double& E, double& nu);
 
+/// Linear solver of the implicit test: ldlt (Eigen SimplicialLDLT, exact), amg (conjugate
+/// gradients preconditioned by smoothed-aggregation multigrid with the rigid-body modes,
+/// tomodem/linalg/amg.hpp), cg (Jacobi), cg-ic (Eigen incomplete Cholesky), auto (ldlt below
+/// 2 000 particles: its fill-in grows fast in 3-D; amg above).
+enum class ElasticSolver : uint8_t { automatic, ldlt, amg, cg, cg_ic };
+inline constexpr NameTable<ElasticSolver, 5> kElasticSolverNames = {{{ElasticSolver::automatic, "auto"},
+                                                                    {ElasticSolver::ldlt, "ldlt"},
+                                                                    {ElasticSolver::amg, "amg"},
+                                                                    {ElasticSolver::cg, "cg"},
+                                                                    {ElasticSolver::cg_ic, "cg-ic"}}};
+inline const char* to_string(ElasticSolver s) { return name_of(kElasticSolverNames, s); }
+inline std::optional<ElasticSolver> parse_elastic_solver(std::string_view name) {
+  return value_of(kElasticSolverNames, name);
+}
+
 struct ImplicitOptions {
-  /// ldlt (Eigen SimplicialLDLT, exact), amg (conjugate gradients preconditioned by smoothed-
-  /// aggregation multigrid with the rigid-body modes, tomodem/linalg/amg.hpp), cg (Jacobi), cg-ic
-  /// (Eigen incomplete Cholesky), auto (ldlt below 2 000 particles: its fill-in grows fast in 3-D;
-  /// amg above).
-  std::string solver = "auto";
+  ElasticSolver solver = ElasticSolver::automatic;
   double tolerance = 1e-10;     ///< relative residual of the iterative solves
   int max_iterations = 0;       ///< iterative cap (0: 20 × DOFs^(1/3) × 100)
   bool full_tensor = true;      ///< six strain cases; false: the three normal ones (E, ν only)
@@ -40,7 +55,7 @@ struct ImplicitResult {
   int levels = 0;               ///< amg: multigrid levels
   double operator_complexity = 0;  ///< amg: Σ nonzeros of all levels / nonzeros of K
   double setup_s = 0;           ///< factorisation or preconditioner set-up
-  std::string solver;
+  ElasticSolver solver = ElasticSolver::ldlt;  ///< the one used (auto resolved)
   long dofs = 0, particles_used = 0, bonds_used = 0;
   long particles_removed = 0, bonds_removed = 0;  ///< outside the load-bearing cluster
   double assembly_s = 0, solve_s = 0, wall_time_s = 0;
@@ -94,9 +109,25 @@ class StiffnessSystem {
 ImplicitResult solve_implicit(const Packing& p, const std::vector<Image>& image, const BondStiffnesses& k,
                               const ImplicitOptions& o, const std::string& file = "");
 
+/// Lateral condition of the explicit test: uniaxial stress (lateral servo at 0) or uniaxial strain.
+enum class UniaxialLoading : uint8_t { stress, strain };
+inline constexpr NameTable<UniaxialLoading, 2> kUniaxialLoadingNames = {
+    {{UniaxialLoading::stress, "stress"}, {UniaxialLoading::strain, "strain"}}};
+inline const char* to_string(UniaxialLoading l) { return name_of(kUniaxialLoadingNames, l); }
+inline std::optional<UniaxialLoading> parse_uniaxial_loading(std::string_view name) {
+  return value_of(kUniaxialLoadingNames, name);
+}
+
+/// How the explicit test loads: a constant slow rate (slopes of the curve) or relaxed increments.
+enum class LoadProtocol : uint8_t { rate, increments };
+inline constexpr NameTable<LoadProtocol, 2> kLoadProtocolNames = {
+    {{LoadProtocol::rate, "rate"}, {LoadProtocol::increments, "increments"}}};
+inline const char* to_string(LoadProtocol p) { return name_of(kLoadProtocolNames, p); }
+inline std::optional<LoadProtocol> parse_load_protocol(std::string_view name) { return value_of(kLoadProtocolNames, name); }
+
 struct ExplicitOptions {
-  std::string loading = "stress";    ///< stress: uniaxial stress (lateral servo at 0); strain: uniaxial strain
-  std::string protocol = "rate";     ///< rate: constant slow rate, slopes; increments: relaxed increments
+  UniaxialLoading loading = UniaxialLoading::stress;
+  LoadProtocol protocol = LoadProtocol::rate;
   int axis = 2;
   double strain = 1e-4;              ///< total axial strain (tension)
   double transits = 50;              ///< loading time in elastic-wave transits of the cell (rate = strain / time)

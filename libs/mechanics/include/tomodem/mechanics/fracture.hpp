@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "tomodem/dem/bonds.hpp"
@@ -15,9 +16,18 @@
 
 namespace tomodem::mechanics {
 
+/// Centre: a crack of length 2a in the middle; edge: a notch of length a at x = 0.
+enum class CrackGeometry : uint8_t { centre, edge };
+inline constexpr NameTable<CrackGeometry, 2> kCrackGeometryNames = {
+    {{CrackGeometry::centre, "centre"}, {CrackGeometry::edge, "edge"}}};
+inline const char* to_string(CrackGeometry g) { return name_of(kCrackGeometryNames, g); }
+inline std::optional<CrackGeometry> parse_crack_geometry(std::string_view name) {
+  return value_of(kCrackGeometryNames, name);
+}
+
 /// Axes of the test: load along z, crack front along y (periodic), crack growth along x.
 struct CrackOptions {
-  std::string geometry = "centre";  ///< centre: crack of length 2a in the middle; edge: notch of length a at x = 0
+  CrackGeometry geometry = CrackGeometry::centre;
   double a_over_w = 0.3;            ///< a / W (a the half length of a centre crack)
   double grip = 0;                  ///< grip layer thickness, m (0: one mean particle diameter)
   double plane_offset = 0;          ///< crack plane above the middle of the grips, as a fraction of their distance
@@ -34,7 +44,7 @@ struct FractureSample {
   std::vector<BondRole> bond_role;
   std::vector<uint8_t> crosses_plane;  ///< per bond: a load bond crossing the crack plane (the ligament)
   std::vector<ParticleRole> role;     ///< removed: not connected to a grip by intact bonds
-  std::string geometry;
+  CrackGeometry geometry = CrackGeometry::centre;
   double W = 0, B = 0, H = 0;         ///< width (x), thickness (y, periodic), grip distance (z), m
   double a = 0;                       ///< crack length in K = Y σ sqrt(π a) (half length for centre), m
   double crack_z = 0, crack_x0 = 0, crack_x1 = 0;  ///< crack plane and its extent along x, m
@@ -49,9 +59,17 @@ FractureSample make_sample(const Network& net, const CrackOptions& o, const std:
 
 /// Geometry factor Y(a/W) of docs/physics.md#fracture-toughness (Tada, Paris & Irwin): centre crack sqrt(sec(π a/W)),
 /// edge notch 1.12 − 0.231 α + 10.55 α² − 21.72 α³ + 30.39 α⁴.
-double geometry_factor(const std::string& geometry, double a_over_w);
+double geometry_factor(CrackGeometry geometry, double a_over_w);
 /// d ln(K)/d a at fixed stress (for the crack-length uncertainty of K_IC).
-double dlnK_da(const std::string& geometry, double a, double W);
+double dlnK_da(CrackGeometry geometry, double a, double W);
+
+/// The failure criteria a fracture test takes (dem::BondFailure::none is no test).
+inline constexpr NameTable<dem::BondFailure, 2> kFailureCriterionNames = {
+    {{dem::BondFailure::lefm, "lefm"}, {dem::BondFailure::stress, "stress"}}};
+inline const char* to_string_criterion(dem::BondFailure f) { return name_of(kFailureCriterionNames, f); }
+inline std::optional<dem::BondFailure> parse_failure_criterion(std::string_view name) {
+  return value_of(kFailureCriterionNames, name);
+}
 
 /// Bond strengths: the criterion and its parameters (per phase pair they come from the laws).
 struct FailureOptions {
@@ -76,8 +94,17 @@ struct FractureEvent {
   Vec3 position;
 };
 
+/// How the sample is loaded: sequentially linear (direct solver), explicit DEM test, or both.
+enum class FractureMethod : uint8_t { sla, explicit_test, both };
+inline constexpr NameTable<FractureMethod, 3> kFractureMethodNames = {
+    {{FractureMethod::sla, "sla"}, {FractureMethod::explicit_test, "explicit"}, {FractureMethod::both, "both"}}};
+inline const char* to_string(FractureMethod m) { return name_of(kFractureMethodNames, m); }
+inline std::optional<FractureMethod> parse_fracture_method(std::string_view name) {
+  return value_of(kFractureMethodNames, name);
+}
+
 struct FractureResult {
-  std::string method;
+  FractureMethod method = FractureMethod::sla;  ///< sla or explicit_test
   std::vector<FracturePoint> curve;
   std::vector<FractureEvent> events;
   double peak_force = 0, peak_displacement = 0, peak_stress = 0;
@@ -92,6 +119,12 @@ struct FractureResult {
   // SLA
   long solves = 0, factorizations = 0, fragments_removed = 0, closed_broken_bonds = 0;
   double initial_stiffness = 0;      ///< N/m, uncracked-by-failure sample
+  std::string solver;                ///< ldlt | pcg
+  long cg_iterations = 0, cg_iterations_max = 0, cg_iterations_fresh = 0;  ///< PCG: total, largest, first (cold) solve
+  long amg_rebuilds = 0;             ///< PCG: multigrid hierarchies built after the first
+  long active_set_iterations = 0;    ///< extra solves for the contact of broken faces
+  long failure_groups = 0;           ///< solves that broke bonds (< events when several break per solve)
+  double solver_setup_s = 0;         ///< factorisations or multigrid set-ups, s
   // Explicit
   double strain_rate = 0, time_step = 0, transit_time = 0, transits_to_peak = 0, reference_strain = 0;
   long steps = 0;
@@ -100,13 +133,36 @@ struct FractureResult {
   double external_work = 0;
 };
 
+/// Linear solver of the SLA: the direct LDLT (Woodbury updates between factorisations) or
+/// multigrid-preconditioned CG (docs/fracture.md#solvers); automatic picks by the particle count.
+enum class SlaSolver : uint8_t { automatic, ldlt, pcg };
 struct SlaOptions {
   double stop_fraction = 0.2;   ///< stop once the load after the peak falls below this × peak (0: until cut through)
   long max_breaks = 1'000'000;
   int woodbury_bonds = 48;      ///< broken bonds handled by low-rank updates before refactorising
+  SlaSolver solver = SlaSolver::automatic;
+  long pcg_from_particles = 3000;  ///< automatic: PCG from this many sample particles on
+  double cg_tolerance = 1e-8;   ///< PCG: relative residual |f − K x| / |f|
+  double rebuild_factor = 2;    ///< PCG: rebuild the multigrid when a solve needs this × the iterations of a fresh one
+  /// Several failures per solve: every bond whose critical opening is within (1 + this) of the
+  /// smallest breaks at the smallest (0: one bond per solve).
+  double event_tolerance = 0;
+  bool contact = true;          ///< broken (and pre-crack) bonds whose faces are pushed together carry normal compression
 };
 FractureResult run_sla(const FractureSample& s, const std::vector<dem::BondLaw>& laws, const FailureOptions& f,
                        const SlaOptions& o);
+
+/// The linear response of the sample at unit grip opening with the given load bonds broken
+/// (contact of their faces as `o.contact`): what one SLA step solves, for tests and studies.
+struct SlaResponse {
+  double stiffness = 0;              ///< N/m: grip force per unit opening (Σ k e² over the springs)
+  std::vector<double> normal_force;  ///< per bond, N per m of opening (+ tension): intact bonds and closed faces
+  long contacts = 0;                 ///< broken bonds whose faces touch (carrying compression)
+  int active_set_iterations = 0;
+  long cg_iterations = 0;
+};
+SlaResponse sla_response(const FractureSample& s, const std::vector<dem::BondLaw>& laws, const FailureOptions& f,
+                         const SlaOptions& o, const std::vector<int32_t>& broken);
 
 struct ExplicitFractureOptions {
   double transits = 200;        ///< loading time to the reference strain, in elastic-wave transits of the sample
@@ -130,8 +186,7 @@ void finish_result(const FractureSample& s, FractureResult& r, double dynamic_er
 /// The tool's configuration (mirrors tomodem-young's).
 struct FractureConfig {
   std::string input, json, curve_csv, plot, map;
-  std::string method = "sla";            ///< sla | explicit | both
-  std::string criterion = "lefm";        ///< lefm | stress
+  FractureMethod method = FractureMethod::sla;
   CrackOptions crack;
   LawOptions law;
   FailureOptions failure;

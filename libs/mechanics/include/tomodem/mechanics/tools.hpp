@@ -1,7 +1,9 @@
 #pragma once
 // The bodies of tomodem-bond and tomodem-young (main.cpp only parses the command line).
+#include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "tomodem/mechanics/bonding.hpp"
@@ -11,7 +13,7 @@ namespace tomodem::mechanics {
 
 struct BondConfig {
   std::string input, output, json;
-  std::string rule = "overlap";             ///< ratio | overlap | density | sinter
+  NeckRule rule = NeckRule::overlap;
   std::string sinter_config;                ///< rule sinter: sintering settings (docs/sintering.md)
   int threads = 0;                          ///< rule sinter: threads of the run (0: OpenMP's default)
   double gap_tolerance = 0, neck_ratio = 0.1, min_neck_ratio = 0.01, target_density = 0;
@@ -22,10 +24,17 @@ struct BondConfig {
 /// Returns the JSON summary (also written to `json` when set).
 std::string run_bond(const BondConfig& c);
 
+/// What tomodem-young runs: the implicit solve, the explicit DEM test, or both (cross-check).
+enum class YoungMethod : uint8_t { implicit, explicit_test, both };
+inline constexpr NameTable<YoungMethod, 3> kYoungMethodNames = {
+    {{YoungMethod::implicit, "implicit"}, {YoungMethod::explicit_test, "explicit"}, {YoungMethod::both, "both"}}};
+inline const char* to_string(YoungMethod m) { return name_of(kYoungMethodNames, m); }
+inline std::optional<YoungMethod> parse_young_method(std::string_view name) { return value_of(kYoungMethodNames, name); }
+
 struct YoungConfig {
   std::string input, json, output_csv;
-  std::string method = "implicit";          ///< implicit | explicit | both
-  std::string axis = "z";
+  YoungMethod method = YoungMethod::implicit;
+  int axis = 2;                             ///< loading axis of E and ν: 0 x, 1 y, 2 z (kAxisNames)
   LawOptions law;
   ImplicitOptions implicit;
   ExplicitOptions explicit_;
