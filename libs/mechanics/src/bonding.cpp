@@ -7,6 +7,7 @@
 
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
+#include "tomodem/core/tool.hpp"
 #include "tomodem/dem/sinter.hpp"
 
 namespace tomodem::mechanics {
@@ -32,100 +33,103 @@ double relative_density(const Packing& p) {
   return density_of(p, neighbor_pairs(p, 0), 1.0);
 }
 
-BondingReport bond_network(Network& net, const BondingOptions& o) {
+namespace {
+
+/// Rule sinter: the packing is sintered to the target density (docs/sintering.md) and its necks
+/// become the bonds.
+void bond_by_sintering(Network& net, const BondingOptions& o, BondingReport& rep) {
   Packing& p = net.packing;
-  const std::size_t n = p.particles.size();
-  BondingReport rep;
-  const int nph = p.materials.empty() ? 1 + (n ? *std::max_element(p.particles.phase.begin(), p.particles.phase.end()) : 0)
-                                      : int(p.materials.size());
-  std::vector<char> excluded(std::size_t(nph) * nph, 0);
-  std::vector<double> ratio(std::size_t(nph) * nph, o.neck_ratio);
-  for (auto [a, b] : o.excluded)
-    if (a >= 0 && b >= 0 && a < nph && b < nph) excluded[a * nph + b] = excluded[b * nph + a] = 1;
-  for (auto [ab, r] : o.pair_ratio)
-    if (ab.first >= 0 && ab.second >= 0 && ab.first < nph && ab.second < nph)
-      ratio[ab.first * nph + ab.second] = ratio[ab.second * nph + ab.first] = r;
+  const double v0 = p.cell.volume();
+  dem::SinteredPacking s = dem::sinter_packing(p, o.source, o.sinter_file, o.target_density, o.threads, !quiet());  // progress unless -q
+  p.particles.position = std::move(s.packing.particles.position);
+  p.particles.radius = std::move(s.packing.particles.radius);
+  p.particles.velocity.clear();
+  p.particles.angular_velocity.clear();
+  p.cell = s.packing.cell;
+  p.bonds = std::move(s.packing.bonds);
+  net.image.clear();
+  for (const Vec3& im : s.bond_image)
+    net.image.push_back({int32_t(std::lround(im.x)), int32_t(std::lround(im.y)), int32_t(std::lround(im.z))});
+  for (std::size_t b = 0; b < p.bonds.size(); ++b)
+    rep.neck_ratio.push_back(p.bonds.radius[b] / harmonic_radius(p.particles.radius[std::size_t(p.bonds.i[b])],
+                                                                 p.particles.radius[std::size_t(p.bonds.j[b])]));
+  rep.scale = std::cbrt(p.cell.volume() / v0);
+  rep.sintering_time_s = s.report.final.time;
+  rep.sintering_steps = s.report.steps;
+}
 
-  rep.initial_relative_density = relative_density(p);
-
-  if (o.rule == NeckRule::sinter) {
-    // Sintering to the target density (docs/sintering.md); its necks become the bonds.
-    const double v0 = p.cell.volume();
-    dem::SinteredPacking s = dem::sinter_packing(p, o.source, o.sinter_file, o.target_density, o.threads);
-    p.particles.position = std::move(s.packing.particles.position);
-    p.particles.radius = std::move(s.packing.particles.radius);
-    p.particles.velocity.clear();
-    p.particles.angular_velocity.clear();
-    p.cell = s.packing.cell;
-    p.bonds = std::move(s.packing.bonds);
-    net.image.clear();
-    for (const Vec3& im : s.bond_image)
-      net.image.push_back({int32_t(std::lround(im.x)), int32_t(std::lround(im.y)), int32_t(std::lround(im.z))});
-    for (std::size_t b = 0; b < p.bonds.size(); ++b)
-      rep.neck_ratio.push_back(p.bonds.radius[b] / harmonic_radius(p.particles.radius[std::size_t(p.bonds.i[b])],
-                                                                   p.particles.radius[std::size_t(p.bonds.j[b])]));
-    rep.scale = std::cbrt(p.cell.volume() / v0);
-    rep.sintering_time_s = s.report.final.time;
-    rep.sintering_steps = s.report.steps;
-    p.contacts = ContactTable{};
-    rep.n_bonds = long(p.bonds.size());
-    rep.bonds_per_particle = n ? 2.0 * double(rep.n_bonds) / double(n) : 0;
-    rep.relative_density = relative_density(p);  // the grown radii: the sintering run's density (same lens formula)
-    rep.clusters = find_clusters(p, net.image);
-    return rep;
+/// Rule density: homothetic densification, centres (and the cell) moving towards each other by a
+/// factor s < 1 (radii fixed) until the union density reaches the target. Pairs are searched once
+/// at the largest reach the bracket needs.
+void densify_to_target(Packing& p, const BondingOptions& o, BondingReport& rep) {
+  if (!(o.target_density > rep.initial_relative_density && o.target_density < 1))
+    throw InputError("", "--target-density", value_text(o.target_density),
+                     "must lie between the packing's relative density (" + value_text(rep.initial_relative_density) +
+                         ") and 1");
+  // Without overlaps the density would grow as 1/s³; overlaps slow it down, so start there and
+  // lower the bracket until the target is passed.
+  double hi = 1.0, lo = std::cbrt(rep.initial_relative_density / o.target_density) * 0.98;
+  double rmax = 0;
+  for (double r : p.particles.radius) rmax = std::max(rmax, r);
+  std::vector<Neighbor> pairs;
+  for (;;) {
+    // Pairs that overlap at scale lo: d·lo < R_i + R_j, i.e. d < R_i + R_j + (R_i + R_j)(1/lo − 1).
+    pairs = neighbor_pairs(p, 2 * rmax * (1 / lo - 1) * 1.001);
+    if (density_of(p, pairs, lo) > o.target_density || lo < 0.3) break;
+    lo *= 0.97;
   }
-
-  if (o.rule == NeckRule::density) {
-    // Homothetic densification: centres (and the cell) move towards each other by a factor s < 1
-    // (radii fixed) until the union density reaches the target. Pairs are searched once at the
-    // largest reach the bracket needs.
-    if (!(o.target_density > rep.initial_relative_density && o.target_density < 1))
-      throw InputError("", "--target-density", value_text(o.target_density),
-                       "must lie between the packing's relative density (" + value_text(rep.initial_relative_density) +
-                           ") and 1");
-    // Without overlaps the density would grow as 1/s³; overlaps slow it down, so start there
-    // and lower the bracket until the target is passed.
-    double hi = 1.0, lo = std::cbrt(rep.initial_relative_density / o.target_density) * 0.98;
-    double rmax_d = 0;
-    for (double r : p.particles.radius) rmax_d = std::max(rmax_d, r);
-    std::vector<Neighbor> pairs;
-    for (;;) {
-      // Pairs that overlap at scale lo: d·lo < R_i + R_j, i.e. d < R_i + R_j + (R_i + R_j)(1/lo − 1).
-      pairs = neighbor_pairs(p, 2 * rmax_d * (1 / lo - 1) * 1.001);
-      if (density_of(p, pairs, lo) > o.target_density || lo < 0.3) break;
-      lo *= 0.97;
-    }
-    if (density_of(p, pairs, lo) <= o.target_density)
-      throw InputError("", "--target-density", value_text(o.target_density),
-                       "not reached by densifying this packing (pairwise lens formula)");
-    for (int it = 0; it < 100 && hi - lo > 1e-13; ++it) {
-      const double mid = 0.5 * (lo + hi);
-      (density_of(p, pairs, mid) > o.target_density ? lo : hi) = mid;
-    }
-    const double s = 0.5 * (lo + hi);
-    rep.scale = s;
-    for (Vec3& x : p.particles.position) x = p.cell.origin + s * (x - p.cell.origin);
-    p.cell.h *= s;
+  if (density_of(p, pairs, lo) <= o.target_density)
+    throw InputError("", "--target-density", value_text(o.target_density),
+                     "not reached by densifying this packing (pairwise lens formula)");
+  for (int it = 0; it < 100 && hi - lo > 1e-13; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (density_of(p, pairs, mid) > o.target_density ? lo : hi) = mid;
   }
+  const double s = 0.5 * (lo + hi);
+  rep.scale = s;
+  for (Vec3& x : p.particles.position) x = p.cell.origin + s * (x - p.cell.origin);
+  p.cell.h *= s;
+}
 
-  // Candidate pairs: in contact (overlapping, touching or within the gap tolerance).
+/// Per phase pair (nph × nph): excluded from bonding, and the neck ratio of rule ratio.
+struct PhaseRules {
+  int nph;
+  std::vector<char> excluded;
+  std::vector<double> ratio;
+  PhaseRules(const Packing& p, const BondingOptions& o) {
+    const std::size_t n = p.particles.size();
+    nph = p.materials.empty() ? 1 + (n ? *std::max_element(p.particles.phase.begin(), p.particles.phase.end()) : 0)
+                              : int(p.materials.size());
+    excluded.assign(std::size_t(nph) * std::size_t(nph), 0);
+    ratio.assign(std::size_t(nph) * std::size_t(nph), o.neck_ratio);
+    const auto ok = [&](int a, int b) { return a >= 0 && b >= 0 && a < nph && b < nph; };
+    for (auto [a, b] : o.excluded)
+      if (ok(a, b)) excluded[std::size_t(a * nph + b)] = excluded[std::size_t(b * nph + a)] = 1;
+    for (auto [ab, r] : o.pair_ratio)
+      if (ok(ab.first, ab.second))
+        ratio[std::size_t(ab.first * nph + ab.second)] = ratio[std::size_t(ab.second * nph + ab.first)] = r;
+  }
+};
+
+/// Rules ratio, overlap, density: a bond for every pair in contact (spatial::in_contact) whose
+/// phases are not excluded, neck radius by the rule.
+void bond_contacts(Network& net, const BondingOptions& o, BondingReport& rep) {
+  Packing& p = net.packing;
+  const PhaseRules rules(p, o);
   double rmax = 0;
   for (double r : p.particles.radius) rmax = std::max(rmax, r);
   const std::vector<Neighbor> pairs = neighbor_pairs(p, spatial::contact_reach(rmax, o.gap_tolerance));
   BondTable bt;
   net.image.clear();
   for (const Neighbor& q : pairs) {
-    const double ri = p.particles.radius[q.i], rj = p.particles.radius[q.j];
+    const double ri = p.particles.radius[std::size_t(q.i)], rj = p.particles.radius[std::size_t(q.j)];
     if (!spatial::in_contact(q.distance, ri, rj, o.gap_tolerance)) continue;
     const double rbar = harmonic_radius(ri, rj);
-    const int pa = p.particles.phase[q.i], pb = p.particles.phase[q.j];
-    if (pa < nph && pb < nph && excluded[pa * nph + pb]) continue;
-    double a;
-    if (o.rule == NeckRule::ratio) {
-      a = ratio[pa * nph + pb] * rbar;
-    } else {
-      a = std::max(intersection_radius(ri, rj, q.distance), o.min_neck_ratio * rbar);
-    }
+    const int pa = p.particles.phase[std::size_t(q.i)], pb = p.particles.phase[std::size_t(q.j)];
+    if (pa < rules.nph && pb < rules.nph && rules.excluded[std::size_t(pa * rules.nph + pb)]) continue;
+    const double a = o.rule == NeckRule::ratio
+                         ? rules.ratio[std::size_t(pa * rules.nph + pb)] * rbar
+                         : std::max(intersection_radius(ri, rj, q.distance), o.min_neck_ratio * rbar);
     bt.i.push_back(q.i);
     bt.j.push_back(q.j);
     bt.radius.push_back(a);
@@ -136,10 +140,25 @@ BondingReport bond_network(Network& net, const BondingOptions& o) {
     rep.neck_ratio.push_back(a / rbar);
   }
   p.bonds = std::move(bt);
+}
+
+}  // namespace
+
+BondingReport bond_network(Network& net, const BondingOptions& o) {
+  Packing& p = net.packing;
+  BondingReport rep;
+  rep.initial_relative_density = relative_density(p);
+  if (o.rule == NeckRule::sinter) {
+    bond_by_sintering(net, o, rep);
+  } else {
+    if (o.rule == NeckRule::density) densify_to_target(p, o, rep);
+    bond_contacts(net, o, rep);
+  }
   p.contacts = ContactTable{};  // contacts of the input describe another state
+  const std::size_t n = p.particles.size();
   rep.n_bonds = long(p.bonds.size());
   rep.bonds_per_particle = n ? 2.0 * double(rep.n_bonds) / double(n) : 0;
-  rep.relative_density = relative_density(p);
+  rep.relative_density = relative_density(p);  // rule sinter: the grown radii, the same lens formula
   rep.clusters = find_clusters(p, net.image);
   return rep;
 }
