@@ -19,6 +19,7 @@ using NormalLaws = List<
     NormalDMT,
     NormalJKR,
     NormalSintering,
+    NormalLuding,
     End>;
 
 using TangentialLaws = List<
