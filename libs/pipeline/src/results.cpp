@@ -569,6 +569,14 @@ std::string figure(const std::string& name, const std::string& title) {
          name + ".dat\">data</a></figcaption>\n</figure>\n";
 }
 
+// Four significant digits: enough to read an interval, the full numbers are in summary.json.
+std::string short_number(double x) {
+  std::ostringstream s;
+  s.precision(4);
+  s << x;
+  return s.str();
+}
+
 std::string html_statistics(const Page& pg) {
   std::string g;
   for (const auto& c : pg.o.group) g += (g.empty() ? "" : " &times; ") + html(c);
@@ -583,10 +591,10 @@ std::string html_statistics(const Page& pg) {
       const stats::Estimate e = estimate_of(c.rows, prop);
       if (e.n == 0) continue;
       h << "<tr><td>" << html(cell_text(c.key)) << "</td><td>" << html(prop) << "</td><td>" << e.n << "</td><td>"
-        << number_text(e.mean) << "</td><td>"
-        << (std::isfinite(e.half95) ? number_text(e.mean - e.half95) + " &ndash; " + number_text(e.mean + e.half95) : "")
-        << "</td><td>" << (std::isfinite(e.rel_half95()) ? number_text(100 * e.rel_half95()) : "") << "</td><td>"
-        << html(c.stopped_because) << "</td><td>" << number_text(c.cpu_s) << "</td></tr>\n";
+        << short_number(e.mean) << "</td><td>"
+        << (std::isfinite(e.half95) ? short_number(e.mean - e.half95) + " &ndash; " + short_number(e.mean + e.half95) : "")
+        << "</td><td>" << (std::isfinite(e.rel_half95()) ? short_number(100 * e.rel_half95()) : "") << "</td><td>"
+        << html(c.stopped_because) << "</td><td>" << short_number(c.cpu_s) << "</td></tr>\n";
     }
   h << "</table>\n";
   if (!pg.rankings.empty()) {
@@ -596,7 +604,7 @@ std::string html_statistics(const Page& pg) {
         h << "<li>" << html(r.text) << "</li>\n";
     h << "</ul>\n";
   }
-  for (const auto& stem : pg.error_plots) h << figure(stem, "error against CPU time: " + stem.substr(14));
+  for (const auto& stem : pg.error_plots) h << figure(stem, "error against CPU time: " + stem.substr(13));
   return h.str();
 }
 
