@@ -2,6 +2,7 @@
 #include <CLI/CLI.hpp>
 
 #include "tomodem/core/cli.hpp"
+#include "tomodem/core/cli_choice.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/summary.hpp"
 #include "tomodem/core/tool.hpp"
@@ -30,12 +31,13 @@ int main(int argc, char** argv) {
     app.add_option("--dataset", c.read.h5_dataset, "HDF5 dataset (z, y, x)")->capture_default_str();
     app.add_option("--roi", c.roi_text, "crop X0,Y0,Z0,NX,NY,NZ (voxels)");
     app.add_option("--downsample", c.read.downsample, "block-average by this integer factor")->capture_default_str();
-    app.add_option("--filter", c.filter, "none | median | gaussian | cad | nlm")->capture_default_str();
+    tomodem::cli::add_choice(app, "--filter", c.filter, tomodem::image::kImageFilterNames, "none | median | gaussian | cad | nlm");
     app.add_option("--filter-radius", c.filter_radius, "median radius / NLM patch radius (voxels)")->capture_default_str();
     app.add_option("--sigma", c.sigma, "gaussian sigma (voxels)")->capture_default_str();
     app.add_option("--iterations", c.iterations, "cad / nlm iterations")->capture_default_str();
     app.add_option("--conductance", c.conductance, "cad conductance")->capture_default_str();
-    app.add_option("--method", c.method, "otsu | peaks | intermeans | multiotsu2 | multiotsu3 | manual | hysteresis")->capture_default_str();
+    tomodem::cli::add_choice(app, "--method", c.method, tomodem::image::kThresholdMethodNames,
+                             "otsu | peaks | intermeans | multiotsu2 | multiotsu3 | manual | hysteresis");
     app.add_option("--levels", c.levels, "manual thresholds (1 or 2) or hysteresis LOW,HIGH (grey values)")->delimiter(',');
     app.add_flag("--pores-bright", c.pores_bright, "pores are brighter than the solid");
     app.add_option("--open", c.open_r, "open the solid with a ball of this radius (voxels)")->capture_default_str();

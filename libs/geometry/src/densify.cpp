@@ -103,31 +103,45 @@ struct QuasiStaticResult {
 /// energy falls below 1e-16 per particle of the law's energy scale (k d² or E* d³), and is known
 /// to be below the target once its energy is under 1 % of the target's (E ∝ q^α from the last
 /// jammed state), which ends minimisations far below the target early.
-QuasiStaticResult quasistatic(dem::Simulation& sim, const PackSpec& spec, double vsolid, double dmean,
-                              const std::vector<std::vector<int>>& clusters, PackReport& rep,
-                              const std::function<void(const std::string&)>& say) {
-  QuasiStaticResult out;
+/// The FIRE settings of the compress–relax protocol: the equilibrium criterion, the energy floor
+/// below which a relaxed state counts as unjammed, and whether contacts are adhesive.
+struct RelaxSettings {
+  dem::FireOptions fo;
+  double floor0 = 0;
+  bool adhesive = false;
+};
+RelaxSettings relax_settings(const dem::Simulation& sim, const PackSpec& spec, double dmean) {
+  RelaxSettings rs;
   const std::size_t n = sim.particles().size();
   const bool linear = spec.normal == dem::NormalLaw::linear;
-  const double alpha = linear ? 2.0 : 2.5;
   double escale = 0;
   for (const auto& pp : sim.model().pairs)
     escale = std::max(escale, linear ? pp.k_n * dmean * dmean : pp.E_star * dmean * dmean * dmean);
-  dem::FireOptions fo;
-  fo.unbalanced_force_ratio = spec.unbalanced_force_ratio;
+  rs.fo.unbalanced_force_ratio = spec.unbalanced_force_ratio;
   // Adhesive contacts store negative energy: no energy floor, relaxations end on the force
   // criterion (or when no contact is left).
-  bool adhesive = false;
   for (const auto& pp : sim.model().pairs)
-    adhesive = adhesive || (pp.work_of_adhesion > 0 && spec.normal != dem::NormalLaw::hertz && !linear);
-  const double floor0 = adhesive ? -std::numeric_limits<double>::infinity() : 1e-16 * double(n) * escale;
-  if (adhesive) {
+    rs.adhesive = rs.adhesive || (pp.work_of_adhesion > 0 && spec.normal != dem::NormalLaw::hertz && !linear);
+  rs.floor0 = rs.adhesive ? -std::numeric_limits<double>::infinity() : 1e-16 * double(n) * escale;
+  if (rs.adhesive) {
     // Force criterion relative to the smallest DMT pull-off force 2π w R* (R* = d_min/4).
     double rmin = *std::min_element(sim.particles().r.begin(), sim.particles().r.end()), wmin = 0;
     for (const auto& pp : sim.model().pairs)
       if (pp.work_of_adhesion > 0) wmin = wmin > 0 ? std::min(wmin, pp.work_of_adhesion) : pp.work_of_adhesion;
-    fo.force_tolerance = spec.unbalanced_force_ratio * 2 * kPi * wmin * 0.5 * rmin;
+    rs.fo.force_tolerance = spec.unbalanced_force_ratio * 2 * kPi * wmin * 0.5 * rmin;
   }
+  return rs;
+}
+
+QuasiStaticResult quasistatic(dem::Simulation& sim, const PackSpec& spec, double vsolid, double dmean,
+                              const std::vector<std::vector<int>>& clusters, PackReport& rep,
+                              const std::function<void(const std::string&)>& say) {
+  QuasiStaticResult out;
+  const double alpha = spec.normal == dem::NormalLaw::linear ? 2.0 : 2.5;
+  RelaxSettings rs = relax_settings(sim, spec, dmean);
+  dem::FireOptions& fo = rs.fo;
+  const double floor0 = rs.floor0;
+  const bool adhesive = rs.adhesive;
   double phi = vsolid / sim.cell().volume();
   const auto relax = [&](double floor) {
     fo.energy_floor = floor;

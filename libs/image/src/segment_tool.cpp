@@ -75,12 +75,6 @@ void check_segment_options(const SegmentConfig& c) {
     }
     return tomodem::image::num_text(x);
   };
-  static const char* filters[] = {"none", "median", "gaussian", "cad", "nlm"};
-  if (std::find(std::begin(filters), std::end(filters), c.filter) == std::end(filters))
-    throw InputError("", "--filter", c.filter, "expected none, median, gaussian, cad or nlm");
-  static const char* methods[] = {"otsu", "peaks", "intermeans", "multiotsu2", "multiotsu3", "manual", "hysteresis"};
-  if (std::find(std::begin(methods), std::end(methods), c.method) == std::end(methods))
-    throw InputError("", "--method", c.method, "expected otsu, peaks, intermeans, multiotsu2, multiotsu3, manual or hysteresis");
   if (c.filter_radius < 1 || c.filter_radius > 10)
     throw InputError("", "--filter-radius", std::to_string(c.filter_radius), "must be an integer in [1, 10] (voxels)");
   if (!finite_pos(c.sigma) || c.sigma > 100) throw InputError("", "--sigma", num_text(c.sigma, "--sigma"), "must be finite, > 0 and <= 100 (voxels)");
@@ -91,12 +85,13 @@ void check_segment_options(const SegmentConfig& c) {
     if (!std::isfinite(l))
       throw InputError("", "--levels", c.as_written.count("--levels") ? c.as_written.at("--levels") : num_text(l),
                        "thresholds must be finite grey values");
-  if (c.method == "manual" && (c.levels.empty() || c.levels.size() > 2))
+  if (c.method == ThresholdMethod::manual && (c.levels.empty() || c.levels.size() > 2))
     throw InputError("", "--levels", std::to_string(c.levels.size()) + " values", "manual thresholding needs one or two --levels");
-  if (c.method == "hysteresis" && c.levels.size() != 2)
+  if (c.method == ThresholdMethod::hysteresis && c.levels.size() != 2)
     throw InputError("", "--levels", std::to_string(c.levels.size()) + " values", "hysteresis needs --levels LOW,HIGH");
-  if (!c.levels.empty() && c.method != "manual" && c.method != "hysteresis")
-    throw InputError("", "--levels", num_text(c.levels[0]), "--levels is used by --method manual or hysteresis only, not " + c.method);
+  if (!c.levels.empty() && c.method != ThresholdMethod::manual && c.method != ThresholdMethod::hysteresis)
+    throw InputError("", "--levels", num_text(c.levels[0]),
+                     "--levels is used by --method manual or hysteresis only, not " + std::string(to_string(c.method)));
   if (!finite_nonneg(c.open_r)) throw InputError("", "--open", num_text(c.open_r, "--open"), "must be finite and >= 0 (voxels; 0: none)");
   if (!finite_nonneg(c.close_r)) throw InputError("", "--close", num_text(c.close_r, "--close"), "must be finite and >= 0 (voxels; 0: none)");
   if (c.connectivity != 6 && c.connectivity != 26)
@@ -116,7 +111,7 @@ void check_segment_options(const SegmentConfig& c) {
 // --vdb, 58 with all three. The reader's own buffers (HDF5: 8 B/voxel) are counted by read_volume.
 double segment_bytes_per_voxel(const SegmentConfig& c) {
   double b = 12;
-  if (c.filter == "gaussian" || c.filter == "cad" || c.filter == "nlm") b += 8;  // ITK images in and out
+  if (c.filter == ImageFilter::gaussian || c.filter == ImageFilter::cad || c.filter == ImageFilter::nlm) b += 8;  // ITK images in and out
   if (c.grains) b += 32;                                                        // Maurer distance, markers, watershed, labels
   if (!c.vdb.empty()) b += 18;                                                  // smoothed indicator, fog and level-set grids
   return b;
@@ -196,49 +191,49 @@ ReadOptions prepare_segment(const SegmentConfig& cfg) {
 
 // The filter in place; its parameters for the summary.
 json apply_filter(const SegmentConfig& cfg, Volume& v) {
-  json filt{{"name", cfg.filter}};
-  if (cfg.filter == "median") {
+  json filt{{"name", to_string(cfg.filter)}};
+  if (cfg.filter == ImageFilter::median) {
     median_inplace(v, cfg.filter_radius);
     filt["radius_vox"] = cfg.filter_radius;
-  } else if (cfg.filter == "gaussian") {
+  } else if (cfg.filter == ImageFilter::gaussian) {
     v = gaussian(v, cfg.sigma);
     filt["sigma_vox"] = cfg.sigma;
-  } else if (cfg.filter == "cad") {
+  } else if (cfg.filter == ImageFilter::cad) {
     v = anisotropic_diffusion(v, cfg.iterations, cfg.conductance);
     filt["iterations"] = cfg.iterations;
     filt["conductance"] = cfg.conductance;
     filt["time_step"] = 0.0625;
-  } else if (cfg.filter == "nlm") {
+  } else if (cfg.filter == ImageFilter::nlm) {
     v = nlm(v, cfg.filter_radius, cfg.iterations);
     filt["patch_radius_vox"] = cfg.filter_radius;
     filt["iterations"] = cfg.iterations;
-  } else if (cfg.filter != "none") {
-    throw InputError("", "--filter", cfg.filter, "expected none, median, gaussian, cad or nlm");
+  } else if (cfg.filter != ImageFilter::none) {
+    throw InputError("", "--filter", to_string(cfg.filter), "expected " + names_of(kImageFilterNames));
   }
-  info("filter: " + cfg.filter);
+  info("filter: " + std::string(to_string(cfg.filter)));
   return filt;
 }
 
 // The thresholds of the chosen method, ascending (Otsu's too, for peaks and intermeans).
 std::vector<double> thresholds(const SegmentConfig& cfg, const Volume& v, Summary& summary) {
   std::vector<double> t;
-  if (cfg.method == "otsu" || cfg.method == "multiotsu2") {
+  if (cfg.method == ThresholdMethod::otsu || cfg.method == ThresholdMethod::multiotsu2) {
     t = {otsu_threshold(v)};
-  } else if (cfg.method == "peaks" || cfg.method == "intermeans") {
+  } else if (cfg.method == ThresholdMethod::peaks || cfg.method == ThresholdMethod::intermeans) {
     const double t_otsu = otsu_threshold(v);
-    t = {cfg.method == "peaks" ? peaks_threshold(v, t_otsu) : intermeans_threshold(v, t_otsu)};
+    t = {cfg.method == ThresholdMethod::peaks ? peaks_threshold(v, t_otsu) : intermeans_threshold(v, t_otsu)};
     summary["otsu_threshold"] = t_otsu;
-  } else if (cfg.method == "multiotsu3") {
+  } else if (cfg.method == ThresholdMethod::multiotsu3) {
     t = multi_otsu_thresholds(v, 3);
-  } else if (cfg.method == "manual" || cfg.method == "hysteresis") {
-    if (cfg.method == "manual" && (cfg.levels.empty() || cfg.levels.size() > 2))
+  } else if (cfg.method == ThresholdMethod::manual || cfg.method == ThresholdMethod::hysteresis) {
+    if (cfg.method == ThresholdMethod::manual && (cfg.levels.empty() || cfg.levels.size() > 2))
       throw InputError("", "--levels", "", "manual thresholding needs one or two --levels");
-    if (cfg.method == "hysteresis" && cfg.levels.size() != 2)
+    if (cfg.method == ThresholdMethod::hysteresis && cfg.levels.size() != 2)
       throw InputError("", "--levels", "", "hysteresis needs --levels LOW,HIGH");
     t = cfg.levels;
     std::sort(t.begin(), t.end());
   } else {
-    throw InputError("", "--method", cfg.method, "expected otsu, peaks, intermeans, multiotsu2, multiotsu3, manual or hysteresis");
+    throw InputError("", "--method", to_string(cfg.method), "expected " + names_of(kThresholdMethodNames));
   }
   return t;
 }
@@ -246,7 +241,7 @@ std::vector<double> thresholds(const SegmentConfig& cfg, const Volume& v, Summar
 // The solid (and an optional second solid phase) from the thresholds t.
 void threshold_solid(const SegmentConfig& cfg, const Volume& v, const std::vector<double>& t, Mask& solid, Mask& phase2) {
   const bool dark = !cfg.pores_bright;
-  if (cfg.method == "hysteresis") {
+  if (cfg.method == ThresholdMethod::hysteresis) {
     if (dark) solid = hysteresis(v, t[0], t[1]);
     else {  // solid is dark: hysteresis on the negated volume
       Volume n = v;
@@ -441,7 +436,7 @@ std::string run_segment(const SegmentConfig& cfg) {
   summary["n_macropores"] = n_macro;
   summary["thresholds"] = t;
   summary["threshold_rule"] = phase_rule(cfg) + " (value >= t is the brighter class)";
-  summary["method"] = cfg.method;
+  summary["method"] = to_string(cfg.method);
   summary["macropore_radius_m"] = macro_r * v.spacing[0];
   summary["macropore_radius_vox"] = macro_r;
   summary["specific_surface_per_m"] = specific_surface(solid);

@@ -47,8 +47,8 @@ Scores segment_pores_phantom(double snr, double blur, const std::string& name, c
   SegmentConfig c;
   c.input = (d / "grey.mha").string();
   c.output = (d / "labels.h5").string();
-  c.method = "intermeans";        // Otsu drifts toward the solid when pores are ~6 % (docs/segment.md)
-  c.filter = filter;
+  c.method = ThresholdMethod::intermeans;        // Otsu drifts toward the solid when pores are ~6 % (docs/segment.md)
+  c.filter = *parse_image_filter(filter);
   c.iterations = 5;
   c.conductance = 2;
   c.macro_radius_text = "5vox";   // between the fine pores (r 3) and the macropores (r >= 9)
@@ -225,7 +225,7 @@ TEST(RealSample, SoilCornerRunsWithDefaults) {
   SegmentConfig g = c;
   g.output.clear();
   g.overlay.clear();
-  g.filter = "gaussian";
+  g.filter = ImageFilter::gaussian;
   g.sigma = 1.1;
   const json sg = json::parse(run_segment(g));
   std::cout << "soil corner, gaussian 1.1 + Otsu: porosity " << sg["porosity"] << " (published 0.4307)\n";

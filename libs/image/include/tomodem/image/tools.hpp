@@ -1,8 +1,12 @@
 #pragma once
 // The two tools' configurations and drivers (tools/segment, tools/phantom stay thin).
+#include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
+#include <string_view>
 
+#include "tomodem/core/names.hpp"
 #include "tomodem/image/phantom.hpp"
 #include "tomodem/image/volume.hpp"
 
@@ -21,18 +25,43 @@ std::map<std::string, std::string> options_as_written(const App& app) {
   return m;
 }
 
+/// Denoising before thresholding: none, median box, Gaussian, curvature anisotropic diffusion, non-local means.
+enum class ImageFilter : uint8_t { none, median, gaussian, cad, nlm };
+inline constexpr NameTable<ImageFilter, 5> kImageFilterNames = {{{ImageFilter::none, "none"},
+                                                                {ImageFilter::median, "median"},
+                                                                {ImageFilter::gaussian, "gaussian"},
+                                                                {ImageFilter::cad, "cad"},
+                                                                {ImageFilter::nlm, "nlm"}}};
+inline const char* to_string(ImageFilter f) { return name_of(kImageFilterNames, f); }
+inline std::optional<ImageFilter> parse_image_filter(std::string_view name) { return value_of(kImageFilterNames, name); }
+
+/// Threshold selection (docs/segment.md): automatic (otsu, peaks, intermeans, multi-Otsu with two
+/// or three classes) or given (manual: one or two levels; hysteresis: low and high).
+enum class ThresholdMethod : uint8_t { otsu, peaks, intermeans, multiotsu2, multiotsu3, manual, hysteresis };
+inline constexpr NameTable<ThresholdMethod, 7> kThresholdMethodNames = {{{ThresholdMethod::otsu, "otsu"},
+                                                                        {ThresholdMethod::peaks, "peaks"},
+                                                                        {ThresholdMethod::intermeans, "intermeans"},
+                                                                        {ThresholdMethod::multiotsu2, "multiotsu2"},
+                                                                        {ThresholdMethod::multiotsu3, "multiotsu3"},
+                                                                        {ThresholdMethod::manual, "manual"},
+                                                                        {ThresholdMethod::hysteresis, "hysteresis"}}};
+inline const char* to_string(ThresholdMethod m) { return name_of(kThresholdMethodNames, m); }
+inline std::optional<ThresholdMethod> parse_threshold_method(std::string_view name) {
+  return value_of(kThresholdMethodNames, name);
+}
+
 struct SegmentConfig {
   std::string input;
   ReadOptions read;
   std::string spacing_text, roi_text, macro_radius_text = "3vox", raw_dims_text;
   // filtering
-  std::string filter = "median";      ///< none | median | gaussian | cad | nlm
+  ImageFilter filter = ImageFilter::median;
   int filter_radius = 1;              ///< median box radius; NLM patch radius (voxels)
   double sigma = 1.0;                 ///< gaussian sigma (voxels)
   int iterations = 5;                 ///< cad / nlm iterations
   double conductance = 1.0;           ///< cad
   // thresholding
-  std::string method = "otsu";        ///< otsu | peaks | intermeans | multiotsu2 | multiotsu3 | manual | hysteresis
+  ThresholdMethod method = ThresholdMethod::otsu;
   std::vector<double> levels;         ///< manual: one or two thresholds; hysteresis: low, high
   bool pores_bright = false;          ///< pores above the threshold (default: pores dark)
   // cleaning
