@@ -5,6 +5,7 @@
 
 #include "tomodem/core/cli.hpp"
 #include "tomodem/core/error.hpp"
+#include "tomodem/core/summary.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/fields/tool.hpp"
 
@@ -15,7 +16,6 @@ int main(int argc, char** argv) {
                  "tomodem-cg"};
     app.add_option("inputs", c.inputs, "packing(s) (.h5); several: the time average over these snapshots")->required();
     app.add_option("-o,--output", c.output, "fields file (.h5; an .xdmf sidecar is written beside it)")->required();
-    app.add_option("--json", c.json, "write the JSON summary to FILE (default: stdout)");
     app.add_option("--kernel", c.kernel, "gaussian | lucy")->capture_default_str();
     app.add_option("--width", c.width, "kernel width w: mean diameters (1.5) or a length (20um, 0.02mm)")
         ->capture_default_str();
@@ -28,14 +28,12 @@ int main(int argc, char** argv) {
     app.add_option("--density", c.density, "solid density of every phase, kg/m^3 (default: the materials')");
     app.add_option("--bond-forces", c.bond_forces, "auto | stored (/bonds/force) | stretch | none")
         ->capture_default_str();
-    tomodem::cli::add_threads(app, c.threads);
-    bool quiet = false;
-    app.add_flag("-q,--quiet", quiet, "no progress messages");
-    tomodem::cli::add_version(app, "tomodem-cg");
+    tomodem::cli::Common common;
+    tomodem::cli::add_common(app, "tomodem-cg", common);
     if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
-    tomodem::set_quiet(quiet);
-    const std::string summary = tomodem::fields::run_cg(c);
-    if (c.json.empty() || c.json == "-") std::cout << summary;
+    c.json = common.json;
+    c.threads = common.threads;
+    tomodem::emit_summary(tomodem::fields::run_cg(c), c.json);
     return tomodem::exit_code::ok;
   });
 }

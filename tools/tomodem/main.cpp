@@ -14,7 +14,7 @@
 namespace {
 const char* kUsage =
     "usage: tomodem VERB [ARGS...]\n"
-    "verbs: segment, phantom, pack, carve, sinter, bond, young, fracture, conduct, dem, run\n"
+    "verbs: segment, phantom, pack, carve, sinter, bond, young, fracture, conduct, cg, dem, run\n"
     "Each verb is the executable tomodem-VERB; `tomodem VERB --help` shows its options.\n";
 
 std::string self_dir() {

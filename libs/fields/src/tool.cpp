@@ -3,7 +3,6 @@
 
 #include <omp.h>
 
-#include <chrono>
 #include <cmath>
 #include <nlohmann/json.hpp>
 
@@ -13,6 +12,8 @@
 #include "tomodem/core/h5.hpp"
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/packing_io.hpp"
+#include "tomodem/core/summary.hpp"
+#include "tomodem/core/units.hpp"
 #include "tomodem/core/tool.hpp"
 
 namespace tomodem::fields {
@@ -20,26 +21,19 @@ namespace tomodem::fields {
 using json = nlohmann::json;
 
 namespace {
-/// "1.5" (mean diameters), "1.5d", or a length with a unit: "20um", "0.02mm", "2e-5m", "20nm".
+/// "1.5" or "1.5d" (mean diameters), or a length with a unit ("20um", "0.02mm": the shared
+/// parser of docs/cli.md). A bare number is diameters here, unlike plain length options, since a
+/// kernel width is chosen against the particle size.
 double parse_width(const std::string& text, double mean_d, bool* in_diameters) {
-  std::size_t used = 0;
   double v = 0;
-  try {
-    v = std::stod(text, &used);
-  } catch (const std::exception&) {
+  std::string unit;
+  if (!split_number_unit(text, v, unit))
     throw InputError("", "--width", text, "expected a number of mean diameters or a length with a unit (20um)");
-  }
-  std::string unit = text.substr(used);
   while (!unit.empty() && unit.front() == ' ') unit.erase(unit.begin());
-  const std::pair<const char*, double> units[] = {{"m", 1}, {"mm", 1e-3}, {"um", 1e-6}, {"\xC2\xB5m", 1e-6},
-                                                  {"nm", 1e-9}};
-  *in_diameters = unit.empty() || unit == "d";
-  double scale = *in_diameters ? mean_d : 0;
-  for (const auto& [u, s] : units)
-    if (unit == u) scale = s;
-  if (scale == 0) throw InputError("", "--width", text, "unknown unit '" + unit + "'; expected d, m, mm, um or nm");
+  *in_diameters = unit.empty() || unit == "d" || unit == "D";
+  if (!*in_diameters) v = parse_length("--width", text);
   require_positive("--width", v, *in_diameters ? "mean diameters" : "length");
-  return v * scale;
+  return *in_diameters ? v * mean_d : v;
 }
 
 int parse_axis(const std::string& s, const std::string& option, const std::string& text) {
@@ -256,7 +250,6 @@ Setup setup(const CgConfig& c, const Packing& first, std::vector<std::string>& w
 }  // namespace
 
 std::string run_cg(const CgConfig& c) {
-  const auto t0 = std::chrono::steady_clock::now();
   if (c.inputs.empty()) throw InputError("", "input", "", "at least one packing is needed");
   if (c.output.empty()) throw InputError("", "-o", "", "an output file (.h5) is needed");
   if (c.bond_forces != "auto" && c.bond_forces != "stored" && c.bond_forces != "stretch" && c.bond_forces != "none")
@@ -310,46 +303,43 @@ std::string run_cg(const CgConfig& c) {
   detail::write_fields(c.output, f, s.grid.kind, s.grid.axis,
                        {{"tool", "tomodem-cg"}, {"version", version_string()}, {"parameters", params.dump()},
                         {"created_utc", utc_now()}});
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   double love_norm = 0, diff = 0;
   for (int i = 0; i < 9; ++i)
     love_norm += love.a[i / 3][i % 3] * love.a[i / 3][i % 3],
         diff += std::pow(love.a[i / 3][i % 3] - d.mean_static.a[i / 3][i % 3], 2);
-  json out = {{"tool", "tomodem-cg"},
-              {"version", version_string()},
-              {"input", c.inputs.front()},
-              {"inputs", c.inputs},
-              {"reference", c.reference},
-              {"outputs", {{"fields", c.output}, {"xdmf", xdmf_sidecar_of(c.output)}, {"json", c.json}}},
-              {"parameters", params},
-              {"grid", s.grid.kind == GridSpec::Kind::full ? "full" : s.grid.kind == GridSpec::Kind::slice ? "slice" : "profile"},
-              {"dims", f.dims},
-              {"n_points", f.points.size()},
-              {"kernel", s.kernel.name()},
-              {"width_m", s.width},
-              {"width_mean_diameters", s.width / s.mean_d},
-              {"cutoff_m", s.kernel.cutoff},
-              {"mean_diameter_m", s.mean_d},
-              {"quadrature_points_max", acc.max_quadrature()},
-              {"snapshots", c.inputs.size()},
-              {"n_particles", first.particles.size()},
-              {"n_contacts", n_contacts},
-              {"n_bonds", n_bonds},
-              {"bond_forces", bond_source.empty() ? "none" : bond_source},
-              {"total_mass_kg", mass},
-              {"mass_error", finite(d.mass_error)},
-              {"divergence_residual", finite(d.divergence_residual)},
-              {"love_static_stress_Pa", mat_json(love)},
-              {"units", {{"love_static_stress_Pa", "Pa"}, {"cg_mean_static_stress_Pa", "Pa"}}},
-              {"warnings", warnings},
-              {"threads", threads},
-              {"wall_time_s", wall}};
+  Summary out("tomodem-cg");
+  out.input(c.inputs.front(), {{"snapshots", c.inputs}, {"reference", c.reference}});
+  out.output("fields", c.output);
+  out.output("xdmf", xdmf_sidecar_of(c.output));
+  out.n_particles(first.particles.size());
+  out["parameters"] = params;
+  out["grid"] = s.grid.kind == GridSpec::Kind::full ? "full" : s.grid.kind == GridSpec::Kind::slice ? "slice" : "profile";
+  out["dims"] = f.dims;
+  out["n_points"] = f.points.size();
+  out["kernel"] = s.kernel.name();
+  out["width_m"] = s.width;
+  out["width_mean_diameters"] = s.width / s.mean_d;
+  out["cutoff_m"] = s.kernel.cutoff;
+  out["mean_diameter_m"] = s.mean_d;
+  out["quadrature_points_max"] = acc.max_quadrature();
+  out["snapshots"] = c.inputs.size();
+  out["n_contacts"] = n_contacts;
+  out["n_bonds"] = n_bonds;
+  out["bond_forces"] = bond_source.empty() ? "none" : bond_source;
+  out["total_mass_kg"] = mass;
+  out["mass_error"] = finite(d.mass_error);
+  out["divergence_residual"] = finite(d.divergence_residual);
+  out["love_static_stress_Pa"] = mat_json(love);
   if (s.grid.kind == GridSpec::Kind::full) {
     out["cg_mean_static_stress_Pa"] = mat_json(d.mean_static);
     out["mean_stress_difference"] = love_norm > 0 ? json(std::sqrt(diff / love_norm)) : json(nullptr);
   }
-  const std::string text = out.dump(2) + "\n";
-  if (!c.json.empty() && c.json != "-") write_text_atomic(c.json, text);
+  out["warnings"] = warnings;
+  out["threads"] = threads;
+  out.unit("mass_error", "1 (relative)");
+  out.unit("divergence_residual", "1 (|div sigma| w / |sigma|)");
+  out.unit("mean_stress_difference", "1 (relative, Frobenius)");
+  const std::string text = out.text();
   return text;
 }
 

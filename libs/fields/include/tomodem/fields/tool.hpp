@@ -26,7 +26,7 @@ struct CgConfig {
   int threads = 0;
 };
 
-/// Runs the tool; returns the JSON summary text (also written to `json` when given).
+/// Runs the tool; returns the JSON summary text (the caller emits it: emit_summary).
 std::string run_cg(const CgConfig& c);
 
 /// How the snapshot gets its masses and pair forces (for tests that build packings in memory).
