@@ -144,6 +144,22 @@ std::vector<char> open_groups(const Pipeline& p, const std::map<std::string, Gro
   return only;
 }
 
+// --force and -B apply once per invocation: a replica forced and run in one round is not run
+// again in the next.
+RunOptions forced_once(const Pipeline& q, const RunOptions& o, const std::map<std::string, StepResult>& earlier) {
+  RunOptions r = o;
+  r.force.clear();
+  r.force_all = false;
+  std::vector<std::size_t> idx;
+  if (o.force_all)
+    for (std::size_t i = 0; i < q.instances.size(); ++i) idx.push_back(i);
+  for (const auto& name : o.force)
+    for (const auto i : select(q, name)) idx.push_back(i);
+  for (const auto i : idx)
+    if (!earlier.count(q.instances[i].id)) r.force.push_back(q.instances[i].id);
+  return r;
+}
+
 // Rounds' results folded into the last pass: a step that ran in an earlier round ran.
 RunSummary merged(RunSummary last, const std::map<std::string, StepResult>& earlier, double wall_s, int hashed) {
   last.ran = last.up_to_date = last.failed = last.skipped = last.would_run = 0;
@@ -174,7 +190,7 @@ RunSummary run_adaptive(const Pipeline& p, const RunOptions& o, std::ostream& pr
   for (;;) {
     const Pipeline q = load(p.file, lo);
     const std::vector<char> only = open_groups(q, states);
-    const RunSummary s = run_pass(q, o, &progress, &only, true);
+    const RunSummary s = run_pass(q, forced_once(q, o, earlier), &progress, &only, true);
     hashed += s.files_hashed;
     for (const auto& r : s.steps)
       if (r.state == "ran" || r.state == "failed" || r.state == "skipped") earlier[r.id] = r;
@@ -198,7 +214,7 @@ RunSummary run_adaptive(const Pipeline& p, const RunOptions& o, std::ostream& pr
     if (!more) break;
   }
   const Pipeline q = load(p.file, lo);
-  const RunSummary last = run_pass(q, o, &progress, nullptr, true);
+  const RunSummary last = run_pass(q, forced_once(q, o, earlier), &progress, nullptr, true);
   return merged(last, earlier, elapsed(), hashed + last.files_hashed);
 }
 

@@ -277,3 +277,72 @@ TEST(PipelineBadInput, YamlSyntaxErrorHasItsLine) {
   EXPECT_NE(m.find("YAML"), std::string::npos) << m;
   EXPECT_NE(m.find("quote values that use ${...}"), std::string::npos) << m;
 }
+
+namespace {
+// gen sweeps 6 plain replicas per level; draw adds replicas adaptively (3 to 6) and reads gen.
+const char* kAdaptive = R"(steps:
+  gen:
+    matrix: {level: [a, b]}
+    replicas: 6
+    seed: 10
+    cell: ${matrix.level}-r${replica}
+    cmd: echo ${seed} > ${outs.0}
+    outs: ['out/${cell}.txt']
+  draw:
+    matrix: {level: [a, b]}
+    replicas: {until: {x: 0.05}, min: 3, max: 6}
+    cell: ${matrix.level}-r${replica}
+    cmd: cat ${steps.gen.outs.0} > ${outs.0}
+    outs: ['out/${cell}.json']
+  gather:
+    cmd: cat ${steps.draw.outs} ${run.replicas} > ${outs.0}
+    outs: [out/all.txt]
+)";
+
+long count_step(const tp::Pipeline& p, const std::string& step, const std::string& level) {
+  return std::count_if(p.instances.begin(), p.instances.end(),
+                       [&](const tp::Instance& in) { return in.step == step && in.matrix.at("level") == level; });
+}
+}  // namespace
+
+TEST(PipelineLoad, AdaptiveReplicasStartAtMinAndUpstreamReplicasFollow) {
+  Scratch s;
+  const std::string file = s.write("p.yaml", kAdaptive);
+  const tp::Pipeline p = tp::load(file);
+  ASSERT_EQ(p.adaptive.size(), 1u);
+  EXPECT_EQ(p.adaptive[0].min, 3);
+  EXPECT_EQ(p.adaptive[0].max, 6);
+  ASSERT_EQ(p.groups.size(), 2u);
+  EXPECT_EQ(p.groups[0].id, "draw[level=a]");
+  EXPECT_EQ(p.groups[0].instances.size(), 3u);
+  // Only the gen replicas a draw replica reads: 3 of 6 per level.
+  EXPECT_EQ(count_step(p, "gen", "a"), 3);
+  EXPECT_EQ(by_id(p, "draw[a-r2]").replica, 2);
+  // The gather reads the replicas that exist, and the record by its name beside the pipeline.
+  EXPECT_EQ(by_id(p, "gather").command,
+            "cat out/a-r0.json out/a-r1.json out/a-r2.json out/b-r0.json out/b-r1.json out/b-r2.json p.replicas.json > "
+            "out/all.txt");
+
+  tp::LoadOptions o;
+  o.use_counts = true;
+  o.replica_counts = {{"draw[level=a]", 5}, {"draw[level=b]", 99}};  // clamped to max
+  const tp::Pipeline q = tp::load(file, o);
+  EXPECT_EQ(count_step(q, "draw", "a"), 5);
+  EXPECT_EQ(count_step(q, "draw", "b"), 6);
+  EXPECT_EQ(count_step(q, "gen", "a"), 5);
+  EXPECT_EQ(by_id(q, "gen[a-r4]").command, "echo 14 > out/a-r4.txt");  // seed + replica, as with replicas: N
+}
+
+TEST(PipelineBadInput, AdaptiveReplicasNeedEnoughUpstreamReplicasAndTheRecordNeedsAnAdaptiveStep) {
+  Scratch s;
+  // draw may reach replica 5, which gen (3 replicas) does not have: found at load, not in round 3.
+  std::string text = kAdaptive;
+  text.replace(text.find("replicas: 6"), 11, "replicas: 3");
+  const std::string e = load_error(s, text);
+  EXPECT_NE(e.find("no cell of step 'gen' matches cell 'a-r3'"), std::string::npos) << e;
+  text = kAdaptive;
+  text.replace(text.find("{until: {x: 0.05}, min: 3, max: 6}"), 34, "2");
+  const std::string r = load_error(s, text);
+  EXPECT_NE(r.find("p.yaml:16"), std::string::npos) << r;
+  EXPECT_NE(r.find("needs a step with `replicas: {until: ...}`"), std::string::npos) << r;
+}
