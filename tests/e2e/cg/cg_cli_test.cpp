@@ -92,6 +92,22 @@ TEST_F(CgCli, WorkedExampleOfTheDocsRunsAsWritten) {
   EXPECT_LT(std::abs(p["mass_error"].get<double>()), 1e-4);
 }
 
+TEST_F(CgCli, BondedNetworkFromTomodemBondIsStressFree) {
+  // tomodem-bond sets each rest length to the centre distance at bonding, so the stretch forces,
+  // and the bond stress, are zero up to the round-off of |d| (1e-16 relative of E a).
+  const Packing p = fields::test::spring_lattice(5, 1e-3, Mat3::identity(), 0);
+  write_packing(path("lattice.h5"), p);
+  ASSERT_EQ(sh(std::string(TOMODEM_BIN_DIR) + "/tomodem-bond lattice.h5 -o bonded.h5 -q --json b.json"), 0)
+      << text("stderr.txt");
+  ASSERT_EQ(sh(cg() + " bonded.h5 -o f.h5 --json f.json -q"), 0) << text("stderr.txt");
+  const auto j = json("f.json");
+  EXPECT_EQ(j["bond_forces"], "stretch");
+  EXPECT_GT(j["n_bonds"].get<int>(), 0);
+  EXPECT_EQ(j["n_bonds"], json("b.json")["n_bonds"]);  // every bond tomodem-bond made is read
+  const auto sb = h5::File(path("f.h5"), h5::File::Mode::read).read_double("/fields/stress_bond");
+  for (double v : sb) EXPECT_LT(std::abs(v), 1e-9 * 1e9);  // E = 1 GPa
+}
+
 TEST_F(CgCli, TimeAverageOfIdenticalSnapshotsIsTheSnapshot) {
   const Packing p = fields::test::spring_lattice(5, 1e-3, Mat3::diagonal({0.999, 1, 1}), 1e4);
   write_packing(path("a.h5"), p);
