@@ -294,6 +294,10 @@ struct Reader {
     if (v < 1 || v > kFormat)
       bad("/@tomodem_format", std::to_string(v),
           "unsupported format version (this build reads 1 to " + std::to_string(kFormat) + ")");
+    // A packing is in metres (root @units, written since issue 21): another unit is refused, not
+    // read as metres. A file without the attribute was written in metres.
+    if (f.has_attr("/", "units") && f.attr_string("/", "units") != "m")
+      bad("/@units", f.attr_string("/", "units"), "a packing's lengths are in metres (m): convert the file");
   }
 
   std::vector<Material> materials() const {

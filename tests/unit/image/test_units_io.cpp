@@ -237,3 +237,27 @@ TEST(UnitsOnDisk, LevelSetStatesMillimetresAndIsSampledInMetres) {
   const std::string bytes = slurp(f);
   EXPECT_NE(bytes.find("metres_per_unit"), std::string::npos);
 }
+
+TEST(UnitsOnDisk, PackingInAnotherUnitIsRefusedNotReadAsMetres) {
+  const auto d = tmpdir("pmm");
+  Packing p;
+  p.cell = Cell::box({0, 0, 0}, {1, 1, 1}, false);
+  p.particles.position = {{0.5, 0.5, 0.5}};
+  p.particles.radius = {0.1};
+  p.particles.phase = {0};
+  const std::string path = (d / "p.h5").string();
+  write_packing(path, p);
+  EXPECT_NO_THROW(read_packing(path));
+  {  // the same packing stating mm (as h5py could write it): its numbers would mean 1000 times less
+    h5::File f((d / "q.h5").string(), h5::File::Mode::create);
+    write_packing_groups(f, p);
+    f.set_attr("/", "units", std::string("mm"));
+  }
+  try {
+    read_packing((d / "q.h5").string());
+    FAIL() << "a packing in mm must be refused";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("/@units"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("mm"), std::string::npos) << e.what();
+  }
+}
