@@ -1136,8 +1136,10 @@ Pipeline load(const std::string& file, const LoadOptions& options) {
     return r && r.IsMap();
   });
   if (!adaptive) return Expander(raw, vars, options, param_sets, base, out_root, nullptr).build();
-  // Every replica an adaptive step may get is checked now, so no later round meets bad input.
-  Expander(raw, vars, options, param_sets, base, out_root, [](const Adaptive& a, const std::string&) { return a.max; }).build();
+  // Every replica an adaptive step may get is checked now, so no later round meets bad input
+  // (the runner's rounds, which give the counts, come after such a load).
+  if (!options.use_counts)
+    Expander(raw, vars, options, param_sets, base, out_root, [](const Adaptive& a, const std::string&) { return a.max; }).build();
   const std::map<std::string, int> counts = options.use_counts ? options.replica_counts : recorded_counts(base.replicas_file);
   return Expander(raw, vars, options, param_sets, base, out_root, [&counts](const Adaptive& a, const std::string& id) {
            const auto it = counts.find(id);

@@ -45,7 +45,8 @@ struct LoadOptions {
   /// Check that inputs no step produces exist (off for `dot` and `export`, which run nothing).
   bool check_inputs = true;
   /// Adaptive replicas: how many replicas each group (ReplicaGroup::id) has now. Without
-  /// `use_counts`, the counts of the last run's record (<stem>.replicas.json), else `min`.
+  /// `use_counts`, the counts of the last run's record (<stem>.replicas.json), else `min`; such a
+  /// load also expands every adaptive step to `max` first, so bad input is found before any round.
   std::map<std::string, int> replica_counts;
   bool use_counts = false;
 };
