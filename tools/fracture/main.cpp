@@ -47,6 +47,16 @@ int main(int argc, char** argv) {
     app.add_option("--woodbury-bonds", c.sla.woodbury_bonds, "sla: breaks handled by low-rank updates between factorisations")
         ->capture_default_str();
     app.add_option("--max-breaks", c.sla.max_breaks, "sla: cap on the number of breaks")->capture_default_str();
+    std::string sla_solver = "auto";
+    app.add_option("--sla-solver", sla_solver, "sla: auto (pcg from 3000 particles) | ldlt | pcg")->capture_default_str();
+    app.add_option("--cg-tolerance", c.sla.cg_tolerance, "sla pcg: relative residual")->capture_default_str();
+    app.add_option("--rebuild-factor", c.sla.rebuild_factor, "sla pcg: rebuild the multigrid at this x fresh iterations")
+        ->capture_default_str();
+    app.add_option("--event-tolerance", c.sla.event_tolerance,
+                   "sla: bonds within (1 + this) of the critical opening break together")->capture_default_str();
+    bool no_contact = false;
+    app.add_flag("--no-contact", no_contact, "sla: broken faces pass through each other (no compression)");
+    app.add_option("--widths", c.widths, "sla: size-effect study, sample widths in mean diameters (>= 3)")->delimiter(',');
     app.add_option("--transits", ex.transits, "explicit: loading time to the reference strain, in elastic-wave transits")
         ->capture_default_str();
     app.add_option("--strain-rate", ex.strain_rate, "explicit: grip strain rate (1/s; overrides --transits)");
@@ -67,6 +77,8 @@ int main(int argc, char** argv) {
     if (rho_opt->count()) c.density = density;
     c.law.shear = !normal_only;
     c.elastic = !no_elastic;
+    c.sla.contact = !no_contact;
+    c.sla.solver = tomodem::parse_name(tomodem::mechanics::kSlaSolverNames, "", "--sla-solver", sla_solver);
     ex.track_energy = !no_energy;
     if (common.threads > 0) omp_set_num_threads(common.threads);
     ex.threads = common.threads > 0 ? common.threads : tomodem::all_threads();

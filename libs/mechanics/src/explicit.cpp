@@ -33,6 +33,56 @@ Fit fit(const std::vector<double>& x, const std::vector<double>& y, std::size_t 
   return f;
 }
 
+/// The bonds of the packing for the DEM engine (broken ones stay broken).
+dem::BondSet engine_bonds(const Packing& p, const std::vector<Image>& image) {
+  dem::BondSet bonds;
+  for (std::size_t b = 0; b < p.bonds.size(); ++b) {
+    bonds.add(p.bonds.i[b], p.bonds.j[b], Vec3{double(image[b][0]), double(image[b][1]), double(image[b][2])},
+              p.bonds.radius[b], p.bonds.rest_length[b]);
+    if (p.bonds.state[b] != BondTable::intact) bonds.state[b] = dem::BondSet::broken;
+  }
+  return bonds;
+}
+
+/// Elastic-wave transit time of the cell along the axis: c = l sqrt(k_n/m), with the mean bond
+/// length, normal stiffness and particle mass.
+double transit_time(const Packing& p, const std::vector<dem::BondLaw>& laws, const dem::Simulation& sim, int ax) {
+  const BondStiffnesses k = bond_stiffnesses(p, laws);
+  double kn = 0, len = 0, mass = 0;
+  long nb = 0;
+  for (std::size_t b = 0; b < p.bonds.size(); ++b)
+    if (p.bonds.state[b] == BondTable::intact) kn += k.kn[b], len += p.bonds.rest_length[b], ++nb;
+  for (double m : sim.particles().m) mass += m;
+  kn /= double(nb);
+  len /= double(nb);
+  mass /= double(sim.particles().size());
+  const double Lc = norm(p.cell.h.col(ax));
+  return Lc / (len * std::sqrt(kn / mass));
+}
+
+/// E and ν (and their spreads) from the measured points, segments from `from` on.
+void moduli_from_points(ExplicitResult& res, const std::vector<double>& lateral_stress, std::size_t from,
+                        UniaxialLoading loading) {
+  const Fit fs = fit(res.strain, res.stress, from);
+  if (loading == UniaxialLoading::stress) {
+    const Fit fl = fit(res.strain, res.lateral_strain, from);
+    res.E = fs.slope;
+    res.nu = -fl.slope;
+    res.E_error = fs.spread;
+    res.nu_error = fl.spread * std::abs(fl.slope);
+  } else {
+    // Uniaxial strain gives the constrained modulus M and K0 = dσ_lat/dσ_axial; E and ν follow
+    // for an isotropic network: ν = K0/(1+K0), E = M (1+ν)(1−2ν)/(1−ν).
+    const Fit fk = fit(res.stress, lateral_stress, from);
+    const double K0 = fk.slope;
+    res.nu = K0 / (1 + K0);
+    res.E = fs.slope * (1 + res.nu) * (1 - 2 * res.nu) / (1 - res.nu);
+    res.E_error = fs.spread + fk.spread;
+    res.nu_error = fk.spread * std::abs(res.nu);
+  }
+  res.E_error_spread = res.E_error;
+}
+
 ExplicitResult run_once(const Packing& p, const std::vector<Image>& image, const std::vector<dem::BondLaw>& laws,
                         const ExplicitOptions& o, const std::string& file) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -57,12 +107,7 @@ ExplicitResult run_once(const Packing& p, const std::vector<Image>& image, const
   dem::Settings settings;
   settings.threads = std::max(1, o.threads);
   dem::Simulation sim(std::move(parts), p.cell, model, settings);
-  dem::BondSet bonds;
-  for (std::size_t b = 0; b < p.bonds.size(); ++b) {
-    bonds.add(p.bonds.i[b], p.bonds.j[b], Vec3{double(image[b][0]), double(image[b][1]), double(image[b][2])},
-              p.bonds.radius[b], p.bonds.rest_length[b]);
-    if (p.bonds.state[b] != BondTable::intact) bonds.state[b] = dem::BondSet::broken;
-  }
+  dem::BondSet bonds = engine_bonds(p, image);
   std::vector<dem::BondLaw> l = laws;
   for (auto& law : l) law.damping_ratio = o.damping_ratio;
   sim.set_bonds(std::move(bonds), l, dem::BondFailure::none);
@@ -70,20 +115,8 @@ ExplicitResult run_once(const Packing& p, const std::vector<Image>& image, const
   sim.set_time_step(o.timestep_fraction * sim.critical_time_step());
   res.time_step = sim.time_step();
 
-  // Elastic-wave transit time of the cell along the axis: c = l sqrt(k_n/m), with the mean bond
-  // length, normal stiffness and particle mass.
-  const BondStiffnesses k = bond_stiffnesses(p, laws);
-  double kn = 0, len = 0, mass = 0;
-  long nb = 0;
-  for (std::size_t b = 0; b < p.bonds.size(); ++b)
-    if (p.bonds.state[b] == BondTable::intact) kn += k.kn[b], len += p.bonds.rest_length[b], ++nb;
-  for (double m : sim.particles().m) mass += m;
-  kn /= double(nb);
-  len /= double(nb);
-  mass /= double(sim.particles().size());
   const int ax = o.axis, b1 = (ax + 1) % 3, b2 = (ax + 2) % 3;
-  const double Lc = norm(p.cell.h.col(ax));
-  res.transit_time = Lc / (len * std::sqrt(kn / mass));
+  res.transit_time = transit_time(p, laws, sim, ax);
   const double T = o.transits * res.transit_time;
   res.strain_rate = o.strain / T;
 
@@ -155,24 +188,7 @@ ExplicitResult run_once(const Packing& p, const std::vector<Image>& image, const
     }
   }
   res.broken_bonds = long(sim.bond_events().size());
-  const Fit fs = fit(res.strain, res.stress, from);
-  if (o.loading == UniaxialLoading::stress) {
-    const Fit fl = fit(res.strain, res.lateral_strain, from);
-    res.E = fs.slope;
-    res.nu = -fl.slope;
-    res.E_error = fs.spread;
-    res.nu_error = fl.spread * std::abs(fl.slope);
-  } else {
-    // Uniaxial strain gives the constrained modulus M and K0 = dσ_lat/dσ_axial; E and ν follow
-    // for an isotropic network: ν = K0/(1+K0), E = M (1+ν)(1−2ν)/(1−ν).
-    const Fit fk = fit(res.stress, lateral_stress, from);
-    const double K0 = fk.slope;
-    res.nu = K0 / (1 + K0);
-    res.E = fs.slope * (1 + res.nu) * (1 - 2 * res.nu) / (1 - res.nu);
-    res.E_error = fs.spread + fk.spread;
-    res.nu_error = fk.spread * std::abs(res.nu);
-  }
-  res.E_error_spread = res.E_error;
+  moduli_from_points(res, lateral_stress, from, o.loading);
   res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return res;
 }

@@ -136,21 +136,29 @@ struct FractureResult {
 /// Linear solver of the SLA: the direct LDLT (Woodbury updates between factorisations) or
 /// multigrid-preconditioned CG (docs/fracture.md#solvers); automatic picks by the particle count.
 enum class SlaSolver : uint8_t { automatic, ldlt, pcg };
+inline constexpr NameTable<SlaSolver, 3> kSlaSolverNames = {
+    {{SlaSolver::automatic, "auto"}, {SlaSolver::ldlt, "ldlt"}, {SlaSolver::pcg, "pcg"}}};
+inline const char* to_string(SlaSolver s) { return name_of(kSlaSolverNames, s); }
+inline std::optional<SlaSolver> parse_sla_solver(std::string_view name) { return value_of(kSlaSolverNames, name); }
 struct SlaOptions {
   double stop_fraction = 0.2;   ///< stop once the load after the peak falls below this × peak (0: until cut through)
   long max_breaks = 1'000'000;
   int woodbury_bonds = 48;      ///< broken bonds handled by low-rank updates before refactorising
   SlaSolver solver = SlaSolver::automatic;
   long pcg_from_particles = 3000;  ///< automatic: PCG from this many sample particles on
-  double cg_tolerance = 1e-8;   ///< PCG: relative residual |f − K x| / |f|
+  double cg_tolerance = 1e-5;   ///< PCG: relative residual |f − K x| / |f| (docs/fracture.md#solvers: why 1e-5)
   double rebuild_factor = 2;    ///< PCG: rebuild the multigrid when a solve needs this × the iterations of a fresh one
   /// Several failures per solve: every bond whose critical opening is within (1 + this) of the
   /// smallest breaks at the smallest (0: one bond per solve).
-  double event_tolerance = 0;
+  double event_tolerance = 0.01;
   bool contact = true;          ///< broken (and pre-crack) bonds whose faces are pushed together carry normal compression
 };
 FractureResult run_sla(const FractureSample& s, const std::vector<dem::BondLaw>& laws, const FailureOptions& f,
                        const SlaOptions& o);
+/// Whether run_sla takes the PCG path for a sample of this many particles (not left out).
+inline bool sla_uses_pcg(const SlaOptions& o, long particles) {
+  return o.solver == SlaSolver::pcg || (o.solver == SlaSolver::automatic && particles >= o.pcg_from_particles);
+}
 
 /// The linear response of the sample at unit grip opening with the given load bonds broken
 /// (contact of their faces as `o.contact`): what one SLA step solves, for tests and studies.
@@ -194,6 +202,7 @@ struct FractureConfig {
   ExplicitFractureOptions explicit_;
   double stop_fraction = 0.2;
   bool elastic = true;                   ///< compute E, ν of the periodic network (G = K²(1−ν²)/E check)
+  std::vector<double> widths;            ///< size-effect study (SLA): sample widths in mean diameters, ≥ 3 (docs/fracture.md#size-effect)
   std::optional<double> youngs_modulus, poisson_ratio, density;  ///< overrides for every phase (unset: file)
 };
 /// Returns the JSON summary (also written to `json` when set).
