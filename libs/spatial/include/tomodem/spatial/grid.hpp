@@ -53,7 +53,8 @@ class Grid {
  public:
   /// Bins the particles. Positions must lie inside the cell along its periodic directions
   /// (wrap_into_cell). `extra` is the reach beyond r_i + r_j that visit() must cover;
-  /// `hierarchical`: levels by radius, else one level.
+  /// `hierarchical`: levels by radius, else one level. Keeps a pointer to the radii (they must
+  /// outlive the grid); the positions are copied as fractional coordinates.
   Grid(const std::vector<Vec3>& x, const std::vector<double>& r, const Cell& cell, double extra, bool hierarchical);
   /// As above, hierarchical when use_hgrid(r).
   Grid(const std::vector<Vec3>& x, const std::vector<double>& r, const Cell& cell, double extra)
