@@ -40,7 +40,7 @@ int main(int argc, char** argv) {
     app.add_option("--ionic", c.ionic, "composite electrode: ionic phases")->delimiter(',');
     app.add_option("--charge-transfer", c.charge_transfer,
                    "composite electrode: charge-transfer conductance per TPB length (S/m)");
-    app.add_option("--voxel", c.voxel, "voxel cross-check at these resolutions (voxels along the longest edge)")
+    app.add_option("--voxel-check", c.voxel, "voxel cross-check at these resolutions (voxels along the longest edge)")
         ->delimiter(',');
     tomodem::cli::Common common;
     tomodem::cli::add_common(app, "tomodem-conduct", common);

@@ -31,7 +31,7 @@ int main(int argc, char** argv) {
     auto* macropores = app.add_option("--macropores", o.n_macropores,
                                       "pores kind: number of macropores (default: up to 6, as many as fit)");
     app.add_option("--fine-porosity", o.fine_porosity, "pores kind: fine pore volume fraction")->capture_default_str();
-    app.add_option("--grains", o.n_grains, "packing kind: number of grains (at most)")->capture_default_str();
+    app.add_option("--grain-count", o.n_grains, "packing kind: number of grains (at most)")->capture_default_str();
     app.add_option("--sphere-radius", o.sphere_radius, "sphere kind: radius (voxels)")->capture_default_str();
     app.add_flag("--float", c.as_float, "write float32 instead of uint16");
     tomodem::cli::Common common;

@@ -15,7 +15,8 @@ namespace {
 const char* kUsage =
     "usage: tomodem VERB [ARGS...]\n"
     "verbs: segment, phantom, pack, carve, sinter, bond, young, fracture, conduct, cg, dem, run\n"
-    "Each verb is the executable tomodem-VERB; `tomodem VERB --help` shows its options.\n";
+    "Each verb is the executable tomodem-VERB; `tomodem VERB --help` shows its options.\n"
+    "Options every verb shares (--json FILE, -q, -o FILE, --threads 0, lengths with units): docs/cli.md\n";
 
 std::string self_dir() {
   char buf[PATH_MAX];

@@ -1,10 +1,9 @@
 // Running a scene's protocol: measurements, stop criteria, progress, checkpoints.
-#include <unistd.h>
-
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 
+#include "tomodem/core/progress.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/dem/scene.hpp"
 
@@ -38,11 +37,10 @@ RunReport run_protocol(Scene& scene, const std::string& checkpoint_path, bool pr
   const Protocol& p = scene.protocol;
   RunReport rep;
   rep.stop_reason = "steps";
-  const bool tty = progress && ::isatty(STDERR_FILENO);
   const long first = sim.step_count();
   rep.series.push_back(sim.measure());
   const auto t0 = std::chrono::steady_clock::now();
-  auto last_print = t0;
+  Progress bar("steps", double(p.steps - first));
   while (sim.step_count() < p.steps) {
     // Advance to the next output row (or checkpoint), whichever comes first.
     long next = std::min(p.steps, (sim.step_count() / p.output_interval + 1) * p.output_interval);
@@ -63,15 +61,15 @@ RunReport run_protocol(Scene& scene, const std::string& checkpoint_path, bool pr
     }
     if (p.checkpoint_interval > 0 && !checkpoint_path.empty() && sim.step_count() % p.checkpoint_interval == 0)
       write_checkpoint(checkpoint_path, sim, scene.text, full_series(scene, rep.series));
-    const auto now = std::chrono::steady_clock::now();
-    if (progress && std::chrono::duration<double>(now - last_print).count() > (tty ? 0.5 : 10.0)) {
+    if (progress) {
       const Measurements& m = rep.series.back();
-      std::fprintf(stderr, "%sstep %ld/%ld  t=%.4g s  KE=%.3g J  p=%.4g Pa  Z=%.3f%s", tty ? "\r" : "",
-                   sim.step_count(), p.steps, sim.time(), m.kinetic_energy, m.pressure, m.coordination, tty ? "" : "\n");
-      last_print = now;
+      char d[160];
+      std::snprintf(d, sizeof d, "step %ld/%ld, t = %.4g s, KE %.3g J, p %.4g Pa, Z %.3f", sim.step_count(), p.steps,
+                    sim.time(), m.kinetic_energy, m.pressure, m.coordination);
+      bar.update(double(sim.step_count() - first), d);
     }
   }
-  if (progress && tty) std::fprintf(stderr, "\n");
+  if (progress) bar.finish(rep.stop_reason);
   rep.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   rep.steps = sim.step_count() - first;
   rep.particle_steps_per_second = rep.wall_time_s > 0 ? double(rep.steps) * sim.particles().size() / rep.wall_time_s : 0;

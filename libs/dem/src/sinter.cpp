@@ -17,6 +17,7 @@
 #include <sstream>
 
 #include "sinter_law.hpp"
+#include "tomodem/core/progress.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
 #include "tomodem/dem/law_registry.hpp"
@@ -525,7 +526,7 @@ class SinterRun {
   double row_dt_ = 0, next_row_ = 0;
   long since_update_ = 0;
   double mass_scale_ = 1;
-  std::chrono::steady_clock::time_point last_print_ = wall0_;
+  Progress bar_{"sintering", 1.0};  // stderr, with the time left (core/progress.hpp)
 };
 
 /// Rayleigh time of the particles of phases with an elastic (non-sintering) pair, physical mass;
@@ -749,13 +750,15 @@ bool SinterRun::record_rows() {
 }
 
 void SinterRun::print_progress() {
-  const auto now = std::chrono::steady_clock::now();
-  if (progress_ && std::chrono::duration<double>(now - last_print_).count() > 10) {
-    const SinterRow& r = rep_.rows.back();
-    std::fprintf(stderr, "step %ld  t=%.4g s  T=%.1f K  rho=%.4f  a/R=%.3f  dt=%.3g s\n", sim_.step_count(), r.time,
-                 r.temperature, r.density, r.mean_neck_ratio, dt_);
-    last_print_ = now;
-  }
+  if (!progress_) return;
+  // Done: the share of the program's time, or of the way to the target density if further.
+  const SinterRow& r = rep_.rows.back();
+  double f = t_end_ > t_start_ ? (sim_.time() - t_start_) / (t_end_ - t_start_) : 0;
+  if (s_.target_density > rho0_) f = std::max(f, (r.density - rho0_) / (s_.target_density - rho0_));
+  char d[160];
+  std::snprintf(d, sizeof d, "t = %.3g s, T = %.0f K, density %.4f, a/R %.3f, step %ld", r.time, r.temperature,
+                r.density, r.mean_neck_ratio, sim_.step_count());
+  bar_.update(f, d);
 }
 
 /// Physical masses back, the cell at rest.
@@ -794,6 +797,7 @@ SinterReport SinterRun::run() {
     rep_.rows.push_back(make_row(scan(sim_, false), dt_, mass_scale_, rho_last_, t_last_));
   }
   rep_.final = rep_.rows.back();
+  if (progress_) bar_.finish(rep_.stop_reason);
   restore();
   rep_.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0_).count();
   return rep_;

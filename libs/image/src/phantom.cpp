@@ -227,7 +227,7 @@ void check_phantom_options(const PhantomOptions& o) {
     throw InputError("", "--macropores", std::to_string(o.n_macropores), "must be an integer in [0, 1000]");
   finite_in("--fine-porosity", o.fine_porosity, 0, 0.3, "must be finite and in [0, 0.3] (volume fraction)");
   if (o.n_grains < 1 || o.n_grains > 100000)
-    throw InputError("", "--grains", std::to_string(o.n_grains), "must be an integer in [1, 100000]");
+    throw InputError("", "--grain-count", std::to_string(o.n_grains), "must be an integer in [1, 100000]");
   if (!std::isfinite(o.sphere_radius) || !(o.sphere_radius > 0) ||
       (o.kind == "sphere" && o.sphere_radius > double(o.n) / 2 - 1))
     throw InputError("", "--sphere-radius", as_written("--sphere-radius", o.sphere_radius),

@@ -122,7 +122,7 @@ std::vector<int> parse_axes(const std::string& text, bool unique) {
 std::array<double, 256> check_image_options(const ConductConfig& c) {
   if (!c.input.empty())
     throw InputError("", "--image", c.image, "give either a packing (positional input '" + c.input + "') or --image, not both");
-  if (!c.voxel.empty()) throw InputError("", "--voxel", std::to_string(c.voxel.front()), "applies to a packing, not to --image");
+  if (!c.voxel.empty()) throw InputError("", "--voxel-check", std::to_string(c.voxel.front()), "applies to a packing, not to --image");
   if (!c.electronic.empty() || !c.ionic.empty())
     throw InputError("", c.electronic.empty() ? "--ionic" : "--electronic", join(c.electronic.empty() ? c.ionic : c.electronic),
                      "applies to a packing; with --image give --phase-conductivity");
@@ -256,7 +256,7 @@ void check_packing_options(const ConductConfig& c) {
     throw InputError("", "--charge-transfer", value_text(c.charge_transfer),
                      "applies to a composite electrode: give --electronic and --ionic too");
   for (int res : c.voxel)
-    if (res < 2) throw InputError("", "--voxel", std::to_string(res), "need at least 2 voxels along the longest edge");
+    if (res < 2) throw InputError("", "--voxel-check", std::to_string(res), "need at least 2 voxels along the longest edge");
   check_outputs({c.input}, {{"-o", c.output}, {"-o (its .xdmf sidecar)", c.output.empty() ? "" : xdmf_sidecar_of(c.output)},
                           {"--json", c.json}});
 }
@@ -338,7 +338,7 @@ void solve_network(const ConductConfig& c, const Network& net, const ConductOpti
   out["percolates"] = any;
 }
 
-// The voxel cross-check at each --voxel resolution, then its convergence (Richardson).
+// The voxel cross-check at each --voxel-check resolution, then its convergence (Richardson).
 json voxel_check(const ConductConfig& c, const Packing& pk, const Network& net, const ConductOptions& co, int axis,
                  double network_sigma) {
   json vx = json::array();
@@ -375,7 +375,7 @@ json voxel_check(const ConductConfig& c, const Packing& pk, const Network& net, 
     char msg[400];
     std::snprintf(msg, sizeof msg,
                   "the voxel grid does not resolve the necks: the smallest neck radius is %.2g voxels on the finest "
-                  "grid (need >= %.0f); --voxel must reach %ld voxels per longest edge for the smallest neck, %ld for "
+                  "grid (need >= %.0f); --voxel-check must reach %ld voxels per longest edge for the smallest neck, %ld for "
                   "the median one; until then the voxel answer is not converged",
                   last.neck_min_voxels, kNeckVoxels, long(last.required_resolution_min), long(last.required_resolution_median));
     problems.push_back(msg);
@@ -392,7 +392,7 @@ json voxel_check(const ConductConfig& c, const Packing& pk, const Network& net, 
     out["observed_order"] = order;
     out["discretisation_error"] = e;
     out["converging"] = converging;
-    if (!same_ratio) problems.push_back("the last three --voxel resolutions are not refined by one factor: no Richardson extrapolation");
+    if (!same_ratio) problems.push_back("the last three --voxel-check resolutions are not refined by one factor: no Richardson extrapolation");
     else if (!converging) {
       char msg[200];
       std::snprintf(msg, sizeof msg, "the voxel answers %.4g, %.4g, %.4g do not converge (observed order %.2f <= 0.5): "
@@ -401,7 +401,7 @@ json voxel_check(const ConductConfig& c, const Packing& pk, const Network& net, 
     }
     if (c.bc == "electrodes" && ext != 0) out["network_minus_voxel_relative"] = (network_sigma - ext) / ext;
   } else {
-    problems.push_back("fewer than three --voxel resolutions: no observed order, no extrapolation");
+    problems.push_back("fewer than three --voxel-check resolutions: no observed order, no extrapolation");
   }
   std::string message;
   for (const auto& p : problems) {

@@ -22,9 +22,9 @@ void check_voxel_grid(const Packing& pk, const VoxelOptions& opt) {
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c)
       if (r != c && h(r, c) != 0)
-        throw InputError(opt.source, "/cell/h", "non-rectangular", "the voxel cross-check (--voxel) needs a rectangular cell");
+        throw InputError(opt.source, "/cell/h", "non-rectangular", "the voxel cross-check (--voxel-check) needs a rectangular cell");
   const std::string res = std::to_string(opt.resolution);
-  if (opt.resolution < 2) throw InputError("", "--voxel", res, "need at least 2 voxels along the longest edge");
+  if (opt.resolution < 2) throw InputError("", "--voxel-check", res, "need at least 2 voxels along the longest edge");
   const double L[3] = {h(0, 0), h(1, 1), h(2, 2)};
   if (!(L[0] > 0 && L[1] > 0 && L[2] > 0))
     throw InputError(opt.source, "/cell/h", "diagonal " + std::to_string(L[0]) + " " + std::to_string(L[1]) + " " +
@@ -35,10 +35,10 @@ void check_voxel_grid(const Packing& pk, const VoxelOptions& opt) {
   for (double l : L) nv *= std::max(1.0, std::round(l / vs));
   char count[32];
   std::snprintf(count, sizeof count, "%.3g", nv);
-  check_memory_request(nv * bytes_per_voxel(), "", "--voxel", res,
+  check_memory_request(nv * bytes_per_voxel(), "", "--voxel-check", res,
                        "the voxel cross-check at " + res + " voxels along the longest edge (" + count + " voxels)");
   if (nv > 2147483645.0)
-    throw InputError("", "--voxel", res,
+    throw InputError("", "--voxel-check", res,
                      std::string("a grid of ") + count + " voxels: more than the solver's 2^31 - 3 nodes; "
                      "choose a coarser resolution");
 }
@@ -65,7 +65,7 @@ VoxelResult voxel_conductivity(const Packing& pk, const VoxelOptions& opt) {
   const double d[3] = {Lx / n[0], Ly / n[1], Lz / n[2]};  // exact fit: slightly anisotropic at worst
   res.voxel_size = vs;
   // Rasterise into a label image (label = material index + 1, 0 = void) and solve it with the
-  // segmented-image transport solver: one finite-volume scheme for --image and --voxel.
+  // segmented-image transport solver: one finite-volume scheme for --image and --voxel-check.
   LabelImage im;
   im.nx = n[0]; im.ny = n[1]; im.nz = n[2];
   im.spacing = {d[0], d[1], d[2]};

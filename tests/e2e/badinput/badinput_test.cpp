@@ -214,7 +214,7 @@ const std::vector<Row> kRows = {
     {"conduct", "{bonded.h5} --axis q", 2, {"--axis", "q"}},
     {"conduct", "{bonded.h5} --preconditioner nosuch", 2, {"--preconditioner", "nosuch"}},
     {"conduct", "{bonded.h5} --phases nosuch", 2, {"--phases", "nosuch"}},
-    {"conduct", "{bonded.h5} --voxel 100000", 2, {"--voxel", "100000"}},
+    {"conduct", "{bonded.h5} --voxel-check 100000", 2, {"--voxel-check", "100000"}},
     {"conduct", "{bonded.h5} --no-such-option", 2, {"--no-such-option"}},
     {"conduct", "{bonded.h5} -o {bonded.h5}", 2, {"-o", "bonded.h5"}},
     {"conduct", "{bonded.h5} --json {bonded.h5}", 2, {"--json", "bonded.h5"}},

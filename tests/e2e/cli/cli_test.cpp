@@ -308,4 +308,34 @@ TEST(OutputOption, DemAndSinterRefuseOAsAFolderAndSayWhatToUse) {
   }
 }
 
+// ---- docs/cli.md names every option of every tool ---------------------------------------------
+
+TEST(CliDoc, EveryOptionOfEveryToolIsInTheTable) {
+  const std::string doc = text_of(fs::path(TOMODEM_SOURCE_DIR) / "docs" / "cli.md");
+  ASSERT_FALSE(doc.empty());
+  const fs::path dir = fresh_dir("doc");
+  int checked = 0;
+  for (const char* tool : {"pack", "dem", "sinter", "bond", "young", "fracture", "conduct", "carve", "segment", "phantom",
+                           "run"}) {
+    const std::string exe = std::string("tomodem-") + tool;
+    if (!built(exe)) continue;
+    const Result r = run(exe, "--help", dir);
+    ASSERT_EQ(r.code, 0) << exe;
+    std::istringstream lines(r.out);
+    for (std::string line; std::getline(lines, line);) {
+      const auto k = line.find_first_not_of(' ');
+      if (k == std::string::npos || line[k] != '-') continue;  // options only, not the usage line
+      std::string names = line.substr(k, line.find(' ', k) - k);
+      for (std::size_t b = 0; b < names.size();) {
+        const auto e = std::min(names.find(',', b), names.size());
+        const std::string name = names.substr(b, e - b);
+        EXPECT_NE(doc.find("`" + name + "`"), std::string::npos) << exe << ": " << name << " is not in docs/cli.md";
+        ++checked;
+        b = e + 1;
+      }
+    }
+  }
+  EXPECT_GT(checked, 100);  // the tools have some 160 options between them
+}
+
 }  // namespace

@@ -87,8 +87,8 @@ const std::vector<Case> kCases = {
     {"image_sides_unknown", "conduct", "--image {D}/labels.h5 --phase 1 --sides mirror", 2, {"--sides", "mirror"}},
     {"image_and_packing", "conduct", L + " --image {D}/labels.h5 --phase 1", 2, {"--image", "lattice.h5"}},
     // ---- options
-    {"voxel_resolution_huge", "conduct", L + " --voxel 100000", 2, {"--voxel", "100000", "would need", "this machine has"}},
-    {"voxel_resolution_one", "conduct", L + " --voxel 1", 2, {"--voxel", "1"}},
+    {"voxel_resolution_huge", "conduct", L + " --voxel-check 100000", 2, {"--voxel-check", "100000", "would need", "this machine has"}},
+    {"voxel_resolution_one", "conduct", L + " --voxel-check 1", 2, {"--voxel-check", "1"}},
     {"electrode_tolerance_nan", "conduct", L + " --electrode-tolerance nan", 2, {"--electrode-tolerance", "nan"}},
     {"gap_tolerance_negative", "conduct", L + " --gap-tolerance -0.5", 2, {"--gap-tolerance", "-0.5"}},
     {"min_contact_ratio_two", "conduct", L + " --min-contact-ratio 2", 2, {"--min-contact-ratio", "2"}},

@@ -107,7 +107,7 @@ TEST_F(ConductCli, PeriodicTensor) {
 
 TEST_F(ConductCli, CompositeAndVoxelSections) {
   const std::string in = lattice();
-  const CliResult r = run(in + " --electronic LSM --ionic YSZ --charge-transfer 1e3 --voxel 10,20,40 --json " +
+  const CliResult r = run(in + " --electronic LSM --ionic YSZ --charge-transfer 1e3 --voxel-check 10,20,40 --json " +
                     path("s.json") + " --quiet");
   ASSERT_EQ(r.code, 0) << r.err;
   const auto s = summary(path("s.json"));
@@ -135,7 +135,7 @@ TEST_F(ConductCli, DocsWorkedExampleRuns) {
   r = run(in + " --phases LSM --bc periodic --json " + path("periodic.json"));
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_EQ(summary(path("periodic.json"))["sigma_tensor"].size(), 3u);
-  r = run(in + " --phases LSM --axis z --electronic LSM --ionic YSZ --charge-transfer 1e3 --voxel 16,32,64 --json " +
+  r = run(in + " --phases LSM --axis z --electronic LSM --ionic YSZ --charge-transfer 1e3 --voxel-check 16,32,64 --json " +
           path("composite.json"));
   ASSERT_EQ(r.code, 0) << r.err;
   const auto c = summary(path("composite.json"));

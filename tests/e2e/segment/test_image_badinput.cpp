@@ -287,7 +287,7 @@ const std::vector<Row> kRows = {
     {"PhantomCuppingTwo", "phantom", "-o {W}/g.mha --size 16 --cupping 2", {}, 2, {"--cupping", "2"}},
     {"PhantomMacroporesNegative", "phantom", "-o {W}/g.mha --size 16 --macropores -1", {}, 2, {"--macropores", "-1"}},
     {"PhantomMacroporesDoNotFit", "phantom", "-o {W}/g.mha --size 16 --macropores 50", {}, 2, {"--macropores", "50", "fit"}},
-    {"PhantomGrainsZero", "phantom", "-o {W}/g.mha --size 16 --kind packing --grains 0", {}, 2, {"--grains", "0"}},
+    {"PhantomGrainsZero", "phantom", "-o {W}/g.mha --size 16 --kind packing --grain-count 0", {}, 2, {"--grain-count", "0"}},
     {"PhantomSphereTooLarge", "phantom", "-o {W}/g.mha --size 16 --kind sphere --sphere-radius 30", {}, 2, {"--sphere-radius", "30"}},
     {"PhantomKindUnknown", "phantom", "-o {W}/g.mha --kind nosuch", {}, 2, {"--kind", "nosuch"}},
     {"PhantomFormatUnknown", "phantom", "-o {W}/g.xyz --size 16", {}, 2, {"-o", "g.xyz"}},

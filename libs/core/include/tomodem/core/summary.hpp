@@ -27,6 +27,7 @@ class Summary {
   void input(const std::string& path, const json& details = json::object());
   /// One output file under its role ("packing", "curve"); an empty path is not an output.
   void output(const std::string& role, const std::string& path);
+  void output(const std::string& role, const char* path) { output(role, std::string(path)); }
   /// A list of files under one role (plots, overlays).
   void output(const std::string& role, const json& paths);
   void n_particles(std::size_t n);

@@ -3,7 +3,7 @@
 // The packing is rasterised into a label image (a voxel takes the material of the first
 // conducting particle that contains its centre, void elsewhere) and solved by the segmented-image
 // transport solver (image_transport.hpp: two-point flux finite volumes, harmonic face means, half
-// a voxel to each Dirichlet face, flood-fill pruning, AMG-CG). One scheme serves --image and --voxel.
+// a voxel to each Dirichlet face, flood-fill pruning, AMG-CG). One scheme serves --image and --voxel-check.
 // The answer converges only once the necks are resolved: a neck of radius a below ~2 voxels is
 // either lost or replaced by a voxel-wide bridge (neck_min_voxels, necks_resolved).
 #include <cstdint>
@@ -43,7 +43,7 @@ struct VoxelResult {
   long required_resolution_median = 0;  ///< ... across the median neck
 };
 
-/// Refuses (InputError naming --voxel and the resolution) a grid that cannot be built: a cell
+/// Refuses (InputError naming --voxel-check and the resolution) a grid that cannot be built: a cell
 /// that is not rectangular, fewer than 2 voxels, more voxels than the solver's 32-bit node
 /// indices hold, or more memory than the machine has (need vs have). Called before any work.
 void check_voxel_grid(const Packing& packing, const VoxelOptions& options);

@@ -1,0 +1,94 @@
+// The shared command-line layer (docs/cli.md): the length parser, the summary builder's common
+// keys, where a summary goes, and the duration text of progress lines.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "tomodem/core/error.hpp"
+#include "tomodem/core/progress.hpp"
+#include "tomodem/core/summary.hpp"
+#include "tomodem/core/units.hpp"
+
+namespace fs = std::filesystem;
+
+TEST(Lengths, UnitsScaleToMetres) {
+  // 1 mm = 1e-3 m, 1 um = 1e-6 m, 1 nm = 1e-9 m (SI prefixes); a bare number is metres.
+  EXPECT_DOUBLE_EQ(tomodem::parse_length("--x", "60.7um"), 60.7e-6);
+  EXPECT_DOUBLE_EQ(tomodem::parse_length("--x", "60.7\xc2\xb5m"), 60.7e-6);
+  EXPECT_DOUBLE_EQ(tomodem::parse_length("--x", "0.05mm"), 5e-5);
+  EXPECT_DOUBLE_EQ(tomodem::parse_length("--x", "0.05MM"), 5e-5);
+  EXPECT_DOUBLE_EQ(tomodem::parse_length("--x", "2 nm"), 2e-9);
+  EXPECT_DOUBLE_EQ(tomodem::parse_length("--x", "1e-3"), 1e-3);
+  EXPECT_DOUBLE_EQ(tomodem::parse_length("--x", "-1.5m"), -1.5);
+}
+
+TEST(Lengths, UnknownUnitsAndNonNumbersNameTheOption) {
+  for (const char* bad : {"3km", "3 furlong", "mm", "", "nan", "1e999"}) {
+    try {
+      tomodem::parse_length("--grip", bad);
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const tomodem::InputError& e) {
+      EXPECT_EQ(e.field(), "--grip") << bad;
+      EXPECT_EQ(e.value(), bad);
+    }
+  }
+}
+
+TEST(Summary, OwnsTheCommonKeys) {
+  tomodem::Summary s("tomodem-test");
+  s.input("in.h5", {{"format", "h5"}});
+  s.output("packing", "out.h5");
+  s.output("nothing", "");  // an empty path is no output
+  s.n_particles(42);
+  s.unit("E", "Pa");
+  s["E"] = 1e9;
+  const auto j = nlohmann::json::parse(s.text());
+  EXPECT_EQ(j["tool"], "tomodem-test");
+  EXPECT_EQ(j["input"]["path"], "in.h5");
+  EXPECT_EQ(j["input"]["format"], "h5");
+  EXPECT_EQ(j["outputs"].size(), 1u);
+  EXPECT_EQ(j["outputs"]["packing"], "out.h5");
+  EXPECT_EQ(j["n_particles"], 42);
+  EXPECT_EQ(j["units"]["E"], "Pa");
+  EXPECT_EQ(j["units"]["wall_time_s"], "s");
+  EXPECT_EQ(j["E"], 1e9);
+  EXPECT_GE(j["wall_time_s"].get<double>(), 0);
+  EXPECT_GE(j["cpu_time_s"].get<double>(), 0);
+  EXPECT_GT(j["peak_rss_bytes"].get<double>(), 0);
+  for (const char* k : {"version", "git_hash", "command_line", "host", "utc_time"})
+    EXPECT_TRUE(j["provenance"].contains(k)) << k;
+}
+
+TEST(Summary, WithoutAnInputThePathIsNull) {
+  const auto j = nlohmann::json::parse(tomodem::Summary("tomodem-test").text());
+  EXPECT_TRUE(j["input"]["path"].is_null());
+  EXPECT_TRUE(j["outputs"].is_object());
+}
+
+TEST(Summary, JsonFileIsWrittenAndDashIsNoFile) {
+  const fs::path dir = fs::path(::testing::TempDir()) / "summary_emit";
+  fs::create_directories(dir);
+  const fs::path f = dir / "s.json";
+  tomodem::emit_summary("{\"a\": 1}\n", f.string());
+  std::ifstream in(f);
+  std::stringstream t;
+  t << in.rdbuf();
+  EXPECT_EQ(t.str(), "{\"a\": 1}\n");
+  const fs::path cwd = fs::current_path();
+  fs::current_path(dir);
+  testing::internal::CaptureStdout();
+  tomodem::emit_summary("{\"b\": 2}\n", "-");
+  EXPECT_EQ(testing::internal::GetCapturedStdout(), "{\"b\": 2}\n");
+  EXPECT_FALSE(fs::exists(dir / "-"));
+  fs::current_path(cwd);
+}
+
+TEST(Progress, DurationsReadAsMinutesAndHours) {
+  EXPECT_EQ(tomodem::duration_text(12.4), "12 s");
+  EXPECT_EQ(tomodem::duration_text(190), "3 min 10 s");
+  EXPECT_EQ(tomodem::duration_text(3725), "1 h 02 min");
+  EXPECT_EQ(tomodem::duration_text(-1), "?");
+}
