@@ -723,7 +723,9 @@ json summary_of(const std::vector<Cell>& cells, const std::vector<std::string>& 
 
 ReportFiles write_report(const std::string& dir, const std::vector<std::string>& row_files, const ReportOptions& options) {
   if (row_files.empty()) throw InputError("", "rows", "", "no row files given");
-  refuse_report_folder(dir, row_files);
+  std::vector<std::string> inputs = row_files;
+  if (!options.replicas.empty()) inputs.push_back(options.replicas);  // the folder must not hold it either
+  refuse_report_folder(dir, inputs);
   ReportOptions o = options;
   Table t = read_rows(row_files);
   add_ratios(t, o.ratios);
