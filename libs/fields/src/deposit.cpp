@@ -107,7 +107,15 @@ struct Accumulator::Impl {
     const Vec3 e0 = g.g0 + g.A * Vec3(b.lo[0], b.lo[1], b.lo[2]) - p;
     const double w2 = kernel.width * kernel.width;
     if (kernel.type == KernelType::gaussian && std::max({norm2(a0), norm2(a1), norm2(a2)}) <= 2 * w2) {
-      gaussian_box(e0, weight, dir, b, w);
+      // Only the part of the item's box that this point's support reaches (branches span more).
+      const Vec3 ci = g.index_of(p);
+      int lo[3], hi[3];
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = std::max(0, int(std::ceil(ci[a] - g.reach[a])) - b.lo[a]);
+        hi[a] = std::min(b.len[a] - 1, int(std::floor(ci[a] + g.reach[a])) - b.lo[a]);
+        if (lo[a] > hi[a]) return;
+      }
+      gaussian_box(e0, lo, hi, weight, dir, b, w);
       return;
     }
     const double gamma = norm2(a2), da2 = dir ? dot(*dir, a2) : 0;
@@ -142,8 +150,10 @@ struct Accumulator::Impl {
   /// product of factors each multiplied by a constant per step, so the box costs a dozen exp calls
   /// instead of two per row (or one per node). Used while the grid steps are below 1.4 w, so that
   /// no factor overflows (at most exp(sqrt(2)·√3·(k + 1)) for a cut-off of k widths).
-  void gaussian_box(const Vec3& e0, double weight, const Vec3* dir, const Box& b, Work& w) const {
+  void gaussian_box(const Vec3& e_box, const int* lo, const int* hi, double weight, const Vec3* dir, const Box& b,
+                    Work& w) const {
     const Vec3 a0 = g.A.col(0), a1 = g.A.col(1), a2 = g.A.col(2);
+    const Vec3 e0 = e_box + g.A * Vec3(lo[0], lo[1], lo[2]);  // the recurrences start at the corner lo
     const double w2 = kernel.width * kernel.width, h = 0.5 / w2, c2 = kernel.cutoff * kernel.cutoff;
     const double gamma = norm2(a2), da2 = dir ? dot(*dir, a2) : 0;
     double E_i = weight * kernel.norm * std::exp(-norm2(e0) * h);   // E(i, 0, 0)
@@ -153,11 +163,11 @@ struct Accumulator::Impl {
     const double Sa = std::exp(-2 * dot(a0, a1) * h), Sq = std::exp(-2 * norm2(a1) * h);
     double R_i = std::exp(-(2 * dot(e0, a2) + gamma) * h);          // E(i,j,k+1)/E(i,j,k) at j = k = 0
     const double Ra = std::exp(-2 * dot(a0, a2) * h), Rb = std::exp(-2 * dot(a1, a2) * h), Q = std::exp(-2 * gamma * h);
-    for (int i = 0; i < b.len[0]; ++i) {
-      const Vec3 ei = e0 + double(i) * a0;
+    for (int i = lo[0]; i <= hi[0]; ++i) {
+      const Vec3 ei = e_box + double(i) * a0;
       double E = E_i, S = S_i, R_j = R_i;
-      for (int j = 0; j < b.len[1]; ++j) {
-        const Vec3 e = ei + double(j) * a1;
+      for (int j = lo[1]; j <= hi[1]; ++j) {
+        const Vec3 e = ei + double(j) * a1;  // row start at the box's k = 0
         int k0 = 0, k1 = 0;
         if (w.idx[0][i] >= 0 && w.idx[1][j] >= 0 && row_range(e, a2, w, &k0, &k1)) {
           const std::size_t row = (std::size_t(i) * b.len[1] + j) * b.len[2];
@@ -165,7 +175,8 @@ struct Accumulator::Impl {
           double* chi = &w.chi[row];
           const double alpha = norm2(e), beta = dot(e, a2), de = dir ? dot(*dir, e) : 0;
           double v = E, R = R_j;
-          for (int k = 0; k < k0; ++k) v *= R, R *= Q;
+          k0 = std::max(k0, lo[2]);
+          for (int k = lo[2]; k < k0; ++k) v *= R, R *= Q;
           for (int k = k0; k <= k1; ++k) {
             const double r2 = alpha + k * (2 * beta + k * gamma);
             const double val = r2 < c2 ? v : 0;
