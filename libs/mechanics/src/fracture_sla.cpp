@@ -18,8 +18,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <memory>
 
 #include "bond_rows.hpp"
@@ -96,7 +94,7 @@ struct Sla {
     for (std::size_t i = 0; i < n; ++i)
       if (s.role[i] != ParticleRole::removed) active[i] = 1, rsum += p.particles.radius[i], ++na;
     rs = rsum / double(std::max(1L, na));
-    pcg = o.solver == SlaSolver::pcg || (o.solver == SlaSolver::automatic && na >= o.pcg_from_particles);
+    pcg = sla_uses_pcg(o, na);
     adj_start.assign(n + 1, 0);
     for (std::size_t b = 0; b < m; ++b) {
       if (s.bond_role[b] != BondRole::load) continue;
@@ -391,7 +389,6 @@ void Sla::pcg_hierarchy() {
   AmgOptions ao;
   ao.strength = 0;          // as implicit.cpp: every bond couples
   ao.aggregate_radius = 2;  // low coordination
-  if (const char* e = std::getenv("TOMODEM_SLA_AMG")) std::sscanf(e, "%d,%d,%lf,%d", &ao.aggregate_radius, &ao.sweeps, &ao.strength, &ao.coarse_size);  // TEMP
   amg = std::make_unique<Amg>(CsrView{int32_t(ndof), K.outerIndexPtr(), K.innerIndexPtr(), K.valuePtr()}, ns, ao);
   ++factorizations;
   cg_reference = -1;
@@ -442,7 +439,8 @@ Eigen::VectorXd Sla::pcg_solve() {
   if (cg_first < 0) {
     cg_first = r.iterations;  // cold: not a reference for warm solves
   } else if (cg_reference < 0) {
-    cg_reference = std::max(r.iterations, 5);
+    // A floor: warm solves of large samples need only a few iterations, and rebuilding for 3 -> 7 costs more than it saves.
+    cg_reference = std::max(r.iterations, 10);
   } else if (r.iterations > o.rebuild_factor * double(cg_reference)) {
     pcg_hierarchy();
     ++rebuilds;
@@ -720,10 +718,6 @@ FractureResult run_sla(const FractureSample& s, const std::vector<dem::BondLaw>&
   for (;;) {
     const Eigen::VectorXd x = sla.solve_with_contact();
     const Sla::Eval ev = sla.evaluate(x);
-    if (std::getenv("TOMODEM_SLA_TRACE"))  // TEMP
-      std::fprintf(stderr, "solve %ld cg %ld/%ld rebuild %ld broken %ld group %zu S %.4e lambda %.4e F %.4e closed %ld t %.1f\n",
-                   sla.solves, sla.cg_total, sla.cg_max, sla.rebuilds, broken, ev.group.size(), ev.stiffness, ev.lambda,
-                   ev.stiffness * ev.lambda, ev.closed, since(t0));
     if (last_stiffness >= 0) {
       // Energy released by the last break at fixed opening: ½ Δ² (S_before − S_after).
       r.dissipated_energy += 0.5 * last_opening * last_opening * std::max(0.0, last_stiffness - ev.stiffness);
@@ -745,7 +739,6 @@ FractureResult run_sla(const FractureSample& s, const std::vector<dem::BondLaw>&
     }
     if (broken >= o.max_breaks) {
       r.stop_reason = "--max-breaks reached";
-      if (std::getenv("TOMODEM_SLA_TRACE")) std::fprintf(stderr, "max breaks %ld %ld\n", broken, o.max_breaks);  // TEMP
       break;
     }
     peak = std::max(peak, force);
@@ -753,7 +746,6 @@ FractureResult run_sla(const FractureSample& s, const std::vector<dem::BondLaw>&
     last_opening = opening;
     last_stiffness = ev.stiffness;
     if (!break_group(sla, ev, s, r, capacity, broken)) break;
-    if (std::getenv("TOMODEM_SLA_TRACE")) std::fprintf(stderr, "after group: %s\n", r.stop_reason.c_str());  // TEMP
   }
   bar.finish(r.stop_reason);
   copy_counters(sla, r);

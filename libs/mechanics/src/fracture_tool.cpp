@@ -14,6 +14,7 @@
 #include "tomodem/core/summary.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/mechanics/fracture.hpp"
+#include "tomodem/mechanics/size_effect.hpp"
 
 namespace tomodem::mechanics {
 
@@ -162,6 +163,16 @@ json result_json(const FractureResult& r, const FractureSample& s) {
     j["factorizations"] = r.factorizations;
     j["fragment_particles_removed"] = r.fragments_removed;
     j["closed_broken_bonds"] = r.closed_broken_bonds;
+    j["solver"] = r.solver;
+    j["failure_groups"] = r.failure_groups;
+    j["active_set_solves"] = r.active_set_iterations;
+    j["solver_setup_s"] = r.solver_setup_s;
+    if (r.solver == "pcg")
+      j["cg"] = {{"iterations", r.cg_iterations},
+                 {"per_solve", double(r.cg_iterations) / double(std::max(1L, r.solves))},
+                 {"largest", r.cg_iterations_max},
+                 {"first_cold", r.cg_iterations_fresh},
+                 {"multigrid_rebuilds", r.amg_rebuilds}};
   } else {
     j["strain_rate"] = r.strain_rate;
     j["reference_strain"] = r.reference_strain;
@@ -179,6 +190,54 @@ json result_json(const FractureResult& r, const FractureSample& s) {
 
 // Every option first: a bad value stops the run before anything is read or written. Returns the
 // failure options with the criterion set.
+/// --widths: at least three distinct positive widths (mean diameters).
+void check_widths(const FractureConfig& c) {
+  if (c.widths.empty()) return;
+  std::vector<double> w = c.widths;
+  std::sort(w.begin(), w.end());
+  std::string text;
+  for (double v : c.widths) text += (text.empty() ? "" : ",") + value_text(v);
+  if (w.size() < 3 || std::unique(w.begin(), w.end()) != w.end() || !(w[0] > 0) || !std::isfinite(w.back()))
+    throw InputError("", "--widths", text, "the size-effect fit needs at least three distinct widths > 0 (mean diameters)");
+}
+
+/// K_IC against the width (SLA): geometrically similar windows of the network (same a/W, same
+/// H/W as the largest window that fits), the two fits of size_effect.hpp.
+json size_effect_study(const FractureConfig& c, const Network& net, const std::vector<dem::BondLaw>& laws,
+                       const FailureOptions& fo, double d) {
+  std::vector<double> widths = c.widths;
+  std::sort(widths.begin(), widths.end());
+  const double L = net.packing.cell.h(0, 0), Hc = net.packing.cell.h(2, 2);
+  if (widths.back() * d > L)
+    throw InputError(c.input, "--widths", value_text(widths.back()),
+                     "wider than the network (" + value_text(L / d) + " mean diameters along x)");
+  const double aspect = std::min(1.0, Hc / (widths.back() * d));  // H/W of every window
+  SlaOptions so = c.sla;
+  so.stop_fraction = c.stop_fraction;
+  std::vector<double> Wm, K, err;
+  json rows = json::array();
+  for (double w : widths) {
+    info("size effect: width " + value_text(w) + " mean diameters");
+    const FractureSample sw = make_sample(crop_network(net, w * d, aspect * w * d), c.crack, c.input);
+    const FractureResult r = run_sla(sw, laws, fo, so);
+    Wm.push_back(sw.W);
+    K.push_back(r.K_IC);
+    err.push_back(r.K_IC_error);
+    rows.push_back({{"W_over_d", sw.W / d}, {"width", sw.W}, {"particles", sw.packing.particles.size()},
+                    {"K_IC", r.K_IC}, {"K_IC_error", r.K_IC_error}, {"broken_bonds", r.events.size()},
+                    {"wall_time_s", r.wall_time_s}});
+  }
+  json out = {{"samples", rows}, {"height_over_width", aspect}};
+  for (SizeEffectLaw law : {SizeEffectLaw::bazant, SizeEffectLaw::linear}) {
+    const SizeEffectFit f = fit_size_effect(Wm, K, err, law);
+    out[law == SizeEffectLaw::bazant ? "bazant" : "linear"] = {
+        {"K_inf", finite(f.K_inf)}, {"K_inf_error", finite(f.K_inf_error)},
+        {law == SizeEffectLaw::bazant ? "W0" : "c", finite(f.length)}, {"length_error", finite(f.length_error)},
+        {"chi2", finite(f.chi2)}, {"dof", f.dof}};
+  }
+  return out;
+}
+
 FailureOptions check_fracture_options(const FractureConfig& c) {
   FailureOptions fo = c.failure;
   require_range("--stop-fraction", c.stop_fraction, 0, false, 1, true, "of the peak load");
@@ -201,6 +260,10 @@ FailureOptions check_fracture_options(const FractureConfig& c) {
     throw InputError("", "--woodbury-bonds", std::to_string(c.sla.woodbury_bonds),
                      "must lie in [0, 100000] (breaks between factorisations)");
   if (c.sla.max_breaks < 1) throw InputError("", "--max-breaks", std::to_string(c.sla.max_breaks), "must be >= 1");
+  require_range("--cg-tolerance", c.sla.cg_tolerance, 0, false, 0.01, true, "relative residual of the PCG solves");
+  require_range("--event-tolerance", c.sla.event_tolerance, 0, true, 0.2, true, "of the critical opening");
+  require_range("--rebuild-factor", c.sla.rebuild_factor, 1, false, 100, true, "x the iterations of a fresh multigrid");
+  check_widths(c);
   require_positive("--transits", c.explicit_.transits, "elastic-wave transits");
   require_non_negative("--strain-rate", c.explicit_.strain_rate, "1/s; 0: from --transits");
   require_non_negative("--damping-ratio", c.explicit_.damping_ratio, "bond dashpot ratio");
@@ -342,7 +405,8 @@ std::string run_fracture(const FractureConfig& c) {
   std::vector<dem::BondLaw> laws = bond_laws(p, c.input, c.law, want_explicit);
   set_failure(laws, p, fo, c.input);
   const FractureSample s = make_sample(net, c.crack, c.input);
-  if (want_sla)  // the Woodbury block K0^-1 U: 6 dofs per particle x 6 columns per broken bond, float64
+  if (want_sla && !sla_uses_pcg(c.sla, long(s.packing.particles.size() - s.removed_particles)))
+    // the Woodbury block K0^-1 U: 6 dofs per particle x 6 columns per broken bond, float64
     check_memory_request(6.0 * double(s.packing.particles.size()) * 6.0 * std::max(1, c.sla.woodbury_bonds) * 8.0, "",
                          "--woodbury-bonds", std::to_string(c.sla.woodbury_bonds),
                          "the low-rank update block for " + std::to_string(s.packing.particles.size()) + " particles");
@@ -376,6 +440,7 @@ std::string run_fracture(const FractureConfig& c) {
   if (want_sla) out["sla"] = result_json(sla, s);
   if (want_explicit) out["explicit"] = result_json(ex, s);
   if (want_sla && want_explicit) out["explicit_vs_sla"] = ex.K_IC / sla.K_IC - 1;
+  if (!c.widths.empty()) out["size_effect"] = size_effect_study(c, net, laws, fo, s.mean_diameter);
   write_fracture_outputs(c, s, sla, ex, primary, out);
   return out.text();
 }
