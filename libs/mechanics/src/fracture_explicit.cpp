@@ -14,13 +14,116 @@
 
 namespace tomodem::mechanics {
 
+namespace {
+/// The bonds that hold or are pre-cracked (broken), between particles of the sample (`index`:
+/// sample particle -> engine particle); `sample_bond` maps each engine bond back.
+dem::BondSet engine_bonds(const FractureSample& s, const std::vector<int32_t>& index, std::vector<int32_t>& sample_bond) {
+  const Packing& p = s.packing;
+  dem::BondSet bonds;
+  for (std::size_t b = 0; b < p.bonds.size(); ++b) {
+    if (s.bond_role[b] != BondRole::load && s.bond_role[b] != BondRole::precrack) continue;
+    const int32_t a = index[std::size_t(p.bonds.i[b])], c = index[std::size_t(p.bonds.j[b])];
+    if (a < 0 || c < 0) continue;
+    const std::size_t k = bonds.add(a, c, Vec3{double(s.image[b][0]), double(s.image[b][1]), double(s.image[b][2])},
+                                    p.bonds.radius[b], p.bonds.rest_length[b]);
+    if (s.bond_role[b] == BondRole::precrack) bonds.state[k] = dem::BondSet::broken;
+    sample_bond.push_back(int32_t(b));
+  }
+  return bonds;
+}
+
+/// Transit time of an elastic wave over the grip distance (mean bond length, stiffness, mass),
+/// and the reference strain: the median strain at which a bond stretched along its axis fails.
+void transit_and_reference_strain(const FractureSample& s, const std::vector<dem::BondLaw>& laws,
+                                  const FailureOptions& f, const dem::Simulation& sim, FractureResult& r) {
+  const Packing& p = s.packing;
+  const BondStiffnesses k = bond_stiffnesses(p, laws);
+  const int nph = int(p.materials.size());
+  double kn = 0, len = 0, mass = 0;
+  long nb = 0;
+  std::vector<double> eps_fail;
+  for (std::size_t b = 0; b < p.bonds.size(); ++b) {
+    if (s.bond_role[b] != BondRole::load) continue;
+    kn += k.kn[b];
+    len += p.bonds.rest_length[b];
+    ++nb;
+    const int i = p.bonds.i[b], j = p.bonds.j[b];
+    const dem::BondLaw& law = laws[std::size_t(p.particles.phase[i] * nph + p.particles.phase[j])];
+    const double a = p.bonds.radius[b];
+    const dem::BondStrength st = dem::bond_strength(f.criterion, law, a, dem::bond_stiffness(law, a, p.particles.radius[i], p.particles.radius[j]));
+    eps_fail.push_back(st.tension * M_PI * a * a / (k.kn[b] * p.bonds.rest_length[b]));
+  }
+  for (double mm : sim.particles().m) mass += mm;
+  kn /= double(nb);
+  len /= double(nb);
+  mass /= double(sim.particles().size());
+  std::nth_element(eps_fail.begin(), eps_fail.begin() + long(eps_fail.size() / 2), eps_fail.end());
+  r.reference_strain = eps_fail[eps_fail.size() / 2];
+  r.transit_time = s.H / (len * std::sqrt(kn / mass));
+}
+
+/// The bond failures of the run as events of the sample, with the load at each (the nearest
+/// record of the curve not before the event).
+/// The grip layers as engine particles (top and bottom), moved at a prescribed velocity.
+void grip_particles(const FractureSample& s, const std::vector<int32_t>& index, dem::Simulation& sim,
+                    std::vector<std::size_t>& top, std::vector<std::size_t>& bottom) {
+  for (std::size_t i = 0; i < index.size(); ++i) {
+    if (index[i] < 0) continue;
+    if (s.role[i] == ParticleRole::top) top.push_back(std::size_t(index[i]));
+    if (s.role[i] == ParticleRole::bottom) bottom.push_back(std::size_t(index[i]));
+  }
+  for (std::size_t i : top) sim.particles().set_motion(i, dem::Motion::prescribed);
+  for (std::size_t i : bottom) sim.particles().set_motion(i, dem::Motion::prescribed);
+}
+
+struct Energy {
+  double work, error;
+};
+
+/// External work (tracked by the engine, or from the load–opening curve), the largest energy
+/// balance error once work is done, and the dissipated energy.
+void energy_budget(const std::vector<Energy>& budget, bool tracked, dem::Simulation& sim, dem::Measurements last,
+                   FractureResult& r) {
+  if (tracked && !budget.empty()) {
+    const double w_end = budget.back().work;
+    r.external_work = w_end;
+    for (const Energy& e : budget)
+      if (e.work > 0.01 * w_end) r.energy_balance_error = std::max(r.energy_balance_error, std::abs(e.error) / e.work);
+  } else {
+    // Work of the grips from the load–opening curve (trapezoids).
+    last = sim.measure();
+    double d0 = 0, f0 = 0;
+    for (const FracturePoint& c : r.curve) {
+      r.external_work += 0.5 * (c.force + f0) * (c.displacement - d0);
+      d0 = c.displacement;
+      f0 = c.force;
+    }
+  }
+  r.dissipated_energy = r.external_work - last.elastic_energy - last.kinetic_energy;
+}
+
+template <class Opening>
+void record_events(const dem::Simulation& sim, const std::vector<int32_t>& sample_bond, const Opening& opening_at,
+                   FractureResult& r) {
+  for (const dem::BondEvent& e : sim.bond_events()) {
+    r.events.push_back({sample_bond[std::size_t(e.bond)], e.mode, opening_at(e.time), 0.0, e.energy, e.position});
+    r.broken_bond_energy += e.energy;
+  }
+  for (FractureEvent& e : r.events) {
+    auto it = std::lower_bound(r.curve.begin(), r.curve.end(), e.displacement,
+                               [](const FracturePoint& c, double d) { return c.displacement < d; });
+    if (it != r.curve.end()) e.force = it->force;
+  }
+}
+}  // namespace
+
 FractureResult run_explicit_fracture(const FractureSample& s, const std::vector<dem::BondLaw>& laws,
                                      const FailureOptions& f, const ExplicitFractureOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
   FractureResult r;
   r.method = FractureMethod::explicit_test;
   const Packing& p = s.packing;
-  const std::size_t n = p.particles.size(), m = p.bonds.size();
+  const std::size_t n = p.particles.size();
   if (!(o.transits > 0) && !(o.strain_rate > 0))
     throw InputError("", "--transits", std::to_string(o.transits), "must be > 0");
   for (const Material& mat : p.materials)
@@ -46,57 +149,18 @@ FractureResult run_explicit_fracture(const FractureSample& s, const std::vector<
   cell.periodic[0] = cell.periodic[2] = false;
   cell.periodic[1] = true;
   dem::Simulation sim(std::move(parts), cell, model, settings);
-  dem::BondSet bonds;
   std::vector<int32_t> sample_bond;  // simulation bond -> sample bond
-  for (std::size_t b = 0; b < m; ++b) {
-    if (s.bond_role[b] != BondRole::load && s.bond_role[b] != BondRole::precrack) continue;
-    const int32_t a = index[std::size_t(p.bonds.i[b])], c = index[std::size_t(p.bonds.j[b])];
-    if (a < 0 || c < 0) continue;
-    const std::size_t k = bonds.add(a, c, Vec3{double(s.image[b][0]), double(s.image[b][1]), double(s.image[b][2])},
-                                    p.bonds.radius[b], p.bonds.rest_length[b]);
-    if (s.bond_role[b] == BondRole::precrack) bonds.state[k] = dem::BondSet::broken;
-    sample_bond.push_back(int32_t(b));
-  }
+  dem::BondSet bonds = engine_bonds(s, index, sample_bond);
   std::vector<dem::BondLaw> l = laws;
   for (auto& law : l) law.damping_ratio = o.damping_ratio;
   sim.set_bonds(std::move(bonds), l, f.criterion);
   if (o.local_damping > 0) sim.body_forces().local_damping = o.local_damping;
   std::vector<std::size_t> top, bottom;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (index[i] < 0) continue;
-    if (s.role[i] == ParticleRole::top) top.push_back(std::size_t(index[i]));
-    if (s.role[i] == ParticleRole::bottom) bottom.push_back(std::size_t(index[i]));
-  }
-  for (std::size_t i : top) sim.particles().set_motion(i, dem::Motion::prescribed);
-  for (std::size_t i : bottom) sim.particles().set_motion(i, dem::Motion::prescribed);
+  grip_particles(s, index, sim, top, bottom);
   sim.set_time_step(o.timestep_fraction * sim.critical_time_step());
   r.time_step = sim.time_step();
 
-  // Transit time of an elastic wave over the grip distance (mean bond length, stiffness, mass),
-  // and the reference strain: the median strain at which a bond stretched along its axis fails.
-  const BondStiffnesses k = bond_stiffnesses(p, laws);
-  const int nph = int(p.materials.size());
-  double kn = 0, len = 0, mass = 0;
-  long nb = 0;
-  std::vector<double> eps_fail;
-  for (std::size_t b = 0; b < m; ++b) {
-    if (s.bond_role[b] != BondRole::load) continue;
-    kn += k.kn[b];
-    len += p.bonds.rest_length[b];
-    ++nb;
-    const int i = p.bonds.i[b], j = p.bonds.j[b];
-    const dem::BondLaw& law = laws[std::size_t(p.particles.phase[i] * nph + p.particles.phase[j])];
-    const double a = p.bonds.radius[b];
-    const dem::BondStrength st = dem::bond_strength(f.criterion, law, a, dem::bond_stiffness(law, a, p.particles.radius[i], p.particles.radius[j]));
-    eps_fail.push_back(st.tension * M_PI * a * a / (k.kn[b] * p.bonds.rest_length[b]));
-  }
-  for (double mm : sim.particles().m) mass += mm;
-  kn /= double(nb);
-  len /= double(nb);
-  mass /= double(sim.particles().size());
-  std::nth_element(eps_fail.begin(), eps_fail.begin() + long(eps_fail.size() / 2), eps_fail.end());
-  r.reference_strain = eps_fail[eps_fail.size() / 2];
-  r.transit_time = s.H / (len * std::sqrt(kn / mass));
+  transit_and_reference_strain(s, laws, f, sim, r);
   r.strain_rate = o.strain_rate > 0 ? o.strain_rate : r.reference_strain / (o.transits * r.transit_time);
   const double v_max = r.strain_rate * s.H;          // grip opening speed
   const double t_ramp = o.ramp_transits * r.transit_time;
@@ -106,9 +170,6 @@ FractureResult run_explicit_fracture(const FractureSample& s, const std::vector<
   const long chunk = std::max(1L, long(r.transit_time / std::max(1, o.records_per_transit) / r.time_step));
   const double opening_cap = 50 * r.reference_strain * s.H;
 
-  struct Energy {
-    double work, error;
-  };
   std::vector<Energy> budget;
   double peak = 0, peak_imbalance = 0, t_peak = 0;
   dem::Measurements last{};
@@ -156,33 +217,9 @@ FractureResult run_explicit_fracture(const FractureSample& s, const std::vector<
       break;
     }
   }
-  for (const dem::BondEvent& e : sim.bond_events()) {
-    r.events.push_back({sample_bond[std::size_t(e.bond)], e.mode, opening_at(e.time), 0.0, e.energy, e.position});
-    r.broken_bond_energy += e.energy;
-  }
-  // Load at each event: from the recorded curve (the nearest record not before the event).
-  for (FractureEvent& e : r.events) {
-    auto it = std::lower_bound(r.curve.begin(), r.curve.end(), e.displacement,
-                               [](const FracturePoint& c, double d) { return c.displacement < d; });
-    if (it != r.curve.end()) e.force = it->force;
-  }
+  record_events(sim, sample_bond, opening_at, r);
   r.transits_to_peak = t_peak / r.transit_time;
-  if (o.track_energy && !budget.empty()) {
-    const double w_end = budget.back().work;
-    r.external_work = w_end;
-    for (const Energy& e : budget)
-      if (e.work > 0.01 * w_end) r.energy_balance_error = std::max(r.energy_balance_error, std::abs(e.error) / e.work);
-  } else {
-    // Work of the grips from the load–opening curve (trapezoids).
-    last = sim.measure();
-    double d0 = 0, f0 = 0;
-    for (const FracturePoint& c : r.curve) {
-      r.external_work += 0.5 * (c.force + f0) * (c.displacement - d0);
-      d0 = c.displacement;
-      f0 = c.force;
-    }
-  }
-  r.dissipated_energy = r.external_work - last.elastic_energy - last.kinetic_energy;
+  energy_budget(budget, o.track_energy, sim, last, r);
   r.grip_force_imbalance = peak_imbalance;
   finish_result(s, r, peak_imbalance);
   r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
