@@ -41,11 +41,16 @@ inline double harmonic_radius(double ri, double rj) { return 2 * ri * rj / (ri +
 
 /// The contact definition shared by bond, conduct and carve (docs/architecture.md#contacts): two
 /// spheres whose centres are d apart are in contact when their gap d − R_i − R_j is at most
-/// tolerance · R̄ (overlapping and touching pairs always).
+/// tolerance · R̄ (overlapping and touching pairs always). "Touching" allows 1e-9 R̄ of round-off:
+/// centres placed exactly one diameter apart (a lattice, a periodic image) come out a few ulps
+/// of the cell size apart, and a zero tolerance must still bond them.
+inline constexpr double kTouchingSlack = 1e-9;
 inline bool in_contact(double d, double ri, double rj, double tolerance) {
-  return d - ri - rj <= tolerance * harmonic_radius(ri, rj);
+  return d - ri - rj <= (tolerance + kTouchingSlack) * harmonic_radius(ri, rj);
 }
 /// The search reach that finds every pair in contact: R̄ ≤ 2 r_max.
-inline double contact_reach(double rmax, double tolerance) { return std::max(0.0, tolerance) * 2 * rmax; }
+inline double contact_reach(double rmax, double tolerance) {
+  return (std::max(0.0, tolerance) + kTouchingSlack) * 2 * rmax;
+}
 
 }  // namespace tomodem::spatial
