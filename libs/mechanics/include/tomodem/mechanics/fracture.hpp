@@ -3,7 +3,7 @@
 // sample cut from the periodic network (free faces normal to x, grips at the z faces, periodic
 // along the crack front y: plane strain), loaded in mode I by the grip displacement along z, two
 // ways: an explicit quasi-static DEM test with bond failure, and the sequentially linear analysis
-// (SLA) with the direct solver (break the most critical bond, rescale the load, re-solve).
+// (SLA: break the most critical bonds, rescale the load, re-solve; direct LDLT or multigrid PCG).
 #include <cstdint>
 #include <optional>
 #include <string>
