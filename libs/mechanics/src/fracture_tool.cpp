@@ -201,16 +201,21 @@ void check_widths(const FractureConfig& c) {
     throw InputError("", "--widths", text, "the size-effect fit needs at least three distinct widths > 0 (mean diameters)");
 }
 
+/// The widest window must fit in the network (checked before any run).
+void check_widths_fit(const FractureConfig& c, const Network& net, double d) {
+  if (c.widths.empty()) return;
+  const double w = *std::max_element(c.widths.begin(), c.widths.end()), L = net.packing.cell.h(0, 0);
+  if (w * d > L)
+    throw InputError(c.input, "--widths", value_text(w), "wider than the network (" + value_text(L / d) + " mean diameters along x)");
+}
+
 /// K_IC against the width (SLA): geometrically similar windows of the network (same a/W, same
 /// H/W as the largest window that fits), the two fits of size_effect.hpp.
 json size_effect_study(const FractureConfig& c, const Network& net, const std::vector<dem::BondLaw>& laws,
                        const FailureOptions& fo, double d) {
   std::vector<double> widths = c.widths;
   std::sort(widths.begin(), widths.end());
-  const double L = net.packing.cell.h(0, 0), Hc = net.packing.cell.h(2, 2);
-  if (widths.back() * d > L)
-    throw InputError(c.input, "--widths", value_text(widths.back()),
-                     "wider than the network (" + value_text(L / d) + " mean diameters along x)");
+  const double Hc = net.packing.cell.h(2, 2);
   const double aspect = std::min(1.0, Hc / (widths.back() * d));  // H/W of every window
   SlaOptions so = c.sla;
   so.stop_fraction = c.stop_fraction;
@@ -405,6 +410,7 @@ std::string run_fracture(const FractureConfig& c) {
   std::vector<dem::BondLaw> laws = bond_laws(p, c.input, c.law, want_explicit);
   set_failure(laws, p, fo, c.input);
   const FractureSample s = make_sample(net, c.crack, c.input);
+  check_widths_fit(c, net, s.mean_diameter);
   if (want_sla && !sla_uses_pcg(c.sla, long(s.packing.particles.size() - s.removed_particles)))
     // the Woodbury block K0^-1 U: 6 dofs per particle x 6 columns per broken bond, float64
     check_memory_request(6.0 * double(s.packing.particles.size()) * 6.0 * std::max(1, c.sla.woodbury_bonds) * 8.0, "",
