@@ -1,0 +1,66 @@
+#pragma once
+// The half neighbour list (CSR) with its per-pair history, the wall candidates, and when to
+// rebuild them (Verlet skin). The search itself is spatial::Grid.
+#include <cstdint>
+#include <vector>
+
+#include "sim_state.hpp"
+#include "tomodem/spatial/grid.hpp"
+
+namespace tomodem::dem {
+
+/// One wall's candidates (particles within reach) with their per-particle history.
+struct WallData {
+  std::vector<int32_t> candidates;
+  std::vector<double> hist;
+  std::vector<uint8_t> touch;
+};
+
+class NeighbourList {
+ public:
+  // Half list (CSR) with per-pair history that survives rebuilds.
+  std::vector<int32_t> start, nj, owner;
+  std::vector<uint8_t> img, touch;
+  std::vector<double> hist;
+  std::vector<Vec3> x_build;
+  Mat3 h_build;
+  std::vector<Vec3> wall_point_build;
+  std::vector<WallData> wall_data;
+  bool need_build = true;
+  long builds = 0;
+  double skin = 0, reach_max = 0;
+  Vec3 shift[27], vshift[27];
+  std::vector<int> split;               // particles of each thread, by pair count
+  std::vector<std::size_t> bond_split;  // bonds of each thread
+
+  /// Skin (Settings::skin or 0.1 × mean diameter) and the largest adhesive reach.
+  void init(const SimState& s);
+  /// Whether a particle, the cell or a wall moved far enough to miss a pair.
+  bool rebuild_due(const SimState& s) const;
+  /// Wraps the positions into the cell (bond images follow) and rebuilds the list, keeping the
+  /// history of the pairs that stay.
+  void build(SimState& s);
+  /// Image shifts H·n and image velocities L·H·n of the current cell.
+  void update_image_tables(const SimState& s);
+  /// Thread split and pair owners of a list restored from a checkpoint.
+  void reindex(const SimState& s);
+
+ private:
+  /// Cell vectors (integer, per particle) subtracted by the last wrap: a pair seen through image
+  /// n before the wrap is seen through n + w_j − w_i after it (its history must follow).
+  std::vector<spatial::Image> wrapped;
+  std::size_t pair_capacity_hint = 0;  ///< pairs in the last list (+N), to reserve the next one
+
+  struct KeptHistory;
+  int image_after_wrap(std::size_t i, int j, int code) const;
+  KeptHistory keep_history(const SimState& s) const;
+  void search_pairs(const SimState& s, std::vector<int32_t>& new_start, std::vector<int32_t>& new_j,
+                    std::vector<uint8_t>& new_img);
+  void exclude_bonded(const SimState& s, std::vector<int32_t>& st, std::vector<int32_t>& jj,
+                      std::vector<uint8_t>& im) const;
+  void find_wall_candidates(const SimState& s);
+  void fill_owner();
+  void partition_threads(const SimState& s);
+};
+
+}  // namespace tomodem::dem
