@@ -58,7 +58,7 @@ int main(int argc, char** argv) {
     app.add_option("--target-grid", o.target_grid, "integration grid per axis (0: from the image resolution)")->capture_default_str();
     app.add_option("--relax", o.relax_steps, "DEM relaxation steps after carving")->capture_default_str();
     app.add_flag("--remove-floating", o.remove_floating, "remove particles outside the main contact cluster");
-    app.add_option("--contact-gap", o.contact_gap, "contact when the gap is at most this fraction of 2RiRj/(Ri+Rj)")->capture_default_str();
+    app.add_option("--gap-tolerance,--contact-gap", o.contact_gap, "contact when the gap is at most this fraction of 2RiRj/(Ri+Rj) (--contact-gap: its old name)")->capture_default_str();
     cli::add_length(app, "--margin", o.outside_margin, "solid_fraction_outside: distance from the pores (default 2 r_max)");
     app.add_option("-o,--output", c.output, "carved packing (.h5; .xdmf sidecar beside it)")->required();
     app.add_option("--picture", c.picture, "mid-plane picture (.png)");

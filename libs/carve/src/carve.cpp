@@ -272,7 +272,7 @@ void check_options(const Packing& in, const Options& opt) {
   if (in.particles.size() == 0) throw InputError(pf, "/particles", "0", "the packing has no particle");
   if (!(opt.fraction >= 0 && opt.fraction < 1)) throw InputError("", "--fraction", num(opt.fraction), "must lie in [0, 1)");
   if (opt.samples_per_diameter < 2) throw InputError("", "--samples", std::to_string(opt.samples_per_diameter), "must be >= 2");
-  if (!(opt.contact_gap >= 0)) throw InputError("", "--contact-gap", num(opt.contact_gap), "must be >= 0");
+  if (!(opt.contact_gap >= 0)) throw InputError("", "--gap-tolerance", num(opt.contact_gap), "must be >= 0");
 }
 
 /// The image must overlap the packing (tiling always does).

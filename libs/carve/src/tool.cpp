@@ -64,7 +64,7 @@ void check_config(const CarveConfig& cfg) {
                      "must be 0 (from the image resolution) or lie in [2, 2048] cells per axis "
                      "(2048^3 = 8.6e9 distance evaluations)");
   if (o.relax_steps < 0) throw InputError("", "--relax", std::to_string(o.relax_steps), "must be >= 0");
-  require_range("--contact-gap", o.contact_gap, 0, false, 1, false, "fraction of 2RiRj/(Ri+Rj)");
+  require_range("--gap-tolerance", o.contact_gap, 0, false, 1, false, "fraction of 2RiRj/(Ri+Rj)");
   require_range("--margin", o.outside_margin, 0, false, INFINITY, true, "m; 0: 2 r_max");
   if (o.threads < 0 || o.threads > 4096)
     throw InputError("", "--threads", std::to_string(o.threads), "must lie in [0, 4096] (0: OpenMP's default)");

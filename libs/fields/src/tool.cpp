@@ -79,12 +79,12 @@ GridSpec parse_grid(const CgConfig& c, const Cell& cell, double width) {
         used = 0;
       }
       if (used != part.size() || part.empty() || !(x >= 1) || x != std::floor(x) || x > 1e9)
-        throw InputError("", "--grid", c.grid, "expected N or NX,NY,NZ: whole numbers of nodes >= 1");
+        throw InputError("", "--nodes", c.grid, "expected N or NX,NY,NZ: whole numbers of nodes >= 1");
       v.push_back(x);
       if (comma == std::string::npos) break;
       pos = comma + 1;
     }
-    if (v.size() != 1 && v.size() != 3) throw InputError("", "--grid", c.grid, "expected one or three counts");
+    if (v.size() != 1 && v.size() != 3) throw InputError("", "--nodes", c.grid, "expected one or three counts");
     for (int a = 0; a < 3; ++a) g.n[a] = int(v.size() == 1 ? v[0] : v[a]);
   }
   if (g.kind == GridSpec::Kind::slice) g.n[g.axis] = 1;
@@ -243,7 +243,7 @@ Setup setup(const CgConfig& c, const Packing& first, std::vector<std::string>& w
   double points = s.grid.kind == GridSpec::Kind::profile ? s.grid.n[s.grid.axis]
                                                          : double(s.grid.n[0]) * s.grid.n[1] * s.grid.n[2];
   // 34 sums and about 80 output values per node, as doubles.
-  check_memory_request(points * 114 * 8, "", "--grid", c.grid.empty() ? "automatic" : c.grid,
+  check_memory_request(points * 114 * 8, "", "--nodes", c.grid.empty() ? "automatic" : c.grid,
                        "a grid of " + value_text(points) + " nodes");
   return s;
 }

@@ -131,7 +131,7 @@ const std::vector<Case> kCases = {
      {"--samples", "100000"}},
     {"offset_nan", "carve", G + V + O + " --offset nan,0,0", 2, {"--offset", "nan"}},
     {"rotate_inf", "carve", G + V + O + " --rotate 0,inf,0", 2, {"--rotate", "inf"}},
-    {"contact_gap_negative", "carve", G + V + O + " --contact-gap -1", 2, {"--contact-gap", "-1"}},
+    {"contact_gap_negative", "carve", G + V + O + " --contact-gap -1", 2, {"--gap-tolerance", "-1"}},
     {"fraction_one", "carve", G + V + O + " --rule fraction --fraction 1", 2, {"--fraction", "1"}},
     {"scale_inf", "carve", G + V + O + " --scale inf", 2, {"--scale", "inf"}},
     {"scale_negative_as_written", "carve", G + V + O + " --scale -1", 2, {"--scale", "value '-1'"}},

@@ -132,11 +132,11 @@ TEST_F(CgCli, SlicesProfilesAndDisplacementThroughFiles) {
   const auto eps = f.read_double("/fields/strain");
   // ∇u against the current positions: 1 - 1/1.001 (the test of the library shows the derivation).
   for (std::size_t n = 0; n < eps.size() / 9; ++n) EXPECT_NEAR(eps[9 * n], 1 - 1 / 1.001, 1e-9);
-  ASSERT_EQ(sh(cg() + " def.h5 -o sl.h5 --json sl.json --slice y=0.5 --grid 9 -q"), 0) << text("stderr.txt");
+  ASSERT_EQ(sh(cg() + " def.h5 -o sl.h5 --json sl.json --slice y=0.5 --nodes 9 -q"), 0) << text("stderr.txt");
   const auto sl = json("sl.json");
   EXPECT_EQ(sl["n_points"], 81);
   EXPECT_TRUE(sl["mass_error"].is_null());  // a plane holds no mass
-  ASSERT_EQ(sh(cg() + " def.h5 -o pr.h5 --json pr.json --profile x --grid 30 -q"), 0) << text("stderr.txt");
+  ASSERT_EQ(sh(cg() + " def.h5 -o pr.h5 --json pr.json --profile x --nodes 30 -q"), 0) << text("stderr.txt");
   EXPECT_EQ(json("pr.json")["n_points"], 30);
   EXPECT_NE(text("pr.xdmf").find("Polyvertex"), std::string::npos);
   EXPECT_NE(text("sl.xdmf").find("2DSMesh"), std::string::npos);

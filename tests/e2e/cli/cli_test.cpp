@@ -157,6 +157,7 @@ const std::vector<Row> kRows = {
     {"dem", "tomodem-dem", "tomodem-dem", "{S} --output-dir d", "{S}", 32},
     {"sinter", "tomodem-sinter", "tomodem-sinter", "{T} --output-dir s", "{T}", 32},
     {"run", "tomodem-run", "tomodem-run", "{R}", "{R}", -1},
+    {"cg", "tomodem-cg", "tomodem-cg", "{P} -o f.h5 --nodes 8", "{P}", 0},
     {"dispatcher", "tomodem", "tomodem-phantom", "phantom -o g.mha --size 24", "", -1},
 };
 
@@ -228,6 +229,7 @@ const std::vector<ThreadsRow> kThreads = {
     {"tomodem-young", "missing.h5"},            {"tomodem-fracture", "missing.h5"},
     {"tomodem-conduct", "missing.h5"},          {"tomodem-carve", "missing.h5 --spheres missing2.h5 -o c.h5"},
     {"tomodem-segment", "missing.mha -o l.h5"}, {"tomodem-phantom", "-o g.mha --size 16"},
+    {"tomodem-cg", "missing.h5 -o f.h5"},
 };
 
 TEST(Threads, ZeroIsAllCoresInEveryToolAndMinusOneIsRefused) {
@@ -316,7 +318,7 @@ TEST(CliDoc, EveryOptionOfEveryToolIsInTheTable) {
   const fs::path dir = fresh_dir("doc");
   int checked = 0;
   for (const char* tool : {"pack", "dem", "sinter", "bond", "young", "fracture", "conduct", "carve", "segment", "phantom",
-                           "run"}) {
+                           "run", "cg"}) {
     const std::string exe = std::string("tomodem-") + tool;
     if (!built(exe)) continue;
     const Result r = run(exe, "--help", dir);
