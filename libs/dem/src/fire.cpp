@@ -66,6 +66,10 @@ class ScaledMasses {
     }
     return true;
   }
+  /// max(S_i, F_i): the stiffness a particle's mass is scaled to (s: the stiffness sums).
+  double effective(const std::vector<double>& s, std::size_t i) const {
+    return std::max(i < s.size() ? s[i] : 0.0, floor_[i]);
+  }
 
  private:
   Particles& p_;
@@ -165,6 +169,159 @@ FireResult minimise_fire(Simulation& sim, const FireOptions& o) {
     }
   }
   stop_motion();
+  masses.restore();
+  body.local_damping = damping;
+  if (dt_caller > 0) sim.set_time_step(std::min(dt_caller, sim.critical_time_step()));
+  return r;
+}
+
+namespace {
+/// The cell's part of the enthalpy minimisation: log strains ε_a with velocities (the engine's
+/// velocity gradient), generalised forces V(−σ_aa − P) and stiffness-scaled masses.
+struct CellDof {
+  int n = 1;                       // 1 isotropic, 3 diagonal
+  double v[3] = {0, 0, 0}, f[3] = {0, 0, 0}, m[3] = {1, 1, 1};
+  double pressure = 0, max_strain = 0;  // target; largest |Δε| per step
+
+  /// Forces from the contact stress (the virial over the cell volume).
+  void forces(const Mat3& sigma, double volume) {
+    if (n == 1) f[0] = volume * (-sigma.trace() - 3 * pressure);
+    else
+      for (int a = 0; a < 3; ++a) f[a] = volume * (-sigma(a, a) - pressure);
+  }
+  /// Masses so that the cell's FIRE step is as stiff as a particle's: the affine stiffness
+  /// K = Σ_c S_c l_c² ≈ ½ Σ_i S_i (2 r_i)² of ∂²U/∂ε² (isotropic; a diagonal component has
+  /// Σ S l² n_a⁴ ≈ K/5 plus couplings K/15 to each other axis, Gershgorin row K/3), with S_i the
+  /// particles' scaled stiffness (floored as theirs), and m = 2 K (Δt_max/c)² as a particle's.
+  void update_masses(const ScaledMasses& masses, const std::vector<double>& s, const Particles& p, double scale) {
+    double k = 0;
+    for (std::size_t i = 0; i < p.size(); ++i) k += 0.5 * masses.effective(s, i) * 4 * p.r[i] * p.r[i];
+    for (int a = 0; a < n; ++a) m[a] = scale * (n == 1 ? k : k / 3);
+  }
+  void kick(double h) {
+    for (int a = 0; a < n; ++a) v[a] += h * f[a] / m[a];
+  }
+  void set_rate(CellControl& ctl, double dt) {
+    for (int a = 0; a < n; ++a) v[a] = std::clamp(v[a], -max_strain / dt, max_strain / dt);
+    for (int a = 0; a < 3; ++a) ctl.velocity_gradient(a, a) = v[n == 1 ? 0 : a];
+  }
+  void stop() { v[0] = v[1] = v[2] = 0; }
+  double power() const { return f[0] * v[0] + f[1] * v[1] + f[2] * v[2]; }
+  double vv() const { return m[0] * v[0] * v[0] + (n == 3 ? m[1] * v[1] * v[1] + m[2] * v[2] * v[2] : 0); }
+  double ff() const { return f[0] * f[0] / m[0] + (n == 3 ? f[1] * f[1] / m[1] + f[2] * f[2] / m[2] : 0); }
+};
+}  // namespace
+
+FireResult minimise_enthalpy(Simulation& sim, const FireOptions& o, const EnthalpyOptions& e) {
+  if (!(e.pressure > 0)) throw InputError("", "pressure", std::to_string(e.pressure), "the enthalpy minimiser needs a target pressure > 0");
+  if (sim.cell_control().active())
+    throw InputError("", "minimise", "", "the enthalpy minimiser drives the cell itself: stop the cell's deformation and servo first");
+  CellControl& ctl = sim.cell_control();
+  BodyForces& body = sim.body_forces();
+  const double damping = body.local_damping, dt_caller = sim.time_step();
+  body.local_damping = 0;
+  const double crit = sim.critical_time_step();
+  const double dt_max = o.dt_max * crit, dt_min = o.dt_min * crit;
+  Particles& p = sim.particles();
+  const std::size_t n = p.size();
+  const bool rot = p.has_rotation();
+  const int threads = std::max(1, sim.settings().threads);
+  const double rmin = *std::min_element(p.r.begin(), p.r.end()), rmax = *std::max_element(p.r.begin(), p.r.end());
+  ScaledMasses masses(sim, dt_max, o.max_move, rmin);
+  const double mscale = 2 * dt_max * dt_max / (ScaledMasses::kMargin * ScaledMasses::kMargin);
+  CellDof cell;
+  cell.n = e.diagonal ? 3 : 1;
+  cell.pressure = e.pressure;
+  // A contact's overlap changes by Δε l ≤ Δε 2 r_max: capped as a particle's move.
+  cell.max_strain = o.max_move * rmin / (2 * rmax);
+  Measurements m = sim.measure();
+  masses.update(m);  // false (physical masses) while no contact carries load: the floor is then used at the first check
+  cell.update_masses(masses, sim.stiffness_sums(), p, mscale);
+  cell.forces(m.stress_contact, sim.cell().volume());
+  double dt = std::min(o.dt_start * crit, dt_max);
+  sim.set_time_step(dt, false);
+  const auto stop_motion = [&] {
+    std::fill(p.v.begin(), p.v.end(), Vec3{});
+    if (rot) std::fill(p.omega.begin(), p.omega.end(), Vec3{});
+    cell.stop();
+  };
+  stop_motion();
+  double alpha = o.alpha_start;
+  long positive = 0;
+  FireResult r;
+  const bool parallel = threads > 1 && n > 20000;
+  int arrived = 0;
+  while (r.steps < o.max_steps) {
+    cell.kick(0.5 * dt);
+    cell.set_rate(ctl, dt);
+    sim.step();
+    ++r.steps;
+    cell.forces(sim.contact_stress(), sim.cell().volume());
+    cell.kick(0.5 * dt);
+    // Power and norms in mass-weighted coordinates (as minimise_fire), the cell included.
+    double power = cell.power(), vv = cell.vv(), ff = cell.ff(), ww = 0, tt = 0, f2 = 0;
+    long nfree = 0;
+#pragma omp parallel for reduction(+ : power, vv, ff, ww, tt, f2, nfree) num_threads(threads) if (parallel)
+    for (long i = 0; i < long(n); ++i) {
+      if (p.motion[i] != Motion::free) continue;
+      ++nfree;
+      f2 += norm2(p.f[i]);
+      power += dot(p.f[i], p.v[i]);
+      vv += p.m[i] * norm2(p.v[i]);
+      ff += p.inv_m[i] * norm2(p.f[i]);
+      if (rot) {
+        power += dot(p.torque[i], p.omega[i]);
+        ww += norm2(p.omega[i]) / p.inv_I[i];
+        tt += p.inv_I[i] * norm2(p.torque[i]);
+      }
+    }
+    const double dt_old = dt;
+    if (power > 0) {
+      const double cv = ff > 0 ? alpha * std::sqrt(vv / ff) : 0, cw = tt > 0 ? alpha * std::sqrt(ww / tt) : 0;
+      const double vmax = o.max_move * rmin / dt;
+#pragma omp parallel for num_threads(threads) if (parallel)
+      for (long i = 0; i < long(n); ++i) {
+        if (p.motion[i] != Motion::free) continue;
+        p.v[i] = (1 - alpha) * p.v[i] + (cv * p.inv_m[i]) * p.f[i];
+        if (rot) p.omega[i] = (1 - alpha) * p.omega[i] + (cw * p.inv_I[i]) * p.torque[i];
+        const double v2 = norm2(p.v[i]);
+        if (v2 > vmax * vmax) p.v[i] *= vmax / std::sqrt(v2);
+      }
+      for (int a = 0; a < cell.n; ++a) {
+        cell.v[a] = (1 - alpha) * cell.v[a] + cv * cell.f[a] / cell.m[a];
+      }
+      if (++positive > o.n_min) {
+        dt = std::min(dt * o.f_inc, dt_max);
+        alpha *= o.f_alpha;
+      }
+    } else {
+      dt = std::max(dt * o.f_dec, dt_min);
+      alpha = o.alpha_start;
+      positive = 0;
+      stop_motion();
+    }
+    if (dt != dt_old) sim.set_time_step(dt, false);
+    if (r.steps % o.check_interval == 0 || r.steps == o.max_steps) {
+      r.last = sim.measure();
+      const double pc = -r.last.stress_contact.trace() / 3;
+      if (e.report && r.steps % e.report_interval == 0) e.report(r.steps, pc);
+      // Arrival: at or above the target in three checks in a row with a network of Z > 3 (one
+      // collision of the loose packing exceeds a small target on its own).
+      arrived = pc >= e.pressure && r.last.coordination > 3 ? arrived + 1 : 0;
+      if (e.stop_on_arrival && arrived >= 3) break;
+      // Adhesive packings: the root-mean-square net force (as minimise_fire).
+      const bool balanced = o.force_tolerance > 0 ? f2 < o.force_tolerance * o.force_tolerance * double(nfree)
+                                                  : r.last.unbalanced_force_ratio < o.unbalanced_force_ratio;
+      if (r.last.contacts > 0 && balanced && std::abs(pc / e.pressure - 1) < e.pressure_tolerance) {
+        r.converged = true;
+        break;
+      }
+      masses.update(r.last);
+      cell.update_masses(masses, sim.stiffness_sums(), p, mscale);
+    }
+  }
+  stop_motion();
+  cell.set_rate(ctl, dt);  // at rest
   masses.restore();
   body.local_damping = damping;
   if (dt_caller > 0) sim.set_time_step(std::min(dt_caller, sim.critical_time_step()));

@@ -139,8 +139,9 @@ void read_config(PackConfig& cfg, const YAML::Node& root, const std::string& pat
     s.target = Target::solid_fraction, s.target_solid_fraction = t.in_range("solid_fraction", 0, 0, 1, true, true);
   else s.target = Target::pressure, s.target_pressure = t.positive("pressure", 0);
   const Node pr = r.map("protocol");
-  pr.allow({"method", "strain_rate", "final_strain_rate", "local_damping", "timestep_fraction", "unbalanced_force_ratio", "max_steps"});
+  pr.allow({"method", "strain_rate", "final_strain_rate", "local_damping", "timestep_fraction", "unbalanced_force_ratio", "max_steps", "cell"});
   s.method = *parse_pack_method(pr.choice("method", to_string(s.method), name_list(kPackMethodNames)));
+  s.cell_relax = *parse_cell_relax(pr.choice("cell", to_string(s.cell_relax), name_list(kCellRelaxNames)));
   s.strain_rate = pr.non_negative("strain_rate", 0);
   s.final_strain_rate = pr.non_negative("final_strain_rate", 0);
   s.local_damping = pr.in_range("local_damping", s.local_damping, 0, 1, false, true);

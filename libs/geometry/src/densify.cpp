@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <climits>
+#include <limits>
 #include <cmath>
 #include <numeric>
 #include <random>
@@ -83,10 +84,12 @@ void set_solid_fraction(dem::Simulation& sim, double vsolid, double phi, const s
   sim.invalidate_neighbors();
 }
 
-/// Largest solid-fraction change between two relaxations: from a relaxed state at φ ≥ 0.25,
-/// overlaps grow by at most about Δφ/(3φ) d ≤ 0.07 d, inside the engine's 0.5 R stability limit.
-/// A solid-fraction target is approached in steps of kPhiStep (closer to quasi-static).
-constexpr double kMaxPhiStep = 0.05, kPhiStep = 0.02;
+/// A solid-fraction target is approached in steps of kPhiStep: from a relaxed state at φ ≥ 0.25
+/// overlaps grow by at most about Δφ/(3φ) d ≤ 0.03 d, inside the engine's 0.5 R stability limit.
+constexpr double kPhiStep = 0.02;
+/// The enthalpy minimiser's pressure tolerance |p − P|/P (the tool accepts 5 %: the reported
+/// pressure, kinetic part included, stays well inside it).
+constexpr double kPressureTolerance = 0.01;
 
 struct QuasiStaticResult {
   long steps = 0;
@@ -133,15 +136,110 @@ RelaxSettings relax_settings(const dem::Simulation& sim, const PackSpec& spec, d
   return rs;
 }
 
+/// Affine slope dq/dφ of q = p^(1/(α−1)) at the current state (q: a linear function of φ above
+/// jamming): dp/dφ = K/(9Vφ) with K = Σ_c S_c l_c² ≈ ½ Σ_i S_i (2 r_i)² (the stiffness sums of the
+/// last measurement). The relaxed slope is lower, so a Newton step with it falls short of the
+/// target and never overshoots into the unjammed side.
+double affine_q_slope(const dem::Simulation& sim, double p, double alpha, double phi) {
+  const auto& s = sim.stiffness_sums();
+  const auto& r = sim.particles().r;
+  double k = 0;
+  for (std::size_t i = 0; i < s.size(); ++i) k += 2 * s[i] * r[i] * r[i];
+  const double dpdphi = k / (9 * sim.cell().volume() * phi);
+  return p > 0 ? std::pow(p, 1 / (alpha - 1)) / ((alpha - 1) * p) * dpdphi : 0;
+}
+
+/// Pressure target: the enthalpy H = U + P V minimised over the positions and the cell
+/// (dem::minimise_enthalpy; LAMMPS fix box/relax with FIRE) from the loose insertion until the
+/// contact pressure first reaches the target: one compression that jams the packing at the
+/// target. The jammed structure is then polished at fixed cell (FIRE) with Newton/secant
+/// corrections of the volume on q = p^(1/(α−1)) (linear in φ above jamming), until the
+/// unbalanced-force ratio is below the criterion and |p − P|/P < kPressureTolerance.
+/// Tangential springs are kept throughout (an isotropic affine strain gives them no increment).
+QuasiStaticResult enthalpy(dem::Simulation& sim, const PackSpec& spec, double vsolid,
+                           const std::vector<std::vector<int>>& clusters, RelaxSettings& rs, PackReport& rep,
+                           const std::function<void(const std::string&)>& say) {
+  QuasiStaticResult out;
+  const double pt = spec.target_pressure, alpha = spec.normal == dem::NormalLaw::linear ? 2.0 : 2.5;
+  say("enthalpy minimisation (FIRE, cell as a degree of freedom) to pressure " + num(pt) + " Pa");
+  Progress bar("pressure target " + num(pt) + " Pa", 1.0);
+  double log_start = 0;
+  dem::EnthalpyOptions eo;
+  eo.pressure = pt;
+  eo.diagonal = spec.cell_relax == CellRelax::diagonal;
+  eo.pressure_tolerance = kPressureTolerance;
+  eo.stop_on_arrival = true;
+  eo.report = [&](long steps, double p) {
+    bar.update(pressure_progress(p, pt, log_start), "step " + std::to_string(steps) + ", p " + num(p) + " Pa");
+  };
+  rs.fo.max_steps = spec.max_steps;
+  const dem::FireResult r = dem::minimise_enthalpy(sim, rs.fo, eo);
+  out.steps = r.steps;
+  ++rep.minimisations;
+  double phi = vsolid / sim.cell().volume();
+  say("enthalpy FIRE: target pressure reached after " + std::to_string(r.steps) + " steps at phi " + num(phi));
+  const auto q_of = [&](double p) { return p > 0 ? std::pow(p, 1 / (alpha - 1)) : 0.0; };
+  const double qt = q_of(pt);
+  struct Point { double phi = 0, q = 0; bool set = false; };
+  Point lo, hi, last;
+  // The relaxed state at the upper end of the bracket: a bracket that collapses on a
+  // rearrangement (frictional packings) ends there, in equilibrium, rather than on an unjammed
+  // state (the tool then reports target_reached: false).
+  struct Snapshot {
+    std::vector<Vec3> x;
+    Cell cell;
+    dem::Simulation::EngineState engine;
+    bool set = false;
+  } upper;
+  double probe = 1e-4;  // relative compression while no relaxed state carries load
+  for (int k = 0; k < 100 && out.steps < spec.max_steps; ++k) {
+    rs.fo.energy_floor = rs.floor0;
+    rs.fo.max_steps = spec.max_steps - out.steps;
+    const dem::FireResult f = dem::minimise_fire(sim, rs.fo);
+    out.steps += f.steps;
+    ++rep.minimisations;
+    out.last = f.last;
+    const double p = f.below_floor ? 0.0 : std::max(f.last.pressure, 0.0);
+    bar.update(pressure_progress(p, pt, log_start), "phi " + num(phi) + ", p " + num(p) + " Pa");
+    say("relaxed at phi " + num(phi) + ": p " + num(p) + " Pa, Z " + num(f.last.coordination) + ", " + std::to_string(f.steps) + " steps");
+    if (f.converged && std::abs(p / pt - 1) < kPressureTolerance) {
+      out.converged = true;
+      break;
+    }
+    const Point pnt{phi, q_of(p), true};
+    (p < pt ? lo : hi) = pnt;
+    if (p >= pt && f.converged) upper = {sim.particles().x, sim.cell(), sim.engine_state(), true};
+    double next;
+    if (p > 0 && last.set && last.q > 0 && std::abs(pnt.phi - last.phi) > 1e-12 * phi && pnt.q != last.q)
+      next = phi + (qt - pnt.q) * (pnt.phi - last.phi) / (pnt.q - last.q);  // secant
+    else if (p > 0) next = phi + (qt - pnt.q) / affine_q_slope(sim, p, alpha, phi);  // Newton, affine slope
+    else next = phi * (1 + probe), probe = std::min(2 * probe, 0.01);
+    if (lo.set && hi.set && !(next > lo.phi && next < hi.phi)) next = 0.5 * (lo.phi + hi.phi);
+    if (lo.set && hi.set && hi.phi - lo.phi < 1e-12 * phi) break;  // a rearrangement jump at the target
+    if (p > 0) last = pnt;
+    phi = next;
+    set_solid_fraction(sim, vsolid, phi, clusters);
+  }
+  if (!out.converged && upper.set) {
+    sim.particles().x = upper.x;
+    sim.cell() = upper.cell;
+    std::fill(sim.particles().v.begin(), sim.particles().v.end(), Vec3{});
+    sim.restore(upper.engine);
+    out.last = sim.measure();
+    out.converged = out.last.unbalanced_force_ratio < spec.unbalanced_force_ratio || rs.adhesive;
+    say("ended on the last relaxed state above the target: p " + num(out.last.pressure) + " Pa");
+  }
+  return out;
+}
+
 QuasiStaticResult quasistatic(dem::Simulation& sim, const PackSpec& spec, double vsolid, double dmean,
                               const std::vector<std::vector<int>>& clusters, PackReport& rep,
                               const std::function<void(const std::string&)>& say) {
   QuasiStaticResult out;
-  const double alpha = spec.normal == dem::NormalLaw::linear ? 2.0 : 2.5;
   RelaxSettings rs = relax_settings(sim, spec, dmean);
+  if (spec.target == Target::pressure) return enthalpy(sim, spec, vsolid, clusters, rs, rep, say);
   dem::FireOptions& fo = rs.fo;
   const double floor0 = rs.floor0;
-  const bool adhesive = rs.adhesive;
   double phi = vsolid / sim.cell().volume();
   const auto relax = [&](double floor) {
     fo.energy_floor = floor;
@@ -152,95 +250,18 @@ QuasiStaticResult quasistatic(dem::Simulation& sim, const PackSpec& spec, double
     out.last = r.last;
     return r;
   };
-  if (spec.target == Target::solid_fraction) {
-    say("compress-relax to solid fraction " + num(spec.target_solid_fraction));
-    dem::FireResult r;
-    do {
-      phi = std::min(spec.target_solid_fraction, phi + kPhiStep);
-      if (spec.target_solid_fraction - phi < 1e-9 * phi) phi = spec.target_solid_fraction;  // not a round-off step
-      set_solid_fraction(sim, vsolid, phi, clusters);
-      r = relax(floor0);
-      say("relaxed at phi " + num(phi) + ": p " + num(r.below_floor ? 0.0 : r.last.pressure) + " Pa, Z " +
-          num(r.last.coordination) + ", " + std::to_string(r.steps) + " steps");
-      if (r.last.max_overlap_ratio > 0.1) break;  // the caller refuses the target
-    } while (phi < spec.target_solid_fraction && out.steps < spec.max_steps);
-    out.converged = r.converged || r.below_floor;
-    return out;
-  }
-  const double pt = spec.target_pressure;
-  const auto q_of = [&](double p) { return p > 0 ? std::pow(p, 1 / (alpha - 1)) : 0.0; };
-  const double qt = q_of(pt);
-  struct Point {
-    double phi = 0, q = 0, energy = 0;
-    bool set = false;
-  };
-  Point lo, hi;
-  std::vector<Point> jammed;  // relaxed states carrying load, in order
-  // The relaxed state at the upper end of the bracket (positions, cell, contact history): a
-  // bracket that collapses on a rearrangement ends there rather than on an unjammed state.
-  struct Snapshot {
-    std::vector<Vec3> x;
-    Cell cell;
-    dem::Simulation::EngineState engine;
-    bool set = false;
-  } upper;
-  say("compress-relax (FIRE) to pressure " + num(pt) + " Pa from solid fraction " + num(phi));
-  Progress bar("pressure target " + num(pt) + " Pa", 1.0);
-  double log_start = 0;
-  while (out.steps < spec.max_steps) {
-    double floor = floor0;
-    // Predicted downwards only (from a jammed state above the target), and not when bonds store
-    // energy of their own.
-    if (!jammed.empty() && !adhesive && sim.bonds().size() == 0 && jammed.back().q >= qt)
-      floor = std::max(floor, 0.01 * jammed.back().energy * std::pow(qt / jammed.back().q, alpha));
-    const dem::FireResult r = relax(floor);
-    const double p = r.below_floor ? 0.0 : std::max(r.last.pressure, 0.0);
-    const Point pnt{phi, q_of(p), r.last.elastic_energy, true};
-    if (p > 0 && r.converged) jammed.push_back(pnt);
-    bar.update(pressure_progress(p, pt, log_start), "phi " + num(phi) + ", p " + num(p) + " Pa");
-    say("relaxed at phi " + num(phi) + ": p " + num(p) + " Pa, Z " + num(r.last.coordination) + ", " +
-        std::to_string(r.steps) + " steps" + (r.converged ? "" : (r.below_floor ? " (below target)" : " (not converged)")));
-    if (r.converged && std::abs(p / pt - 1) < 0.05) {
-      out.converged = true;
-      break;
-    }
-    (p < pt ? lo : hi) = pnt;
-    if (p >= pt && r.converged) upper = {sim.particles().x, sim.cell(), sim.engine_state(), true};
-    // Slope dq/dφ of the last two jammed states (linear above jamming).
-    double slope = 0;
-    if (jammed.size() >= 2) {
-      const Point &a = jammed[jammed.size() - 2], &b = jammed.back();
-      // Two states at (almost) the same φ give no slope (their p differ by the relaxation's noise).
-      if (std::abs(b.phi - a.phi) > 1e-7 * phi) slope = (b.q - a.q) / (b.phi - a.phi);
-    }
-    double next;
-    if (slope > 0) next = jammed.back().phi + (qt - jammed.back().q) / slope;
-    else if (!hi.set) next = phi + (p > 0 ? 0.005 : std::min(kMaxPhiStep, 0.1 * phi));
-    else if (!lo.set) next = phi - 0.005;
-    else next = 0.5 * (lo.phi + hi.phi);
-    if (lo.set && hi.set) {
-      const double w = hi.phi - lo.phi;
-      if (w < 1e-9 * phi) break;  // bracket collapsed (a rearrangement jump at the target)
-      // Stay inside the bracket (an extrapolation outside it bisects instead).
-      if (!(next > lo.phi && next < hi.phi)) next = 0.5 * (lo.phi + hi.phi);
-    }
-    next = std::clamp(next, phi - kMaxPhiStep, phi + kMaxPhiStep);
-    if (std::abs(next - phi) < 1e-10 * phi) break;  // no progress left
-    phi = next;
+  say("compress-relax to solid fraction " + num(spec.target_solid_fraction));
+  dem::FireResult r;
+  do {
+    phi = std::min(spec.target_solid_fraction, phi + kPhiStep);
+    if (spec.target_solid_fraction - phi < 1e-9 * phi) phi = spec.target_solid_fraction;  // not a round-off step
     set_solid_fraction(sim, vsolid, phi, clusters);
-  }
-  if (!out.converged && upper.set) {  // end on the jammed side of a collapsed bracket
-    sim.particles().x = upper.x;
-    sim.cell() = upper.cell;
-    std::fill(sim.particles().v.begin(), sim.particles().v.end(), Vec3{});
-    sim.restore(upper.engine);
-    out.last = sim.measure();
-    out.converged = out.last.unbalanced_force_ratio < spec.unbalanced_force_ratio || adhesive;
-  }
-  if (jammed.size() >= 2) {
-    const Point &a = jammed[jammed.size() - 2], &b = jammed.back();
-    if (b.phi != a.phi && b.q != a.q) rep.jamming_solid_fraction = b.phi - b.q * (b.phi - a.phi) / (b.q - a.q);
-  }
+    r = relax(floor0);
+    say("relaxed at phi " + num(phi) + ": p " + num(r.below_floor ? 0.0 : r.last.pressure) + " Pa, Z " +
+        num(r.last.coordination) + ", " + std::to_string(r.steps) + " steps");
+    if (r.last.max_overlap_ratio > 0.1) break;  // the caller refuses the target
+  } while (phi < spec.target_solid_fraction && out.steps < spec.max_steps);
+  out.converged = r.converged || r.below_floor;
   return out;
 }
 
@@ -314,6 +335,26 @@ void check_particle_memory(std::size_t n, const std::string& file, const std::st
   if (n > std::size_t(INT_MAX)) throw InputError(file, field, value, "at most 2147483647 particles");
 }
 
+double max_admissible_pressure(const PackSpec& s) {
+  if (s.work_of_adhesion > 0 || (s.normal != dem::NormalLaw::linear && s.normal != dem::NormalLaw::hertz)) {
+    for (const auto& ph : s.phases)
+      if (ph.material.surface_energy > 0 || s.work_of_adhesion > 0) return std::numeric_limits<double>::infinity();
+  }
+  double pmax = std::numeric_limits<double>::infinity();
+  for (const auto& ph : s.phases) {
+    const double d = ph.psd.diameter, delta = 0.1 * 0.5 * d;
+    double f;  // contact force of two equal spheres at overlap δ
+    if (s.normal == dem::NormalLaw::linear) {
+      f = (s.normal_stiffness > 0 ? s.normal_stiffness : ph.material.youngs_modulus * d) * delta;
+    } else {
+      const double nu = ph.material.poisson_ratio, estar = ph.material.youngs_modulus / (2 * (1 - nu * nu));
+      f = 4.0 / 3.0 * estar * std::sqrt(0.25 * d) * std::pow(delta, 1.5);  // Hertz, R* = d/4
+    }
+    if (d > 0 && f > 0) pmax = std::min(pmax, 6 * 0.64 * f / (kPi * d * d));
+  }
+  return pmax;
+}
+
 void validate(const PackSpec& s) {
   const std::string& f = s.source;
   if (s.phases.empty()) throw InputError(f, "phases", "", "at least one phase is needed");
@@ -357,6 +398,13 @@ void validate(const PackSpec& s) {
                      "must lie in (0, 0.4): random sequential insertion jams near 0.38");
   if (s.target == Target::pressure && !(s.target_pressure > 0) && s.arrangement == Arrangement::random)
     throw InputError(f, "target.pressure", num(s.target_pressure), "must be > 0 (Pa)");
+  if (s.target == Target::pressure && s.arrangement == Arrangement::random) {
+    const double pmax = max_admissible_pressure(s);
+    if (s.target_pressure > pmax)
+      throw InputError(f, "target.pressure", num(s.target_pressure),
+                       "above " + num(pmax) + " Pa, the pressure at which the mean contact overlap reaches 10 % of a radius "
+                       "(p = Z phi f(delta)/(pi d^2) at Z = 6, phi = 0.64)");
+  }
   if (s.target == Target::solid_fraction) {
     const double phi = s.target_solid_fraction;
     if (!(phi > 0 && phi < 1)) throw InputError(f, "target.solid_fraction", num(phi), "must lie in (0, 1)");

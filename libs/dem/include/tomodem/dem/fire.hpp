@@ -5,6 +5,8 @@
 // positive and the motion stopped when it turns negative. At a fixed cell this relaxes a
 // frictionless packing to a local minimum of its elastic energy (zero net force on every
 // particle); with friction it is a quasi-static relaxation to mechanical equilibrium.
+#include <functional>
+
 #include "tomodem/dem/simulation.hpp"
 
 namespace tomodem::dem {
@@ -51,5 +53,29 @@ struct FireResult {
 /// off during the minimisation and the caller's time step, damping and masses are restored afterwards.
 /// Velocities are zero at the start and at a converged stop.
 FireResult minimise_fire(Simulation& sim, const FireOptions& options = {});
+
+/// The periodic cell as a degree of freedom of the minimisation (LAMMPS `fix box/relax` with
+/// FIRE; Bitzek et al. 2006, Guénolé et al., Comput. Mater. Sci. 175 (2020) 109584): the
+/// enthalpy H = U + P V is minimised over the particle positions and the cell's log strains ε_a
+/// (one isotropic strain, or three on the diagonal of h), whose generalised forces are
+/// −∂H/∂ε_a = V(−σ_aa − P) from the contact (virial) stress σ, tension positive.
+struct EnthalpyOptions {
+  double pressure = 0;             ///< target P, Pa (> 0)
+  bool diagonal = false;           ///< three independent normal strains (else one isotropic)
+  double pressure_tolerance = 0.01;  ///< converged also needs |p − P| / P below this
+  /// Called every report_interval steps with the step count and the contact pressure.
+  std::function<void(long, double)> report;
+  long report_interval = 2000;
+  /// Stop (not converged) as soon as the contact pressure first reaches the target: the jammed
+  /// structure, to be polished at fixed cell.
+  bool stop_on_arrival = false;
+};
+
+/// Minimises the enthalpy at target pressure from the current state: converged when the
+/// unbalanced-force ratio is below options.unbalanced_force_ratio and the contact pressure is
+/// within pressure_tolerance of the target. The cell moves through the engine's velocity
+/// gradient (affine field, tangential springs kept and advanced by the relative motion only);
+/// the cell control is left at rest. energy_floor and force_tolerance are not used.
+FireResult minimise_enthalpy(Simulation& sim, const FireOptions& options, const EnthalpyOptions& cell);
 
 }  // namespace tomodem::dem

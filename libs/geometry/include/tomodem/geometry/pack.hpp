@@ -46,6 +46,19 @@ inline constexpr NameTable<PackMethod, 2> kPackMethodNames = {
 inline const char* to_string(PackMethod m) { return name_of(kPackMethodNames, m); }
 inline std::optional<PackMethod> parse_pack_method(std::string_view name) { return value_of(kPackMethodNames, name); }
 
+/// The cell's degrees of freedom under a pressure target (enthalpy minimisation): one isotropic
+/// strain, or the three normal strains (an orthorhombic cell, each axis at the target stress).
+enum class CellRelax : uint8_t { isotropic, diagonal };
+inline constexpr NameTable<CellRelax, 2> kCellRelaxNames = {{{CellRelax::isotropic, "isotropic"}, {CellRelax::diagonal, "diagonal"}}};
+inline const char* to_string(CellRelax c) { return name_of(kCellRelaxNames, c); }
+inline std::optional<CellRelax> parse_cell_relax(std::string_view name) { return value_of(kCellRelaxNames, name); }
+
+/// Largest pressure a random packing of the spec can carry before its mean contact overlap
+/// exceeds 10 % of a radius (the limit of solid-fraction targets): p = Z φ f(δ)/(π d²) (Love–Weber
+/// stress of a packing at Z = 6, φ = 0.64) for the softest phase at its nominal diameter.
+/// Infinity when no estimate applies (adhesive laws).
+double max_admissible_pressure(const struct PackSpec& spec);
+
 struct PackSpec {
   std::vector<PhaseSpec> phases;
   std::size_t n_particles = 1000;      ///< total count (approximate: phases are rounded)
@@ -63,6 +76,7 @@ struct PackSpec {
   // Protocol.
   PackMethod method = PackMethod::quasistatic;
   Target target = Target::pressure;
+  CellRelax cell_relax = CellRelax::isotropic;  ///< quasistatic pressure target
   double target_pressure = 0;          ///< Pa
   double target_solid_fraction = 0;
   double strain_rate = 0;              ///< 1/s, compression cap (0: 2e-5 per critical time step)
