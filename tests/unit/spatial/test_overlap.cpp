@@ -75,6 +75,8 @@ TEST(SpatialOverlap, IntersectionRadiusAndContactDefinition) {
   EXPECT_FALSE(in_contact(4.0 + 0.151, 1, 3, 0.1));
   EXPECT_TRUE(in_contact(4.0, 1, 3, 0.0));   // touching counts
   EXPECT_TRUE(in_contact(3.5, 1, 3, 0.0));   // overlapping
-  EXPECT_FALSE(in_contact(4.0 + 1e-12, 1, 3, 0.0));
+  // Touching allows kTouchingSlack R̄ (R̄ = 1.5 here) of round-off, and not more.
+  EXPECT_TRUE(in_contact(4.0 + 1e-12, 1, 3, 0.0));
+  EXPECT_FALSE(in_contact(4.0 + 2e-9, 1, 3, 0.0));
   EXPECT_GE(contact_reach(3, 0.1), 0.1 * harmonic_radius(3, 3));  // the search reach covers every R̄
 }
