@@ -33,7 +33,8 @@ TEST(Composite, SeriesChainResistanceIsExact) {
   p.materials[1].conductivity = si;
   const CompositeResult r = solve_composite(p, options(gct));
   ASSERT_TRUE(r.percolates);
-  const double want = 2 / holm_conductance(a, se, se) + 1 / (gct * 2 * kPi * a) + 1 / holm_conductance(a, si, si);
+  // Holm (docs/physics.md): a like-phase contact of radius a has resistance 1/(2σa).
+  const double want = 2 / (2 * se * a) + 1 / (gct * 2 * kPi * a) + 1 / (2 * si * a);
   EXPECT_NEAR(r.resistance_ohm, want, 1e-9 * want);
   EXPECT_NEAR(r.tpb_length_m, 2 * kPi * a, 1e-15);
   EXPECT_NEAR(r.tpb_density_m_per_m3, 2 * kPi * a / (10.0 * 2 * 2), 1e-15);

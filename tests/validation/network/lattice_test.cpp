@@ -84,7 +84,8 @@ TEST(Conduct, LayeredTwoPhaseSeriesAndParallelBounds) {
   double rsum = 0;
   for (int x = 0; x + 1 < 8; ++x) {
     const double sa = (x / 2) % 2 ? s2 : s1, sb = ((x + 1) / 2) % 2 ? s2 : s1;
-    rsum += 1.0 / holm_conductance(a, sa, sb);
+    // Holm (docs/physics.md): 1/(4σa) on each side of the constriction, in series.
+    rsum += 1.0 / (4 * sa * a) + 1.0 / (4 * sb * a);
   }
   // One chain per lattice column: I = 16/rsum over A = (8R)², L = 7·2R.
   const double want = 16.0 / rsum * 14.0 * R / (64.0 * R * R);
