@@ -649,7 +649,7 @@ void start(Sla& sla) {
 }
 
 void copy_counters(const Sla& sla, FractureResult& r) {
-  r.solver = sla.pcg ? "pcg" : "ldlt";
+  r.solver = sla.pcg ? SlaSolver::pcg : SlaSolver::ldlt;
   r.solves = sla.solves;
   r.factorizations = sla.factorizations;
   r.cg_iterations = sla.cg_total;

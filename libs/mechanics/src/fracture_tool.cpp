@@ -163,11 +163,11 @@ json result_json(const FractureResult& r, const FractureSample& s) {
     j["factorizations"] = r.factorizations;
     j["fragment_particles_removed"] = r.fragments_removed;
     j["closed_broken_bonds"] = r.closed_broken_bonds;
-    j["solver"] = r.solver;
+    j["solver"] = to_string(r.solver);
     j["failure_groups"] = r.failure_groups;
     j["active_set_solves"] = r.active_set_iterations;
     j["solver_setup_s"] = r.solver_setup_s;
-    if (r.solver == "pcg")
+    if (r.solver == SlaSolver::pcg)
       j["cg"] = {{"iterations", r.cg_iterations},
                  {"per_solve", double(r.cg_iterations) / double(std::max(1L, r.solves))},
                  {"largest", r.cg_iterations_max},

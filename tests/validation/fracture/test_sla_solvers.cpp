@@ -122,8 +122,8 @@ TEST(SlaSolvers, PcgBreaksTheSameBondsAsLdlt) {
   o.solver = SlaSolver::pcg;
   o.cg_tolerance = 1e-10;
   const FractureResult b = run_sla(s, laws, f, o);
-  EXPECT_EQ(a.solver, "ldlt");
-  EXPECT_EQ(b.solver, "pcg");
+  EXPECT_EQ(a.solver, SlaSolver::ldlt);
+  EXPECT_EQ(b.solver, SlaSolver::pcg);
   ASSERT_GT(a.events.size(), 10u);
   ASSERT_EQ(a.events.size(), b.events.size());
   double closest = HUGE_VAL;

@@ -94,6 +94,14 @@ struct FractureEvent {
   Vec3 position;
 };
 
+/// Linear solver of the SLA: the direct LDLT (Woodbury updates between factorisations) or
+/// multigrid-preconditioned CG (docs/fracture.md#solvers); automatic picks by the particle count.
+enum class SlaSolver : uint8_t { automatic, ldlt, pcg };
+inline constexpr NameTable<SlaSolver, 3> kSlaSolverNames = {
+    {{SlaSolver::automatic, "auto"}, {SlaSolver::ldlt, "ldlt"}, {SlaSolver::pcg, "pcg"}}};
+inline const char* to_string(SlaSolver s) { return name_of(kSlaSolverNames, s); }
+inline std::optional<SlaSolver> parse_sla_solver(std::string_view name) { return value_of(kSlaSolverNames, name); }
+
 /// How the sample is loaded: sequentially linear (direct solver), explicit DEM test, or both.
 enum class FractureMethod : uint8_t { sla, explicit_test, both };
 inline constexpr NameTable<FractureMethod, 3> kFractureMethodNames = {
@@ -119,7 +127,7 @@ struct FractureResult {
   // SLA
   long solves = 0, factorizations = 0, fragments_removed = 0, closed_broken_bonds = 0;
   double initial_stiffness = 0;      ///< N/m, uncracked-by-failure sample
-  std::string solver;                ///< ldlt | pcg
+  SlaSolver solver = SlaSolver::ldlt;  ///< the solver the SLA used: ldlt | pcg (never automatic)
   long cg_iterations = 0, cg_iterations_max = 0, cg_iterations_fresh = 0;  ///< PCG: total, largest, first (cold) solve
   long amg_rebuilds = 0;             ///< PCG: multigrid hierarchies built after the first
   long active_set_iterations = 0;    ///< extra solves for the contact of broken faces
@@ -133,13 +141,6 @@ struct FractureResult {
   double external_work = 0;
 };
 
-/// Linear solver of the SLA: the direct LDLT (Woodbury updates between factorisations) or
-/// multigrid-preconditioned CG (docs/fracture.md#solvers); automatic picks by the particle count.
-enum class SlaSolver : uint8_t { automatic, ldlt, pcg };
-inline constexpr NameTable<SlaSolver, 3> kSlaSolverNames = {
-    {{SlaSolver::automatic, "auto"}, {SlaSolver::ldlt, "ldlt"}, {SlaSolver::pcg, "pcg"}}};
-inline const char* to_string(SlaSolver s) { return name_of(kSlaSolverNames, s); }
-inline std::optional<SlaSolver> parse_sla_solver(std::string_view name) { return value_of(kSlaSolverNames, name); }
 struct SlaOptions {
   double stop_fraction = 0.2;   ///< stop once the load after the peak falls below this × peak (0: until cut through)
   long max_breaks = 1'000'000;
