@@ -2,6 +2,7 @@
 #include <CLI/CLI.hpp>
 
 #include "tomodem/core/cli.hpp"
+#include "tomodem/core/cli_choice.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/summary.hpp"
 #include "tomodem/core/tool.hpp"
@@ -20,7 +21,7 @@ int main(int argc, char** argv) {
     app.add_option("-o,--output", c.output,
                    "grey volume: .mha .mhd .nrrd .nii .tif (multi-page) .h5 .raw, or DIR/ for a TIFF stack")->required();
     app.add_option("--truth", c.truth, "truth labels (.h5: /labels, /macropores); packing kind: also TRUTH.packing.h5");
-    app.add_option("--kind", o.kind, "pores | lamellae | sphere | packing")->capture_default_str();
+    tomodem::cli::add_choice(app, "--kind", o.kind, tomodem::image::kPhantomKindNames, "pores | lamellae | sphere | packing");
     app.add_option("--size", o.n, "cube edge (voxels)")->capture_default_str()->check(non_negative);
     tomodem::cli::add_length(app, "--voxel", o.voxel, "voxel size (default 10um)");
     app.add_option("--snr", o.snr, "contrast / noise sigma (0: no noise)")->capture_default_str();

@@ -18,14 +18,14 @@ int main(int argc, char** argv) {
     tomodem::image::SegmentConfig c;
     CLI::App app{"Segment a tomography volume into solid, fine pores and macropores (docs/segment.md)", "tomodem-segment"};
     app.add_option("input", c.input, "volume: file, folder of TIFF slices, or a pattern (slices sorted by name)")->required();
-    app.add_option("--format", c.read.format, "auto | tiff | mha | nrrd | nifti | raw | h5")->capture_default_str();
+    tomodem::cli::add_choice(app, "--format", c.read.format, tomodem::image::kVolumeFormatNames, "auto | tiff | mha | nrrd | nifti | raw | h5");
     app.add_option("--spacing", c.spacing_text, "voxel size (60.7um, 0.05mm, 6e-5); overrides the header");
     tomodem::cli::add_length(app, "--header-unit", c.read.header_unit,
                              "length of one unit of MetaImage/NRRD/NIfTI headers (default 1mm)");
     app.add_option("--raw-dims", c.raw_dims_text, "raw: NX,NY,NZ");
-    app.add_option("--raw-type", c.read.raw_type, "raw: uint8 | int8 | uint16 | int16 | uint32 | int32 | float32 | float64")
-        ->capture_default_str();
-    app.add_option("--byte-order", c.read.byte_order, "raw: little | big")->capture_default_str();
+    tomodem::cli::add_choice(app, "--raw-type", c.read.raw_type, tomodem::image::kRawTypeNames,
+                             "raw: uint8 | int8 | uint16 | int16 | uint32 | int32 | float32 | float64");
+    tomodem::cli::add_choice(app, "--byte-order", c.read.byte_order, tomodem::image::kByteOrderNames, "raw: little | big");
     app.add_option("--raw-header", c.read.raw_header, "raw: bytes to skip")->capture_default_str()
         ->check(non_negative);
     app.add_option("--dataset", c.read.h5_dataset, "HDF5 dataset (z, y, x)")->capture_default_str();

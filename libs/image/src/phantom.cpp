@@ -214,8 +214,6 @@ void check_phantom_options(const PhantomOptions& o) {
   const auto finite_in = [&](const char* option, double x, double lo, double hi, const std::string& what) {
     if (!std::isfinite(x) || x < lo || x > hi) throw InputError("", option, as_written(option, x), what);
   };
-  if (o.kind != "pores" && o.kind != "lamellae" && o.kind != "sphere" && o.kind != "packing")
-    throw InputError("", "--kind", o.kind, "expected pores, lamellae, sphere or packing");
   if (o.n < 16 || o.n > 2048) throw InputError("", "--size", std::to_string(o.n), "must be in [16, 2048] (voxels)");
   if (!std::isfinite(o.voxel) || !(o.voxel > 0) || o.voxel > 1)
     throw InputError("", "--voxel", as_written("--voxel", o.voxel), "must be finite, > 0 and <= 1 (m)");
@@ -229,7 +227,7 @@ void check_phantom_options(const PhantomOptions& o) {
   if (o.n_grains < 1 || o.n_grains > 100000)
     throw InputError("", "--grain-count", std::to_string(o.n_grains), "must be an integer in [1, 100000]");
   if (!std::isfinite(o.sphere_radius) || !(o.sphere_radius > 0) ||
-      (o.kind == "sphere" && o.sphere_radius > double(o.n) / 2 - 1))
+      (o.kind == PhantomKind::sphere && o.sphere_radius > double(o.n) / 2 - 1))
     throw InputError("", "--sphere-radius", as_written("--sphere-radius", o.sphere_radius),
                      "must be finite, > 0 and at most size/2 - 1 = " + text(double(o.n) / 2 - 1) + " voxels");
   for (double x : {o.macro_radius_min, o.macro_radius_max, o.fine_radius, o.grain_radius_min, o.grain_radius_max,
@@ -250,17 +248,18 @@ Phantom make_phantom(const PhantomOptions& o) {
   P.grey = Volume(d);
   for (auto* g : {&P.truth.spacing, &P.macropore_ids.spacing, &P.grey.spacing}) *g = {o.voxel, o.voxel, o.voxel};
   bool grey_done = false;
-  if (o.kind == "pores") pores_kind(o, rng, P);
-  else if (o.kind == "lamellae") lamellae_kind(o, rng, P);
-  else if (o.kind == "sphere") { sphere_kind(o, P); grey_done = true; }
-  else if (o.kind == "packing") packing_kind(o, rng, P);
-  else throw InputError("", "--kind", o.kind, "expected pores, lamellae, sphere or packing");
+  switch (o.kind) {
+    case PhantomKind::pores: pores_kind(o, rng, P); break;
+    case PhantomKind::lamellae: lamellae_kind(o, rng, P); break;
+    case PhantomKind::sphere: sphere_kind(o, P); grey_done = true; break;
+    case PhantomKind::packing: packing_kind(o, rng, P); break;
+  }
   const double contrast = o.solid_value - o.pore_value;
   // Grey values: solid bright, pores dark (as in absorption CT).
   for (std::size_t i = 0; i < P.grey.v.size(); ++i) {
     double pore_fraction;
     if (grey_done) pore_fraction = P.grey.v[i];
-    else if (o.kind == "packing") pore_fraction = P.truth.v[i] == 0 ? 1 : 0;
+    else if (o.kind == PhantomKind::packing) pore_fraction = P.truth.v[i] == 0 ? 1 : 0;
     else pore_fraction = P.truth.v[i] != 0 ? 1 : 0;
     P.grey.v[i] = float(o.solid_value - contrast * pore_fraction);
   }

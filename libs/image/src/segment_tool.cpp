@@ -474,7 +474,7 @@ std::string run_phantom(const PhantomConfig& c) {
     std::vector<std::pair<std::string, std::string>> outs{{"-o", folder ? c.output.substr(0, c.output.size() - 1) : c.output},
                                                           {"--truth", c.truth}, {"--json", c.json}};
     if (l.size() > 4 && l.compare(l.size() - 4, 4, ".mhd") == 0) outs.push_back({"-o", sibling(c.output, ".raw")});
-    if (!c.truth.empty() && c.opt.kind == "packing") {
+    if (!c.truth.empty() && c.opt.kind == PhantomKind::packing) {
       outs.push_back({"--truth", c.truth + ".packing.h5"});
       outs.push_back({"--truth", sibling(c.truth + ".packing.h5", ".xdmf")});
     }
@@ -482,7 +482,7 @@ std::string run_phantom(const PhantomConfig& c) {
   }
   const Phantom P = make_phantom(c.opt);
   Summary s("tomodem-phantom");
-  s["kind"] = c.opt.kind;
+  s["kind"] = to_string(c.opt.kind);
   s["size"] = c.opt.n;
   s["voxel_m"] = c.opt.voxel;
   s["snr"] = c.opt.snr;
@@ -491,11 +491,11 @@ std::string run_phantom(const PhantomConfig& c) {
   s["cupping"] = c.opt.cupping;
   s["seed"] = c.opt.seed;
   std::size_t pore = 0;
-  for (auto x : P.truth.v) pore += (c.opt.kind == "packing") ? (x == 0) : (x != 0);
+  for (auto x : P.truth.v) pore += (c.opt.kind == PhantomKind::packing) ? (x == 0) : (x != 0);
   s["true_porosity"] = double(pore) / double(P.truth.v.size());
   s["n_macropores"] = P.macropore_voxels.size();
   s["macropore_voxels"] = P.macropore_voxels;
-  if (c.opt.kind == "packing") {
+  if (c.opt.kind == PhantomKind::packing) {
     s["n_grains"] = P.packing.particles.size();
     s.n_particles(P.packing.particles.size());
   }
@@ -508,7 +508,7 @@ std::string run_phantom(const PhantomConfig& c) {
       h5::File f(tmp, h5::File::Mode::create);
       const std::vector<std::size_t> dims{c.opt.n, c.opt.n, c.opt.n};
       f.write("/labels", P.truth.v, dims);
-      f.set_attr("/labels", "legend", std::string(c.opt.kind == "packing" ? "0:void,k:grain k (1-based row of the packing)"
+      f.set_attr("/labels", "legend", std::string(c.opt.kind == PhantomKind::packing ? "0:void,k:grain k (1-based row of the packing)"
                                                                             : "0:solid,1:fine_pore,2:macropore"));
       f.write("/macropores", P.macropore_ids.v, dims);
       f.set_attr("/labels", "spacing", std::vector<double>(3, c.opt.voxel));
@@ -517,7 +517,7 @@ std::string run_phantom(const PhantomConfig& c) {
     }
     commit_output(c.truth);
     s.output("truth", c.truth);
-    if (c.opt.kind == "packing") {
+    if (c.opt.kind == PhantomKind::packing) {
       Packing pk = P.packing;
       pk.provenance.tool = "tomodem-phantom";
       pk.provenance.version = version_string();

@@ -71,12 +71,14 @@ std::vector<std::string> stack_files(const std::string& input) {
   return files;
 }
 
-std::size_t type_size(const std::string& t) {
-  if (t == "uint8" || t == "int8") return 1;
-  if (t == "uint16" || t == "int16") return 2;
-  if (t == "float32" || t == "uint32" || t == "int32") return 4;
-  if (t == "float64") return 8;
-  throw InputError("", "--raw-type", t, "expected uint8, int8, uint16, int16, uint32, int32, float32 or float64");
+std::size_t type_size(RawType t) {
+  switch (t) {
+    case RawType::uint8: case RawType::int8: return 1;
+    case RawType::uint16: case RawType::int16: return 2;
+    case RawType::uint32: case RawType::int32: case RawType::float32: return 4;
+    case RawType::float64: return 8;
+  }
+  return 1;
 }
 
 template <class T>
@@ -135,35 +137,34 @@ Volume read_raw(const std::string& path, const ReadOptions& o, ReadInfo* info) {
   if (size < expected)
     throw InputError(path, "size", std::to_string(size) + " bytes",
                      "truncated: dims " + std::to_string(nx) + "x" + std::to_string(ny) + "x" + std::to_string(nz) + " " +
-                         o.raw_type + " need " + std::to_string(expected) + " bytes");
+                         to_string(o.raw_type) + " need " + std::to_string(expected) + " bytes");
   if (size > expected)
     throw InputError(path, "size", std::to_string(size) + " bytes",
                      "does not match dims " + std::to_string(nx) + "x" + std::to_string(ny) + "x" + std::to_string(nz) +
-                         " " + o.raw_type + " (" + std::to_string(expected) + " bytes); check --raw-dims/--raw-type/--raw-header");
-  if (o.byte_order != "little" && o.byte_order != "big")
-    throw InputError("", "--byte-order", o.byte_order, "expected little or big");
+                         " " + to_string(o.raw_type) + " (" + std::to_string(expected) + " bytes); check --raw-dims/--raw-type/--raw-header");
   std::ifstream in(path, std::ios::binary);
   in.seekg(static_cast<std::streamoff>(o.raw_header));
   Volume v(Dims{nx, ny, nz});
-  const bool swap = (o.byte_order == "big");  // x86: little-endian host
+  const bool swap = (o.byte_order == ByteOrder::big);  // x86: little-endian host
   const std::size_t slab = nx * ny;
   std::vector<char> buf(slab * bytes);
   for (std::size_t z = 0; z < nz; ++z) {
     in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
     if (!in) throw InputError(path, "data", "slice " + std::to_string(z), "read failed (truncated?)");
     std::vector<float> out(slab);
-    const auto& t = o.raw_type;
-    if (t == "uint8") convert<uint8_t>(buf.data(), slab, false, out);
-    else if (t == "int8") convert<int8_t>(buf.data(), slab, false, out);
-    else if (t == "uint16") convert<uint16_t>(buf.data(), slab, swap, out);
-    else if (t == "int16") convert<int16_t>(buf.data(), slab, swap, out);
-    else if (t == "uint32") convert<uint32_t>(buf.data(), slab, swap, out);
-    else if (t == "int32") convert<int32_t>(buf.data(), slab, swap, out);
-    else if (t == "float32") convert<float>(buf.data(), slab, swap, out);
-    else convert<double>(buf.data(), slab, swap, out);
+    switch (o.raw_type) {
+      case RawType::uint8: convert<uint8_t>(buf.data(), slab, false, out); break;
+      case RawType::int8: convert<int8_t>(buf.data(), slab, false, out); break;
+      case RawType::uint16: convert<uint16_t>(buf.data(), slab, swap, out); break;
+      case RawType::int16: convert<int16_t>(buf.data(), slab, swap, out); break;
+      case RawType::uint32: convert<uint32_t>(buf.data(), slab, swap, out); break;
+      case RawType::int32: convert<int32_t>(buf.data(), slab, swap, out); break;
+      case RawType::float32: convert<float>(buf.data(), slab, swap, out); break;
+      case RawType::float64: convert<double>(buf.data(), slab, swap, out); break;
+    }
     std::copy(out.begin(), out.end(), v.v.begin() + static_cast<std::ptrdiff_t>(z * slab));
   }
-  if (info) info->pixel_type = o.raw_type;
+  if (info) info->pixel_type = to_string(o.raw_type);
   return v;
 }
 
@@ -254,11 +255,6 @@ Volume downsample(const Volume& v, int f) {
 }
 
 void check_read_options(const ReadOptions& o) {
-  static const char* formats[] = {"auto", "tiff", "tiff-stack", "mha", "nrrd", "nifti", "raw", "h5"};
-  if (std::find(std::begin(formats), std::end(formats), o.format) == std::end(formats))
-    throw InputError("", "--format", o.format, "expected auto, tiff, mha, nrrd, nifti, raw or h5");
-  type_size(o.raw_type);
-  if (o.byte_order != "little" && o.byte_order != "big") throw InputError("", "--byte-order", o.byte_order, "expected little or big");
   if (o.downsample < 1) throw InputError("", "--downsample", std::to_string(o.downsample), "must be an integer >= 1");
   if (!(o.header_unit > 0) || !std::isfinite(o.header_unit))
     throw InputError("", "--header-unit", std::to_string(o.header_unit), "must be finite and > 0 (metres per header unit, e.g. 0.001)");
@@ -272,7 +268,7 @@ void check_read_options(const ReadOptions& o) {
 }
 
 std::vector<std::string> input_files(const std::string& input, const ReadOptions& o) {
-  std::string format = (o.format == "auto") ? detect_format(input) : o.format;
+  std::string format = (o.format == VolumeFormat::automatic) ? detect_format(input) : to_string(o.format);
   if (format == "tiff" && (input.find_first_of("*?") != std::string::npos || fs::is_directory(input))) format = "tiff-stack";
   if (format == "tiff-stack") return stack_files(input);
   std::vector<std::string> files{input};
@@ -302,7 +298,7 @@ void check_finite(const Volume& v, const std::string& file, const std::string& f
 Volume read_volume(const std::string& input, const ReadOptions& o, ReadInfo* info_out) {
   check_read_options(o);
   ReadInfo info;
-  info.format = (o.format == "auto") ? detect_format(input) : o.format;
+  info.format = (o.format == VolumeFormat::automatic) ? detect_format(input) : to_string(o.format);
   if (info.format == "tiff" && (input.find_first_of("*?") != std::string::npos || fs::is_directory(input)))
     info.format = "tiff-stack";
   if (info.format != "tiff-stack" && !fs::exists(input)) throw InputError(input, "", "", "no such file");
@@ -349,7 +345,7 @@ Volume read_volume(const std::string& input, const ReadOptions& o, ReadInfo* inf
     info.pixel_type = "float64 (as read)";
     field = o.h5_dataset;
   } else {
-    throw InputError(input, "--format", o.format, "unknown format (auto, tiff, mha, nrrd, nifti, raw, h5)");
+    throw InputError(input, "--format", to_string(o.format), "unknown format (auto, tiff, mha, nrrd, nifti, raw, h5)");
   }
   if (v.dims.count() == 0) throw InputError(input, "dims", "0", "empty volume");
   check_finite(v, input, field, info.format == "h5");

@@ -258,8 +258,8 @@ TEST(Raw, BigEndianUint16) {
   }
   ReadOptions o;
   o.raw_dims = {2, 2, 2};
-  o.raw_type = "uint16";
-  o.byte_order = "big";
+  o.raw_type = RawType::uint16;
+  o.byte_order = ByteOrder::big;
   o.spacing = {1e-6, 1e-6, 1e-6};
   const Volume v = read_volume(f, o);
   for (int i = 0; i < 8; ++i) EXPECT_EQ(v.v[std::size_t(i)], float(i * 256 + 0x10));
@@ -268,7 +268,7 @@ TEST(Raw, BigEndianUint16) {
 TEST(Formats, EveryFormatReadsTheSameVoxels) {
   PhantomOptions po;
   po.n = 24;
-  po.kind = "sphere";
+  po.kind = PhantomKind::sphere;
   po.sphere_radius = 6;
   po.snr = 5;
   po.voxel = 2e-5;
@@ -280,7 +280,7 @@ TEST(Formats, EveryFormatReadsTheSameVoxels) {
     const std::string path = (d / n).string();
     write_volume(path, P.grey, true);
     ReadOptions o;
-    if (n == "v.raw") { o.raw_dims = {24, 24, 24}; o.raw_type = "uint16"; }
+    if (n == "v.raw") { o.raw_dims = {24, 24, 24}; o.raw_type = RawType::uint16; }
     if (n == "v.tif" || n == "stack/" || n == "v.raw") o.spacing = {2e-5, 2e-5, 2e-5};
     ReadInfo info;
     const Volume v = read_volume(n == "stack/" ? (d / "stack").string() : path, o, &info);
@@ -468,11 +468,15 @@ TEST(Phantom, DefaultMacroporeCountFitsSmallSizes) {
   for (auto set : std::vector<std::function<void(PhantomOptions&)>>{
            [](PhantomOptions& p) { p.blur = std::nan(""); }, [](PhantomOptions& p) { p.fine_porosity = 2; },
            [](PhantomOptions& p) { p.voxel = INFINITY; }, [](PhantomOptions& p) { p.rings = -1; },
-           [](PhantomOptions& p) { p.kind = "nosuch"; }, [](PhantomOptions& p) { p.n = 8; }}) {
+           [](PhantomOptions& p) { p.n = 8; }}) {
     PhantomOptions q = po;
     set(q);
     EXPECT_THROW(make_phantom(q), tomodem::InputError);
   }
+  // An unknown kind is refused where the name is parsed, with the message the library gave before.
+  const tomodem::InputError e = input_error([] { tomodem::parse_name(kPhantomKindNames, "", "--kind", "nosuch"); });
+  EXPECT_EQ(e.field(), "--kind");
+  EXPECT_NE(std::string(e.what()).find("expected pores, lamellae, sphere or packing"), std::string::npos) << e.what();
 }
 
 TEST(LevelSet, TruncatedVdbIsRefusedNotRead) {

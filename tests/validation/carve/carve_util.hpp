@@ -57,7 +57,7 @@ inline image::Mask macropore_mask(const image::Phantom& ph) {
 /// The sphere phantom of tomodem-phantom (one macropore of `radius` voxels, off-grid centre).
 inline image::Phantom sphere_phantom(std::size_t n, double radius, double voxel = 1e-5) {
   image::PhantomOptions o;
-  o.kind = "sphere";
+  o.kind = tomodem::image::PhantomKind::sphere;
   o.n = n;
   o.sphere_radius = radius;
   o.voxel = voxel;

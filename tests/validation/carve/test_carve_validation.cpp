@@ -30,6 +30,19 @@ TEST(CarveValidation, SpherePhantomLevelSetWithinOnePercent) {
   image::write_level_set(dir + "/sphere.vdb", macropore_mask(ph));
   const auto ls = load_level_set(dir + "/sphere.vdb");
   const Packing p = random_packing(L, R / 10, 0.3, 11, {-0.5 * h, -0.5 * h, -0.5 * h});  // the image box
+  // Independent of the carve: the phantom's sphere is centred at n/2 + (0.37, 0.21, 0.60) voxels
+  // (image/src/phantom.cpp, sphere kind; voxel i's centre at i·h), wholly inside the box. The particles
+  // do not overlap (random sequential insertion), so the solid volume is Σ 4/3 π r³, and the set a
+  // sharp sphere carves (centre inside; the fraction rule's "more than half inside" is the same set
+  // for r ≪ R up to r²/R ≈ 0.15 voxel of curvature) removes the particles whose centres lie within R.
+  const Vec3 c{32.37 * h, 32.21 * h, 32.60 * h};
+  double v_solid = 0, v_in = 0;
+  for (std::size_t i = 0; i < p.particles.size(); ++i) {
+    const double vi = sphere_volume(p.particles.radius[i]);
+    v_solid += vi;
+    if (norm(p.particles.position[i] - c) < R) v_in += vi;
+  }
+  const double geometric = v_in / v_solid;
   for (Rule rule : {Rule::centre, Rule::fraction}) {
     Options opt;
     opt.rule = rule;
@@ -41,8 +54,14 @@ TEST(CarveValidation, SpherePhantomLevelSetWithinOnePercent) {
     report(std::string(rule == Rule::centre ? "centre" : "fraction 0.5") + " rule: target", rp.macroporosity_target);
     report("achieved", rp.macroporosity_achieved);
     report("analytic sphere", analytic);
-    // Issue 7: within 1 % absolute of the image's macroporosity.
-    EXPECT_NEAR(rp.macroporosity_achieved, rp.macroporosity_target, 0.01);
+    report("particles centred in the sphere", geometric);
+    // Issue 7: within 1 % absolute of the pore's macroporosity, here the sphere's own volume
+    // fraction (about 300 particles of the pore's volume: their count's spread √300 ≈ 6 % ≈ 0.0035).
+    EXPECT_NEAR(rp.macroporosity_achieved, analytic, 0.01);
+    // The carved set against the particles centred in the true sphere: they differ only by particles
+    // whose centres lie in the band between the level set's surface and the sphere, within ¼ voxel
+    // of it (below): a shell of 3 × 0.25/15.3 ≈ 5 % of the sphere's volume.
+    EXPECT_NEAR(rp.macroporosity_achieved, geometric, 0.05 * geometric);
     // The level set's surface lies within ¼ voxel of the sphere on average (a Gaussian of σ = 1
     // voxel shrinks it by σ²/R ≈ 0.07 voxel): volume within 3 × 0.25/15.3 ≈ 5 % of the sphere's.
     EXPECT_NEAR(rp.macroporosity_target, analytic, 0.05 * analytic);
@@ -59,7 +78,7 @@ TEST(CarveValidation, SpherePhantomLevelSetWithinOnePercent) {
 TEST(CarveValidation, LamellarPhantomLevelSetAndLabels) {
   const std::string dir = temp_dir("val_lamellae");
   image::PhantomOptions o;
-  o.kind = "lamellae";
+  o.kind = tomodem::image::PhantomKind::lamellae;
   o.n = 64;
   const auto ph = image::make_phantom(o);
   const auto mask = macropore_mask(ph);

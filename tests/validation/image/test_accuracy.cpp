@@ -36,7 +36,7 @@ struct Scores {
 
 Scores segment_pores_phantom(double snr, double blur, const std::string& name, const std::string& filter) {
   PhantomOptions po;
-  po.kind = "pores";
+  po.kind = PhantomKind::pores;
   po.n = 96;
   po.snr = snr;
   po.blur = blur;
@@ -111,7 +111,7 @@ TEST(SegmentAccuracy, PoresPhantomSnr2WithBlur) {
 
 TEST(SegmentAccuracy, GrainsOfAPolydispersePackingAreRecovered) {
   PhantomOptions po;
-  po.kind = "packing";
+  po.kind = PhantomKind::packing;
   po.n = 96;
   po.snr = 5;
   po.blur = 1.0;
@@ -163,7 +163,7 @@ TEST(SegmentAccuracy, GrainsOfAPolydispersePackingAreRecovered) {
 
 TEST(LevelSet, ZeroCrossingWithinHalfAVoxelOfTheSphere) {
   PhantomOptions po;
-  po.kind = "sphere";
+  po.kind = PhantomKind::sphere;
   po.n = 64;
   po.sphere_radius = 15.3;
   po.snr = 5;

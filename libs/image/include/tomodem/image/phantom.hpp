@@ -5,13 +5,23 @@
 #include <string>
 #include <vector>
 
+#include "tomodem/core/names.hpp"
 #include "tomodem/core/packing.hpp"
 #include "tomodem/image/volume.hpp"
 
 namespace tomodem::image {
 
+/// What the phantom holds: macropores and fine pores in a solid, lamellae, one centred spherical
+/// macropore, or a packing of touching spheres.
+enum class PhantomKind : uint8_t { pores, lamellae, sphere, packing };
+inline constexpr NameTable<PhantomKind, 4> kPhantomKindNames = {{{PhantomKind::pores, "pores"},
+                                                                 {PhantomKind::lamellae, "lamellae"},
+                                                                 {PhantomKind::sphere, "sphere"},
+                                                                 {PhantomKind::packing, "packing"}}};
+inline const char* to_string(PhantomKind k) { return name_of(kPhantomKindNames, k); }
+
 struct PhantomOptions {
-  std::string kind = "pores";     ///< pores | lamellae | packing | sphere
+  PhantomKind kind = PhantomKind::pores;
   std::size_t n = 96;             ///< cubic size (voxels)
   double voxel = 1e-5;            ///< m
   double snr = 5;                 ///< contrast / noise sigma (0 = no noise)

@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "tomodem/core/names.hpp"
+
 namespace tomodem::image {
 
 struct Dims {
@@ -35,13 +37,41 @@ using Volume = Grid<float>;     ///< grey values (any input type is converted to
 using Mask = Grid<uint8_t>;     ///< 0/1, or small phase labels
 using Labels = Grid<int32_t>;   ///< component or grain ids, 0 = background
 
+/// An input's file format; automatic: from the extension (a folder or a pattern: a TIFF stack).
+enum class VolumeFormat : uint8_t { automatic, tiff, mha, nrrd, nifti, raw, h5 };
+inline constexpr NameTable<VolumeFormat, 7> kVolumeFormatNames = {{{VolumeFormat::automatic, "auto"},
+                                                                   {VolumeFormat::tiff, "tiff"},
+                                                                   {VolumeFormat::mha, "mha"},
+                                                                   {VolumeFormat::nrrd, "nrrd"},
+                                                                   {VolumeFormat::nifti, "nifti"},
+                                                                   {VolumeFormat::raw, "raw"},
+                                                                   {VolumeFormat::h5, "h5"}}};
+inline const char* to_string(VolumeFormat f) { return name_of(kVolumeFormatNames, f); }
+
+/// The voxel type of a raw file.
+enum class RawType : uint8_t { uint8, int8, uint16, int16, uint32, int32, float32, float64 };
+inline constexpr NameTable<RawType, 8> kRawTypeNames = {{{RawType::uint8, "uint8"},
+                                                         {RawType::int8, "int8"},
+                                                         {RawType::uint16, "uint16"},
+                                                         {RawType::int16, "int16"},
+                                                         {RawType::uint32, "uint32"},
+                                                         {RawType::int32, "int32"},
+                                                         {RawType::float32, "float32"},
+                                                         {RawType::float64, "float64"}}};
+inline const char* to_string(RawType t) { return name_of(kRawTypeNames, t); }
+
+/// The byte order of a raw file's voxels.
+enum class ByteOrder : uint8_t { little, big };
+inline constexpr NameTable<ByteOrder, 2> kByteOrderNames = {{{ByteOrder::little, "little"}, {ByteOrder::big, "big"}}};
+inline const char* to_string(ByteOrder b) { return name_of(kByteOrderNames, b); }
+
 /// How to read an input (docs/segment.md, "Inputs").
 struct ReadOptions {
-  std::string format = "auto";          ///< auto | tiff | mha | nrrd | nifti | raw | h5
+  VolumeFormat format = VolumeFormat::automatic;
   // raw binary
   std::array<std::size_t, 3> raw_dims{0, 0, 0};  ///< nx, ny, nz
-  std::string raw_type = "uint8";       ///< uint8 | uint16 | int16 | float32
-  std::string byte_order = "little";    ///< little | big
+  RawType raw_type = RawType::uint8;
+  ByteOrder byte_order = ByteOrder::little;
   std::size_t raw_header = 0;           ///< bytes to skip
   // HDF5
   std::string h5_dataset = "/volume";   ///< (z, y, x); spacing from its attribute "spacing" (x y z) if present,
@@ -83,7 +113,7 @@ Volume read_volume(const std::string& input, const ReadOptions& opt, ReadInfo* i
 std::vector<std::string> input_files(const std::string& input, const ReadOptions& opt);
 
 /// Refuses (InputError naming the option and the value) read options that are nonsense on their
-/// own: unknown --format, --raw-type or --byte-order, --downsample < 1, a --header-unit or
+/// own: --downsample < 1, a --header-unit or
 /// spacing that is not finite and > 0, an empty --roi region, a --dataset not starting with '/'.
 void check_read_options(const ReadOptions& opt);
 
