@@ -106,8 +106,9 @@ TEST(CarveValidation, LamellarPhantomLevelSetAndLabels) {
   report("level set: achieved", a.report.macroporosity_achieved);
   report("labels: target", b.report.macroporosity_target);
   report("labels: achieved", b.report.macroporosity_achieved);
-  EXPECT_NEAR(a.report.macroporosity_achieved, a.report.macroporosity_target, 0.01);  // issue 7: 1 %
-  EXPECT_NEAR(b.report.macroporosity_achieved, b.report.macroporosity_target, 0.01);
+  // Issue 7: within 1 % absolute of the image's macroporosity, the voxel count above.
+  EXPECT_NEAR(a.report.macroporosity_achieved, truth, 0.01);
+  EXPECT_NEAR(b.report.macroporosity_achieved, truth, 0.01);
   // The label route's surface is the voxel faces: its target is the voxel count to the
   // integration grid's resolution (grid cell ≈ 1/4 voxel here: 1e-3).
   EXPECT_NEAR(b.report.macroporosity_target, truth, 2e-3);
@@ -134,6 +135,9 @@ TEST(CarveValidation, FractionRuleErrorShrinksWithParticleSize) {
   const double L = 1e-3, R = 0.3 * L;
   const Box box{{0, 0, 0}, {L, L, L}};
   const auto ball = make_analytic([&](const Vec3& x) { return norm(x - Vec3{0.5 * L, 0.5 * L, 0.5 * L}) - R; }, box, L / 256);
+  // The sphere lies wholly inside the cell: its volume fraction 4/3 π (0.3)³ ≈ 0.1131, independent of
+  // the carve (whose own integral of it is within 1e-4, far below the errors measured here).
+  const double exact = sphere_volume(R) / (L * L * L);
   std::vector<double> err;
   for (double ratio : {5.0, 10.0, 20.0}) {
     double e = 0, e_half = 0;
@@ -145,11 +149,11 @@ TEST(CarveValidation, FractionRuleErrorShrinksWithParticleSize) {
       o.fraction = 0.2;
       o.target_grid = 128;  // the smoothed-cap integral of a sphere of 38 grid cells: error < 1e-4
       const Result r = tomodem::carve::carve(p, *ball, o);
-      e += (r.report.macroporosity_achieved - r.report.macroporosity_target) / reps;
+      e += (r.report.macroporosity_achieved - exact) / reps;
       o.fraction = 0.5;
       const Result r5 = tomodem::carve::carve(p, *ball, o);
-      e_half += (r5.report.macroporosity_achieved - r5.report.macroporosity_target) / reps;
-      if (ratio >= 10) EXPECT_NEAR(r5.report.macroporosity_achieved, r5.report.macroporosity_target, 0.01);
+      e_half += (r5.report.macroporosity_achieved - exact) / reps;
+      if (ratio >= 10) EXPECT_NEAR(r5.report.macroporosity_achieved, exact, 0.01);
     }
     report("R/r = " + std::to_string(int(ratio)) + ": mean error, fraction 0.2", e);
     report("R/r = " + std::to_string(int(ratio)) + ": mean error, fraction 0.5", e_half);
