@@ -77,6 +77,46 @@ class ScaledMasses {
   double dt_max_;
   std::vector<double> m_, inv_m_, inv_I_, floor_;
 };
+/// Power and norms over the free particles (fixed or prescribed ones keep their velocity), in
+/// mass-weighted coordinates (u = √m v, g = F/√m): the mixing turns v towards M⁻¹F, the
+/// preconditioned descent direction, and reduces to Bitzek's rule for equal masses.
+struct FireSums {
+  double power = 0, vv = 0, ff = 0, ww = 0, tt = 0, f2 = 0;
+  long nfree = 0;
+};
+FireSums particle_sums(const Particles& p, bool rot, int threads, bool parallel) {
+  double power = 0, vv = 0, ff = 0, ww = 0, tt = 0, f2 = 0;
+  long nfree = 0;
+  const long n = long(p.size());
+#pragma omp parallel for reduction(+ : power, vv, ff, ww, tt, f2, nfree) num_threads(threads) if (parallel)
+  for (long i = 0; i < n; ++i) {
+    if (p.motion[i] != Motion::free) continue;
+    ++nfree;
+    power += dot(p.f[i], p.v[i]);
+    vv += p.m[i] * norm2(p.v[i]);
+    ff += p.inv_m[i] * norm2(p.f[i]);
+    f2 += norm2(p.f[i]);
+    if (rot) {
+      power += dot(p.torque[i], p.omega[i]);
+      ww += norm2(p.omega[i]) / p.inv_I[i];
+      tt += p.inv_I[i] * norm2(p.torque[i]);
+    }
+  }
+  return {power, vv, ff, ww, tt, f2, nfree};
+}
+/// FIRE's mixing of the free particles' velocities towards M⁻¹F (cv, cw: the translation and
+/// rotation weights), no particle faster than vmax.
+void mix_particles(Particles& p, bool rot, double alpha, double cv, double cw, double vmax, int threads, bool parallel) {
+  const long n = long(p.size());
+#pragma omp parallel for num_threads(threads) if (parallel)
+  for (long i = 0; i < n; ++i) {
+    if (p.motion[i] != Motion::free) continue;
+    p.v[i] = (1 - alpha) * p.v[i] + (cv * p.inv_m[i]) * p.f[i];
+    if (rot) p.omega[i] = (1 - alpha) * p.omega[i] + (cw * p.inv_I[i]) * p.torque[i];
+    const double v2 = norm2(p.v[i]);
+    if (v2 > vmax * vmax) p.v[i] *= vmax / std::sqrt(v2);
+  }
+}
 }  // namespace
 
 FireResult minimise_fire(Simulation& sim, const FireOptions& o) {
@@ -109,39 +149,16 @@ FireResult minimise_fire(Simulation& sim, const FireOptions& o) {
   while (r.steps < o.max_steps) {
     sim.step();
     ++r.steps;
-    // Power and norms over the free particles (fixed or prescribed ones keep their velocity), in
-    // mass-weighted coordinates (u = √m v, g = F/√m): the mixing turns v towards M⁻¹F, the
-    // preconditioned descent direction, and reduces to Bitzek's rule for equal masses.
-    double power = 0, vv = 0, ff = 0, ww = 0, tt = 0, f2 = 0;
-    long nfree = 0;
-#pragma omp parallel for reduction(+ : power, vv, ff, ww, tt, f2, nfree) num_threads(threads) if (parallel)
-    for (long i = 0; i < long(n); ++i) {
-      if (p.motion[i] != Motion::free) continue;
-      ++nfree;
-      power += dot(p.f[i], p.v[i]);
-      vv += p.m[i] * norm2(p.v[i]);
-      ff += p.inv_m[i] * norm2(p.f[i]);
-      f2 += norm2(p.f[i]);
-      if (rot) {
-        power += dot(p.torque[i], p.omega[i]);
-        ww += norm2(p.omega[i]) / p.inv_I[i];
-        tt += p.inv_I[i] * norm2(p.torque[i]);
-      }
-    }
+    const FireSums sums = particle_sums(p, rot, threads, parallel);
+    const double power = sums.power, vv = sums.vv, ff = sums.ff, ww = sums.ww, tt = sums.tt, f2 = sums.f2;
+    const long nfree = sums.nfree;
     const double dt_old = dt;
     if (power > 0) {
       // Translation and rotation are mixed separately (their norms have different units). No
       // particle moves more than max_move of the smallest radius in a step.
       const double cv = ff > 0 ? alpha * std::sqrt(vv / ff) : 0, cw = tt > 0 ? alpha * std::sqrt(ww / tt) : 0;
       const double vmax = o.max_move * rmin / dt;
-#pragma omp parallel for num_threads(threads) if (parallel)
-      for (long i = 0; i < long(n); ++i) {
-        if (p.motion[i] != Motion::free) continue;
-        p.v[i] = (1 - alpha) * p.v[i] + (cv * p.inv_m[i]) * p.f[i];
-        if (rot) p.omega[i] = (1 - alpha) * p.omega[i] + (cw * p.inv_I[i]) * p.torque[i];
-        const double v2 = norm2(p.v[i]);
-        if (v2 > vmax * vmax) p.v[i] *= vmax / std::sqrt(v2);
-      }
+      mix_particles(p, rot, alpha, cv, cw, vmax, threads, parallel);
       if (++positive > o.n_min) {
         dt = std::min(dt * o.f_inc, dt_max);
         alpha *= o.f_alpha;
@@ -259,34 +276,15 @@ FireResult minimise_enthalpy(Simulation& sim, const FireOptions& o, const Enthal
     cell.forces(sim.contact_stress(), sim.cell().volume());
     cell.kick(0.5 * dt);
     // Power and norms in mass-weighted coordinates (as minimise_fire), the cell included.
-    double power = cell.power(), vv = cell.vv(), ff = cell.ff(), ww = 0, tt = 0, f2 = 0;
-    long nfree = 0;
-#pragma omp parallel for reduction(+ : power, vv, ff, ww, tt, f2, nfree) num_threads(threads) if (parallel)
-    for (long i = 0; i < long(n); ++i) {
-      if (p.motion[i] != Motion::free) continue;
-      ++nfree;
-      f2 += norm2(p.f[i]);
-      power += dot(p.f[i], p.v[i]);
-      vv += p.m[i] * norm2(p.v[i]);
-      ff += p.inv_m[i] * norm2(p.f[i]);
-      if (rot) {
-        power += dot(p.torque[i], p.omega[i]);
-        ww += norm2(p.omega[i]) / p.inv_I[i];
-        tt += p.inv_I[i] * norm2(p.torque[i]);
-      }
-    }
+    const FireSums sums = particle_sums(p, rot, threads, parallel);
+    const double power = cell.power() + sums.power, vv = cell.vv() + sums.vv, ff = cell.ff() + sums.ff;
+    const double ww = sums.ww, tt = sums.tt, f2 = sums.f2;
+    const long nfree = sums.nfree;
     const double dt_old = dt;
     if (power > 0) {
       const double cv = ff > 0 ? alpha * std::sqrt(vv / ff) : 0, cw = tt > 0 ? alpha * std::sqrt(ww / tt) : 0;
       const double vmax = o.max_move * rmin / dt;
-#pragma omp parallel for num_threads(threads) if (parallel)
-      for (long i = 0; i < long(n); ++i) {
-        if (p.motion[i] != Motion::free) continue;
-        p.v[i] = (1 - alpha) * p.v[i] + (cv * p.inv_m[i]) * p.f[i];
-        if (rot) p.omega[i] = (1 - alpha) * p.omega[i] + (cw * p.inv_I[i]) * p.torque[i];
-        const double v2 = norm2(p.v[i]);
-        if (v2 > vmax * vmax) p.v[i] *= vmax / std::sqrt(v2);
-      }
+      mix_particles(p, rot, alpha, cv, cw, vmax, threads, parallel);
       for (int a = 0; a < cell.n; ++a) {
         cell.v[a] = (1 - alpha) * cell.v[a] + cv * cell.f[a] / cell.m[a];
       }
