@@ -7,20 +7,7 @@
 
 namespace tomodem::fields {
 
-Vec3 minimum_image(const Cell& cell, const Vec3& xi, const Vec3& xj) {
-  const Vec3 d0 = xj - xi;
-  Vec3 best = d0;
-  double best2 = norm2(d0);
-  for (int a = -1; a <= 1; ++a)
-    for (int b = -1; b <= 1; ++b)
-      for (int c = -1; c <= 1; ++c) {
-        const int n[3] = {a, b, c};
-        if ((a && !cell.periodic[0]) || (b && !cell.periodic[1]) || (c && !cell.periodic[2])) continue;
-        const Vec3 d = d0 + cell.h * Vec3(n[0], n[1], n[2]);
-        if (norm2(d) < best2) best2 = norm2(d), best = d;
-      }
-  return best;
-}
+using spatial::shortest_branch;
 
 namespace {
 constexpr double kPi = 3.14159265358979323846;
@@ -85,9 +72,9 @@ std::vector<PairForce> bond_pairs(const Packing& p, const std::string& file, con
     const Vec3 &xi = p.particles.position[c.i], &xj = p.particles.position[c.j];
     if (!o.bond_image.empty()) {
       const auto& n = o.bond_image[b];
-      c.branch = xj + p.cell.h * Vec3(n[0], n[1], n[2]) - xi;
+      c.branch = xj + p.cell.h * spatial::as_vector(n) - xi;
     } else {
-      c.branch = minimum_image(p.cell, xi, xj);
+      c.branch = shortest_branch(p.cell, xi, xj);
     }
     c.force = mode == "stored" ? o.stored_bond_force[b] : stretch_force(p, file, b, c.branch);
     out.push_back(c);
@@ -108,7 +95,7 @@ std::vector<Vec3> displacements(const Packing& p, const Packing& ref, const std:
   for (std::size_t i = 0; i < N; ++i) {
     const Vec3 xr = ref.particles.position[i];
     const Vec3 affine = p.cell.origin + F * (xr - ref.cell.origin);
-    x[i] = affine + minimum_image(p.cell, affine, p.particles.position[i]);
+    x[i] = affine + shortest_branch(p.cell, affine, p.particles.position[i]);
     u[i] = x[i] - xr;
   }
   return u;
@@ -127,7 +114,7 @@ Snapshot make_snapshot(const Packing& p, const std::string& file, const Snapshot
   for (std::size_t c = 0; c < C.size(); ++c) {
     PairForce f;
     f.i = C.i[c], f.j = C.j[c];
-    f.branch = minimum_image(p.cell, s.x[f.i], s.x[f.j]);
+    f.branch = shortest_branch(p.cell, s.x[f.i], s.x[f.j]);
     f.force = C.normal_force[c] + C.tangential_force[c];
     s.contacts.push_back(f);
   }

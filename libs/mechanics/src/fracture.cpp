@@ -11,6 +11,7 @@
 
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/tool.hpp"
+#include "tomodem/spatial/clusters.hpp"
 
 namespace tomodem::mechanics {
 
@@ -20,17 +21,6 @@ std::string num(double v) {
   std::snprintf(b, sizeof b, "%.6g", v);
   return b;
 }
-
-/// Union–find over particles.
-struct Components {
-  std::vector<int32_t> parent;
-  explicit Components(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  int32_t find(int32_t a) {
-    while (parent[a] != a) a = parent[a] = parent[parent[a]];
-    return a;
-  }
-  void join(int32_t a, int32_t b) { parent[find(a)] = find(b); }
-};
 }  // namespace
 
 namespace {
@@ -143,9 +133,9 @@ void classify_bonds(FractureSample& s) {
 bool keep_gripped(FractureSample& s) {
   const Packing& p = s.packing;
   const std::size_t n = p.particles.size(), m = p.bonds.size();
-  Components comp(n);
+  spatial::UnionFind comp(n);
   for (std::size_t b = 0; b < m; ++b)
-    if (s.bond_role[b] == BondRole::load) comp.join(p.bonds.i[b], p.bonds.j[b]);
+    if (s.bond_role[b] == BondRole::load) comp.unite(p.bonds.i[b], p.bonds.j[b]);
   std::vector<uint8_t> has(n, 0);  // per root: 1 bottom, 2 top
   for (std::size_t i = 0; i < n; ++i) {
     if (s.role[i] == ParticleRole::bottom) has[comp.find(int32_t(i))] |= 1;

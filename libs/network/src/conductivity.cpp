@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "tomodem/core/error.hpp"
+#include "tomodem/spatial/clusters.hpp"
 
 namespace tomodem::network {
 
@@ -45,48 +46,6 @@ void fill_fractions(const Network& net, const std::vector<uint8_t>& perc, const 
   res.dead_end_fraction = total > 0 ? d_all / total : 0;
 }
 
-/// Union-find that tracks each node's periodic image relative to its root, so that a cluster
-/// closing a loop with a non-zero net image shift is known to wrap around the cell.
-class WrapFind {
- public:
-  explicit WrapFind(std::size_t n) : parent_(n), off_(n, {0, 0, 0}), wraps_(n, {0, 0, 0}) {
-    for (std::size_t v = 0; v < n; ++v) parent_[v] = static_cast<int32_t>(v);
-  }
-  int32_t find(int32_t v, std::array<int32_t, 3>& off) {
-    path_.clear();
-    while (parent_[v] != v) { path_.push_back(v); v = parent_[v]; }
-    // Compress: offsets to the root, accumulated from the node nearest the root outwards.
-    for (auto it = path_.rbegin(); it != path_.rend(); ++it) {
-      const int32_t u = *it, p = parent_[u];
-      if (p != v) for (int k = 0; k < 3; ++k) off_[u][k] += off_[p][k];
-      parent_[u] = v;
-    }
-    off = path_.empty() ? std::array<int32_t, 3>{0, 0, 0} : off_[path_.front()];
-    return v;
-  }
-  /// Edge a -> b with b in image `w` of a's frame.
-  void unite(int32_t a, int32_t b, const std::array<int32_t, 3>& w) {
-    std::array<int32_t, 3> oa, ob;
-    const int32_t ra = find(a, oa), rb = find(b, ob);
-    if (ra == rb) {
-      for (int k = 0; k < 3; ++k)
-        if (oa[k] + w[k] - ob[k] != 0) wraps_[ra][k] = 1;
-      return;
-    }
-    parent_[rb] = ra;  // image of rb in ra's frame: oa + w - ob
-    for (int k = 0; k < 3; ++k) {
-      off_[rb][k] = oa[k] + w[k] - ob[k];
-      wraps_[ra][k] |= wraps_[rb][k];
-    }
-  }
-  const std::array<uint8_t, 3>& wraps(int32_t root) const { return wraps_[root]; }
-
- private:
-  std::vector<int32_t> parent_;
-  std::vector<std::array<int32_t, 3>> off_;
-  std::vector<std::array<uint8_t, 3>> wraps_;
-  std::vector<int32_t> path_;
-};
 }  // namespace
 
 double volume_fraction(const Network& net, const std::vector<uint8_t>& flag) {
@@ -189,23 +148,21 @@ TensorResult solve_periodic(const Network& net, const ConductOptions& opt) {
                        "periodic boundary conditions need a cell periodic along x, y and z");
   TensorResult out;
   const std::size_t n = net.n_nodes(), m = net.n_edges();
-  WrapFind wf(n);
-  for (std::size_t e = 0; e < m; ++e) wf.unite(net.graph.i[e], net.graph.j[e], net.image[e]);
-  std::vector<int32_t> root(n);
-  std::vector<uint8_t> active(n, 0), fixed(n, 0), seen(n, 0);
+  // Clusters of the contact graph and the cell vectors each wraps along (libs/spatial).
+  const spatial::Clusters clusters = spatial::find_clusters(n, net.graph.i, net.graph.j, net.image);
+  std::vector<uint8_t> active(n, 0), fixed(n, 0), seen(clusters.size.size(), 0);
   std::array<std::vector<uint8_t>, 3> wraps_k;
   for (int k = 0; k < 3; ++k) wraps_k[k].assign(n, 0);
   for (std::size_t v = 0; v < n; ++v) {
-    std::array<int32_t, 3> o;
-    root[v] = wf.find(static_cast<int32_t>(v), o);
-    const auto& w = wf.wraps(root[v]);
+    const std::size_t c = std::size_t(clusters.label[v]);
+    const auto& w = clusters.wraps[c];
     for (int k = 0; k < 3; ++k) {
       wraps_k[k][v] = w[k];
       out.wraps[k] = out.wraps[k] || w[k];
     }
     active[v] = w[0] || w[1] || w[2];
-    if (active[v] && !seen[root[v]]) {  // pin one node per current-carrying cluster (u = 0)
-      seen[root[v]] = 1;
+    if (active[v] && !seen[c]) {  // pin one node per current-carrying cluster (u = 0)
+      seen[c] = 1;
       fixed[v] = 1;
     }
   }

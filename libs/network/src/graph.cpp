@@ -1,33 +1,13 @@
 #include "tomodem/network/graph.hpp"
 
+#include "tomodem/spatial/clusters.hpp"
+
 #include <numeric>
 
 namespace tomodem::network {
 
-UnionFind::UnionFind(std::size_t n) : parent_(n), size_(n, 1) {
-  std::iota(parent_.begin(), parent_.end(), 0);
-}
-
-int32_t UnionFind::find(int32_t a) {
-  while (parent_[a] != a) {
-    parent_[a] = parent_[parent_[a]];
-    a = parent_[a];
-  }
-  return a;
-}
-
-bool UnionFind::unite(int32_t a, int32_t b) {
-  a = find(a);
-  b = find(b);
-  if (a == b) return false;
-  if (size_[a] < size_[b]) std::swap(a, b);
-  parent_[b] = a;
-  size_[a] += size_[b];
-  return true;
-}
-
 std::vector<int32_t> connected_components(const Graph& graph, std::size_t* n_components) {
-  UnionFind uf(graph.n_nodes);
+  spatial::UnionFind uf(graph.n_nodes);
   for (std::size_t e = 0; e < graph.n_edges(); ++e) uf.unite(graph.i[e], graph.j[e]);
   std::vector<int32_t> label(graph.n_nodes, -1), root_label(graph.n_nodes, -1);
   int32_t next = 0;

@@ -1,4 +1,4 @@
-// Components by a depth-first walk that carries each particle's lattice offset from the
+// Union-find for plain components. Periodic clusters by a depth-first walk that carries each particle's lattice offset from the
 // component's first particle; an edge that closes a loop with another offset is a winding.
 #include "tomodem/spatial/clusters.hpp"
 
@@ -6,8 +6,29 @@
 #include <cmath>
 #include <cstdlib>
 #include <numeric>
+#include <utility>
 
 namespace tomodem::spatial {
+
+UnionFind::UnionFind(std::size_t n) : parent_(n), size_(n, 1) { std::iota(parent_.begin(), parent_.end(), 0); }
+
+int32_t UnionFind::find(int32_t a) {
+  while (parent_[std::size_t(a)] != a) {
+    parent_[std::size_t(a)] = parent_[std::size_t(parent_[std::size_t(a)])];
+    a = parent_[std::size_t(a)];
+  }
+  return a;
+}
+
+bool UnionFind::unite(int32_t a, int32_t b) {
+  a = find(a);
+  b = find(b);
+  if (a == b) return false;
+  if (size_[std::size_t(a)] < size_[std::size_t(b)]) std::swap(a, b);
+  parent_[std::size_t(b)] = a;
+  size_[std::size_t(a)] += size_[std::size_t(b)];
+  return true;
+}
 
 namespace {
 // Rank of a set of integer vectors (Gaussian elimination in doubles; entries are small).
@@ -94,6 +115,12 @@ Clusters find_clusters(std::size_t n, const std::vector<int32_t>& ei, const std:
       }
     }
     c.wrap_rank.push_back(windings.empty() ? 0 : rank_of(windings));
+    // Every winding of the cluster is a combination of the independent ones kept, so an axis
+    // some winding has a component along is one a kept winding has a component along.
+    std::array<uint8_t, 3> along{0, 0, 0};
+    for (const auto& w : windings)
+      for (int k = 0; k < 3; ++k) along[k] = uint8_t(along[k] || w[k] != 0);
+    c.wraps.push_back(along);
   }
   summarise(c, n);
   return c;

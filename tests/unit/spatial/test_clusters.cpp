@@ -38,3 +38,30 @@ TEST(SpatialClusters, SimpleCubicUnitCellSpansInThreeDimensions) {
   const Clusters d = find_clusters(1, {0, 0}, {0, 0}, {{1, 0, 0}, {2, 0, 0}});
   EXPECT_EQ(d.wrap_rank[0], 1);
 }
+
+TEST(SpatialClusters, WrapsNamesTheCellVectorsOfTheWindings) {
+  // A chain closed through the +x image wraps along x only; a chain closed through the (1, 1, 0)
+  // image has one winding (rank 1) with components along x and y, so a transport solve along x
+  // or y finds it connected and one along z does not.
+  const std::vector<int32_t> i = {0, 1, 2, 3}, j = {1, 2, 0, 3};
+  const std::vector<Image> im = {{0, 0, 0}, {0, 0, 0}, {1, 0, 0}, {1, 1, 0}};
+  const Clusters c = find_clusters(4, i, j, im);
+  ASSERT_EQ(c.size.size(), 2u);
+  EXPECT_EQ(c.wraps[std::size_t(c.label[0])], (std::array<uint8_t, 3>{1, 0, 0}));
+  EXPECT_EQ(c.wrap_rank[std::size_t(c.label[3])], 1);
+  EXPECT_EQ(c.wraps[std::size_t(c.label[3])], (std::array<uint8_t, 3>{1, 1, 0}));
+  // Closed inside the cell: no axis.
+  const Clusters d = find_clusters(3, {0, 1, 2}, {1, 2, 0}, {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}});
+  EXPECT_EQ(d.wraps[0], (std::array<uint8_t, 3>{0, 0, 0}));
+}
+
+TEST(SpatialUnionFind, JoinsSetsAndReportsWhetherTheyWereApart) {
+  UnionFind uf(5);
+  EXPECT_TRUE(uf.unite(0, 1));
+  EXPECT_TRUE(uf.unite(3, 4));
+  EXPECT_FALSE(uf.unite(1, 0));  // already one set
+  EXPECT_TRUE(uf.unite(1, 4));
+  EXPECT_EQ(uf.find(0), uf.find(3));
+  EXPECT_NE(uf.find(0), uf.find(2));
+  EXPECT_EQ(uf.find(2), 2);  // a singleton is its own root
+}

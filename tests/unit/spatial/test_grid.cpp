@@ -172,6 +172,21 @@ TEST(SpatialImage, CodesAndMinimumImage) {
   EXPECT_EQ(minimum_image(c, c.h.inverse(), xi, xj), (Image{-1, 1, 0}));
 }
 
+TEST(SpatialImage, ShortestBranchTakesTheNearestImageAlongPeriodicAxesOnly) {
+  // Unit box periodic along x only: j at x = 0.9 is 0.2 behind i at 0.1 through the −x image;
+  // along the open y it stays 0.8 away.
+  Cell c;
+  c.h = Mat3::identity();
+  c.periodic[0] = true;
+  c.periodic[1] = c.periodic[2] = false;
+  Image n{9, 9, 9};
+  const Vec3 d = shortest_branch(c, {0.1, 0.1, 0.5}, {0.9, 0.9, 0.5}, &n);
+  EXPECT_NEAR(d.x, -0.2, 1e-15);
+  EXPECT_NEAR(d.y, 0.8, 1e-15);
+  EXPECT_EQ(d.z, 0.0);
+  EXPECT_EQ(n, (Image{-1, 0, 0}));
+}
+
 TEST(SpatialImage, WrapIntoCellReturnsTheLatticeVectorsSubtracted) {
   Cell c;
   c.h = sheared(1.0);

@@ -6,6 +6,7 @@
 
 #include "tomodem/core/packing.hpp"
 #include "tomodem/fields/cg.hpp"
+#include "tomodem/spatial/image.hpp"
 
 namespace tomodem::fields {
 
@@ -34,15 +35,12 @@ struct SnapshotOptions {
   double density = 0;                   ///< kg/m^3 for every phase; 0: the materials' densities
   std::string bond_forces = "auto";     ///< auto | stored | stretch | none
   std::vector<Vec3> stored_bond_force;  ///< /bonds/force rows (force on j from i), when read
-  std::vector<std::array<int32_t, 3>> bond_image;  ///< /bonds/image rows, when read
+  std::vector<spatial::Image> bond_image;  ///< /bonds/image rows, when read
 };
 /// Masses, contact and bond forces and branch vectors of a packing; the displacement from
 /// `reference` when given. InputError naming `file` and the dataset for what is missing.
 /// `bond_source` receives where the bond forces came from.
 Snapshot make_snapshot(const Packing& p, const std::string& file, const SnapshotOptions& o, const Packing* reference,
                        const std::string& reference_file, std::string* bond_source = nullptr);
-
-/// x_j + H·n − x_i over the periodic images (n ∈ {-1, 0, 1} along periodic axes), shortest.
-Vec3 minimum_image(const Cell& cell, const Vec3& xi, const Vec3& xj);
 
 }  // namespace tomodem::fields

@@ -20,18 +20,6 @@ struct Graph {
   }
 };
 
-/// Disjoint sets with path halving and union by size.
-class UnionFind {
- public:
-  explicit UnionFind(std::size_t n);
-  int32_t find(int32_t a);
-  /// Returns true when a and b were in different sets.
-  bool unite(int32_t a, int32_t b);
-
- private:
-  std::vector<int32_t> parent_, size_;
-};
-
 /// Connected components: label per node in [0, n_components), numbered by first node.
 std::vector<int32_t> connected_components(const Graph& graph, std::size_t* n_components = nullptr);
 

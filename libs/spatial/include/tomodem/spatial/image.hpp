@@ -42,4 +42,22 @@ inline Image minimum_image(const Cell& cell, const Mat3& hinv, const Vec3& xi, c
   return n;
 }
 
+/// The shortest x_j + H·n − x_i over the images n ∈ {−1, 0, 1} along the periodic directions
+/// (all 27 tried, so it is the shortest in a sheared cell too, where rounding the fractional
+/// difference is not); `n`, when given, receives the image.
+inline Vec3 shortest_branch(const Cell& cell, const Vec3& xi, const Vec3& xj, Image* n = nullptr) {
+  const Vec3 d0 = xj - xi;
+  Vec3 best = d0;
+  double best2 = norm2(d0);
+  int best_code = kCentreImage;
+  for (int code = 0; code < kImageCodes; ++code) {
+    const Image m = image_of_code(code);
+    if ((m[0] && !cell.periodic[0]) || (m[1] && !cell.periodic[1]) || (m[2] && !cell.periodic[2])) continue;
+    const Vec3 d = d0 + cell.h * as_vector(m);
+    if (norm2(d) < best2) best2 = norm2(d), best = d, best_code = code;
+  }
+  if (n) *n = image_of_code(best_code);
+  return best;
+}
+
 }  // namespace tomodem::spatial
