@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "tomodem/core/cli_docs.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/core/units.hpp"
@@ -116,8 +117,16 @@ inline void check_o_as_folder(const std::string& o_value, const std::string& too
 
 /// Parses the command line: the exit code to stop with (0 after --help or --version, 2 for bad
 /// usage, after CLI11's message), or nothing when the tool should go on.
+/// `TOOL --help-man` prints the manual page and `TOOL --help-completion` the bash completion,
+/// both generated from `app` (cli_docs.hpp; used by the install step, hidden from --help).
 inline std::optional<int> parse(CLI::App& app, int argc, char** argv) {
   set_command_line(argc, argv);
+  if (argc == 2 && (std::string(argv[1]) == "--help-man" || std::string(argv[1]) == "--help-completion")) {
+    std::string tool = argv[0];
+    tool = tool.substr(tool.find_last_of('/') + 1);
+    std::cout << (std::string(argv[1]) == "--help-man" ? man_page(app, tool, version_string()) : bash_completion(app, tool));
+    return exit_code::ok;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {
