@@ -84,9 +84,23 @@ void set_solid_fraction(dem::Simulation& sim, double vsolid, double phi, const s
   sim.invalidate_neighbors();
 }
 
-/// A solid-fraction target is approached in steps of kPhiStep: from a relaxed state at φ ≥ 0.25
-/// overlaps grow by at most about Δφ/(3φ) d ≤ 0.03 d, inside the engine's 0.5 R stability limit.
+/// A solid-fraction target is approached in steps of at most kPhiStep (and of max_compression).
 constexpr double kPhiStep = 0.02;
+/// The most a contact's overlap may grow in one affine compression, as a fraction of the
+/// smaller radius of the pair (the engine stops at 0.5; the relaxation that follows moves the
+/// particles by up to 0.02 r_min per step and needs the rest of that margin).
+constexpr double kAffineOverlapGrowth = 0.1;
+
+/// Largest compression Δφ from `phi` in one affine step. A pair at centre distance l ≤ r_i + r_j
+/// comes closer by l Δφ/(3φ); against the smaller radius the worst pair is the smallest particle
+/// on the largest, l/r_min = 1 + r_max/r_min. Sizing the step by the mean particle let a 0.1 µm
+/// fine touching a 2.5 µm pore former overlap by 0.5 of its radius after one 0.02 step (issue 21).
+double max_compression(const dem::Simulation& sim, double phi) {
+  const auto& r = sim.particles().r;
+  if (r.empty()) return kPhiStep;
+  const auto [lo, hi] = std::minmax_element(r.begin(), r.end());
+  return std::min(kPhiStep, 3 * phi * kAffineOverlapGrowth * *lo / (*lo + *hi));
+}
 /// The enthalpy minimiser's pressure tolerance |p − P|/P (the tool accepts 5 %: the reported
 /// pressure, kinetic part included, stays well inside it).
 constexpr double kPressureTolerance = 0.01;
@@ -217,7 +231,7 @@ QuasiStaticResult enthalpy(dem::Simulation& sim, const PackSpec& spec, double vs
     if (lo.set && hi.set && !(next > lo.phi && next < hi.phi)) next = 0.5 * (lo.phi + hi.phi);
     if (lo.set && hi.set && hi.phi - lo.phi < 1e-12 * phi) break;  // a rearrangement jump at the target
     if (p > 0) last = pnt;
-    phi = next;
+    phi = std::min(next, phi + max_compression(sim, phi));
     set_solid_fraction(sim, vsolid, phi, clusters);
   }
   if (!out.converged && upper.set) {
@@ -253,7 +267,7 @@ QuasiStaticResult quasistatic(dem::Simulation& sim, const PackSpec& spec, double
   say("compress-relax to solid fraction " + num(spec.target_solid_fraction));
   dem::FireResult r;
   do {
-    phi = std::min(spec.target_solid_fraction, phi + kPhiStep);
+    phi = std::min(spec.target_solid_fraction, phi + max_compression(sim, phi));
     if (spec.target_solid_fraction - phi < 1e-9 * phi) phi = spec.target_solid_fraction;  // not a round-off step
     set_solid_fraction(sim, vsolid, phi, clusters);
     r = relax(floor0);
