@@ -26,7 +26,7 @@ int main(int argc, char** argv) {
   namespace tp = tomodem::pipeline;
   CLI::App app{"tomodem-run: run a pipeline file, re-running only the steps whose inputs, params, command or\n"
                "tool version changed (see docs/pipelines.md). Without a subcommand it runs the pipeline."};
-  app.set_version_flag("--version", tomodem::version_string());
+  app.set_version_flag("--version", tomodem::version_string() + "\nfeatures: " + tomodem::build_features());
   std::string file, json_file, step, shard;
   bool quiet = false;
   tp::LoadOptions lo;

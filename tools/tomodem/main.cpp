@@ -33,7 +33,7 @@ int main(int argc, char** argv) {
     return argc < 2 ? tomodem::exit_code::bad_input : 0;
   }
   if (!std::strcmp(argv[1], "--version")) {
-    std::cout << tomodem::version_string() << '\n';
+    std::cout << tomodem::version_string() << "\nfeatures: " << tomodem::build_features() << '\n';
     return 0;
   }
   const std::string tool = std::string("tomodem-") + argv[1];

@@ -8,6 +8,7 @@
 #include <iterator>
 #include <thread>
 #include <algorithm>
+#include <optional>
 #include <vector>
 
 #include "tomodem/core/error.hpp"
@@ -106,7 +107,44 @@ void spin_briefly_unless_told() {
 }
 }  // namespace
 
+std::string build_features() {
+#ifdef TOMODEM_HAVE_MPI
+  return "openmp mpi petsc";
+#else
+  return "openmp";
+#endif
+}
+
+namespace {
+int env_int(const char* name, int fallback) {
+  const char* s = std::getenv(name);
+  return s && *s ? std::atoi(s) : fallback;
+}
+
+// A build without MPI started by a launcher on several ranks would run that many copies of the
+// serial run, all writing the same outputs. The launchers say so in the environment: OpenMPI's
+// mpirun (OMPI_COMM_WORLD_SIZE), MPICH's Hydra and srun --mpi=pmi2 (PMI_SIZE), srun itself
+// (SLURM_STEP_NUM_TASKS; not SLURM_NTASKS, which a batch script with --ntasks also has, and from
+// which tomodem-run starts serial steps). Refused on every rank, said once, by rank 0.
+std::optional<int> refuse_serial_build_on_ranks(const std::string& tool) {
+#ifdef TOMODEM_HAVE_MPI
+  (void)tool;
+  return std::nullopt;
+#else
+  const int size = std::max({env_int("OMPI_COMM_WORLD_SIZE", 1), env_int("PMI_SIZE", 1), env_int("SLURM_STEP_NUM_TASKS", 1)});
+  if (size <= 1) return std::nullopt;
+  const int rank = std::max({env_int("OMPI_COMM_WORLD_RANK", 0), env_int("PMI_RANK", 0), env_int("SLURM_PROCID", 0)});
+  if (rank == 0)
+    std::cerr << tool << ": error: this build has no MPI: started on " << size
+              << " ranks, it would run that many copies of the serial run; configure with -DTOMODEM_MPI=ON, "
+                 "or run it on one rank\n";
+  return exit_code::bad_input;
+#endif
+}
+}  // namespace
+
 int run_tool(const std::string& tool_name, const std::function<int()>& body) {
+  if (const auto refused = refuse_serial_build_on_ranks(tool_name)) return *refused;
   spin_briefly_unless_told();
   g_tool = tool_name;
   install_cleanup_handlers();

@@ -15,6 +15,7 @@
 #include <optional>
 #include <queue>
 #include <set>
+#include <sstream>
 
 #include "template.hpp"
 #include "tomodem/core/error.hpp"
@@ -44,11 +45,13 @@ std::string scalar(const YAML::Node& n, const std::string& file, const std::stri
 long long integer(const std::string& text, const Location& where, const std::string& field, long long lo) {
   char* end = nullptr;
   long long v = std::strtoll(text.c_str(), &end, 10);
-  if (!text.empty() && *end != '\0') {  // "1e9" is an integer written as a float
+  bool whole = !text.empty() && *end == '\0';
+  if (!text.empty() && !whole) {  // "1e9" is an integer written as a float; "1.5" is not one
     const double d = std::strtod(text.c_str(), &end);
-    if (*end == '\0' && std::isfinite(d) && d == std::floor(d) && std::fabs(d) < 9e18) v = static_cast<long long>(d);
+    whole = *end == '\0' && std::isfinite(d) && d == std::floor(d) && std::fabs(d) < 9e18;
+    if (whole) v = static_cast<long long>(d);
   }
-  if (text.empty() || *end != '\0' || v < lo)
+  if (!whole || v < lo)
     fail(where, field, text, "expected an integer >= " + std::to_string(lo));
   return v;
 }
@@ -218,8 +221,8 @@ void check_sweep_size(double cells, const Location& where, const std::string& fi
              " instances of the step; at most 1000000 per step (split the study into several pipelines)");
 }
 
-const std::set<std::string> kStepKeys = {"cmd", "tool", "args", "deps", "outs", "params", "threads", "matrix",
-                                         "cases", "cell", "replicas", "seed", "version", "desc"};
+const std::set<std::string> kStepKeys = {"cmd", "tool", "args", "deps", "outs", "params", "threads", "ranks",
+                                         "matrix", "cases", "cell", "replicas", "seed", "version", "desc"};
 
 // What ${...} may name inside one instance. A null pointer means "not available here".
 struct Scope {
@@ -227,7 +230,7 @@ struct Scope {
   const Cell* cell = nullptr;
   std::string step;
   long long seed = 0;
-  int threads = 1;
+  int threads = 1, ranks = 1;
   const std::map<std::string, std::string>* params = nullptr;
   const NamedPaths* outs = nullptr;
   const NamedPaths* deps = nullptr;
@@ -262,6 +265,7 @@ std::vector<std::string> lookup(const Scope& s, const std::string& name) {
   }
   if (name == "seed") return {std::to_string(s.seed)};
   if (name == "threads") return {std::to_string(s.threads)};
+  if (name == "ranks") return {std::to_string(s.ranks)};
   if (starts("params.")) {
     if (!s.params) throw RefError{"params cannot be used here"};
     const auto it = s.params->find(name.substr(7));
@@ -282,7 +286,7 @@ std::vector<std::string> lookup(const Scope& s, const std::string& name) {
   }
   throw RefError{"unknown reference '${" + name +
                  "}' (known: vars.*, matrix.*, params.*, outs[.*], deps[.*], steps.S.outs[.*], cell, replica, "
-                 "seed, threads, step, run.replicas; write $${ for a literal ${)"};
+                 "seed, threads, ranks, step, run.replicas; write $${ for a literal ${)"};
 }
 
 std::vector<std::string> resolve_list(const std::string& text, const Scope& s, const Location& where,
@@ -511,7 +515,8 @@ std::string find_tool(const std::string& exe, const std::string& tool_dir) {
   return "";
 }
 
-std::string tool_version(const std::string& path) {
+// The whole `--version` output of a tool.
+const std::string& version_output(const std::string& path) {
   static std::map<std::string, std::string> cache;  // one `--version` call per tool and process
   if (auto it = cache.find(path); it != cache.end()) return it->second;
   std::string out;
@@ -521,7 +526,28 @@ std::string tool_version(const std::string& path) {
     ::pclose(f);
   }
   while (!out.empty() && std::isspace(static_cast<unsigned char>(out.back()))) out.pop_back();
-  return cache[path] = out.substr(0, out.find('\n'));
+  return cache[path] = out;
+}
+
+// The first line is the version of the step's signature; the `features:` line is not part of it.
+std::string tool_version(const std::string& path) {
+  const std::string& out = version_output(path);
+  return out.substr(0, out.find('\n'));
+}
+
+// "features: openmp mpi petsc" (the line every tool's --version prints), or "no features line".
+std::string tool_features_line(const std::string& path) {
+  std::istringstream lines(version_output(path));
+  for (std::string line; std::getline(lines, line);)
+    if (line.rfind("features:", 0) == 0) return line;
+  return "no features line";
+}
+
+bool has_feature(const std::string& path, const std::string& feature) {
+  std::istringstream words(tool_features_line(path));
+  for (std::string w; words >> w;)
+    if (w == feature) return true;
+  return false;
 }
 
 // ---- building the instances -------------------------------------------------------------
@@ -685,7 +711,7 @@ void check_step_keys(const RawStep& st) {
   for (const auto& kv : st.node)
     if (!kStepKeys.count(kv.first.Scalar()))
       fail(at(f, kv.first), base + kv.first.Scalar(), "",
-           "unknown key (expected cmd, tool, args, deps, outs, params, threads, matrix, cases, cell, replicas, "
+           "unknown key (expected cmd, tool, args, deps, outs, params, threads, ranks, matrix, cases, cell, replicas, "
            "seed, version, desc)");
   if (!st.node["cmd"] == !st.node["tool"]) fail(st.where, "steps." + st.name, "", "a step needs one of cmd: or tool:");
   if (st.node["args"] && !st.node["tool"]) fail(at(f, st.node["args"]), base + "args", "", "args: goes with tool:");
@@ -765,6 +791,10 @@ class Expander {
       in.threads = static_cast<int>(
           integer(resolve(scalar(th, f, base + "threads"), s, at(f, th), base + "threads"), at(f, th), base + "threads", 1));
     s.threads = in.threads;
+    if (const YAML::Node rk = st.node["ranks"])  // 0, negative or not an integer: exit 2 naming it
+      in.ranks = static_cast<int>(
+          integer(resolve(scalar(rk, f, base + "ranks"), s, at(f, rk), base + "ranks"), at(f, rk), base + "ranks", 1));
+    s.ranks = in.ranks;
     in.params = params_of(st, s);
     s.params = &in.params;
     for (const auto& [name, text, where] : path_items(st.node["outs"], f, base + "outs")) {
@@ -871,6 +901,7 @@ class Expander {
     s.step = st.name;
     s.seed = pe.seed;
     s.threads = in.threads;
+    s.ranks = in.ranks;
     s.params = &in.params;
     s.outs = &in.outs;
     if (!adaptive_of_.empty()) s.replicas = &replicas_ref_;
@@ -919,6 +950,12 @@ class Expander {
         }
     }
     in.version = tool_version(exe);
+    // A tool of a build without MPI would run `ranks` copies of the serial run: refused here,
+    // before anything runs, rather than by every copy at its start.
+    if (in.ranks > 1 && !has_feature(exe, "mpi"))
+      fail(at(f, st.node["ranks"]), base + "ranks", std::to_string(in.ranks),
+           "tomodem-" + in.tool + " has no MPI (its --version says '" + tool_features_line(exe) +
+               "'): build tomodem with -DTOMODEM_MPI=ON, or use ranks: 1");
   }
 
   // An input another instance writes makes that instance upstream; any other must exist (the

@@ -88,6 +88,11 @@ SlurmFiles slurm_scripts(const Pipeline& p, const SlurmOptions& o) {
   int shards = o.shards > 0 ? o.shards : std::min(leaves, 1000);
   int cpus = o.cpus;
   for (const auto& in : p.instances) cpus = o.cpus > 0 ? cpus : std::max(cpus, in.threads);
+  // MPI steps run under srun inside the job (the runner picks srun where SLURM_JOB_ID is set),
+  // so each job asks for the largest rank count as tasks, each with `cpus` cores.
+  int ranks = 1;
+  for (const auto& in : p.instances) ranks = std::max(ranks, in.ranks);
+  const std::string ntasks = ranks > 1 ? "--ntasks=" + std::to_string(ranks) : "";
   const fs::path file = fs::absolute(p.file).lexically_normal();
   const std::string stem = file.stem().string();
   const std::string logs = fs::absolute(p.logs_dir).lexically_normal().string();
@@ -110,14 +115,14 @@ SlurmFiles slurm_scripts(const Pipeline& p, const SlurmOptions& o) {
     << "# Submit with the .submit.sh beside it (shared upstream steps, then this array, then the gather).\n"
     << "#SBATCH --job-name=" << job << "\n"
     << "#SBATCH --array=1-" << shards << "%" << o.limit << "\n"
-    << "#SBATCH --cpus-per-task=" << cpus << "\n"
+    << (ntasks.empty() ? "" : "#SBATCH " + ntasks + "\n") << "#SBATCH --cpus-per-task=" << cpus << "\n"
     << "#SBATCH --time=" << o.time << "\n"
     << part << "#SBATCH --output=" << sbatch_value(logs + "/slurm-%A_%a.out", "logs") << "\n"
     << "set -euo pipefail\n"
     << "exec " << run << " --shard \"${SLURM_ARRAY_TASK_ID}/" << shards << "\" --jobs \"${SLURM_CPUS_PER_TASK:-" << cpus
     << "}\" --quiet\n";
   f.array_script = a.str();
-  const std::string common = " --cpus-per-task=" + std::to_string(cpus) + " --time=" + o.time +
+  const std::string common = (ntasks.empty() ? "" : " " + ntasks) + " --cpus-per-task=" + std::to_string(cpus) + " --time=" + o.time +
                              (o.partition.empty() ? "" : " --partition=" + o.partition);
   std::ostringstream s;
   s << "#!/bin/bash\n"

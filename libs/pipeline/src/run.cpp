@@ -23,6 +23,7 @@
 
 #include "adaptive.hpp"
 #include "state.hpp"
+#include "template.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
 #include "tomodem/pipeline/run.hpp"
@@ -133,11 +134,22 @@ class SignalScope {
   struct sigaction old_int_ {}, old_term_ {};
 };
 
-pid_t spawn(const Pipeline& p, const Instance& in, const std::string& log) {
+// The launcher's words and the rank count, as recorded in the lock file ("" for a serial step).
+std::string launch_text(const Instance& in, const Launcher& launcher) {
+  if (in.ranks <= 1) return "";
+  const std::vector<std::string> argv = launch_argv(in, launcher);
+  std::string text;
+  for (std::size_t k = 0; k + in.argv.size() < argv.size(); ++k) text += (k ? " " : "") + detail::shell_quote(argv[k]);
+  return text;
+}
+
+pid_t spawn(const Pipeline& p, const Instance& in, const std::string& log, const Launcher& launcher) {
   // A step starts from a clean slate; its old outputs wait aside until it has succeeded.
   move_outputs_aside(p, in);
   const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) throw RuntimeFailure("cannot write log " + log + ": " + std::strerror(errno));
+  const std::vector<std::string> words = launch_argv(in, launcher);
+  const std::string launch = launch_text(in, launcher);
   const pid_t parent = ::getpid();
   const pid_t pid = ::fork();
   if (pid < 0) throw RuntimeFailure(std::string("fork failed: ") + std::strerror(errno));
@@ -153,16 +165,17 @@ pid_t spawn(const Pipeline& p, const Instance& in, const std::string& log) {
     const std::string t = std::to_string(in.threads);
     ::setenv("OMP_NUM_THREADS", t.c_str(), 1);
     ::setenv("TOMODEM_THREADS", t.c_str(), 1);
-    const std::string header = "# tomodem-run " + in.id + "\n# " + in.command + "\n";
+    const std::string header = "# tomodem-run " + in.id + "\n# " + (launch.empty() ? "" : launch + " ") + in.command + "\n";
     if (::write(1, header.data(), header.size()) < 0) ::_exit(127);
     if (::chdir(p.dir.c_str()) != 0) {
       ::perror("chdir");
       ::_exit(127);
     }
+    // execvp: a launcher (mpirun, srun) is found on PATH; steps' own argv[0] is a full path.
     std::vector<char*> argv;
-    for (const auto& a : in.argv) argv.push_back(const_cast<char*>(a.c_str()));
+    for (const auto& a : words) argv.push_back(const_cast<char*>(a.c_str()));
     argv.push_back(nullptr);
-    ::execv(argv[0], argv.data());
+    ::execvp(argv[0], argv.data());
     ::perror(argv[0]);
     ::_exit(127);
   }
@@ -389,7 +402,7 @@ class Scheduler {
   bool start(std::size_t i) {
     const Instance& in = p_.instances[i];
     StepResult& res = sum_.steps[i];
-    const int slots = std::min(in.threads, jobs_);
+    const int slots = std::min(in.threads * in.ranks, jobs_);
     if (slots > free_slots_) return false;  // wait for a slot; later, smaller steps may still fit
     auto step_lock = std::make_shared<FileLock>(step_lock_path(p_, in), LOCK_EX, "");
     if (!step_lock->held()) {
@@ -402,7 +415,7 @@ class Scheduler {
     }
     res.log = log_path(p_, in);
     say("run  " + in.id + " (" + res.reason + ")");
-    running_.push_back(Running{i, spawn(p_, in, res.log), std::chrono::steady_clock::now(), utc_now(), slots, std::move(step_lock)});
+    running_.push_back(Running{i, spawn(p_, in, res.log, launcher_), std::chrono::steady_clock::now(), utc_now(), slots, std::move(step_lock)});
     free_slots_ -= slots;
     st_[i] = St::running;
     return true;
@@ -442,6 +455,7 @@ class Scheduler {
     settle_outputs(p_, in, ok);
     if (ok) {
       lock_.steps[in.id] = record(in, cache_, r.started, res.seconds);
+      lock_.steps[in.id].launch = launch_text(in, launcher_);
       lock_.failures.erase(in.id);
       st_[r.idx] = St::done;
       res.state = "ran";
@@ -487,6 +501,7 @@ class Scheduler {
   std::ostream* progress_;
   const std::size_t n_;
   const int jobs_;
+  const Launcher launcher_ = launcher_from_env();  // for steps with ranks: N > 1
   int free_slots_, total_ = 0, decided_ = 0;
   RunSummary sum_;
   std::vector<int> owner_;

@@ -81,6 +81,8 @@ void merge_lock(const std::string& path, LockFile& lock, HashCache& cache) {
       x.started = e.value("started", "");
       x.finished = e.value("finished", "");
       x.seconds = e.value("seconds", 0.0);
+      x.ranks = e.value("ranks", 1);
+      x.launch = e.value("launch", "");
       lock.steps[id] = x;
       lock.failures.erase(id);
     }
@@ -101,10 +103,12 @@ std::string lock_json(const LockFile& lock, HashCache& cache) {
   json j;
   j["format"] = "tomodem-run lock 1";
   j["steps"] = json::object();
-  for (const auto& [id, e] : lock.steps)
+  for (const auto& [id, e] : lock.steps) {
     j["steps"][id] = {{"cmd", e.command}, {"version", e.version},   {"params", e.params},
                       {"deps", e.deps},   {"outs", e.outs},         {"started", e.started},
-                      {"finished", e.finished}, {"seconds", e.seconds}};
+                      {"finished", e.finished}, {"seconds", e.seconds}, {"ranks", e.ranks}};
+    if (!e.launch.empty()) j["steps"][id]["launch"] = e.launch;
+  }
   j["failures"] = json::object();
   for (const auto& [id, f] : lock.failures)
     j["failures"][id] = {{"exit_code", f.exit_code}, {"finished", f.finished}, {"reason", f.reason}, {"log", f.log}};
@@ -215,6 +219,7 @@ LockEntry record(const Instance& in, HashCache& cache, const std::string& starte
   e.started = started;
   e.finished = utc_now();
   e.seconds = seconds;
+  e.ranks = in.ranks;
   return e;
 }
 

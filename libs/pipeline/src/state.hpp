@@ -16,6 +16,9 @@ struct LockEntry {
   std::map<std::string, std::string> deps, outs;  // path -> XXH3-128 hex
   std::string started, finished;
   double seconds = 0;
+  // Provenance only, not in the signature: MPI ranks give the serial result to round-off.
+  int ranks = 1;
+  std::string launch;  // "mpirun -np 4" ("" for a serial step)
 };
 
 struct FailureRecord {

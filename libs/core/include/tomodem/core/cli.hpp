@@ -16,12 +16,12 @@
 
 namespace tomodem::cli {
 
-/// --version prints "<tool> tomodem X (git H)" and exits with 0.
+/// --version prints "<tool> tomodem X (git H)", then "features: ..." (build_features()), and exits with 0.
 inline void add_version(CLI::App& app, const std::string& tool) {
   app.add_flag_callback(
       "--version",
       [tool] {
-        std::cout << tool << " " << version_string() << "\n";
+        std::cout << tool << " " << version_string() << "\nfeatures: " << build_features() << "\n";
         throw CLI::Success();
       },
       "print the version and exit");

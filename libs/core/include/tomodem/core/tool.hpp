@@ -8,9 +8,15 @@ namespace tomodem {
 /// "tomodem 0.1.0 (git abc123)".
 std::string version_string();
 
+/// What this build can do, for the second line of every tool's --version ("features: openmp",
+/// "features: openmp mpi petsc" with -DTOMODEM_MPI=ON); tomodem-run reads it before it starts a
+/// step on several ranks.
+std::string build_features();
+
 /// Runs `body` and maps exceptions onto the documented exit codes, printing one clear line:
 ///   InputError -> 2 ("tomodem-dem: error: scene.yaml: field 'x': value 'y': why")
 ///   NumericalError -> 3, anything else -> 1.
+/// A build without MPI started on several ranks (mpirun, srun) exits 2 at once, rank 0 saying why.
 int run_tool(const std::string& tool_name, const std::function<int()>& body);
 
 /// Messages on stderr; info is silenced by set_quiet(true).

@@ -31,7 +31,8 @@ struct Instance {
   NamedPaths deps;                           // inputs, relative to the pipeline folder
   NamedPaths outs;                           // outputs, relative to the pipeline folder
   std::map<std::string, std::string> params; // flattened "a.b" -> scalar text
-  int threads = 1;
+  int threads = 1;                           // per rank
+  int ranks = 1;                             // MPI ranks (`ranks:`); > 1 starts it through a launcher
   int replica = -1;                          // ${replica}, or -1 for a step without `replicas:`
   std::vector<std::size_t> upstream;         // indices of instances whose outputs this one reads
   Location where;                            // the step's declaration

@@ -93,12 +93,32 @@ std::string summary_json(const Pipeline& p, const RunSummary& s);
 /// A few lines for the terminal: counts, then each failed or skipped step and why.
 std::string summary_text(const RunSummary& s);
 
+// ---- MPI steps (`ranks: N`) ---------------------------------------------------------------
+
+/// How a step with `ranks: N > 1` is started (docs/pipelines.md, "MPI steps"): the launcher's
+/// words, then the rank count in its own flags, then the step's command.
+struct Launcher {
+  std::vector<std::string> words;  // {"mpirun"}, {"srun"}, or TOMODEM_MPIRUN split at blanks
+  bool srun = false;               // the first word is srun: `-n N -c T`, else `-np N`
+};
+
+/// TOMODEM_MPIRUN when set and not blank (e.g. "mpirun --oversubscribe"); else `srun` inside a
+/// Slurm job (SLURM_JOB_ID set: the Slurm export's jobs); else `mpirun`. Null means unset.
+Launcher make_launcher(const char* tomodem_mpirun, const char* slurm_job_id);
+/// The same, from this process's environment.
+Launcher launcher_from_env();
+
+/// What is executed for `in`: in.argv itself when in.ranks <= 1, else the launcher's words, the
+/// rank count (and for srun the threads per rank) and in.argv.
+std::vector<std::string> launch_argv(const Instance& in, const Launcher& launcher);
+
 // ---- Slurm ----------------------------------------------------------------------------------
 
 struct SlurmOptions {
   int shards = 0;          // 0: one per sweep leaf, at most 1000
   int limit = 8;           // array concurrency (`%` in --array)
   int cpus = 0;            // --cpus-per-task (0: the largest `threads` of a step)
+                           // --ntasks: the largest `ranks` of a step (when > 1)
   std::string time = "04:00:00";
   std::string partition;   // "" = the cluster's default
   std::string runner = "tomodem-run";
