@@ -7,6 +7,7 @@
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/summary.hpp"
 #include "tomodem/core/tool.hpp"
+#include "tomodem/linalg/petsc_solver.hpp"
 #include "tomodem/network/conduct_tool.hpp"
 
 int main(int argc, char** argv) {
@@ -35,7 +36,7 @@ int main(int argc, char** argv) {
     app.add_flag("--no-contacts", no_contacts, "ignore contacts (bonds only)");
     app.add_option("--tolerance", c.tolerance, "relative residual of the CG solve")->capture_default_str();
     app.add_option("--max-iterations", c.max_iterations, "CG iteration cap (0: automatic)")->capture_default_str();
-    app.add_option("--preconditioner", c.preconditioner, "ic | jacobi | amg")->capture_default_str();
+    app.add_option("--preconditioner", c.preconditioner, "ic | jacobi | amg | petsc (PETSc CG + GAMG, MPI build)")->capture_default_str();
     app.add_option("--electronic", c.electronic, "composite electrode: electronic phases")->delimiter(',');
     app.add_option("--ionic", c.ionic, "composite electrode: ionic phases")->delimiter(',');
     app.add_option("--charge-transfer", c.charge_transfer,
@@ -45,6 +46,7 @@ int main(int argc, char** argv) {
     tomodem::cli::Common common;
     tomodem::cli::add_common(app, "tomodem-conduct", common);
     if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
+    if (c.preconditioner == "petsc") tomodem::require_petsc("--preconditioner");
     c.json = common.json;
     c.bonds = !no_bonds;
     c.contacts = !no_contacts;

@@ -9,6 +9,7 @@
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/summary.hpp"
 #include "tomodem/core/tool.hpp"
+#include "tomodem/linalg/petsc_solver.hpp"
 #include "tomodem/mechanics/fracture.hpp"
 
 int main(int argc, char** argv) {
@@ -48,7 +49,7 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     app.add_option("--max-breaks", c.sla.max_breaks, "sla: cap on the number of breaks")->capture_default_str();
     std::string sla_solver = "auto";
-    app.add_option("--sla-solver", sla_solver, "sla: auto (pcg from 3000 particles) | ldlt | pcg")->capture_default_str();
+    app.add_option("--sla-solver", sla_solver, "sla: auto (pcg from 3000 particles) | ldlt | pcg | petsc (MPI build)")->capture_default_str();
     app.add_option("--cg-tolerance", c.sla.cg_tolerance, "sla pcg: relative residual")->capture_default_str();
     app.add_option("--rebuild-factor", c.sla.rebuild_factor, "sla pcg: rebuild the multigrid at this x fresh iterations")
         ->capture_default_str();
@@ -79,6 +80,7 @@ int main(int argc, char** argv) {
     c.elastic = !no_elastic;
     c.sla.contact = !no_contact;
     c.sla.solver = tomodem::parse_name(tomodem::mechanics::kSlaSolverNames, "", "--sla-solver", sla_solver);
+    if (c.sla.solver == tomodem::mechanics::SlaSolver::petsc) tomodem::require_petsc("--sla-solver");
     ex.track_energy = !no_energy;
     if (common.threads > 0) omp_set_num_threads(common.threads);
     ex.threads = common.threads > 0 ? common.threads : tomodem::all_threads();

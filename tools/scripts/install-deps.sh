@@ -9,10 +9,14 @@ PKGS=(build-essential cmake ninja-build pkg-config git
       libcgal-dev libgmp-dev libmpfr-dev
       libinsighttoolkit5-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
       libopenvdb-dev libboost-iostreams-dev libtbb-dev libblosc-dev
-      python3-h5py python3-openvdb)
+      python3-h5py python3-openvdb
+      libopenmpi-dev openmpi-bin petsc-dev libhdf5-openmpi-dev)
 # python3-h5py and python3-openvdb (about 40 MB with numpy) run the overlay check of the outputs
 # (tests/e2e/paraview). python3-paraview is not installed: it pulls 194 packages, 1.0 GB
 # (apt-get -s, Debian 12); the check uses pvpython when it is there.
+# OpenMPI, PETSc and the parallel HDF5 build the MPI tests (-DTOMODEM_MPI=ON, ctest -L mpi, run by
+# test.sh after the serial tests). libhdf5-openmpi-dev switches Debian's hdf5.pc alternative to
+# the MPI library; the serial build is unaffected: it finds HDF5 through /usr/bin/h5cc (serial).
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The README's test command: installs what is needed, builds (Release) and runs every test
-# except the long benchmarks (ctest label `bench` runs only with BENCH=1).
+# except the long benchmarks (ctest label `bench` runs only with BENCH=1); then the MPI tests
+# (label `mpi`) in a second build with -DTOMODEM_MPI=ON.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 bash tools/scripts/install-deps.sh
@@ -12,3 +13,14 @@ EXCLUDE=(-LE bench); [ "${BENCH:-0}" = 1 ] && EXCLUDE=()
 # 100x slower. Passive waiting costs the tests nothing (none of them measures time).
 export OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-PASSIVE}
 ctest --test-dir "$BUILD_DIR" --output-on-failure -j "$(nproc)" "${EXCLUDE[@]}"
+
+# The MPI build (docs/solvers.md, docs/scaling.md): same flags as build.sh plus TOMODEM_MPI, and
+# only the MPI test executables (target tomodem_mpi_tests; a topic whose tests run tools adds
+# them to that target). Each test runs under mpirun on 1, 2, ... ranks, oversubscribed, one
+# OpenMP thread per rank.
+MPI_BUILD_DIR=${MPI_BUILD_DIR:-build-mpi}
+cmake -S . -B "$MPI_BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=Release -DTOMODEM_NATIVE="${NATIVE:-ON}" -DTOMODEM_MPI=ON >/dev/null
+cmake --build "$MPI_BUILD_DIR" -j "${JOBS:-$(nproc)}" --target tomodem_mpi_tests
+export OMP_NUM_THREADS=1
+if [ "$(id -u)" -eq 0 ]; then export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1; fi
+ctest --test-dir "$MPI_BUILD_DIR" --output-on-failure -L mpi

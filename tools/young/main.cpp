@@ -8,6 +8,7 @@
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/summary.hpp"
 #include "tomodem/core/tool.hpp"
+#include "tomodem/linalg/petsc_solver.hpp"
 #include "tomodem/mechanics/tools.hpp"
 
 int main(int argc, char** argv) {
@@ -30,7 +31,7 @@ int main(int argc, char** argv) {
     bool normal_only = false, normal_cases = false;
     app.add_flag("--normal-bonds", normal_only, "bonds without shear force and twist (G* = 0)");
     tomodem::cli::add_choice(app, "--solver", im.solver, tomodem::mechanics::kElasticSolverNames,
-                             "implicit: auto | ldlt | amg | cg | cg-ic");
+                             "implicit: auto | ldlt | amg | cg | cg-ic | petsc (MPI build)");
     app.add_option("--tolerance", im.tolerance, "implicit: relative residual of the iterative solve")->capture_default_str();
     app.add_option("--max-iterations", im.max_iterations, "implicit: CG iteration cap (0: automatic)");
     app.add_flag("--no-tensor", normal_cases, "implicit: only the three normal strain cases (E, nu; no shear moduli)");
@@ -56,6 +57,7 @@ int main(int argc, char** argv) {
     tomodem::cli::Common common;
     tomodem::cli::add_common(app, "tomodem-young", common);
     if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
+    if (im.solver == tomodem::mechanics::ElasticSolver::petsc) tomodem::require_petsc("--solver");
     c.json = common.json;
     if (e_opt->count()) c.youngs_modulus = youngs_modulus;
     if (nu_opt->count()) c.poisson_ratio = poisson_ratio;

@@ -25,6 +25,7 @@
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/linalg/amg.hpp"
+#include "tomodem/linalg/petsc_solver.hpp"
 #include "tomodem/mechanics/fracture.hpp"
 
 namespace tomodem::mechanics {
@@ -77,6 +78,7 @@ struct Sla {
   SpMatR K;
   Eigen::VectorXd f, x;
   std::unique_ptr<Amg> amg;
+  std::unique_ptr<PetscSolver> petsc;  ///< SlaSolver::petsc: PETSc CG + GAMG in place of amg and pcg()
   long cg_total = 0, cg_max = 0, cg_first = -1, cg_reference = -1, rebuilds = 0;
 
   Sla(const FractureSample& sample, const std::vector<dem::BondLaw>& laws, dem::BondFailure criterion,
@@ -161,6 +163,7 @@ struct Sla {
   Eigen::VectorXd woodbury_solve() const;
   void pcg_build();
   void pcg_hierarchy();
+  PcgReport iterate(const CsrView& view, int cap);
   void scatter(std::size_t b, double sign, bool normal_only);
   Eigen::VectorXd pcg_solve();
   Eigen::VectorXd solve();
@@ -386,10 +389,19 @@ void Sla::pcg_hierarchy() {
   ns.rotation_scale = rs;
   ns.cell = p.cell.h;
   ns.periodic[1] = true;  // the crack front; x and z are cut
-  AmgOptions ao;
-  ao.strength = 0;          // as implicit.cpp: every bond couples
-  ao.aggregate_radius = 2;  // low coordination
-  amg = std::make_unique<Amg>(CsrView{int32_t(ndof), K.outerIndexPtr(), K.innerIndexPtr(), K.valuePtr()}, ns, ao);
+  const CsrView view{int32_t(ndof), K.outerIndexPtr(), K.innerIndexPtr(), K.valuePtr()};
+  if (o.solver == SlaSolver::petsc) {
+    PetscSolveOptions po;
+    po.tolerance = o.cg_tolerance;
+    po.max_iterations = int(std::max<double>(1000, 50 * std::cbrt(double(ndof))));
+    petsc.reset();  // collective: the old one is destroyed on every rank before the new one
+    petsc = std::make_unique<PetscSolver>(view, ns, po);
+  } else {
+    AmgOptions ao;
+    ao.strength = 0;          // as implicit.cpp: every bond couples
+    ao.aggregate_radius = 2;  // low coordination
+    amg = std::make_unique<Amg>(view, ns, ao);
+  }
   ++factorizations;
   cg_reference = -1;
   setup_s += since(t0);
@@ -420,16 +432,25 @@ void Sla::scatter(std::size_t b, double sign, bool normal_only) {
 
 /// PCG from the previous solution; a fresh hierarchy once a solve takes rebuild_factor × the
 /// iterations of the first warm solve after the last build (the reference of this hierarchy).
+/// One warm-started solve with the current hierarchy, its finest level swapped for K.
+PcgReport Sla::iterate(const CsrView& view, int cap) {
+  if (petsc) {
+    petsc->replace_matrix(view);
+    return petsc->solve(f.data(), x.data());
+  }
+  amg->replace_finest(view);
+  return tomodem::pcg(view, amg.get(), f.data(), x.data(), o.cg_tolerance, cap);
+}
+
 Eigen::VectorXd Sla::pcg_solve() {
   const CsrView view{int32_t(ndof), K.outerIndexPtr(), K.innerIndexPtr(), K.valuePtr()};
-  amg->replace_finest(view);
   const int cap = int(std::max<double>(1000, 50 * std::cbrt(double(ndof))));
-  PcgReport r = tomodem::pcg(view, amg.get(), f.data(), x.data(), o.cg_tolerance, cap);
+  PcgReport r = iterate(view, cap);
   if (!r.converged) {  // a stale hierarchy: one retry with a fresh one
     pcg_hierarchy();
     ++rebuilds;
     cg_total += r.iterations;
-    r = tomodem::pcg(view, amg.get(), f.data(), x.data(), o.cg_tolerance, cap);
+    r = iterate(view, cap);
     if (!r.converged)
       throw RuntimeFailure("fracture SLA: CG did not reach the tolerance " + std::to_string(o.cg_tolerance) + " in " +
                            std::to_string(cap) + " iterations (residual " + std::to_string(r.residual) + ")");
@@ -649,7 +670,7 @@ void start(Sla& sla) {
 }
 
 void copy_counters(const Sla& sla, FractureResult& r) {
-  r.solver = sla.pcg ? SlaSolver::pcg : SlaSolver::ldlt;
+  r.solver = !sla.pcg ? SlaSolver::ldlt : sla.o.solver == SlaSolver::petsc ? SlaSolver::petsc : SlaSolver::pcg;
   r.solves = sla.solves;
   r.factorizations = sla.factorizations;
   r.cg_iterations = sla.cg_total;

@@ -167,7 +167,7 @@ json result_json(const FractureResult& r, const FractureSample& s) {
     j["failure_groups"] = r.failure_groups;
     j["active_set_solves"] = r.active_set_iterations;
     j["solver_setup_s"] = r.solver_setup_s;
-    if (r.solver == SlaSolver::pcg)
+    if (r.solver != SlaSolver::ldlt)
       j["cg"] = {{"iterations", r.cg_iterations},
                  {"per_solve", double(r.cg_iterations) / double(std::max(1L, r.solves))},
                  {"largest", r.cg_iterations_max},

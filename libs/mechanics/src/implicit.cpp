@@ -16,6 +16,7 @@
 #include <memory>
 
 #include "tomodem/linalg/amg.hpp"
+#include "tomodem/linalg/petsc_solver.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/mechanics/elastic.hpp"
@@ -65,6 +66,7 @@ struct StiffnessSystem::Impl {
   ElasticSolver kind = ElasticSolver::ldlt;  // never automatic
   long cap = 0;
   std::unique_ptr<Amg> amg;
+  std::unique_ptr<PetscSolver> petsc;     // MPI build: PETSc CG + GAMG (docs/solvers.md)
   std::unique_ptr<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double, Eigen::ColMajor, int>, Eigen::Lower>> ldlt;
   std::unique_ptr<Eigen::ConjugateGradient<SpMatR, Eigen::Lower | Eigen::Upper, Eigen::IncompleteCholesky<double>>> ic;
 
@@ -84,8 +86,10 @@ struct StiffnessSystem::Impl {
 
   /// Blocks and right-hand sides from the bond rows; on the first call also the DOF map.
   void assemble(bool first);
-  /// Factorisation (ldlt), preconditioner (amg, cg-ic).
+  /// Factorisation (ldlt), preconditioner (amg, cg-ic, petsc).
   void prepare(bool first);
+  /// The unknowns' particles and kinds, positions and rotation scale: the rigid-body modes.
+  NearNullspace near_nullspace() const;
 };
 
 void StiffnessSystem::Impl::assemble(bool first) {
@@ -180,22 +184,19 @@ void StiffnessSystem::Impl::prepare(bool first) {
     ldlt = std::make_unique<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double, Eigen::ColMajor, int>, Eigen::Lower>>(
         Eigen::SparseMatrix<double, Eigen::ColMajor, int>(K));
     if (ldlt->info() != Eigen::Success) throw RuntimeFailure("stiffness matrix: LDLT factorisation failed");
+  } else if (kind == ElasticSolver::petsc) {
+    if (first) {
+      PetscSolveOptions po;
+      po.tolerance = o.tolerance;
+      po.max_iterations = int(cap);
+      petsc = std::make_unique<PetscSolver>(view(), near_nullspace(), po);
+      info.levels = petsc->stats().levels;
+    } else {
+      petsc->replace_matrix(view());
+    }
   } else if (kind == ElasticSolver::amg) {
     if (first) {
-      NearNullspace ns;
-      ns.node.resize(std::size_t(ndof));
-      ns.kind.resize(std::size_t(ndof));
-      for (int64_t a = 0; a < np * 6; ++a)
-        if (dof[a] >= 0) {
-          ns.node[std::size_t(dof[a])] = int32_t(a / 6);
-          ns.kind[std::size_t(dof[a])] = int8_t(a % 6);
-        }
-      ns.position.resize(std::size_t(np));
-      for (std::size_t i = 0; i < pid.size(); ++i)
-        if (pid[i] >= 0) ns.position[std::size_t(pid[i])] = p.particles.position[i];
-      ns.rotation_scale = rs;
-      ns.cell = p.cell.h;
-      for (int c = 0; c < 3; ++c) ns.periodic[c] = p.cell.periodic[c];
+      const NearNullspace ns = near_nullspace();
       AmgOptions ao;
       ao.strength = 0;         // every bond couples (the rotational coupling is weak but matters)
       ao.aggregate_radius = 2; // low coordination (Z ≈ 4): radius-1 aggregates would coarsen by ~5 only
@@ -213,6 +214,24 @@ void StiffnessSystem::Impl::prepare(bool first) {
     if (ic->info() != Eigen::Success) throw RuntimeFailure("stiffness matrix: incomplete Cholesky failed");
   }
   info.setup_s += seconds_since(t0);
+}
+
+NearNullspace StiffnessSystem::Impl::near_nullspace() const {
+  NearNullspace ns;
+  ns.node.resize(std::size_t(ndof));
+  ns.kind.resize(std::size_t(ndof));
+  for (int64_t a = 0; a < np * 6; ++a)
+    if (dof[a] >= 0) {
+      ns.node[std::size_t(dof[a])] = int32_t(a / 6);
+      ns.kind[std::size_t(dof[a])] = int8_t(a % 6);
+    }
+  ns.position.resize(std::size_t(np));
+  for (std::size_t i = 0; i < pid.size(); ++i)
+    if (pid[i] >= 0) ns.position[std::size_t(pid[i])] = p.particles.position[i];
+  ns.rotation_scale = rs;
+  ns.cell = p.cell.h;
+  for (int c = 0; c < 3; ++c) ns.periodic[c] = p.cell.periodic[c];
+  return ns;
 }
 
 StiffnessSystem::StiffnessSystem(const Packing& p, const std::vector<Image>& image, const BondStiffnesses& k,
@@ -306,6 +325,8 @@ LinearResponse StiffnessSystem::solve(const std::array<double, 6>& strain) const
     } else if (m.kind == ElasticSolver::cg_ic) {
       q = m.ic->solve(rhs);
       out.iterations = m.ic->iterations();
+    } else if (m.kind == ElasticSolver::petsc) {
+      out.iterations = m.petsc->solve(rhs.data(), q.data()).iterations;
     } else {
       const PcgReport r = pcg(m.view(), m.amg.get(), rhs.data(), q.data(), m.o.tolerance, int(m.cap));
       out.iterations = r.iterations;

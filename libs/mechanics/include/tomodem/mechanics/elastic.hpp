@@ -23,14 +23,16 @@ void uniaxial_from_tensor(const Matrix6& C, int axis, double& E, double& nu);
 
 /// Linear solver of the implicit test: ldlt (Eigen SimplicialLDLT, exact), amg (conjugate
 /// gradients preconditioned by smoothed-aggregation multigrid with the rigid-body modes,
-/// tomodem/linalg/amg.hpp), cg (Jacobi), cg-ic (Eigen incomplete Cholesky), auto (ldlt below
-/// 2 000 particles: its fill-in grows fast in 3-D; amg above).
-enum class ElasticSolver : uint8_t { automatic, ldlt, amg, cg, cg_ic };
-inline constexpr NameTable<ElasticSolver, 5> kElasticSolverNames = {{{ElasticSolver::automatic, "auto"},
+/// tomodem/linalg/amg.hpp), cg (Jacobi), cg-ic (Eigen incomplete Cholesky), petsc (PETSc's CG +
+/// GAMG with the rigid-body modes, MPI build only: docs/solvers.md), auto (ldlt below 2 000
+/// particles: its fill-in grows fast in 3-D; amg above).
+enum class ElasticSolver : uint8_t { automatic, ldlt, amg, cg, cg_ic, petsc };
+inline constexpr NameTable<ElasticSolver, 6> kElasticSolverNames = {{{ElasticSolver::automatic, "auto"},
                                                                     {ElasticSolver::ldlt, "ldlt"},
                                                                     {ElasticSolver::amg, "amg"},
                                                                     {ElasticSolver::cg, "cg"},
-                                                                    {ElasticSolver::cg_ic, "cg-ic"}}};
+                                                                    {ElasticSolver::cg_ic, "cg-ic"},
+                                                                    {ElasticSolver::petsc, "petsc"}}};
 inline const char* to_string(ElasticSolver s) { return name_of(kElasticSolverNames, s); }
 inline std::optional<ElasticSolver> parse_elastic_solver(std::string_view name) {
   return value_of(kElasticSolverNames, name);

@@ -95,10 +95,13 @@ struct FractureEvent {
 };
 
 /// Linear solver of the SLA: the direct LDLT (Woodbury updates between factorisations) or
-/// multigrid-preconditioned CG (docs/fracture.md#solvers); automatic picks by the particle count.
-enum class SlaSolver : uint8_t { automatic, ldlt, pcg };
-inline constexpr NameTable<SlaSolver, 3> kSlaSolverNames = {
-    {{SlaSolver::automatic, "auto"}, {SlaSolver::ldlt, "ldlt"}, {SlaSolver::pcg, "pcg"}}};
+/// multigrid-preconditioned CG (docs/fracture.md#solvers), or PETSc's CG + GAMG on the same
+/// iterative path (MPI build only, docs/solvers.md); automatic picks ldlt or pcg by the particle count.
+enum class SlaSolver : uint8_t { automatic, ldlt, pcg, petsc };
+inline constexpr NameTable<SlaSolver, 4> kSlaSolverNames = {{{SlaSolver::automatic, "auto"},
+                                                             {SlaSolver::ldlt, "ldlt"},
+                                                             {SlaSolver::pcg, "pcg"},
+                                                             {SlaSolver::petsc, "petsc"}}};
 inline const char* to_string(SlaSolver s) { return name_of(kSlaSolverNames, s); }
 inline std::optional<SlaSolver> parse_sla_solver(std::string_view name) { return value_of(kSlaSolverNames, name); }
 
@@ -127,7 +130,7 @@ struct FractureResult {
   // SLA
   long solves = 0, factorizations = 0, fragments_removed = 0, closed_broken_bonds = 0;
   double initial_stiffness = 0;      ///< N/m, uncracked-by-failure sample
-  SlaSolver solver = SlaSolver::ldlt;  ///< the solver the SLA used: ldlt | pcg (never automatic)
+  SlaSolver solver = SlaSolver::ldlt;  ///< the solver the SLA used: ldlt | pcg | petsc (never automatic)
   long cg_iterations = 0, cg_iterations_max = 0, cg_iterations_fresh = 0;  ///< PCG: total, largest, first (cold) solve
   long amg_rebuilds = 0;             ///< PCG: multigrid hierarchies built after the first
   long active_set_iterations = 0;    ///< extra solves for the contact of broken faces
@@ -156,9 +159,11 @@ struct SlaOptions {
 };
 FractureResult run_sla(const FractureSample& s, const std::vector<dem::BondLaw>& laws, const FailureOptions& f,
                        const SlaOptions& o);
-/// Whether run_sla takes the PCG path for a sample of this many particles (not left out).
+/// Whether run_sla takes the iterative path (pcg, or petsc on the same fixed pattern and warm
+/// starts) for a sample of this many particles (not left out).
 inline bool sla_uses_pcg(const SlaOptions& o, long particles) {
-  return o.solver == SlaSolver::pcg || (o.solver == SlaSolver::automatic && particles >= o.pcg_from_particles);
+  return o.solver == SlaSolver::pcg || o.solver == SlaSolver::petsc ||
+         (o.solver == SlaSolver::automatic && particles >= o.pcg_from_particles);
 }
 
 /// The linear response of the sample at unit grip opening with the given load bonds broken

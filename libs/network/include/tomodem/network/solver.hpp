@@ -14,8 +14,10 @@ enum class Preconditioner {
   incomplete_cholesky,  ///< Eigen::IncompleteCholesky (Lin & Moré), natural ordering
   jacobi,               ///< diagonal scaling: cheapest set-up, multi-threaded apply
   amg,                  ///< smoothed-aggregation multigrid (tomodem/linalg/amg.hpp): iterations nearly independent of size
+  petsc,                ///< PETSc's CG + GAMG (tomodem/linalg/petsc_solver.hpp), MPI build only (docs/solvers.md)
 };
-Preconditioner parse_preconditioner(const std::string& name);  ///< "ic" | "jacobi" | "amg"
+/// "ic" | "jacobi" | "amg" | "petsc" ("petsc" in a build without PETSc: InputError, exit 2)
+Preconditioner parse_preconditioner(const std::string& name);
 std::string to_string(Preconditioner p);
 
 struct SolverOptions {
