@@ -44,12 +44,28 @@ void servo_cell(SimState& s, const Tally& last, const std::vector<double>& stiff
   Mat3 sigma = last.virial;
   sigma *= -1.0 / vol;
   double ksum = 0, mass = 0, dmean = 0;
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    if (!stiffness.empty()) ksum += stiffness[i];
-    mass += p.m[i];
-    dmean += 2 * p.r[i];
+#if TOMODEM_HAVE_MPI
+  if (s.domain) {  // the owned particles of every rank
+    double sums[4] = {0, 0, 0, 0};
+    for (std::size_t i = 0; i < p.size(); ++i)
+      if (!s.domain->ghost[i]) {
+        if (!stiffness.empty()) sums[0] += stiffness[i];
+        sums[1] += p.m[i];
+        sums[2] += 2 * p.r[i];
+        sums[3] += 1;
+      }
+    s.domain->sum(sums, 4);
+    ksum = sums[0], mass = sums[1], dmean = sums[2] / sums[3];
+  } else
+#endif
+  {
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      if (!stiffness.empty()) ksum += stiffness[i];
+      mass += p.m[i];
+      dmean += 2 * p.r[i];
+    }
+    dmean /= double(p.size());
   }
-  dmean /= double(p.size());
   const double modulus = 0.5 * ksum * dmean * dmean / (5 * vol);  // stiffness sums count each contact twice
   double width = 0;
   for (int k = 0; k < 3; ++k) width = std::max(width, norm(s.cell.h.col(k)));

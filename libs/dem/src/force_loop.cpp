@@ -83,6 +83,18 @@ void ForceLoop::compute(SimState& s, NeighbourList& nl, bool tally, Vec3* pair_f
     Vec3* f = tid > 0 ? fbuf[tid].data() : p.f.data();
     Vec3* tq = rot ? (tid > 0 ? tbuf[tid].data() : p.torque.data()) : nullptr;
     double* st = tally ? (tid > 0 ? sbuf[tid].data() : stiffness.data()) : nullptr;
+#if TOMODEM_HAVE_MPI
+    if (s.domain && tally) {
+      // Newton off: a pair of an owned particle and a ghost is computed on both ranks, but its
+      // tally (virial, energies, contacts) counts only where its row's particle is owned.
+      const uint8_t* ghost = s.domain->ghost.data();
+      Tally elsewhere;
+      for (int a = split[tid], b; a < split[tid + 1]; a = b) {
+        for (b = a + 1; b < split[tid + 1] && ghost[b] == ghost[a];) ++b;
+        s.kern.pair[1](jb, a, b, f, tq, ghost[a] ? &elsewhere : &tallies[tid], st);
+      }
+    } else
+#endif
     s.kern.pair[tally](jb, split[tid], split[tid + 1], f, tq, &tallies[tid], st);
     if (have_bonds)
       s.bond_kernel[tally](bj, nl.bond_split[tid], nl.bond_split[tid + 1], f, tq, &tallies[tid], st, &event_buf[tid]);

@@ -144,6 +144,11 @@ NeighbourList::KeptHistory NeighbourList::keep_history(const SimState& s) const 
 }
 
 void NeighbourList::build(SimState& s) {
+#if TOMODEM_HAVE_MPI
+  // Decomposed: the owners wrapped their particles before the exchange (the ghosts are copies).
+  if (s.domain) wrapped.assign(s.p.size(), spatial::Image{0, 0, 0});
+  else
+#endif
   wrapped = spatial::wrap_into_cell(s.p.x, s.cell);
   BondSet& bonds = s.bonds;
   for (std::size_t b = 0; b < bonds.size(); ++b)
@@ -161,6 +166,9 @@ void NeighbourList::build(SimState& s) {
   std::vector<int32_t> new_start, new_j;
   std::vector<uint8_t> new_img;
   search_pairs(s, new_start, new_j, new_img);
+#if TOMODEM_HAVE_MPI
+  canonical_rows(s, new_start, new_j, new_img);
+#endif
   if (!bonds.i.empty()) exclude_bonded(s, new_start, new_j, new_img);
   // Carry the kept history to the pairs that stay in the list (short per-particle lists: linear
   // search); a pair whose particle crossed a periodic face keeps its spring and JKR flag.
@@ -190,6 +198,32 @@ void NeighbourList::build(SimState& s) {
   need_build = false;
   ++builds;
 }
+
+#if TOMODEM_HAVE_MPI
+/// The MPI build lists each row by (partner, image), so a particle sums its contacts in the same
+/// order whichever other particles a rank holds (rows are in particle order already); a rank
+/// drops the pairs of two ghosts (another rank owns both).
+void NeighbourList::canonical_rows(const SimState& s, std::vector<int32_t>& st, std::vector<int32_t>& jj,
+                                   std::vector<uint8_t>& im) const {
+  const std::size_t n = s.p.size();
+  const uint8_t* ghost = s.domain ? s.domain->ghost.data() : nullptr;
+  std::vector<std::pair<int32_t, uint8_t>> row;
+  std::size_t out = 0;
+  int32_t begin = st[0];
+  for (std::size_t i = 0; i < n; ++i) {
+    const int32_t end = st[i + 1];
+    row.clear();
+    for (int32_t k = begin; k < end; ++k)
+      if (!ghost || !ghost[i] || !ghost[jj[k]]) row.emplace_back(jj[k], im[k]);
+    std::sort(row.begin(), row.end());
+    for (const auto& pc : row) jj[out] = pc.first, im[out] = pc.second, ++out;
+    begin = end;
+    st[i + 1] = int32_t(out);
+  }
+  jj.resize(out);
+  im.resize(out);
+}
+#endif
 
 /// Wall candidates: particles within reach of each wall; the others' wall history is cleared.
 void NeighbourList::find_wall_candidates(const SimState& s) {

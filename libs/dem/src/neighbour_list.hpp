@@ -58,6 +58,10 @@ class NeighbourList {
                     std::vector<uint8_t>& new_img);
   void exclude_bonded(const SimState& s, std::vector<int32_t>& st, std::vector<int32_t>& jj,
                       std::vector<uint8_t>& im) const;
+#if TOMODEM_HAVE_MPI
+  void canonical_rows(const SimState& s, std::vector<int32_t>& st, std::vector<int32_t>& jj,
+                      std::vector<uint8_t>& im) const;
+#endif
   void find_wall_candidates(const SimState& s);
   void fill_owner();
   void partition_threads(const SimState& s);

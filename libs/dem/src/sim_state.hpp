@@ -10,6 +10,9 @@
 #include "bond_kernel.hpp"
 #include "kernel.hpp"
 #include "tomodem/dem/simulation.hpp"
+#if TOMODEM_HAVE_MPI
+#include "tomodem/dem/decomposition.hpp"
+#endif
 
 namespace tomodem::dem {
 
@@ -37,6 +40,9 @@ struct SimState {
 
   double dt = 0, t = 0;
   long nstep = 0;
+#if TOMODEM_HAVE_MPI
+  DomainHooks* domain = nullptr;  // the decomposition (decomposition.hpp); null when serial
+#endif
 
   bool deforming() const { return control.active(); }
 };

@@ -30,6 +30,9 @@ struct Simulation::Impl : SimState {
   ForceLoop forces;
   EnergyAccount energy;
   bool forces_valid = false;
+#if TOMODEM_HAVE_MPI
+  std::unique_ptr<DomainHooks> domain_owner;
+#endif
 
   Impl(Particles particles, Cell c, ContactModel m, Settings s)
       : SimState(std::move(particles), c, std::move(m), s) {
@@ -41,11 +44,31 @@ struct Simulation::Impl : SimState {
     nl.init(*this);
   }
 
+  /// The list rebuilt when due. Decomposed: the ghosts are refreshed first, every rank rebuilds
+  /// when any must, and particles migrate (with their contact history) before the build.
+  void rebuild_if_due() {
+#if TOMODEM_HAVE_MPI
+    if (domain) {
+      domain->forward(*this);
+      if (domain->any(nl.rebuild_due(*this))) {
+        domain->before_build(*this, nl);
+        nl.build(*this);
+        domain->after_build(*this, nl);
+      }
+      return;
+    }
+#endif
+    if (nl.rebuild_due(*this)) nl.build(*this);
+  }
+
   /// Forces at the current state, the list rebuilt first when due.
   void compute_forces(bool tally, Vec3* pair_force = nullptr) {
-    if (nl.rebuild_due(*this)) nl.build(*this);
+    rebuild_if_due();
     nl.update_image_tables(*this);
     forces.compute(*this, nl, tally, pair_force);
+#if TOMODEM_HAVE_MPI
+    if (domain && tally) domain->reduce(forces.last);
+#endif
     forces_valid = true;
   }
 
@@ -106,7 +129,7 @@ struct Simulation::Impl : SimState {
     // and restored, so measuring never changes the trajectory.
     // Rebuild first when due: a rebuild inside the tally pass would resize the history, and
     // restoring the saved copy afterwards would leave it shorter than the neighbour list.
-    if (nl.rebuild_due(*this)) nl.build(*this);
+    rebuild_if_due();
     if (pair_force) pair_force->assign(nl.nj.size(), Vec3{});
     const std::vector<double> h = nl.hist;
     const std::vector<uint8_t> tf = nl.touch;
@@ -119,7 +142,11 @@ struct Simulation::Impl : SimState {
     const std::size_t n_events = bond_events.size();
     const bool build_flag = nl.need_build;
     compute_forces(true, pair_force ? pair_force->data() : nullptr);
+#if TOMODEM_HAVE_MPI
+    Measurements m = domain ? domain->measure(*this, forces.last, energy) : measurements_from(*this, forces.last, energy);
+#else
     Measurements m = measurements_from(*this, forces.last, energy);
+#endif
     m.neighbor_rebuilds = nl.builds;
     // Restore.
     nl.hist = h;
@@ -181,7 +208,30 @@ void Simulation::add_wall(const Wall& w) {
   impl_->forces_valid = false;
 }
 
-double Simulation::critical_time_step() const { return dem::critical_time_step(*impl_, impl_->nl); }
+double Simulation::critical_time_step() const {
+#if TOMODEM_HAVE_MPI
+  if (impl_->domain) return impl_->domain->min(dem::critical_time_step(*impl_, impl_->nl));
+#endif
+  return dem::critical_time_step(*impl_, impl_->nl);
+}
+
+#if TOMODEM_HAVE_MPI
+void Simulation::attach_domain(std::unique_ptr<DomainHooks> d) {
+  Impl& s = *impl_;
+  s.domain_owner = std::move(d);
+  s.domain = s.domain_owner.get();
+  try {
+    s.domain->before_build(s, s.nl);
+  } catch (...) {  // refused before anything changed (decomposition.hpp)
+    s.domain = nullptr;
+    s.domain_owner.reset();
+    throw;
+  }
+  s.nl.build(s);
+  s.domain->after_build(s, s.nl);
+}
+DomainHooks* Simulation::domain() const { return impl_->domain; }
+#endif
 
 const std::vector<double>& Simulation::stiffness_sums() const { return impl_->forces.stiffness; }
 void Simulation::set_time_step(double dt, bool check_limit) {

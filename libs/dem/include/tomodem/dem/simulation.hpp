@@ -16,6 +16,10 @@
 
 namespace tomodem::dem {
 
+#if TOMODEM_HAVE_MPI
+class DomainHooks;  // decomposition.hpp (MPI build only)
+#endif
+
 /// A rigid plane; particles interact with it through the scene's contact law (R* = R, m* = m).
 struct Wall {
   Vec3 point;               ///< a point on the plane, m
@@ -168,6 +172,13 @@ class Simulation {
   EngineState engine_state() const;
   /// Restores a state saved from a simulation with the same particles, model and walls.
   void restore(const EngineState& state);
+
+#if TOMODEM_HAVE_MPI
+  /// Hands the synchronisation points (ghost refresh, re-neighbouring, reductions) to a domain
+  /// decomposition (decomposition.hpp: use decompose()); rebuilds the list at once.
+  void attach_domain(std::unique_ptr<DomainHooks> domain);
+  DomainHooks* domain() const;  ///< null for a serial run
+#endif
 
  private:
   struct Impl;

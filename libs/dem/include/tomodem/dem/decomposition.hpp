@@ -1,0 +1,81 @@
+#pragma once
+// Spatial domain decomposition of a Simulation over MPI ranks (docs/dem.md, "Running on several
+// ranks"). Only in the MPI build (-DTOMODEM_MPI=ON); this header includes no MPI header.
+//
+// The cell is cut into a regular grid of sub-domains in fractional coordinates (a sheared cell
+// is cut along its own lattice planes). A rank owns the particles whose centre lies in its box
+// and holds copies ("ghosts") of the other ranks' particles within the interaction reach plus
+// the neighbour-list skin of its box. Periodic images are not copied: a ghost is an exact copy
+// of its owner's particle and the rank's neighbour list finds its images through the same image
+// codes as the serial engine. Pairs between an owned particle and a ghost are computed on both
+// ranks ("newton off"); each particle sums its contacts in the serial order (rows by particle id,
+// each row by partner and image), so with one thread per rank every rank count gives the serial
+// trajectory bit for bit.
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "tomodem/core/vec3.hpp"
+#include "tomodem/dem/particles.hpp"
+
+namespace tomodem::dem {
+
+class Simulation;
+struct SimState;
+class NeighbourList;
+struct Tally;
+struct Measurements;
+struct EnergyAccount;
+
+/// What the engine asks of a decomposition at its few synchronisation points. Implemented in
+/// libs/dem/src/mpi/; the serial engine never sees it.
+class DomainHooks {
+ public:
+  virtual ~DomainHooks() = default;
+  /// Per local particle: 1 for a ghost (a copy of another rank's particle), 0 for an owned one.
+  std::vector<uint8_t> ghost;
+  /// Refreshes the ghosts' positions, velocities and spins from their owners (every force pass).
+  virtual void forward(SimState& s) = 0;
+  /// True on every rank when it is true on any.
+  virtual bool any(bool local) = 0;
+  /// Migration and a new ghost layer, with the contact history carried by particle id.
+  virtual void before_build(SimState& s, NeighbourList& nl) = 0;
+  virtual void after_build(SimState& s, NeighbourList& nl) = 0;
+  /// Sums (in rank order, the same on every rank) of the tally of owned rows.
+  virtual void reduce(Tally& t) = 0;
+  /// Sums of v[0..n) over the ranks, in rank order: the same doubles on every rank.
+  virtual void sum(double* v, int n) = 0;
+  virtual double min(double v) = 0;
+  /// The measurement of the whole cell from the rank's tally (already reduced) and owned particles.
+  virtual Measurements measure(const SimState& s, const Tally& tally, const EnergyAccount& energy) = 0;
+};
+
+struct DecompositionOptions {
+  /// Sub-domains along each cell vector; 0 entries are chosen by MPI_Dims_create.
+  std::array<int, 3> dims{0, 0, 0};
+};
+
+/// Where this rank stands (for reports and tests).
+struct DomainLayout {
+  int rank = 0, ranks = 1;
+  std::array<int, 3> dims{1, 1, 1}, coords{0, 0, 0};
+  long owned = 0, ghosts = 0;
+  long migrated = 0;        ///< particles this rank sent to another since the start
+  long exchanges = 0;       ///< ghost layers built (one per neighbour-list build)
+};
+
+/// Splits `sim`, built identically on every rank of MPI_COMM_WORLD (same particles, cell, model
+/// and settings), into sub-domains: each rank keeps its own particles and gets its ghost layer.
+/// Collective. Throws InputError (the same on every rank) when a sub-domain would be thinner
+/// than the interaction reach plus skin (too many ranks along a cell vector for this sample),
+/// and for what is not decomposed yet (walls, bonds, energy tracking).
+void decompose(Simulation& sim, const DecompositionOptions& opt = {});
+
+/// This rank's place in the decomposition (ranks = 1, owned = all, for a serial simulation).
+DomainLayout layout(const Simulation& sim);
+
+/// The owned particles of every rank, sorted by id, on rank 0 (empty elsewhere). Collective.
+/// Rotational columns are included when the scene has them; forces are not gathered.
+Particles gather_particles(const Simulation& sim);
+
+}  // namespace tomodem::dem
