@@ -58,7 +58,7 @@ int run(int argc, char** argv) {
   app.add_option("--output-dir", out_dir, "folder for the outputs the scene names (created if missing; default .)");
   cli::refuse_o_as_folder(app, o_value);
   cli::add_json(app, common.json);
-  cli::add_threads(app, common.threads, "default: the scene's simulation.threads, else 1");
+  cli::add_threads(app, common.threads, "default 0, all cores; a settings.threads in the scene is used when --threads is not given");
   app.add_option("--steps", steps, "override the protocol's total steps")->check(CLI::PositiveNumber);
   app.add_option("--restart", restart, "continue from this checkpoint (same scene)");
   app.add_flag("--restart-changed-physics", changed_physics,
@@ -78,7 +78,8 @@ int run(int argc, char** argv) {
   if (changed_physics && restart.empty())
     throw InputError("", "--restart-changed-physics", "", "only means something with --restart <checkpoint>");
   if (out_dir.empty()) throw InputError("", "--output-dir", "", "the output folder must not be empty");
-  // --threads given: it wins (0: every core); not given: the scene's setting.
+  // --threads given: it wins (0: every core); not given: the scene's settings.threads if it writes one, else
+  // every core (the scene reader's default, as for every tool: docs/cli.md).
   const int threads = app.count("--threads") ? (common.threads > 0 ? common.threads : all_threads()) : 0;
 
   dem::Scene scene = dem::load_scene(scene_path, threads);

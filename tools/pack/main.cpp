@@ -27,7 +27,7 @@ int run(int argc, char** argv) {
   app.add_option("config", config, "packing config (YAML, see docs/pack.md)");
   app.add_option("-o,--output", out, "packing file (.h5; an .xdmf sidecar is written next to it)");
   cli::add_json(app, common.json);
-  cli::add_threads(app, common.threads, "default: the config's threads, else 1");
+  cli::add_threads(app, common.threads, "default 0, all cores; a threads: key in the config is used when --threads is not given");
   app.add_option("--particles", particles, "override the particle count")->check(CLI::PositiveNumber);
   app.add_option("--seed", seed, "override the random seed")->check(CLI::NonNegativeNumber);
   app.add_option("--target-pressure", pressure, "override the target: pressure, Pa")->check(CLI::PositiveNumber);
@@ -41,7 +41,8 @@ int run(int argc, char** argv) {
   if (config.empty()) throw InputError("", "config", "", "no config file given (see --help)");
   geometry::PackConfig cfg = geometry::load_pack_config(config);
   auto& s = cfg.spec;
-  // --threads given: it wins (0: every core); not given: the config's setting.
+  // --threads given: it wins (0: every core); not given: the config's threads if it writes one, else
+  // every core (the config reader's default, as for every tool: docs/cli.md).
   if (app.count("--threads")) s.threads = common.threads > 0 ? common.threads : all_threads();
   if (particles > 0) s.n_particles = std::size_t(particles);
   if (seed >= 0) s.seed = uint64_t(seed);

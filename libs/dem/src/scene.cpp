@@ -16,6 +16,7 @@
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/packing_io.hpp"
+#include "tomodem/core/tool.hpp"
 #include "tomodem/dem/law_registry.hpp"
 #include "tomodem/dem/yaml_fields.hpp"
 
@@ -445,7 +446,8 @@ void make_simulation(const Map& root, Scene& scene, Particles particles, const C
   const Map sm = root.map("settings");
   sm.allow({"skin", "threads", "track_energy", "check_interval"});
   settings.skin = sm.positive("skin", 0);
-  settings.threads = int(sm.integer("threads", 1, 1, 4096));
+  // Not written: every core, the CLI's default (docs/cli.md); a count the scene writes is kept.
+  settings.threads = sm.has("threads") ? int(sm.integer("threads", 1, 1, 4096)) : all_threads();
   if (threads > 0) settings.threads = threads;
   settings.track_energy = sm.flag("track_energy", false);
   // 0 would silently turn the stability checks off (the run could blow up unnoticed).

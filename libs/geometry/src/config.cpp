@@ -9,6 +9,7 @@
 
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
+#include "tomodem/core/tool.hpp"
 #include "tomodem/dem/law_registry.hpp"
 #include "tomodem/dem/model.hpp"
 #include "tomodem/dem/yaml_fields.hpp"
@@ -46,7 +47,8 @@ void read_config(PackConfig& cfg, const YAML::Node& root, const std::string& pat
   s.arrangement = *parse_arrangement(r.choice("arrangement", to_string(s.arrangement), name_list(kArrangementNames)));
   s.initial_solid_fraction = r.in_range("initial_solid_fraction", s.initial_solid_fraction, 0, 0.4, true, true);
   s.seed = uint64_t(r.integer("seed", 1, 0));
-  s.threads = int(r.integer("threads", 1, 1, 4096));
+  // Not written: every core, the CLI's default (docs/cli.md); a count the config writes is kept.
+  s.threads = r.has("threads") ? int(r.integer("threads", 1, 1, 4096)) : all_threads();
   const YAML::Node phases =
       r.list("phases", 1, "[{name: a, material: {density: 2500, youngs_modulus: 1e8}, size_distribution: {diameter: 1e-3}}]");
   const auto dir = std::filesystem::path(path).parent_path();
