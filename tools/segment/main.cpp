@@ -17,9 +17,10 @@ int main(int argc, char** argv) {
   return tomodem::run_tool("tomodem-segment", [&]() -> int {
     tomodem::image::SegmentConfig c;
     CLI::App app{"Segment a tomography volume into solid, fine pores and macropores (docs/segment.md)", "tomodem-segment"};
-    app.add_option("input", c.input, "volume: file, folder of TIFF slices, or a pattern (slices sorted by name)")->required();
-    tomodem::cli::add_choice(app, "--format", c.read.format, tomodem::image::kVolumeFormatNames, "auto | tiff | mha | nrrd | nifti | raw | h5");
-    app.add_option("--spacing", c.spacing_text, "voxel size (60.7um, 0.05mm, 6e-5); overrides the header");
+    app.add_option("input", c.input, "volume: file, folder of TIFF slices or of a DICOM series, or a pattern (slices sorted by name)")->required();
+    tomodem::cli::add_choice(app, "--format", c.read.format, tomodem::image::kVolumeFormatNames, "auto | tiff | mha | nrrd | nifti | raw | h5 | dicom (a folder with one series)");
+    app.add_option("--spacing", c.spacing_text,
+                   "voxel size, one length or x,y,z (60.7um, 1um,1um,2um; lengths: m, mm, um, nm; bare numbers: m); overrides the header");
     tomodem::cli::add_length(app, "--header-unit", c.read.header_unit,
                              "length of one unit of MetaImage/NRRD/NIfTI headers (default 1mm)");
     app.add_option("--raw-dims", c.raw_dims_text, "raw: NX,NY,NZ");
@@ -32,8 +33,10 @@ int main(int argc, char** argv) {
     app.add_option("--roi", c.roi_text, "crop X0,Y0,Z0,NX,NY,NZ (voxels)");
     app.add_option("--downsample", c.read.downsample, "block-average by this integer factor")->capture_default_str();
     tomodem::cli::add_choice(app, "--filter", c.filter, tomodem::image::kImageFilterNames, "none | median | gaussian | cad | nlm");
-    app.add_option("--filter-radius", c.filter_radius, "median radius / NLM patch radius (voxels)")->capture_default_str();
-    app.add_option("--sigma", c.sigma, "gaussian sigma (voxels)")->capture_default_str();
+    app.add_option("--filter-radius", c.filter_radius_text,
+                   "median radius / NLM patch radius: voxels of the finest axis (2, 2vox) or a length (2um), the same length on every axis")
+        ->capture_default_str();
+    app.add_option("--sigma", c.sigma_text, "gaussian sigma: voxels of the finest axis (1.5) or a length (1.5um)")->capture_default_str();
     app.add_option("--iterations", c.iterations, "cad / nlm iterations")->capture_default_str();
     app.add_option("--conductance", c.conductance, "cad conductance")->capture_default_str();
     tomodem::cli::add_choice(app, "--method", c.method, tomodem::image::kThresholdMethodNames,

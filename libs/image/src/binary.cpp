@@ -107,10 +107,23 @@ void median27_row(const float* const* rows, std::size_t nx, float* out, float* S
 }
 }  // namespace
 
-void median_inplace(Volume& v, int r, bool generic) {
-  if (r < 1) throw InputError("", "--filter-radius", std::to_string(r), "median radius must be >= 1");
+std::array<int, 3> radii_for_length(const Volume& v, double r_vox) {
+  const double finest = std::min({v.spacing[0], v.spacing[1], v.spacing[2]});
+  std::array<int, 3> r{};
+  // The voxel centres within r along each axis; 1e-9 keeps 1um/1um at 1 despite round-off.
+  for (int a = 0; a < 3; ++a) r[std::size_t(a)] = int(std::floor(r_vox * finest / v.spacing[std::size_t(a)] + 1e-9));
+  return r;
+}
+
+void median_inplace(Volume& v, int r, bool generic) { median_inplace(v, std::array<int, 3>{r, r, r}, generic); }
+
+void median_inplace(Volume& v, const std::array<int, 3>& radii, bool generic) {
+  const int r = radii[2], rx = radii[0], ry = radii[1];
+  if (rx < 1 || ry < 1 || r < 0)
+    throw InputError("", "--filter-radius", std::to_string(rx) + "," + std::to_string(ry) + "," + std::to_string(r),
+                     "median radius must span >= 1 voxel in x and y");
   const std::size_t nx = v.dims.nx, ny = v.dims.ny, nz = v.dims.nz, P = nx * ny;
-  const long w = 2 * r + 1, n = w * w * w, mid = n / 2;
+  const long w = 2 * r + 1, n = w * (2 * ry + 1) * (2 * rx + 1), mid = n / 2;
   // Ring of the original planes z - r .. z + r (plane q in slot q mod w): the output of plane z
   // overwrites the input, so the filter needs the volume plus 2r + 1 planes of memory.
   std::vector<float> ring(std::size_t(w) * P);
@@ -130,7 +143,7 @@ void median_inplace(Volume& v, int r, bool generic) {
 #pragma omp for schedule(static)
       for (long y = 0; y < long(ny); ++y) {
         float* out = &v.v[std::size_t(z) * P + std::size_t(y) * nx];
-        if (r == 1 && !generic) {
+        if (r == 1 && rx == 1 && ry == 1 && !generic) {
           const float* rows[9];
           for (int c = 0; c < 3; ++c)
             for (int b = 0; b < 3; ++b) rows[3 * c + b] = plane(z + c - 1) + clampi(y + b - 1, ny) * nx;
@@ -141,9 +154,9 @@ void median_inplace(Volume& v, int r, bool generic) {
           std::size_t k = 0;
           for (long c = -r; c <= r; ++c) {
             const float* pl = plane(z + c);
-            for (long b = -r; b <= r; ++b) {
+            for (long b = -ry; b <= ry; ++b) {
               const float* row = pl + clampi(y + b, ny) * nx;
-              for (long a = -r; a <= r; ++a) buf[k++] = row[clampi(x + a, nx)];
+              for (long a = -rx; a <= rx; ++a) buf[k++] = row[clampi(x + a, nx)];
             }
           }
           std::nth_element(buf.begin(), buf.begin() + mid, buf.end());
@@ -282,18 +295,19 @@ Mask threshold(const Volume& v, double t, bool below) {
 namespace {
 constexpr float kInf = 1e20f;
 // Felzenszwalb & Huttenlocher (2012): lower envelope of the parabolas rooted at finite samples.
-void edt_1d(const float* f, int n, float* d, int* vtx, double* z) {
+// w2: the squared voxel size along the line in units of the finest voxel (1 when isotropic).
+void edt_1d(const float* f, int n, float* d, int* vtx, double* z, double w2) {
   int k = -1;
   for (int q = 0; q < n; ++q) {
     if (f[q] >= kInf) continue;
-    const double fq = double(f[q]) + double(q) * q;
+    const double fq = double(f[q]) + w2 * double(q) * q;
     // Intersection s = num / den with the parabola on top of the stack; s <= z[k] is tested as
     // num <= z[k] den (den > 0), so only a parabola that stays pays for a division.
     double num = 0, den = 1;
     while (k >= 0) {
       const int p = vtx[k];
-      num = fq - (double(f[p]) + double(p) * p);
-      den = 2.0 * (q - p);
+      num = fq - (double(f[p]) + w2 * double(p) * p);
+      den = 2.0 * w2 * (q - p);
       if (num <= z[k] * den) --k;
       else break;
     }
@@ -313,29 +327,29 @@ void edt_1d(const float* f, int n, float* d, int* vtx, double* z) {
   for (int q = 0; q < n; ++q) {
     while (z[k + 1] < q) ++k;
     const double dq = double(q - vtx[k]);
-    d[q] = float(dq * dq + f[vtx[k]]);
+    d[q] = float(w2 * dq * dq + f[vtx[k]]);
   }
 }
 
 // First pass, along x, of a field that is 0 or kInf: the squared distance to the nearest 0 of
 // the line, from a forward and a backward scan (no parabolas needed for a binary input).
-void edt_1d_binary(float* f, int n) {
+void edt_1d_binary(float* f, int n, float w2) {
   int last = -1;
   for (int q = 0; q < n; ++q) {
     if (f[q] == 0.0f) last = q;
-    else if (last >= 0) f[q] = float(q - last) * float(q - last);
+    else if (last >= 0) f[q] = w2 * float(q - last) * float(q - last);
   }
   last = -1;
   for (int q = n - 1; q >= 0; --q) {
     if (f[q] == 0.0f) last = q;
-    else if (last >= 0) f[q] = std::min(f[q], float(last - q) * float(last - q));
+    else if (last >= 0) f[q] = std::min(f[q], w2 * float(last - q) * float(last - q));
   }
 }
 
 // One axis pass over every line. Lines along y and z are processed in groups of up to 16
 // neighbouring x: each gather/scatter then reads whole cache lines instead of one float per
 // cache line (and per page, along z).
-void edt_axis(std::vector<float>& g, const Dims& d, int axis) {
+void edt_axis(std::vector<float>& g, const Dims& d, int axis, double w2) {
   constexpr std::size_t W = 16;
   const std::size_t n = axis == 0 ? d.nx : axis == 1 ? d.ny : d.nz;
   const std::size_t stride = axis == 0 ? 1 : axis == 1 ? d.nx : d.nx * d.ny;
@@ -349,7 +363,7 @@ void edt_axis(std::vector<float>& g, const Dims& d, int axis) {
 #pragma omp for schedule(static)
     for (std::ptrdiff_t gi = 0; gi < std::ptrdiff_t(groups); ++gi) {
       if (axis == 0) {
-        edt_1d_binary(&g[std::size_t(gi) * d.nx], int(n));
+        edt_1d_binary(&g[std::size_t(gi) * d.nx], int(n), float(w2));
         continue;
       }
       const std::size_t outer = std::size_t(gi) / xblocks, x0 = (std::size_t(gi) % xblocks) * W;
@@ -358,7 +372,7 @@ void edt_axis(std::vector<float>& g, const Dims& d, int axis) {
       for (std::size_t i = 0; i < n; ++i)
         for (std::size_t l = 0; l < lanes; ++l) f[l * n + i] = g[base + i * stride + l];
       for (std::size_t l = 0; l < lanes; ++l) {
-        edt_1d(&f[l * n], int(n), out.data(), vtx.data(), z.data());
+        edt_1d(&f[l * n], int(n), out.data(), vtx.data(), z.data(), w2);
         std::copy(out.begin(), out.end(), f.begin() + std::ptrdiff_t(l * n));
       }
       for (std::size_t i = 0; i < n; ++i)
@@ -367,9 +381,15 @@ void edt_axis(std::vector<float>& g, const Dims& d, int axis) {
   }
 }
 
-// Exact squared Euclidean distance transform of a field that is 0 (the set) or kInf, in place.
-void edt_inplace(std::vector<float>& g, const Dims& d) {
-  for (int a = 0; a < 3; ++a) edt_axis(g, d, a);
+// Exact squared Euclidean distance transform of a field that is 0 (the set) or kInf, in place,
+// in units of the finest voxel edge: an axis with coarser voxels (a scan's z) weighs its steps
+// by (spacing / finest)^2, so balls and distances are round in metres, not in voxels.
+void edt_inplace(std::vector<float>& g, const Dims& d, const std::array<double, 3>& spacing) {
+  const double finest = std::min({spacing[0], spacing[1], spacing[2]});
+  for (int a = 0; a < 3; ++a) {
+    const double w = spacing[std::size_t(a)] / finest;
+    edt_axis(g, d, a, w * w);
+  }
 }
 
 // Squared distance to the nearest voxel with m != 0 (`to_set`) or m == 0 (otherwise).
@@ -377,7 +397,7 @@ std::vector<float> edt_to(const Mask& m, bool to_set) {
   std::vector<float> g(m.v.size());
 #pragma omp parallel for schedule(static)
   for (std::size_t i = 0; i < g.size(); ++i) g[i] = (m.v[i] != 0) == to_set ? 0.0f : kInf;
-  edt_inplace(g, m.dims);
+  edt_inplace(g, m.dims, m.spacing);
   return g;
 }
 }  // namespace
@@ -550,7 +570,7 @@ Labels macropores(const Mask& pores, double r, std::size_t min_voxels, int* coun
     const float r2 = float(r * r), r12 = float((r + 1) * (r + 1));
 #pragma omp parallel for schedule(static)
     for (std::size_t i = 0; i < g.size(); ++i) g[i] = g[i] > r2 ? 0.0f : kInf;
-    edt_inplace(g, pores.dims);
+    edt_inplace(g, pores.dims, pores.spacing);
     opened.copy_geometry(pores);
     opened.v.resize(pores.v.size());
 #pragma omp parallel for schedule(static)

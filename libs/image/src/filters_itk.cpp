@@ -6,6 +6,8 @@
 
 #include <omp.h>
 
+#include <algorithm>
+
 #include "itk_image.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/image/segment.hpp"
@@ -21,9 +23,20 @@ void set_threads(int n) {
   itk::MultiThreaderBase::SetGlobalMaximumNumberOfThreads(n);
 }
 
+// Voxel spacing relative to the finest axis (1 on it): the filters that use image spacing then
+// see anisotropic voxels while their parameters stay in voxels of the finest axis.
+template <class Image>
+static void set_relative_spacing(Image* img, const Volume& v) {
+  const double finest = std::min({v.spacing[0], v.spacing[1], v.spacing[2]});
+  typename Image::SpacingType sp;
+  for (unsigned a = 0; a < 3; ++a) sp[a] = v.spacing[a] / finest;
+  img->SetSpacing(sp);
+}
+
 template <class Filter>
 static Volume run_filter(const Volume& v, Filter* f) {
   auto in = itkb::to_voxel_image<float>(v);
+  set_relative_spacing(in.GetPointer(), v);
   f->SetInput(in);
   try {
     f->Update();
@@ -35,8 +48,13 @@ static Volume run_filter(const Volume& v, Filter* f) {
 
 Volume gaussian(const Volume& v, double sigma) {
   if (!(sigma > 0)) throw InputError("", "--sigma", std::to_string(sigma), "must be > 0 (voxels)");
-  auto f = itk::SmoothingRecursiveGaussianImageFilter<FI, FI>::New();
-  f->SetSigma(sigma);
+  using Filter = itk::SmoothingRecursiveGaussianImageFilter<FI, FI>;
+  auto f = Filter::New();
+  // sigma in voxels of the finest axis, the same length on each axis (image spacing is relative, so
+  // ITK's physical sigma is this length; on an axis twice as coarse it spans half the voxels).
+  typename Filter::SigmaArrayType sigmas;
+  sigmas.Fill(sigma);
+  f->SetSigmaArray(sigmas);
   return run_filter(v, f.GetPointer());
 }
 

@@ -3,7 +3,10 @@
 #include <itkImage.h>
 #include <itkImageFileReader.h>
 #include <itkImageFileWriter.h>
+#include <itkGDCMImageIO.h>
+#include <itkGDCMSeriesFileNames.h>
 #include <itkImageIOBase.h>
+#include <itkImageSeriesReader.h>
 #include <itkImageIOFactory.h>
 #include <itkImageSeriesWriter.h>
 #include <itkImportImageFilter.h>
@@ -244,6 +247,114 @@ Volume read_series(const std::vector<std::string>& files, ReadInfo* info, const 
     if (got[0] != nx || got[1] != ny)
       throw InputError(files[i], "slice size", std::to_string(got[0]) + "x" + std::to_string(got[1]), "differs from its header");
     std::copy_n(r->GetOutput()->GetBufferPointer(), nx * ny, v.v.data() + i * nx * ny);
+  }
+  return v;
+}
+
+namespace {
+// Geometry of one DICOM file of a series, from its header (GDCM), in mm.
+struct DicomSlice {
+  std::size_t nx = 0, ny = 0, frames = 1;
+  double position = 0;  ///< along the slice normal
+  double dx = 0, dy = 0;
+};
+DicomSlice dicom_slice(const std::string& file) {
+  auto io = itk::GDCMImageIO::New();
+  try {
+    io->SetFileName(file);
+    io->ReadImageInformation();
+  } catch (const itk::ExceptionObject& e) {
+    throw InputError(file, "header", "", std::string("not a readable DICOM file: ") + e.GetDescription());
+  }
+  if (io->GetNumberOfComponents() != 1)
+    throw InputError(file, "pixel", std::to_string(io->GetNumberOfComponents()) + " components", "expected grey slices");
+  DicomSlice s;
+  s.nx = io->GetDimensions(0);
+  s.ny = io->GetNumberOfDimensions() > 1 ? io->GetDimensions(1) : 1;
+  s.frames = io->GetNumberOfDimensions() > 2 ? io->GetDimensions(2) : 1;
+  s.dx = io->GetSpacing(0);
+  s.dy = io->GetNumberOfDimensions() > 1 ? io->GetSpacing(1) : 0;
+  const auto normal = io->GetDirection(2);
+  for (unsigned a = 0; a < 3; ++a) s.position += io->GetOrigin(a) * normal[a];
+  return s;
+}
+
+// Every slice of the series the same size and pixel spacing, and the slices evenly spaced along
+// their normal: a missing, doubled or misplaced slice would otherwise be read as a smooth volume.
+void check_dicom_slices(const std::vector<std::string>& files, std::size_t& nx, std::size_t& ny) {
+  std::vector<DicomSlice> s;
+  for (const auto& f : files) s.push_back(dicom_slice(f));
+  nx = s[0].nx;
+  ny = s[0].ny;
+  for (std::size_t k = 0; k < s.size(); ++k) {
+    if (s[k].frames > 1 && files.size() > 1)
+      throw InputError(files[k], "frames", std::to_string(s[k].frames), "a multi-frame file among single slices");
+    if (s[k].nx != nx || s[k].ny != ny)
+      throw InputError(files[k], "Rows/Columns", std::to_string(s[k].nx) + "x" + std::to_string(s[k].ny),
+                       "differs from the first slice " + files[0] + " (" + std::to_string(nx) + "x" + std::to_string(ny) + ")");
+    if (std::abs(s[k].dx - s[0].dx) > 1e-6 * s[0].dx || std::abs(s[k].dy - s[0].dy) > 1e-6 * s[0].dy)
+      throw InputError(files[k], "PixelSpacing", std::to_string(s[k].dx) + "\\" + std::to_string(s[k].dy),
+                       "differs from the first slice's " + std::to_string(s[0].dx) + "\\" + std::to_string(s[0].dy) + " mm");
+  }
+  if (s.size() < 2) return;
+  std::vector<double> gaps;
+  for (std::size_t k = 0; k + 1 < s.size(); ++k) gaps.push_back(s[k + 1].position - s[k].position);
+  std::vector<double> sorted = gaps;
+  std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(sorted.size() / 2), sorted.end());
+  const double gap = sorted[sorted.size() / 2];
+  // 1 %: scanners write positions to 0.001 mm or better; a missing slice doubles a gap.
+  for (std::size_t k = 0; k < gaps.size(); ++k)
+    if (!(std::abs(gap) > 0) || std::abs(gaps[k] - gap) > 0.01 * std::abs(gap))
+      throw InputError(files[k + 1], "ImagePositionPatient", std::to_string(s[k + 1].position) + " mm along the slice normal",
+                       "is " + std::to_string(gaps[k]) + " mm from the previous slice " + files[k] + ", the series' other slices " +
+                           std::to_string(gap) + " mm apart: a slice is missing, doubled or out of place");
+}
+}  // namespace
+
+Volume read_dicom(const std::string& folder, ReadInfo* info, const std::function<void(Dims)>& before_alloc) {
+  auto names = itk::GDCMSeriesFileNames::New();
+  std::vector<std::string> uids;
+  try {
+    names->SetUseSeriesDetails(true);
+    names->SetDirectory(folder);
+    uids = names->GetSeriesUIDs();
+  } catch (const itk::ExceptionObject& e) {
+    throw InputError(folder, "series", "", std::string("cannot list the DICOM series: ") + e.GetDescription());
+  }
+  if (uids.empty()) throw InputError(folder, "series", "", "no DICOM series in the folder (no readable .dcm files)");
+  if (uids.size() > 1) {
+    std::string list;
+    for (const auto& u : uids) list += (list.empty() ? "" : ", ") + u + " (" + std::to_string(names->GetFileNames(u).size()) + " files)";
+    throw InputError(folder, "series", std::to_string(uids.size()) + " series",
+                     "the folder holds several DICOM series: " + list + "; give each series a folder of its own");
+  }
+  const std::vector<std::string> files = names->GetFileNames(uids[0]);  // ordered along the slice normal by GDCM
+  std::size_t nx = 0, ny = 0;
+  check_dicom_slices(files, nx, ny);
+  auto io = itk::GDCMImageIO::New();
+  io->SetFileName(files[0]);
+  io->ReadImageInformation();
+  const std::size_t nz = files.size() > 1 ? files.size() : std::size_t(io->GetNumberOfDimensions() > 2 ? io->GetDimensions(2) : 1);
+  if (before_alloc) before_alloc(Dims{nx, ny, nz});
+  auto r = itk::ImageSeriesReader<FloatImage>::New();
+  r->SetImageIO(io);
+  r->SetFileNames(files);
+  try {
+    r->Update();
+  } catch (const itk::ExceptionObject& e) {
+    throw InputError(folder, "data", "", std::string("cannot read the DICOM series (truncated or corrupt slice?): ") + e.GetDescription());
+  }
+  const FloatImage* img = r->GetOutput();
+  const auto size = img->GetLargestPossibleRegion().GetSize();
+  Volume v(Dims{size[0], size[1], size[2]});
+  std::copy_n(img->GetBufferPointer(), v.v.size(), v.v.data());
+  for (unsigned k = 0; k < 3; ++k) {
+    v.spacing[k] = img->GetSpacing()[k];  // mm
+    v.origin[k] = img->GetOrigin()[k];
+  }
+  if (info) {
+    info->pixel_type = component_name(io);
+    info->files = files;
   }
   return v;
 }

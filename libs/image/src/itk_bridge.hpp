@@ -20,6 +20,11 @@ Volume read_file(const std::string& path, ReadInfo* info);
 /// `dims` receives nx, ny (from the first slice) and nz (the number of files) before anything is
 /// allocated; `before_alloc` runs then (the memory check).
 Volume read_series(const std::vector<std::string>& files, ReadInfo* info, const std::function<void(Dims)>& before_alloc);
+/// Reads the one DICOM series of `folder` (ITK GDCMSeriesFileNames + GDCMImageIO), slices ordered
+/// along their normal; spacing and origin in mm (DICOM's unit). InputError naming the file when
+/// the folder holds no or several series, a slice is unreadable, differs in size or pixel spacing,
+/// or the slices are not evenly spaced (a missing or doubled slice). `before_alloc` as read_series.
+Volume read_dicom(const std::string& folder, ReadInfo* info, const std::function<void(Dims)>& before_alloc);
 /// Writes to exactly `path` (the extension picks the ITK ImageIO).
 void write_file(const std::string& path, const Volume& v, bool as_uint16);
 void write_series(const std::vector<std::string>& files, const Volume& v, bool as_uint16);

@@ -5,6 +5,8 @@
 #include <itkRegionalMaximaImageFilter.h>
 #include <itkSignedMaurerDistanceMapImageFilter.h>
 
+#include <algorithm>
+
 #include "itk_image.hpp"
 #include "tomodem/core/progress.hpp"
 #include "tomodem/core/error.hpp"
@@ -29,10 +31,16 @@ Mask hysteresis(const Volume& v, double low, double high) {
 
 Labels watershed_grains(const Mask& solid, const GrainOptions& opt, int* count) {
   auto dist = itk::SignedMaurerDistanceMapImageFilter<UI, FI>::New();
-  dist->SetInput(itkb::to_voxel_image<uint8_t>(solid));
+  // Distances in voxels of the finest axis, each axis weighted by its spacing (anisotropic scans).
+  auto in = itkb::to_voxel_image<uint8_t>(solid);
+  const double finest = std::min({solid.spacing[0], solid.spacing[1], solid.spacing[2]});
+  UI::SpacingType sp;
+  for (unsigned a = 0; a < 3; ++a) sp[a] = solid.spacing[a] / finest;
+  in->SetSpacing(sp);
+  dist->SetInput(in);
   dist->SetInsideIsPositive(true);
   dist->SetSquaredDistance(false);
-  dist->SetUseImageSpacing(false);
+  dist->SetUseImageSpacing(true);
   dist->SetBackgroundValue(0);
   auto hmax = itk::HMaximaImageFilter<FI, FI>::New();
   hmax->SetInput(dist->GetOutput());

@@ -70,16 +70,35 @@ void write_labels_h5(const std::string& path, const Mask& phases, const Labels& 
 
 namespace {
 constexpr double kMmPerM = 1e3;
-double voxel_size(const Mask& m) {
-  const double s = m.spacing[0];
-  if (std::abs(m.spacing[1] - s) > 1e-3 * s || std::abs(m.spacing[2] - s) > 1e-3 * s)
-    warn("the level set uses the x voxel size for all axes (anisotropic voxels)");
-  return s;
+// A level set needs cubic voxels (its values are distances in world units): a mask with coarser
+// axes is resampled to the finest voxel size, each new voxel taking the mask value of the old
+// voxel that holds its centre. The box (origin - s/2 .. + n s) is kept where n s is a whole
+// number of finest voxels; otherwise it grows by less than one finest voxel.
+Mask cubic_voxels(const Mask& m) {
+  const double h = std::min({m.spacing[0], m.spacing[1], m.spacing[2]});
+  if (std::max({m.spacing[0], m.spacing[1], m.spacing[2]}) <= h * (1 + 1e-9)) return m;
+  const std::size_t n_old[3] = {m.dims.nx, m.dims.ny, m.dims.nz};
+  std::size_t n[3];
+  for (int a = 0; a < 3; ++a) n[a] = std::size_t(std::ceil(double(n_old[a]) * m.spacing[a] / h - 1e-9));
+  Mask c(Dims{n[0], n[1], n[2]});
+  c.spacing = {h, h, h};
+  std::vector<std::size_t> map[3];
+  for (int a = 0; a < 3; ++a) {
+    const double lo = m.origin[a] - 0.5 * m.spacing[a];
+    c.origin[a] = lo + 0.5 * h;
+    for (std::size_t i = 0; i < n[a]; ++i)
+      map[a].push_back(std::min(n_old[a] - 1, std::size_t((double(i) + 0.5) * h / m.spacing[a])));
+  }
+  for (std::size_t z = 0; z < n[2]; ++z)
+    for (std::size_t y = 0; y < n[1]; ++y)
+      for (std::size_t x = 0; x < n[0]; ++x) c.at(x, y, z) = m.at(map[0][x], map[1][y], map[2][z]);
+  return c;
 }
 }  // namespace
 
-void write_level_set(const std::string& path, const Mask& m, double half_width_vox) {
+void write_level_set(const std::string& path, const Mask& mask, double half_width_vox) {
   openvdb::initialize();
+  const Mask m = cubic_voxels(mask);
   Volume f;
   f.copy_geometry(m);
   f.v.resize(m.v.size());
@@ -88,7 +107,7 @@ void write_level_set(const std::string& path, const Mask& m, double half_width_v
   // phi = 0.5 - smoothed indicator: negative inside; background +0.5 (outside).
   // Built in voxel units (OpenVDB's mesher rejects voxel sizes of ~1e-5 as zero scale), then
   // values and transform are scaled to metres.
-  const double h = voxel_size(m) * kMmPerM;  // OpenVDB refuses scale maps with |det| < 3e-15: store mm
+  const double h = m.spacing[0] * kMmPerM;  // OpenVDB refuses scale maps with |det| < 3e-15: store mm
   auto fog = openvdb::FloatGrid::create(0.5f);
   auto acc = fog->getAccessor();
   for (std::size_t z = 0; z < m.dims.nz; ++z)

@@ -47,6 +47,47 @@ double to_voxels(const std::string& option, const std::string& text, double voxe
   return L < 0 ? -L : L / voxel;
 }
 
+double finest_spacing(const Volume& v) { return std::min({v.spacing[0], v.spacing[1], v.spacing[2]}); }
+
+// --filter-radius and --sigma: a bare number (what they always meant) or "2vox" is voxels of the
+// finest axis, "2um" a length. Returns voxels of the finest axis; finest = 0: the check only
+// (before the volume is read), lengths then give 0.
+bool bare_number(const std::string& text) {
+  try {
+    std::size_t pos = 0;
+    std::stod(text, &pos);
+    return pos == text.size();
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+double voxels_of(const std::string& option, const std::string& text, double finest) {
+  if (bare_number(text)) return std::stod(text);
+  const double L = parse_length(option, text);
+  if (L < 0) return -L;
+  return finest > 0 ? L / finest : 0;
+}
+
+// --spacing: one length for every axis, or three (x,y,z) for anisotropic voxels.
+std::array<double, 3> parse_spacing(const std::string& text) {
+  std::vector<std::string> items;
+  std::stringstream in(text);
+  for (std::string item; std::getline(in, item, ',');) items.push_back(item);
+  if (!text.empty() && text.back() == ',') items.push_back("");
+  if (items.size() != 1 && items.size() != 3)
+    throw InputError("", "--spacing", text,
+                     "expected one length (every axis) or three, x,y,z (e.g. 1um,1um,2um), not " + std::to_string(items.size()));
+  std::array<double, 3> s{};
+  for (std::size_t a = 0; a < 3; ++a) {
+    const std::string& t = items[items.size() == 1 ? 0 : a];
+    const double L = parse_length("--spacing", t);
+    if (L < 0) throw InputError("", "--spacing", text, "give physical lengths (e.g. 60.7um), not voxels");
+    if (!(L > 0) || !std::isfinite(L)) throw InputError("", "--spacing", text, "every voxel size must be finite and > 0");
+    s[a] = L;
+  }
+  return s;
+}
+
 // Wall time of each stage, in the order run, for the summary.
 struct StageClock {
   std::chrono::steady_clock::time_point last = std::chrono::steady_clock::now();
@@ -75,9 +116,15 @@ void check_segment_options(const SegmentConfig& c) {
     }
     return tomodem::image::num_text(x);
   };
-  if (c.filter_radius < 1 || c.filter_radius > 10)
-    throw InputError("", "--filter-radius", std::to_string(c.filter_radius), "must be an integer in [1, 10] (voxels)");
-  if (!finite_pos(c.sigma) || c.sigma > 100) throw InputError("", "--sigma", num_text(c.sigma, "--sigma"), "must be finite, > 0 and <= 100 (voxels)");
+  // In voxels: the range now; a length: > 0 now, the range in voxels once the volume is read.
+  const double filter_radius = voxels_of("--filter-radius", c.filter_radius_text, 0);
+  if (bare_number(c.filter_radius_text) ? !(filter_radius >= 1 && filter_radius <= 10)
+                                        : !(parse_length("--filter-radius", c.filter_radius_text) != 0 && filter_radius >= 0))
+    throw InputError("", "--filter-radius", c.filter_radius_text, "must be in [1, 10] voxels (or a length, e.g. 2um)");
+  const double sigma = voxels_of("--sigma", c.sigma_text, 0);
+  if (bare_number(c.sigma_text) ? !(std::isfinite(sigma) && sigma > 0 && sigma <= 100)
+                                : !(parse_length("--sigma", c.sigma_text) != 0 && sigma >= 0))
+    throw InputError("", "--sigma", c.sigma_text, "must be finite, > 0 and <= 100 voxels (or a length, e.g. 1.5um)");
   if (c.iterations < 1 || c.iterations > 1000)
     throw InputError("", "--iterations", std::to_string(c.iterations), "must be an integer in [1, 1000]");
   if (!finite_pos(c.conductance)) throw InputError("", "--conductance", num_text(c.conductance, "--conductance"), "must be finite and > 0");
@@ -162,11 +209,7 @@ std::string phase_rule(const SegmentConfig& c) { return c.pores_bright ? "pores 
 // stack's slices included).
 ReadOptions prepare_segment(const SegmentConfig& cfg) {
   ReadOptions ro = cfg.read;
-  if (!cfg.spacing_text.empty()) {
-    const double s = parse_length("--spacing", cfg.spacing_text);
-    if (s < 0) throw InputError("", "--spacing", cfg.spacing_text, "give a physical length (e.g. 60.7um), not voxels");
-    ro.spacing = {s, s, s};
-  }
+  if (!cfg.spacing_text.empty()) ro.spacing = parse_spacing(cfg.spacing_text);
   if (!cfg.roi_text.empty()) {
     const auto r = parse_list("--roi", cfg.roi_text, 6);
     std::copy(r.begin(), r.end(), ro.roi.begin());
@@ -192,20 +235,36 @@ ReadOptions prepare_segment(const SegmentConfig& cfg) {
 // The filter in place; its parameters for the summary.
 json apply_filter(const SegmentConfig& cfg, Volume& v) {
   json filt{{"name", to_string(cfg.filter)}};
+  // Radii and sigma are lengths, the same on every axis: on a coarser z a median spans fewer slices.
+  const double finest = finest_spacing(v);
+  const double radius = voxels_of("--filter-radius", cfg.filter_radius_text, finest);
+  const double sigma = voxels_of("--sigma", cfg.sigma_text, finest);
+  if (cfg.filter == ImageFilter::median || cfg.filter == ImageFilter::nlm) {
+    if (!(radius >= 1 && radius <= 10))
+      throw InputError("", "--filter-radius", cfg.filter_radius_text,
+                       "is " + num_text(radius) + " voxels of the finest axis here; must be in [1, 10]");
+  }
   if (cfg.filter == ImageFilter::median) {
-    median_inplace(v, cfg.filter_radius);
-    filt["radius_vox"] = cfg.filter_radius;
+    const auto radii = radii_for_length(v, radius);
+    median_inplace(v, radii);
+    filt["radius_vox"] = radius;
+    filt["radius_m"] = radius * finest;
+    filt["box_radii_vox"] = radii;
   } else if (cfg.filter == ImageFilter::gaussian) {
-    v = gaussian(v, cfg.sigma);
-    filt["sigma_vox"] = cfg.sigma;
+    v = gaussian(v, sigma);
+    filt["sigma_vox"] = sigma;
+    filt["sigma_m"] = sigma * finest;
   } else if (cfg.filter == ImageFilter::cad) {
     v = anisotropic_diffusion(v, cfg.iterations, cfg.conductance);
     filt["iterations"] = cfg.iterations;
     filt["conductance"] = cfg.conductance;
     filt["time_step"] = 0.0625;
   } else if (cfg.filter == ImageFilter::nlm) {
-    v = nlm(v, cfg.filter_radius, cfg.iterations);
-    filt["patch_radius_vox"] = cfg.filter_radius;
+    // ITK counts the patch radius in voxels of the coarsest axis (and widens it on the finer ones).
+    const double coarsest = std::max({v.spacing[0], v.spacing[1], v.spacing[2]});
+    const int patch = std::max(1, int(std::lround(radius * finest / coarsest)));
+    v = nlm(v, patch, cfg.iterations);
+    filt["patch_radius_vox"] = patch;
     filt["iterations"] = cfg.iterations;
   } else if (cfg.filter != ImageFilter::none) {
     throw InputError("", "--filter", to_string(cfg.filter), "expected " + names_of(kImageFilterNames));
@@ -330,6 +389,7 @@ Packing separate_grains(const SegmentConfig& cfg, const Mask& solid, const Mask&
   grains = watershed_grains(solid, go, &n);
   const auto g = regions(grains, n);
   const auto d2 = distance_squared(solid);
+  const double finest = std::min({solid.spacing[0], solid.spacing[1], solid.spacing[2]});
   std::vector<float> inscribed(std::size_t(n) + 1, 0.0f);
   std::vector<std::size_t> n_phase2(std::size_t(n) + 1, 0);
   for (std::size_t i = 0; i < d2.size(); ++i) {
@@ -346,8 +406,9 @@ Packing separate_grains(const SegmentConfig& cfg, const Mask& solid, const Mask&
   Packing packing;
   for (const auto& r : g) {
     if (!r.voxels) continue;
-    const double rin = std::sqrt(double(inscribed[std::size_t(r.label)]));
-    const double ratio = double(r.voxels) / (4.0 / 3.0 * M_PI * rin * rin * rin);
+    // The inscribed radius is in voxels of the finest axis (distance_squared): compare volumes in m³.
+    const double rin = std::sqrt(double(inscribed[std::size_t(r.label)])) * finest;
+    const double ratio = r.volume_m3 / (4.0 / 3.0 * M_PI * rin * rin * rin);
     under += ratio > 2.0;                  // much more volume than its largest inscribed ball: merged grains
     over += double(r.voxels) < 0.2 * med;  // a fragment far below the typical grain
     cut += r.touches_surface;
@@ -410,9 +471,15 @@ std::string run_segment(const SegmentConfig& cfg) {
   if (!(*mx > *mn))
     throw InputError(cfg.input, "volume", std::to_string(*mn), "constant volume (every voxel has this value): nothing to segment");
   Summary summary("tomodem-segment");
+  const bool typed = std::isfinite(rinfo.type_min);
   summary.input(cfg.input, {{"format", rinfo.format}, {"pixel_type", rinfo.pixel_type},
                             {"files", rinfo.files.size()}, {"dims", {v.dims.nx, v.dims.ny, v.dims.nz}},
-                            {"spacing_m", v.spacing}, {"origin_m", v.origin}, {"spacing_source", rinfo.spacing_source}});
+                            {"spacing_m", v.spacing}, {"origin_m", v.origin}, {"spacing_source", rinfo.spacing_source},
+                            {"value_range", {rinfo.value_min, rinfo.value_max}},
+                            {"type_range", typed ? json{rinfo.type_min, rinfo.type_max} : json(nullptr)}});
+  info(rinfo.pixel_type + " voxels, values " + num_text(rinfo.value_min) + " .. " + num_text(rinfo.value_max) +
+       (typed ? " of the type's " + num_text(rinfo.type_min) + " .. " + num_text(rinfo.type_max) : std::string()) +
+       "; voxel " + num_text(v.spacing[0]) + " x " + num_text(v.spacing[1]) + " x " + num_text(v.spacing[2]) + " m");
   clock.done("read");
   summary["filter"] = apply_filter(cfg, v);
   clock.done("filter");
@@ -427,7 +494,8 @@ std::string run_segment(const SegmentConfig& cfg) {
   clock.done("threshold");
   Mask pores = clean_solid(cfg, solid, summary);
   clock.done("clean");
-  const double macro_r = to_voxels("--macropore-radius", cfg.macro_radius_text, v.spacing[0]);
+  const double finest = finest_spacing(v);  // lengths in voxels are voxels of the finest axis
+  const double macro_r = to_voxels("--macropore-radius", cfg.macro_radius_text, finest);
   int n_macro = 0;
   const Labels macro = macropores(pores, macro_r, cfg.macro_min_voxels, &n_macro);
   info("macropores: " + std::to_string(n_macro));
@@ -437,7 +505,7 @@ std::string run_segment(const SegmentConfig& cfg) {
   summary["thresholds"] = t;
   summary["threshold_rule"] = phase_rule(cfg) + " (value >= t is the brighter class)";
   summary["method"] = to_string(cfg.method);
-  summary["macropore_radius_m"] = macro_r * v.spacing[0];
+  summary["macropore_radius_m"] = macro_r * finest;
   summary["macropore_radius_vox"] = macro_r;
   summary["specific_surface_per_m"] = specific_surface(solid);
   macropore_keys(macro, n_macro, summary);

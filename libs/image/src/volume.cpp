@@ -5,6 +5,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fnmatch.h>
+#include <limits>
 #include <fstream>
 #include <sstream>
 
@@ -31,9 +32,26 @@ bool ends_with(const std::string& s, const std::string& e) {
   return s.size() >= e.size() && s.compare(s.size() - e.size(), e.size(), e) == 0;
 }
 
+// A DICOM file: "DICM" after the 128-byte preamble (PS3.10 7.1), or the .dcm extension.
+bool is_dicom_file(const fs::path& p) {
+  std::string ext = p.extension().string();
+  for (auto& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".dcm") return true;
+  std::ifstream in(p, std::ios::binary);
+  char magic[4] = {};
+  in.seekg(128);
+  return in.read(magic, 4) && std::memcmp(magic, "DICM", 4) == 0;
+}
+bool holds_dicom(const std::string& dir) {
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec))
+    if (e.is_regular_file() && is_dicom_file(e.path())) return true;
+  return false;
+}
+
 std::string detect_format(const std::string& input) {
   if (input.find_first_of("*?") != std::string::npos) return "tiff-stack";
-  if (fs::is_directory(input)) return "tiff-stack";
+  if (fs::is_directory(input)) return holds_dicom(input) ? "dicom" : "tiff-stack";
   const std::string l = lower(input);
   if (ends_with(l, ".tif") || ends_with(l, ".tiff")) return "tiff";
   if (ends_with(l, ".mha") || ends_with(l, ".mhd")) return "mha";
@@ -200,6 +218,19 @@ Volume read_h5(const std::string& path, const ReadOptions& o, bool* has_spacing,
 
 }  // namespace
 
+std::array<double, 2> type_range(const std::string& t) {
+  if (t == "uint8") return {0, 255};
+  if (t == "int8") return {-128, 127};
+  if (t == "uint16") return {0, 65535};
+  if (t == "int16") return {-32768, 32767};
+  if (t == "uint32") return {0, 4294967295.0};
+  if (t == "int32") return {-2147483648.0, 2147483647.0};
+  if (t == "float32") return {-double(std::numeric_limits<float>::max()), double(std::numeric_limits<float>::max())};
+  if (t == "float64") return {-std::numeric_limits<double>::max(), std::numeric_limits<double>::max()};
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  return {nan, nan};
+}
+
 double parse_length(const std::string& option, const std::string& text) {
   // Voxels are the image tools' own unit; physical lengths go through core's one parser.
   double x = 0;
@@ -271,6 +302,13 @@ std::vector<std::string> input_files(const std::string& input, const ReadOptions
   std::string format = (o.format == VolumeFormat::automatic) ? detect_format(input) : to_string(o.format);
   if (format == "tiff" && (input.find_first_of("*?") != std::string::npos || fs::is_directory(input))) format = "tiff-stack";
   if (format == "tiff-stack") return stack_files(input);
+  if (format == "dicom") {  // every file of the folder (the series is found when it is read)
+    std::vector<std::string> files;
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(input, ec))
+      if (e.is_regular_file()) files.push_back(e.path().string());
+    return files;
+  }
   std::vector<std::string> files{input};
   if (format == "mha" && fs::is_regular_file(input)) {
     const std::string data = checks::metaimage_data_file(input);
@@ -301,10 +339,13 @@ Volume read_volume(const std::string& input, const ReadOptions& o, ReadInfo* inf
   info.format = (o.format == VolumeFormat::automatic) ? detect_format(input) : to_string(o.format);
   if (info.format == "tiff" && (input.find_first_of("*?") != std::string::npos || fs::is_directory(input)))
     info.format = "tiff-stack";
-  if (info.format != "tiff-stack" && !fs::exists(input)) throw InputError(input, "", "", "no such file");
-  if (info.format != "tiff-stack" && fs::is_directory(input))
-    throw InputError(input, "", "", "is a folder; a folder is read as a stack of TIFF slices only (--format tiff or auto)");
-  if (info.format != "tiff-stack") {
+  const bool folder_format = info.format == "tiff-stack" || info.format == "dicom";
+  if (info.format == "dicom" && !fs::is_directory(input))
+    throw InputError(input, "", "", "a DICOM series is read from its folder: give the folder that holds the slices");
+  if (!folder_format && !fs::exists(input)) throw InputError(input, "", "", "no such file");
+  if (!folder_format && fs::is_directory(input))
+    throw InputError(input, "", "", "is a folder; a folder is read as a stack of TIFF slices or a DICOM series only (--format tiff, dicom or auto)");
+  if (!folder_format) {
     std::ifstream probe(input, std::ios::binary);
     if (!probe) throw InputError(input, "", "", "cannot open the file for reading (permissions?)");
     std::error_code ec;
@@ -336,6 +377,11 @@ Volume read_volume(const std::string& input, const ReadOptions& o, ReadInfo* inf
       }
       for (int k = 0; k < 3; ++k) { v.spacing[k] *= unit; v.origin[k] *= unit; }
     }
+  } else if (info.format == "dicom") {
+    v = itkb::read_dicom(input, &info, [&](Dims d) { check_read_memory(input, "slices", d, 0, o); });
+    header_spacing = true;
+    info.length_unit = "mm";  // DICOM states every length in mm (PS3.3 C.7.6.2)
+    for (int k = 0; k < 3; ++k) { v.spacing[k] *= 1e-3; v.origin[k] *= 1e-3; }
   } else if (info.format == "raw") {
     info.files = {input};
     v = read_raw(input, o, &info);
@@ -345,10 +391,20 @@ Volume read_volume(const std::string& input, const ReadOptions& o, ReadInfo* inf
     info.pixel_type = "float64 (as read)";
     field = o.h5_dataset;
   } else {
-    throw InputError(input, "--format", to_string(o.format), "unknown format (auto, tiff, mha, nrrd, nifti, raw, h5)");
+    throw InputError(input, "--format", to_string(o.format), "unknown format (" + names_of(kVolumeFormatNames) + ")");
   }
   if (v.dims.count() == 0) throw InputError(input, "dims", "0", "empty volume");
   check_finite(v, input, field, info.format == "h5");
+  {  // the values as read and the stored type's range (16- and 32-bit scans use a part of it)
+    const auto [lo, hi] = std::minmax_element(v.v.begin(), v.v.end());
+    info.value_min = *lo;
+    info.value_max = *hi;
+    const auto range = type_range(info.pixel_type);
+    info.type_min = range[0];
+    info.type_max = range[1];
+    if ((info.pixel_type == "uint32" || info.pixel_type == "int32") && std::max(std::abs(info.value_min), std::abs(info.value_max)) > 16777216.0)
+      warn(input + ": 32-bit integer values beyond 2^24 = 16777216 are rounded to float32 (24-bit mantissa)");
+  }
   if (o.spacing[0] > 0) {
     v.spacing = o.spacing;
     if (!header_spacing) v.origin = {0, 0, 0};

@@ -1,6 +1,9 @@
 #pragma once
 // Segmentation building blocks as free functions over tomodem::image grids (docs/architecture.md#code-conventions, P7).
 // Lengths are in voxels unless a name says otherwise; all filters are 3-D and use OpenMP/ITK threads.
+// Anisotropic voxels (a scan's coarser z): a length "in voxels" is in voxels of the finest axis,
+// and filters, distances and balls follow each axis's spacing, so they are the same in metres.
+#include <array>
 #include <string>
 #include <vector>
 
@@ -16,11 +19,19 @@ namespace tomodem::image {
 /// voxels at a time (about 200 min/max per voxel); r > 1, or `generic`: std::nth_element over the box (the
 /// reference the benchmark compares against).
 void median_inplace(Volume& v, int radius, bool generic = false);
+/// The same over a (2rx+1)(2ry+1)(2rz+1) box (rz may be 0: each slice on its own).
+void median_inplace(Volume& v, const std::array<int, 3>& radii, bool generic = false);
+/// The box half-widths of a median of radius `r_vox` (voxels of the finest axis): the voxel
+/// centres within that length along each axis, floor(r s_finest / s_axis). At 1um,1um,2um and
+/// r = 1: {1, 1, 0}: on coarser z the kernel spans fewer slices.
+std::array<int, 3> radii_for_length(const Volume& v, double r_vox);
 /// The same on a copy.
 Volume median(const Volume& v, int radius);
-/// Gaussian smoothing, sigma in voxels (ITK SmoothingRecursiveGaussianImageFilter).
+/// Gaussian smoothing, sigma in voxels of the finest axis, the same length on every axis
+/// (ITK SmoothingRecursiveGaussianImageFilter with a sigma per axis).
 Volume gaussian(const Volume& v, double sigma_vox);
-/// Curvature anisotropic diffusion (ITK); time step 0.0625 is the 3-D stability limit.
+/// Curvature anisotropic diffusion (ITK, on the voxel spacing relative to the finest axis); time
+/// step 0.0625 is the 3-D stability limit for the finest axis.
 Volume anisotropic_diffusion(const Volume& v, int iterations, double conductance, double time_step = 0.0625);
 /// Non-local means (ITK PatchBasedDenoisingImageFilter, Gaussian noise model).
 Volume nlm(const Volume& v, int patch_radius, int iterations);
@@ -47,10 +58,10 @@ Mask threshold(const Volume& v, double t, bool below = false);
 Mask hysteresis(const Volume& v, double low, double high);
 
 // ---- binary morphology and labelling (binary.cpp) ----
-/// Squared Euclidean distance (in voxels²) of every voxel to the nearest voxel where m == 0
+/// Squared Euclidean distance (in finest voxels²; exact for anisotropic spacing) of every voxel to the nearest voxel where m == 0
 /// (for m != 0 voxels; 0 elsewhere). Felzenszwalb–Huttenlocher, exact, separable.
 std::vector<float> distance_squared(const Mask& m);
-Mask erode_ball(const Mask& m, double r);   ///< Euclidean ball of radius r (voxels)
+Mask erode_ball(const Mask& m, double r);   ///< Euclidean ball of radius r (finest voxels; round in metres)
 Mask dilate_ball(const Mask& m, double r);
 Mask open_ball(const Mask& m, double r);
 Mask close_ball(const Mask& m, double r);

@@ -53,11 +53,14 @@ inline std::optional<ThresholdMethod> parse_threshold_method(std::string_view na
 struct SegmentConfig {
   std::string input;
   ReadOptions read;
+  /// --spacing: one length (every axis) or three, x,y,z ("1um,1um,2um").
   std::string spacing_text, roi_text, macro_radius_text = "3vox", raw_dims_text;
   // filtering
   ImageFilter filter = ImageFilter::median;
-  int filter_radius = 1;              ///< median box radius; NLM patch radius (voxels)
-  double sigma = 1.0;                 ///< gaussian sigma (voxels)
+  /// Median box radius / NLM patch radius and Gaussian sigma: a bare number or "2vox" in voxels
+  /// of the finest axis, or a length ("2um"); the same length on every axis (anisotropic voxels).
+  std::string filter_radius_text = "1";
+  std::string sigma_text = "1";
   int iterations = 5;                 ///< cad / nlm iterations
   double conductance = 1.0;           ///< cad
   // thresholding

@@ -6,6 +6,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -37,15 +38,17 @@ using Volume = Grid<float>;     ///< grey values (any input type is converted to
 using Mask = Grid<uint8_t>;     ///< 0/1, or small phase labels
 using Labels = Grid<int32_t>;   ///< component or grain ids, 0 = background
 
-/// An input's file format; automatic: from the extension (a folder or a pattern: a TIFF stack).
-enum class VolumeFormat : uint8_t { automatic, tiff, mha, nrrd, nifti, raw, h5 };
-inline constexpr NameTable<VolumeFormat, 7> kVolumeFormatNames = {{{VolumeFormat::automatic, "auto"},
+/// An input's file format; automatic: from the extension (a pattern: a TIFF stack; a folder: a
+/// DICOM series when it holds DICOM files, else a TIFF stack).
+enum class VolumeFormat : uint8_t { automatic, tiff, mha, nrrd, nifti, raw, h5, dicom };
+inline constexpr NameTable<VolumeFormat, 8> kVolumeFormatNames = {{{VolumeFormat::automatic, "auto"},
                                                                    {VolumeFormat::tiff, "tiff"},
                                                                    {VolumeFormat::mha, "mha"},
                                                                    {VolumeFormat::nrrd, "nrrd"},
                                                                    {VolumeFormat::nifti, "nifti"},
                                                                    {VolumeFormat::raw, "raw"},
-                                                                   {VolumeFormat::h5, "h5"}}};
+                                                                   {VolumeFormat::h5, "h5"},
+                                                                   {VolumeFormat::dicom, "dicom"}}};
 inline const char* to_string(VolumeFormat f) { return name_of(kVolumeFormatNames, f); }
 
 /// The voxel type of a raw file.
@@ -94,12 +97,19 @@ struct ReadOptions {
 
 /// What the reader found, for the summary's provenance.
 struct ReadInfo {
-  std::string format;          ///< tiff-stack | tiff | mha | nrrd | nifti | raw | h5
+  std::string format;          ///< tiff-stack | tiff | mha | nrrd | nifti | raw | h5 | dicom
   std::string pixel_type;      ///< as stored: uint8, uint16, int16, float32, ...
   std::string spacing_source;  ///< header | --spacing
   std::string length_unit;     ///< the unit the file states (header key or HDF5 attribute `units`); "" = none
   std::vector<std::string> files;
+  /// Grey values as read (before --roi and --downsample) and the range of the stored type
+  /// (uint16: 0..65535); the type range is NaN where the file's type is not known (HDF5).
+  double value_min = 0, value_max = 0;
+  double type_min = std::numeric_limits<double>::quiet_NaN(), type_max = std::numeric_limits<double>::quiet_NaN();
 };
+
+/// The value range of a stored voxel type ("uint16" -> 0, 65535); NaNs for an unknown name.
+std::array<double, 2> type_range(const std::string& pixel_type);
 
 /// Reads a volume. `input` is a file, a folder of TIFF slices, or a pattern with * or ?
 /// (slices sorted by name). InputError (exit 2) names the file and what is wrong: unknown
