@@ -211,11 +211,21 @@ Mat3 read_tensor(const Map& m, bool (*mask)[3] = nullptr) {
 
 }  // namespace
 
-std::vector<Vec3> lattice_sites(const std::string& kind, int n, double a) {
-  std::vector<Vec3> basis;
-  if (kind == "simple_cubic") basis = {{0.5, 0.5, 0.5}};
-  else if (kind == "bcc") basis = {{0.25, 0.25, 0.25}, {0.75, 0.75, 0.75}};
-  else if (kind == "fcc") basis = {{0.25, 0.25, 0.25}, {0.75, 0.75, 0.25}, {0.75, 0.25, 0.75}, {0.25, 0.75, 0.75}};
+namespace {
+std::vector<Vec3> lattice_basis(LatticeKind kind) {
+  switch (kind) {
+    case LatticeKind::simple_cubic: return {{0.5, 0.5, 0.5}};
+    case LatticeKind::bcc: return {{0.25, 0.25, 0.25}, {0.75, 0.75, 0.75}};
+    case LatticeKind::fcc: return {{0.25, 0.25, 0.25}, {0.75, 0.75, 0.25}, {0.75, 0.25, 0.75}, {0.25, 0.75, 0.75}};
+  }
+  return {};
+}
+}  // namespace
+
+int lattice_basis_size(LatticeKind kind) { return int(lattice_basis(kind).size()); }
+
+std::vector<Vec3> lattice_sites(LatticeKind kind, int n, double a) {
+  const std::vector<Vec3> basis = lattice_basis(kind);
   std::vector<Vec3> sites;
   for (int i = 0; i < n; ++i)
     for (int j = 0; j < n; ++j)
@@ -345,23 +355,23 @@ void generate_particles(const Map& root, const Map& g, Scene& scene, Packing& in
     if (long(sites.size()) < count)
       throw g.error("count", std::to_string(count),
                     "only " + std::to_string(sites.size()) + " spheres fit by random insertion; lower the solid fraction");
-  } else if (arr == "simple_cubic" || arr == "bcc" || arr == "fcc") {
+  } else if (const std::optional<LatticeKind> lattice = parse_lattice(arr)) {
     if (!g.has("cells")) throw g.error("cells", "", "lattice arrangements need cells (per side) > 0");
     const long n = g.integer("cells", 0, 1);
-    const int per_cell = arr == "simple_cubic" ? 1 : (arr == "bcc" ? 2 : 4);
+    const int per_cell = lattice_basis_size(*lattice);
     const double sites_wanted = double(per_cell) * double(n) * double(n) * double(n);
     check_memory_request(sites_wanted * kBytesPerParticle, file, g.where("cells"), g.text("cells"),
                          g.text("cells") + "^3 " + arr + " cells (" + value_text(sites_wanted) + " particles)");
     if (sites_wanted > INT_MAX) throw g.error("cells", g.text("cells"), "at most 2147483647 particles in all");
     double a = g.has("spacing") ? g.positive("spacing", 0)
                                 : std::cbrt(per_cell * 4.0 / 3.0 * M_PI * r * r * r / phi);
-    sites = lattice_sites(arr, int(n), a);
+    sites = lattice_sites(*lattice, int(n), a);
     if (!root.has("cell")) {
       input.cell = Cell::box({0, 0, 0}, {n * a, n * a, n * a}, true);
       have_cell = true;
     }
   } else {
-    throw g.error("arrangement", arr, "unknown; expected simple_cubic, bcc, fcc or random");
+    throw g.error("arrangement", arr, "unknown; expected random, " + names_of(kLatticeNames));
   }
   std::mt19937_64 rng(seed + 7919);
   std::uniform_real_distribution<double> u(-1, 1);

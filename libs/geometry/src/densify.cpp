@@ -539,7 +539,10 @@ Inserted lattice_particles(const PackSpec& spec) {
   const double phi = spec.target == Target::solid_fraction ? spec.target_solid_fraction : lattice_max_fraction(spec.arrangement);
   const double a = d * std::cbrt(lattice_max_fraction(spec.arrangement) / phi) *
                    (spec.arrangement == Arrangement::simple_cubic ? 1.0 : (spec.arrangement == Arrangement::bcc ? 2 / std::sqrt(3.0) : std::sqrt(2.0)));
-  in.pos = dem::lattice_sites(to_string(spec.arrangement), nc, a);
+  const dem::LatticeKind kind = spec.arrangement == Arrangement::simple_cubic
+                                ? dem::LatticeKind::simple_cubic
+                                : (spec.arrangement == Arrangement::bcc ? dem::LatticeKind::bcc : dem::LatticeKind::fcc);
+  in.pos = dem::lattice_sites(kind, nc, a);
   in.radius.assign(in.pos.size(), 0.5 * d);
   in.phase.assign(in.pos.size(), 0);
   in.cell = Cell::box({0, 0, 0}, {nc * a, nc * a, nc * a}, true);

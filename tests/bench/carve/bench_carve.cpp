@@ -73,7 +73,7 @@ TEST(BenchCarve, MillionParticlesLevelSet512) {
   const int cells = 63;
   const double a = 1.0;
   Packing p;
-  p.particles.position = dem::lattice_sites("fcc", cells, a);
+  p.particles.position = dem::lattice_sites(dem::LatticeKind::fcc, cells, a);
   p.particles.radius.assign(p.particles.position.size(), 0.999 * a / (2 * std::sqrt(2.0)));
   p.particles.phase.assign(p.particles.position.size(), 0);
   p.cell = Cell::box({0, 0, 0}, {cells * a, cells * a, cells * a}, true);

@@ -150,7 +150,7 @@ TEST(CarveConnectivity, LatticeOneClusterThenFloaters) {
   // Simple cubic touching spheres: one cluster wrapping the cell in 3-D.
   const double a = 2e-3, r = 1e-3;
   Packing p;
-  p.particles.position = dem::lattice_sites("simple_cubic", 5, a);
+  p.particles.position = dem::lattice_sites(dem::LatticeKind::simple_cubic, 5, a);
   p.particles.radius.assign(p.particles.position.size(), r);
   p.particles.phase.assign(p.particles.position.size(), 0);
   p.cell = Cell::box({0, 0, 0}, {5 * a, 5 * a, 5 * a}, true);

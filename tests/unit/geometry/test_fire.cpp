@@ -13,7 +13,7 @@ using namespace tomodem;
 
 namespace {
 dem::Simulation fcc(int cells, double a, double d, double k, double jitter, uint64_t seed, double friction = 0) {
-  std::vector<Vec3> x = dem::lattice_sites("fcc", cells, a);
+  std::vector<Vec3> x = dem::lattice_sites(dem::LatticeKind::fcc, cells, a);
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(-jitter, jitter);
   dem::Particles p;
@@ -77,7 +77,7 @@ TEST(Fire, RefusesADeformingCell) {
 namespace {
 /// Compressed FCC crystal of Hertz spheres, half of them (at random) `ratio` times lighter.
 dem::Simulation light_and_heavy_fcc(double a, double d, double ratio, uint64_t seed) {
-  std::vector<Vec3> x = dem::lattice_sites("fcc", 4, a);
+  std::vector<Vec3> x = dem::lattice_sites(dem::LatticeKind::fcc, 4, a);
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(-0.02 * d, 0.02 * d);
   std::bernoulli_distribution light(0.5);

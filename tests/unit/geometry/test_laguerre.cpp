@@ -14,7 +14,7 @@ using namespace tomodem::geometry;
 TEST(Laguerre, FccCellsAreRhombicDodecahedraOfVolumeASquaredOver4) {
   const int n = 4;
   const double a = 1.0;
-  const auto x = dem::lattice_sites("fcc", n, a);
+  const auto x = dem::lattice_sites(dem::LatticeKind::fcc, n, a);
   std::vector<double> r(x.size(), 0.3);
   const Cell cell = Cell::box({0, 0, 0}, {n * a, n * a, n * a}, true);
   const auto t = laguerre(x, r, cell);

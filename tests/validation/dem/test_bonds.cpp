@@ -22,7 +22,7 @@ struct BondedLattice {
   Simulation make(BondFailure failure = BondFailure::none, double zeta = 0.3) const {
     const double s = 2 * R;
     Particles p;
-    for (const Vec3& x : lattice_sites("simple_cubic", n, s)) p.add(x, R, rho, 0);
+    for (const Vec3& x : lattice_sites(dem::LatticeKind::simple_cubic, n, s)) p.add(x, R, rho, 0);
     ContactModel m;
     m.normal = NormalLaw::hertz;
     m.materials = {material(E, nu, rho)};

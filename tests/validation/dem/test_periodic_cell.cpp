@@ -23,7 +23,7 @@ struct Lattice {
   Simulation make(double zeta) const {
     const double a = 2 * R - delta0;
     Particles p;
-    for (const Vec3& x : lattice_sites("simple_cubic", n, a)) p.add(x, R, rho, 0);
+    for (const Vec3& x : lattice_sites(dem::LatticeKind::simple_cubic, n, a)) p.add(x, R, rho, 0);
     ContactModel m;
     m.normal = NormalLaw::linear;
     m.materials = {material(1e8, 0.25, rho)};

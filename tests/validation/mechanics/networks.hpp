@@ -1,7 +1,10 @@
 #pragma once
 // Bonded networks for the mechanics tests: lattices and random packings on periodic cells.
 #include <cmath>
+#include <optional>
 #include <random>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "tomodem/core/packing.hpp"
@@ -22,7 +25,9 @@ inline Material ceramic(double E = 1e9, double nu = 0.25, double rho = 2500) {
 /// Spheres at lattice sites (simple_cubic, bcc, fcc) with n cells of constant a, periodic cube.
 inline Packing lattice(const std::string& kind, int n, double a, double radius, Material m = ceramic()) {
   Packing p;
-  for (const Vec3& x : dem::lattice_sites(kind, n, a)) {
+  const std::optional<dem::LatticeKind> lattice = dem::parse_lattice(kind);
+  if (!lattice) throw std::invalid_argument("test::lattice: unknown lattice " + kind);
+  for (const Vec3& x : dem::lattice_sites(*lattice, n, a)) {
     p.particles.position.push_back(x);
     p.particles.radius.push_back(radius);
     p.particles.phase.push_back(0);

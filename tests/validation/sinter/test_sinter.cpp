@@ -65,7 +65,7 @@ SinterSettings hold(double T, double seconds) {
 std::vector<Vec3> fcc(int n, double r, double overlap, double jitter, double& side) {
   const double a = 2 * r * (1 - overlap) * std::sqrt(2.0);
   side = n * a;
-  std::vector<Vec3> x = lattice_sites("fcc", n, a);
+  std::vector<Vec3> x = lattice_sites(dem::LatticeKind::fcc, n, a);
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> u(-1, 1);
   for (auto& xi : x) xi += (jitter * 2 * r) * Vec3{u(rng), u(rng), u(rng)};

@@ -1,10 +1,14 @@
 #pragma once
 // A tomodem-dem scene: particles (from a packing file or generated), materials, physics,
 // boundaries, a protocol and outputs, read from YAML (format: docs/dem.md).
+#include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
+#include "tomodem/core/names.hpp"
 #include "tomodem/core/packing.hpp"
 #include "tomodem/dem/simulation.hpp"
 
@@ -50,9 +54,19 @@ std::vector<std::vector<double>> full_series(const Scene& scene, const std::vect
 /// (with its line) and the value. `threads` > 0 overrides the scene's setting.
 Scene load_scene(const std::string& path, int threads = 0);
 
+/// A cubic lattice: simple cubic (1 site), BCC (2) or FCC (4 sites per cubic cell). Scenes and
+/// tools parse the name at the edge (`particles.generate.arrangement`, pack's `arrangement`).
+enum class LatticeKind : uint8_t { simple_cubic, bcc, fcc };
+inline constexpr NameTable<LatticeKind, 3> kLatticeNames = {
+    {{LatticeKind::simple_cubic, "simple_cubic"}, {LatticeKind::bcc, "bcc"}, {LatticeKind::fcc, "fcc"}}};
+inline const char* to_string(LatticeKind l) { return name_of(kLatticeNames, l); }
+inline std::optional<LatticeKind> parse_lattice(std::string_view name) { return value_of(kLatticeNames, name); }
+/// Sites per cubic cell: 1, 2 or 4.
+int lattice_basis_size(LatticeKind kind);
+
 /// Lattice and random generators used by scenes and tests.
-/// Simple cubic (1 site), BCC (2) or FCC (4 sites per cubic cell), n cells per side, spacing a.
-std::vector<Vec3> lattice_sites(const std::string& kind, int n, double a);
+/// The sites of `kind`, n cells per side, spacing a.
+std::vector<Vec3> lattice_sites(LatticeKind kind, int n, double a);
 /// Random sequential insertion of `count` non-overlapping spheres of radius r in a box.
 std::vector<Vec3> random_sites(int count, double r, const Vec3& lo, const Vec3& hi, bool periodic, unsigned seed);
 
