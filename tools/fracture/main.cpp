@@ -9,6 +9,7 @@
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/summary.hpp"
 #include "tomodem/core/tool.hpp"
+#include "tomodem/dem/law_registry.hpp"
 #include "tomodem/linalg/petsc_solver.hpp"
 #include "tomodem/mechanics/fracture.hpp"
 
@@ -21,8 +22,12 @@ int main(int argc, char** argv) {
                  "tomodem-fracture"};
     app.add_option("input", c.input, "bonded packing (.h5, from tomodem-bond)")->required();
     tomodem::cli::add_choice(app, "--method", c.method, tomodem::mechanics::kFractureMethodNames, "sla | explicit | both");
-    tomodem::cli::add_choice(app, "--criterion", fo.criterion, tomodem::mechanics::kFailureCriterionNames,
-                             "bond failure: lefm (fracture energy) | stress (strengths)");
+    // The criteria that break bonds, by the registry's names (dem/law_registry.hpp).
+    app.add_option_function<std::string>(
+           "--criterion",
+           [&fo](const std::string& name) { fo.criterion = tomodem::dem::parse_bond_failure(name, "", "--criterion", true); },
+           "bond failure: lefm (fracture energy) | stress (strengths)")
+        ->default_str(tomodem::mechanics::to_string_criterion(fo.criterion));
     app.add_option("--fracture-energy", fo.fracture_energy, "lefm: Gamma = 2 gamma_s (J/m^2; 0: from the materials)");
     app.add_option("--tensile-strength", fo.tensile_strength, "stress: bond tensile strength (Pa)");
     app.add_option("--shear-strength", fo.shear_strength, "stress: bond shear strength (Pa)");

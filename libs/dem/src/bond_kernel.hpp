@@ -1,9 +1,12 @@
 #pragma once
-// The bond loop, compiled per failure criterion and tally flag (bonds.cpp selects).
+// The bond loop, compiled per bond law, failure criterion and tally flag from the registry's
+// lists (law_list.hpp; bonds.cpp selects). The law gives the stiffnesses and the stored energy,
+// the criterion the critical stresses.
 #include <cmath>
 #include <vector>
 
 #include "kernel.hpp"
+#include "law_list.hpp"
 #include "tomodem/dem/bonds.hpp"
 
 namespace tomodem::dem {
@@ -41,7 +44,8 @@ struct BondPair {
   double eta_n, eta_t;
 };
 
-inline BondPair bond_pair(const BondJob& job, const BondSet& B, std::size_t b) {
+template <class Law>
+BondPair bond_pair(const BondJob& job, const BondSet& B, std::size_t b) {
   BondPair p;
   p.i = B.i[b];
   p.j = B.j[b];
@@ -53,7 +57,7 @@ inline BondPair bond_pair(const BondJob& job, const BondSet& B, std::size_t b) {
   p.rj = job.r[j];
   p.a = B.radius[b];
   p.law = &job.laws[job.phase[i] * job.n_phases + job.phase[j]];
-  p.k = bond_stiffness(*p.law, p.a, p.ri, p.rj);
+  p.k = Law::stiffness(*p.law, p.a, p.ri, p.rj);
   const double mstar = job.m[i] * job.m[j] / (job.m[i] + job.m[j]);
   const Vec3 vrel = job.u[j] + job.lh * B.image[b] - job.u[i] - cross(job.omega[j], p.rj * p.n) -
                     cross(job.omega[i], p.ri * p.n);
@@ -71,12 +75,6 @@ inline void rotate_into_plane(Vec3& v, const Vec3& n) {
   v -= dot(v, n) * n;
   const double m1 = norm2(v);
   if (m1 > 0) v *= std::sqrt(m0 / m1);
-}
-
-/// Elastic energy a bond holds in this state, J.
-inline double bond_energy(const BondStiffness& k, double un, const Vec3& fs, double tw, const Vec3& mb) {
-  return 0.5 * k.kn * un * un + (k.kt > 0 ? 0.5 * norm2(fs) / k.kt : 0.0) +
-         (k.ktwist > 0 ? 0.5 * tw * tw / k.ktwist : 0.0) + (k.kbend > 0 ? 0.5 * norm2(mb) / k.kbend : 0.0);
 }
 
 /// A broken bond is an ordinary contact between the two fracture faces: compression when the
@@ -126,12 +124,12 @@ void broken_bond(const BondJob& job, std::size_t b, const BondPair& p, Vec3* f, 
   }
 }
 
-/// Whether an intact bond in state (fn_el, fs, tw, mb) fails under criterion kFail; if so it is
+/// Whether an intact bond in state (fn_el, fs, tw, mb) fails under criterion Failure; if so it is
 /// marked broken, its stored energy released and the event recorded.
-template <BondFailure kFail, bool kTally>
+template <class Law, class Failure, bool kTally>
 bool bond_fails(const BondJob& job, std::size_t b, const BondPair& p, double un, double fn_el, const Vec3& fs,
                 double tw, const Vec3& mb, Tally* tally, std::vector<BondEvent>* events) {
-  if constexpr (kFail == BondFailure::none) {
+  if constexpr (!Failure::kBreaks) {
     return false;
   } else {
     BondSet& B = *job.bonds;
@@ -140,14 +138,14 @@ bool bond_fails(const BondJob& job, std::size_t b, const BondPair& p, double un,
     const double area = M_PI * a * a;
     const double sigma = std::max(-fn_el, 0.0) / area + 4 * norm(mb) / (area * a);
     const double tau = norm(fs) / area + 2 * std::abs(tw) / (area * a);
-    const BondStrength sc = bond_strength(kFail, *p.law, a, p.k);
+    const BondStrength sc = Failure::strength(*p.law, a, p.k);
     const bool t_fail = sigma > sc.tension, s_fail = tau > sc.shear;
     if (!(t_fail || s_fail)) return false;
     B.state[b] = BondSet::broken;
     B.mode[b] = (t_fail && sigma / sc.tension >= tau / sc.shear) ? BondSet::tension : BondSet::shear;
     B.broken_at[b] = job.time;
     // The energy stored in the bond at this state is released (fracture dissipation).
-    const double released = bond_energy(p.k, un, fs, tw, mb);
+    const double released = Law::energy(p.k, un, fs, tw, mb);
     B.shear_force[b] = {0, 0, 0};
     B.twist[b] = 0;
     B.bend[b] = {0, 0, 0};
@@ -159,7 +157,7 @@ bool bond_fails(const BondJob& job, std::size_t b, const BondPair& p, double un,
 
 /// An intact bond: normal force in total form from the rest length (repulsive positive; tension
 /// pulls together), incremental shear force, twisting and bending moments, then the failure test.
-template <BondFailure kFail, bool kTally>
+template <class Law, class Failure, bool kTally>
 void intact_bond(const BondJob& job, std::size_t b, const BondPair& p, Vec3* f, Vec3* torque, Tally* tally,
                  double* stiffness, std::vector<BondEvent>* events) {
   BondSet& B = *job.bonds;
@@ -177,7 +175,7 @@ void intact_bond(const BondJob& job, std::size_t b, const BondPair& p, Vec3* f, 
   Vec3 mb = B.bend[b];
   rotate_into_plane(mb, p.n);
   mb -= (k.kbend * job.dt) * (wrel - wn * p.n);
-  if (bond_fails<kFail, kTally>(job, b, p, un, fn_el, fs, tw, mb, tally, events)) return;
+  if (bond_fails<Law, Failure, kTally>(job, b, p, un, fn_el, fs, tw, mb, tally, events)) return;
   B.shear_force[b] = fs;
   B.twist[b] = tw;
   B.bend[b] = mb;
@@ -191,7 +189,7 @@ void intact_bond(const BondJob& job, std::size_t b, const BondPair& p, Vec3* f, 
   torque[j] += p.rj * c - mt - mb;
   if constexpr (kTally) {
     tally->virial += outer(-fi, p.d);
-    tally->elastic += bond_energy(k, un, fs, tw, mb);
+    tally->elastic += Law::energy(k, un, fs, tw, mb);
     tally->dissipated += (p.eta_n * p.vn * p.vn + p.eta_t * norm2(p.vt)) * job.dt;
     tally->sum_contact_force += norm(fi);
     ++tally->bonds;
@@ -202,16 +200,16 @@ void intact_bond(const BondJob& job, std::size_t b, const BondPair& p, Vec3* f, 
   }
 }
 
-template <BondFailure kFail, bool kTally>
+template <class Law, class Failure, bool kTally>
 void bond_kernel(const BondJob& job, std::size_t begin, std::size_t end, Vec3* f, Vec3* torque, Tally* tally,
                  double* stiffness, std::vector<BondEvent>* events) {
   const BondSet& B = *job.bonds;
   for (std::size_t b = begin; b < end; ++b) {
-    const BondPair p = bond_pair(job, B, b);
+    const BondPair p = bond_pair<Law>(job, B, b);
     if (B.state[b] != BondSet::intact)
       broken_bond<kTally>(job, b, p, f, torque, tally, stiffness);
     else
-      intact_bond<kFail, kTally>(job, b, p, f, torque, tally, stiffness, events);
+      intact_bond<Law, Failure, kTally>(job, b, p, f, torque, tally, stiffness, events);
   }
 }
 

@@ -1,8 +1,10 @@
 #include "tomodem/dem/bonds.hpp"
 
 #include <cmath>
+#include <type_traits>
 
 #include "bond_kernel.hpp"
+#include "tomodem/dem/law_registry.hpp"
 
 namespace tomodem::dem {
 
@@ -29,16 +31,30 @@ std::size_t BondSet::add(int32_t a, int32_t b, const Vec3& image_ab, double r, d
   return i.size() - 1;
 }
 
+namespace {
+template <class Law, class Failure>
+void pick_kernel(BondFailure failure, bool tally, BondKernel& kernel) {
+  if constexpr (!std::is_same_v<Failure, law::End>)
+    if (!kernel && Failure::kId == failure)
+      kernel = tally ? &detail::bond_kernel<Law, Failure, true> : &detail::bond_kernel<Law, Failure, false>;
+}
+template <class Law, class... Failure>
+BondKernel pick_kernel(law::List<Failure...>, BondFailure failure, bool tally) {
+  BondKernel kernel = nullptr;
+  (pick_kernel<Law, Failure>(failure, tally, kernel), ...);
+  return kernel;
+}
+template <class Law, class... Rest>
+constexpr Law* first_law(law::List<Law, Rest...>) { return nullptr; }
+using TheBondLaw = std::remove_pointer_t<decltype(first_law(law::BondLaws{}))>;
+}  // namespace
+
 BondKernel select_bond_kernel(BondFailure failure, bool tally) {
-  switch (failure) {
-    case BondFailure::none:
-      return tally ? &detail::bond_kernel<BondFailure::none, true> : &detail::bond_kernel<BondFailure::none, false>;
-    case BondFailure::stress:
-      return tally ? &detail::bond_kernel<BondFailure::stress, true> : &detail::bond_kernel<BondFailure::stress, false>;
-    case BondFailure::lefm:
-      return tally ? &detail::bond_kernel<BondFailure::lefm, true> : &detail::bond_kernel<BondFailure::lefm, false>;
-  }
-  return nullptr;
+  return pick_kernel<TheBondLaw>(law::BondFailures{}, failure, tally);
+}
+
+BondStrength bond_strength(BondFailure failure, const BondLaw& law, double a, const BondStiffness& k) {
+  return bond_failure_info(failure).strength(law, a, k);
 }
 
 }  // namespace tomodem::dem

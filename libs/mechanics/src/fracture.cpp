@@ -11,6 +11,7 @@
 
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/tool.hpp"
+#include "tomodem/dem/law_registry.hpp"
 #include "tomodem/spatial/clusters.hpp"
 
 namespace tomodem::mechanics {
@@ -228,37 +229,46 @@ double dlnK_da(CrackGeometry geometry, double a, double W) {
   return 1 / (2 * a) + dlnY / W;
 }
 
+std::string to_string_criterion(dem::BondFailure f) { return dem::bond_failure_info(f).key; }
+
+namespace {
+/// The options as registry settings; "given": not left at FailureOptions' default.
+std::vector<dem::BondSetting> failure_settings(const FailureOptions& f) {
+  const FailureOptions d;
+  const auto given = [](double v, double fallback) { return !(v == fallback); };  // NaN counts as given
+  return {{"tensile_strength", f.tensile_strength, given(f.tensile_strength, d.tensile_strength)},
+          {"shear_strength", f.shear_strength, given(f.shear_strength, d.shear_strength)},
+          {"fracture_energy", f.fracture_energy, given(f.fracture_energy, d.fracture_energy)},
+          {"friction", f.friction, given(f.friction, d.friction)}};
+}
+}  // namespace
+
+void check_failure_options(const FailureOptions& f) {
+  const dem::BondFailureInfo& c = dem::bond_failure_info(f.criterion);
+  if (!c.breaks)
+    throw InputError("", "--criterion", c.key, "a fracture test needs bonds that break; expected " +
+                                                   dem::bond_failure_names(true));
+  dem::check_bond_settings(c, failure_settings(f));
+}
+
 void set_failure(std::vector<dem::BondLaw>& laws, const Packing& p, const FailureOptions& f, const std::string& file) {
+  check_failure_options(f);
+  const dem::BondFailureInfo& c = dem::bond_failure_info(f.criterion);
   const std::size_t n = p.materials.size();
-  if (f.criterion == dem::BondFailure::stress) {
-    if (!(f.tensile_strength > 0) || !std::isfinite(f.tensile_strength))
-      throw InputError("", "--tensile-strength", num(f.tensile_strength),
-                       "the stress criterion needs the tensile strength of the bonds (Pa, > 0)");
-    if (!(f.shear_strength > 0) || !std::isfinite(f.shear_strength))
-      throw InputError("", "--shear-strength", num(f.shear_strength),
-                       "the stress criterion needs the shear strength of the bonds (Pa, > 0)");
-  } else if (f.criterion == dem::BondFailure::lefm) {
-    if (!(f.fracture_energy >= 0) || !std::isfinite(f.fracture_energy))
-      throw InputError("", "--fracture-energy", num(f.fracture_energy), "must be >= 0 (0: from the materials)");
-    if (f.fracture_energy == 0)
-      for (std::size_t k = 0; k < n; ++k)
-        if (!(p.materials[k].surface_energy > 0))
-          throw InputError(file, "/materials/" + std::to_string(k) + " (" + p.materials[k].name + ")@surface_energy_J_per_m2",
-                           num(p.materials[k].surface_energy),
-                           "the LEFM criterion needs the fracture energy Γ = 2γ_s: give --fracture-energy or a "
-                           "surface energy > 0 for every material");
-  } else {
-    throw InputError("", "--criterion", "none", "a failure criterion is needed");
-  }
-  if (!(f.friction >= 0)) throw InputError("", "--friction", num(f.friction), "must be >= 0");
+  const bool gamma_from_materials = c.needs_surface_energy && f.fracture_energy == 0;
+  if (gamma_from_materials)
+    for (std::size_t k = 0; k < n; ++k)
+      if (!(p.materials[k].surface_energy > 0))
+        throw InputError(file, "/materials/" + std::to_string(k) + " (" + p.materials[k].name + ")@surface_energy_J_per_m2",
+                         num(p.materials[k].surface_energy),
+                         "the " + c.key + " criterion needs the fracture energy Γ = 2γ_s: give --fracture-energy or a "
+                         "surface energy > 0 for every material");
+  const std::vector<dem::BondSetting> settings = failure_settings(f);
   for (std::size_t a = 0; a < n; ++a)
     for (std::size_t b = 0; b < n; ++b) {
       dem::BondLaw& l = laws[a * n + b];
-      l.tensile_strength = f.tensile_strength;
-      l.shear_strength = f.shear_strength;
-      l.fracture_energy =
-          f.fracture_energy > 0 ? f.fracture_energy : p.materials[a].surface_energy + p.materials[b].surface_energy;
-      l.friction = f.friction;
+      dem::apply_bond_settings(c, settings, l);
+      if (gamma_from_materials) l.fracture_energy = p.materials[a].surface_energy + p.materials[b].surface_energy;
     }
 }
 

@@ -247,10 +247,8 @@ FailureOptions check_fracture_options(const FractureConfig& c) {
   FailureOptions fo = c.failure;
   require_range("--stop-fraction", c.stop_fraction, 0, false, 1, true, "of the peak load");
   // Every option is checked whatever the method and criterion: out of range is refused, never ignored.
-  require_non_negative("--fracture-energy", fo.fracture_energy, "J/m^2; 0: from the materials");
-  require_non_negative("--tensile-strength", fo.tensile_strength, "Pa");
-  require_non_negative("--shear-strength", fo.shear_strength, "Pa");
-  require_non_negative("--friction", fo.friction, "Coulomb friction coefficient");
+  // The criterion's parameters from the registry: one it does not take is refused, not ignored.
+  check_failure_options(fo);
   {
     const bool centre = c.crack.geometry == CrackGeometry::centre;
     const double a = c.crack.a_over_w, amax = centre ? 0.5 : 1;

@@ -10,6 +10,7 @@
 #include "tomodem/core/h5.hpp"
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/packing_io.hpp"
+#include "tomodem/dem/law_registry.hpp"
 
 namespace tomodem::mechanics {
 
@@ -66,6 +67,17 @@ void write_network(const std::string& path, const Network& net) {
   write_xdmf_sidecar(path, net.packing.particles.size(), !net.packing.particles.velocity.empty(), net.packing.bonds.size());
 }
 
+namespace {
+/// The bond law of the mechanics tools (the registry's, dem/law_registry.hpp).
+const dem::BondLawInfo& bond_law_entry() { return dem::parse_bond_law("parallel", "", "bond law"); }
+/// LawOptions as registry settings: each always has a value, and each is checked.
+std::vector<dem::BondSetting> law_settings(const LawOptions& o) {
+  return {{"g_n_coefficient", o.g_n_coefficient, true},
+          {"g_t_coefficient", o.g_t_coefficient, true},
+          {"damping_ratio", o.damping_ratio, true}};
+}
+}  // namespace
+
 std::vector<dem::BondLaw> bond_laws(const Packing& p, const std::string& file, const LawOptions& o,
                                     bool need_density) {
   const std::size_t n = p.materials.size();
@@ -96,9 +108,7 @@ std::vector<dem::BondLaw> bond_laws(const Packing& p, const std::string& file, c
       l.E_star = 1 / ((1 - A.poisson_ratio * A.poisson_ratio) / A.youngs_modulus +
                       (1 - B.poisson_ratio * B.poisson_ratio) / B.youngs_modulus);
       l.G_star = o.shear ? 1 / ((2 - A.poisson_ratio) / Ga + (2 - B.poisson_ratio) / Gb) : 0;
-      l.g_n_coefficient = o.g_n_coefficient;
-      l.g_t_coefficient = o.g_t_coefficient;
-      l.damping_ratio = o.damping_ratio;
+      dem::apply_bond_settings(bond_law_entry(), law_settings(o), l);
     }
   return laws;
 }
@@ -110,10 +120,7 @@ void check_material_overrides(const std::optional<double>& youngs_modulus, const
   if (density) require_positive("--density", *density, "kg/m^3");
 }
 
-void check_law_options(const LawOptions& o) {
-  require_non_negative("--gn-coefficient", o.g_n_coefficient, "g_n = 1 + c (a/R)^2");
-  require_non_negative("--gt-coefficient", o.g_t_coefficient, "g_t = 1 + c (a/R)^2");
-}
+void check_law_options(const LawOptions& o) { dem::check_bond_settings(bond_law_entry(), law_settings(o)); }
 
 void override_materials(Packing& p, const std::optional<double>& youngs_modulus,
                         const std::optional<double>& poisson_ratio, const std::optional<double>& density) {

@@ -53,18 +53,10 @@ inline BondStiffness bond_stiffness(const BondLaw& law, double a, double ri, dou
 struct BondStrength {
   double tension, shear;
 };
-/// Stress criterion: the given strengths. LEFM (Jauffrès et al. 2012, docs/fracture.md): the neck
-/// is a circular ligament whose compliance 1/k gives the energy release rate G = (F²/2) dC/dA
-/// (dA = −2πa da, g held fixed); G = Γ gives F_c² = 8π E* g_n a³ Γ, i.e. σ_c = 2 sqrt(2E* Γ g_n/(π a)) and
-/// τ_c = 2 sqrt(8G* Γ g_t/(π a)) (for g = 1 the first is Tada's external circular crack,
-/// K_I = F/(2a sqrt(πa)) = K_IC): smaller necks are stronger in stress.
-inline BondStrength bond_strength(BondFailure failure, const BondLaw& law, double a, const BondStiffness& k) {
-  if (failure == BondFailure::lefm)
-    return {2 * std::sqrt(2 * law.E_star * law.fracture_energy * k.gn / (M_PI * a)),
-            2 * std::sqrt(8 * law.G_star * law.fracture_energy * k.gt / (M_PI * a))};
-  if (failure == BondFailure::stress) return {law.tensile_strength, law.shear_strength};
-  return {HUGE_VAL, HUGE_VAL};
-}
+/// The critical stresses of a bond under `failure` (HUGE_VAL for none): each criterion's own
+/// formula (src/laws/bond_failure_*.hpp, through the registry); the DEM bond loop calls the
+/// same functions, compiled in.
+BondStrength bond_strength(BondFailure failure, const BondLaw& law, double a, const BondStiffness& k);
 
 /// Bonds as structure of arrays, i < j; `image` is the periodic image of j seen from i
 /// (integer cell vectors) and follows the particles when they are wrapped into the cell.

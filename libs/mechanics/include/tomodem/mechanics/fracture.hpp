@@ -63,13 +63,9 @@ double geometry_factor(CrackGeometry geometry, double a_over_w);
 /// d ln(K)/d a at fixed stress (for the crack-length uncertainty of K_IC).
 double dlnK_da(CrackGeometry geometry, double a, double W);
 
-/// The failure criteria a fracture test takes (dem::BondFailure::none is no test).
-inline constexpr NameTable<dem::BondFailure, 2> kFailureCriterionNames = {
-    {{dem::BondFailure::lefm, "lefm"}, {dem::BondFailure::stress, "stress"}}};
-inline const char* to_string_criterion(dem::BondFailure f) { return name_of(kFailureCriterionNames, f); }
-inline std::optional<dem::BondFailure> parse_failure_criterion(std::string_view name) {
-  return value_of(kFailureCriterionNames, name);
-}
+/// The failure criteria a fracture test takes are the registry's that break bonds
+/// (dem::bond_failure_names(true), dem::parse_bond_failure(name, file, field, true)); the name of one:
+std::string to_string_criterion(dem::BondFailure f);
 
 /// Bond strengths: the criterion and its parameters (per phase pair they come from the laws).
 struct FailureOptions {
@@ -78,6 +74,10 @@ struct FailureOptions {
   double fracture_energy = 0;                       ///< J/m² (LEFM; 0: γ_i + γ_j from the materials)
   double friction = 0.5;                            ///< μ between the faces of broken bonds (explicit)
 };
+/// Checks the options against the criterion's registry entry (dem/law_registry.hpp): a strength
+/// or energy the criterion does not take is refused with the keys it takes, a value out of its
+/// range too (InputError naming the option, exit 2).
+void check_failure_options(const FailureOptions& f);
 /// Fills the failure fields of the laws; InputError naming the file/option for a missing strength.
 void set_failure(std::vector<dem::BondLaw>& laws, const Packing& p, const FailureOptions& f, const std::string& file);
 
