@@ -3,3 +3,8 @@ tomodem_mpi_test(dem_decomposition_tests
   SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/dem/test_decomposition.cpp
   LIBS tomodem_dem
   RANKS 1 2 3 4)
+
+# Scene A timings on ranks and threads (not a test; numbers for docs/scaling.md).
+add_executable(dem_decomposition_bench ${CMAKE_CURRENT_SOURCE_DIR}/dem/bench_decomposed.cpp)
+target_link_libraries(dem_decomposition_bench PRIVATE tomodem_dem tomodem_mpi)
+add_dependencies(tomodem_mpi_tests dem_decomposition_bench)
