@@ -41,13 +41,16 @@ int main(int argc, char** argv) {
     app.add_option("--ionic", c.ionic, "composite electrode: ionic phases")->delimiter(',');
     app.add_option("--charge-transfer", c.charge_transfer,
                    "composite electrode: charge-transfer conductance per TPB length (S/m)");
-    app.add_option("--voxel-check", c.voxel, "voxel cross-check at these resolutions (voxels along the longest edge)")
+    std::vector<std::string> voxel;
+    app.add_option("--voxel-check", voxel,
+                   "voxel cross-check at these resolutions: voxels along the longest edge (16,32,64) or per mean diameter (16d,32d,64d)")
         ->delimiter(',');
     tomodem::cli::Common common;
     tomodem::cli::add_common(app, "tomodem-conduct", common);
     if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
     if (c.preconditioner == "petsc") tomodem::require_petsc("--preconditioner");
     c.json = common.json;
+    tomodem::network::parse_voxel_resolutions(voxel, c);
     c.bonds = !no_bonds;
     c.contacts = !no_contacts;
     if (common.threads > 0) omp_set_num_threads(common.threads);

@@ -256,7 +256,9 @@ void check_packing_options(const ConductConfig& c) {
     throw InputError("", "--charge-transfer", value_text(c.charge_transfer),
                      "applies to a composite electrode: give --electronic and --ionic too");
   for (int res : c.voxel)
-    if (res < 2) throw InputError("", "--voxel-check", std::to_string(res), "need at least 2 voxels along the longest edge");
+    if (res < 2)
+      throw InputError("", "--voxel-check", std::to_string(res) + (c.voxel_per_diameter ? "d" : ""),
+                       c.voxel_per_diameter ? "need at least 2 voxels per diameter" : "need at least 2 voxels along the longest edge");
   check_outputs({c.input}, {{"-o", c.output}, {"-o (its .xdmf sidecar)", c.output.empty() ? "" : xdmf_sidecar_of(c.output)},
                           {"--json", c.json}});
 }
@@ -348,19 +350,28 @@ json voxel_check(const ConductConfig& c, const Packing& pk, const Network& net, 
     VoxelOptions vo;
     vo.axis = axis;
     vo.resolution = res;
+    vo.per_diameter = c.voxel_per_diameter;
+    vo.bonds = c.bonds;
     vo.phases = c.phases;
     vo.solver = co.solver;
     vo.source = c.input;
     vo.neck_radii = net.contact_radius;
+    for (std::size_t e = 0; e < net.n_edges(); ++e) {
+      const double ri = net.radius[net.graph.i[e]], rj = net.radius[net.graph.j[e]];
+      vo.neck_reduced_radii.push_back(ri * rj / (ri + rj));
+    }
     last = voxel_conductivity(pk, vo);
     const VoxelResult& r = last;
     s.push_back(r.sigma_eff);
     vx.push_back({{"resolution", res},
                   {"grid", {r.nx, r.ny, r.nz}},
+                  {"voxels_per_longest_edge", r.resolution_per_longest_edge},
                   {"voxel_size_m", r.voxel_size},
                   {"voxels_per_diameter", r.voxels_per_diameter},
                   {"neck_min_voxels", r.neck_min_voxels},
                   {"neck_median_voxels", r.neck_median_voxels},
+                  {"neck_resolution_min", r.neck_resolution_min},
+                  {"neck_resolution_median", r.neck_resolution_median},
                   {"solid_fraction", r.solid_fraction},
                   {"sigma_eff", r.sigma_eff},
                   {"percolates", r.percolates},
@@ -368,16 +379,24 @@ json voxel_check(const ConductConfig& c, const Packing& pk, const Network& net, 
                   {"solver", solver_json(r.solver)},
                   {"wall_time_s", r.wall_time_s}});
   }
-  json out = {{"axis", kAxis[axis]}, {"runs", vx}, {"sigma_eff_per_resolution", s}, {"resolutions", c.voxel}};
+  json out = {{"axis", kAxis[axis]},
+              {"runs", vx},
+              {"sigma_eff_per_resolution", s},
+              {"resolutions", c.voxel},
+              {"resolution_unit", c.voxel_per_diameter ? "voxels per mean diameter" : "voxels along the longest edge"},
+              {"rasterisation", "partial volume, 4x4x4 samples in voxels cut by a surface; bonds as cylinders of radius a_b"},
+              {"neck_resolution_needed", kNeckResolution}};
   std::vector<std::string> problems;
   // Of the finest grid (the last one given).
   if (!last.necks_resolved) {
-    char msg[400];
+    char msg[560];
     std::snprintf(msg, sizeof msg,
-                  "the voxel grid does not resolve the necks: the smallest neck radius is %.2g voxels on the finest "
-                  "grid (need >= %.0f); --voxel-check must reach %ld voxels per longest edge for the smallest neck, %ld for "
-                  "the median one; until then the voxel answer is not converged",
-                  last.neck_min_voxels, kNeckVoxels, long(last.required_resolution_min), long(last.required_resolution_median));
+                  "the voxel grid does not resolve the necks: the median neck has a^2/(R* h) = %.2g on the finest grid "
+                  "(a %.2g voxels across; need >= %.0f: the gap beside a neck is thinner than a voxel out to "
+                  "sqrt(a^2 + 2 R* h), which the image fills); --voxel-check must reach %ld%s for the median neck (%ld for "
+                  "the smallest); until then the voxel answer is not converged",
+                  last.neck_resolution_median, last.neck_median_voxels, kNeckResolution, long(last.required_resolution_median),
+                  c.voxel_per_diameter ? " voxels per diameter" : " voxels per longest edge", long(last.required_resolution_min));
     problems.push_back(msg);
   }
   if (s.size() >= 3) {
@@ -426,6 +445,27 @@ std::string parameters_text(const ConductConfig& c) {
 }
 }  // namespace
 
+void parse_voxel_resolutions(const std::vector<std::string>& values, ConductConfig& c) {
+  std::string all;
+  for (const auto& v : values) all += (all.empty() ? "" : ",") + v;
+  c.voxel.clear();
+  int suffixed = 0;
+  for (const auto& v : values) {
+    const bool d = !v.empty() && (v.back() == 'd' || v.back() == 'D');
+    const std::string digits = d ? v.substr(0, v.size() - 1) : v;
+    char* end = nullptr;
+    const long n = std::strtol(digits.c_str(), &end, 10);
+    if (digits.empty() || *end != '\0' || n > 1000000000L)
+      throw InputError("", "--voxel-check", all,
+                       "'" + v + "' is not a whole number of voxels along the longest edge (64) or per diameter (8d)");
+    c.voxel.push_back(static_cast<int>(n));
+    suffixed += d;
+  }
+  if (suffixed != 0 && suffixed != static_cast<int>(values.size()))
+    throw InputError("", "--voxel-check", all, "give every resolution per diameter (8d,16d,32d) or none");
+  c.voxel_per_diameter = suffixed > 0;
+}
+
 std::string run_conduct(const ConductConfig& c) {
   if (!c.image.empty()) return run_image_conduct(c);
   check_packing_options(c);
@@ -437,6 +477,8 @@ std::string run_conduct(const ConductConfig& c) {
   for (int res : c.voxel) {  // before the network solve: an impossible grid stops the run now
     VoxelOptions vo;
     vo.resolution = res;
+    vo.per_diameter = c.voxel_per_diameter;
+    vo.phases = c.phases;
     vo.source = c.input;
     check_voxel_grid(pk, vo);
   }

@@ -89,6 +89,9 @@ const std::vector<Case> kCases = {
     // ---- options
     {"voxel_resolution_huge", "conduct", L + " --voxel-check 100000", 2, {"--voxel-check", "100000", "would need", "this machine has"}},
     {"voxel_resolution_one", "conduct", L + " --voxel-check 1", 2, {"--voxel-check", "1"}},
+    {"voxel_resolution_mixed_units", "conduct", L + " --voxel-check 8d,16", 2, {"--voxel-check", "8d,16", "per diameter"}},
+    {"voxel_resolution_not_a_number", "conduct", L + " --voxel-check 8x", 2, {"--voxel-check", "8x"}},
+    {"voxel_resolution_one_per_diameter", "conduct", L + " --voxel-check 1d", 2, {"--voxel-check", "1d"}},
     {"electrode_tolerance_nan", "conduct", L + " --electrode-tolerance nan", 2, {"--electrode-tolerance", "nan"}},
     {"gap_tolerance_negative", "conduct", L + " --gap-tolerance -0.5", 2, {"--gap-tolerance", "-0.5"}},
     {"min_contact_ratio_two", "conduct", L + " --min-contact-ratio 2", 2, {"--min-contact-ratio", "2"}},

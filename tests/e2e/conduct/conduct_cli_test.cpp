@@ -115,6 +115,13 @@ TEST_F(ConductCli, CompositeAndVoxelSections) {
   EXPECT_FALSE(s["composite"]["percolates"].get<bool>());
   EXPECT_EQ(s["voxel"]["runs"].size(), 3u);
   EXPECT_TRUE(s["voxel"].contains("extrapolated_sigma_eff"));
+  // Per diameter (R = 5 µm spheres, 5 along x): 4 voxels per diameter is 20 along the 50 µm edge.
+  const CliResult d = run(in + " --voxel-check 2d,4d --json " + path("d.json") + " --quiet");
+  ASSERT_EQ(d.code, 0) << d.err;
+  const auto sd = summary(path("d.json"));
+  EXPECT_EQ(sd["voxel"]["resolution_unit"], "voxels per mean diameter");
+  EXPECT_EQ(sd["voxel"]["runs"][1]["voxels_per_longest_edge"].get<int>(), 20);
+  EXPECT_NEAR(sd["voxel"]["runs"][1]["voxels_per_diameter"].get<double>(), 4.0, 1e-9);
 }
 
 // The worked example of docs/conduct.md, command for command, on the example data shipped in
@@ -135,13 +142,24 @@ TEST_F(ConductCli, DocsWorkedExampleRuns) {
   r = run(in + " --phases LSM --bc periodic --json " + path("periodic.json"));
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_EQ(summary(path("periodic.json"))["sigma_tensor"].size(), 3u);
-  r = run(in + " --phases LSM --axis z --electronic LSM --ionic YSZ --charge-transfer 1e3 --voxel-check 16,32,64 --json " +
+  r = run(in + " --phases LSM --axis z --electronic LSM --ionic YSZ --charge-transfer 1e3 --voxel-check 2d,4d,8d --json " +
           path("composite.json"));
   ASSERT_EQ(r.code, 0) << r.err;
   const auto c = summary(path("composite.json"));
   EXPECT_TRUE(c["composite"]["percolates"].get<bool>());
   EXPECT_GT(c["composite"]["resistance_ohm"].get<double>(), 0.0);
   EXPECT_EQ(c["voxel"]["runs"].size(), 3u);
+  // The necks (median a/R ≈ 0.18) are not resolved at 8 voxels per diameter: the summary says so
+  // and asks for more (q = a²/(R* h) >= 4 needs ~128 per diameter); the answers fall monotonically
+  // (partial volumes) towards the network instead of jumping (153, 359, 267 S/m before issue 20).
+  const auto& v = c["voxel"];
+  EXPECT_FALSE(v["necks_resolved"].get<bool>());
+  EXPECT_TRUE(v["warning"].get<bool>());
+  EXPECT_GT(v["required_resolution_median_neck"].get<long>(), 8);
+  const auto sv = v["sigma_eff_per_resolution"];
+  EXPECT_GT(sv[0].get<double>(), sv[1].get<double>());
+  EXPECT_GT(sv[1].get<double>(), sv[2].get<double>());
+  EXPECT_GT(v["observed_order"].get<double>(), 0.5);
 }
 
 TEST_F(ConductCli, UnknownPhaseExitsTwoWithoutOutput) {

@@ -45,8 +45,9 @@ TEST(Voxel, UniformMediumIsExact) {
 // grid (differences shrink), and the network (Holm constrictions, geometric neck radius) agrees
 // with the extrapolated voxel answer within the model error stated in docs/conduct.md: Holm's
 // 1/(2σa) ignores the resistance of the particle bodies and the finite size of the necks, which
-// for necks of a/R ≈ 0.3–0.5 is a 10–30 % effect. This sample gives +10 % (network 0.567,
-// voxel 0.647 / 0.537 / 0.518 at 16 / 32 / 64 voxels, extrapolated 0.514 S/m); we assert 25 %.
+// for necks of a/R ≈ 0.3–0.5 is a 10–40 % effect. This sample gives +8 % (network 0.567,
+// voxel 0.672 / 0.593 / 0.557 at 16 / 32 / 64 voxels, partial volumes, extrapolated 0.526 S/m,
+// order 1.1); we assert 25 %.
 TEST(Voxel, NetworkAndVoxelAgreeWithinModelErrorAndConverge) {
   const Packing p = jittered(42);
   const Network net = build_network(p, NetworkOptions{});
@@ -65,12 +66,15 @@ TEST(Voxel, NetworkAndVoxelAgreeWithinModelErrorAndConverge) {
     s.push_back(v.sigma_eff);
   }
   EXPECT_LT(std::abs(s[2] - s[1]), std::abs(s[1] - s[0])) << s[0] << " " << s[1] << " " << s[2];
+  EXPECT_GT(s[0], s[1]);  // partial volumes bridge the gaps beside the necks: from above
+  EXPECT_GT(s[1], s[2]);
   double order = 0, err = 0;
   const double ext = richardson(s[0], s[1], s[2], 2.0, &order, &err);
   RecordProperty("network", std::to_string(a.sigma_eff));
   RecordProperty("voxel_extrapolated", std::to_string(ext));
   std::printf("network %.5g voxel %.5g %.5g %.5g extrapolated %.5g (order %.2f)\n", a.sigma_eff, s[0], s[1], s[2],
               ext, order);
+  EXPECT_GT(order, 0.5);
   EXPECT_NEAR(a.sigma_eff, ext, 0.25 * ext);
 }
 
@@ -80,17 +84,15 @@ TEST(Voxel, NetworkAndVoxelAgreeWithinModelErrorAndConverge) {
 // normal to the axis are the neck planes, equipotential by symmetry; the others carry no flux),
 // so the voxel cross-check solves that cube; the network is a two-sphere chain with one neck
 // (Holm: G = 2σa, L = 2, A = 4, σ_net = σa). Grids of 16, 32, 64, 128 voxels per cube edge
-// (18–143 voxels per diameter; the neck radius a = 0.5 spans 4–32 voxels).
-// Measured: 0.48955, 0.47802, 0.47272, 0.47378; Richardson of 16/32/64: 0.46822, order 1.12.
-// Centre sampling puts the narrowest voxel layer h/2 off the neck plane, so the imaged neck is
-// a² + O(R h): first order, with a staircase oscillation once the error is ~1 % (the 128 grid
-// lies above 64). Asserted: observed order > 0.5 on 16/32/64, the extrapolation agrees with the
-// 128 grid within its own error estimate + 1 %, and the network lies within the Holm model
-// error of the extrapolation: Holm's 1/(2σa) is the small-neck limit and ignores the sphere
-// bodies, so for a/R = 0.45 the network is above the voxel answer (measured +7 %); we assert
-// above, by at most 35 % (the bound stated in docs/conduct.md for a/R <= 0.5 is 25 %).
-// A smaller neck (a = 0.25) does not converge on these grids (order 0 on 16/32/64): h must be
-// well below a²/R, not just below a.
+// (18–143 voxels per diameter; the neck radius a = 0.5 spans 4–32 voxels, q = a²/(R* h) =
+// 4.5–36 with R* = Rs/2). Measured with partial volumes: 0.51039, 0.49082, 0.48136, 0.47721,
+// monotone from above; Richardson of 16/32/64: 0.47250, order 1.05; of 32/64/128: 0.47398, order
+// 1.19 (centre sampling gave 0.4896, 0.4780, 0.4727, 0.4738: the 128 grid rose again). Asserted:
+// monotone, observed order 0.7–1.5 on both triples (first order: the imaged neck is widened by
+// O(R*h/a²)), the two extrapolations agree within the error estimate of the first, and the network
+// lies within the Holm model error of the extrapolation: Holm's 1/(2σa) is the small-neck limit
+// and ignores the sphere bodies, so for a/R = 0.45 the network is above the voxel answer
+// (measured +6 %); we assert above, by at most 35 %.
 TEST(Voxel, SimpleCubicNeckLatticeConvergesAndHolmIsWithinModelError) {
   const double a = 0.5, Rs = std::sqrt(1.0 + a * a);
   Packing chain = test::sc_lattice(2, 1, 1, 1.0, a, false);
@@ -109,11 +111,13 @@ TEST(Voxel, SimpleCubicNeckLatticeConvergesAndHolmIsWithinModelError) {
     o.resolution = res;
     o.solver.tolerance = 1e-10;
     o.neck_radii = {a};
+    o.neck_reduced_radii = {Rs / 2};
     const VoxelResult v = voxel_conductivity(cell, o);
     ASSERT_TRUE(v.percolates);
     EXPECT_LT(v.conservation_error, 1e-6);
     EXPECT_NEAR(v.neck_min_voxels, a * res / 2.0, 1e-12);
-    EXPECT_EQ(v.necks_resolved, a * res / 2.0 >= kNeckVoxels);
+    EXPECT_NEAR(v.neck_resolution_median, a * a / (Rs / 2) * res / 2.0, 1e-9);
+    EXPECT_EQ(v.necks_resolved, a * a / (Rs / 2) * res / 2.0 >= kNeckResolution);
     s.push_back(v.sigma_eff);
   }
   double p1 = 0, e1 = 0, p2 = 0, e2 = 0;
@@ -121,8 +125,122 @@ TEST(Voxel, SimpleCubicNeckLatticeConvergesAndHolmIsWithinModelError) {
   const double x2 = richardson(s[1], s[2], s[3], 2.0, &p2, &e2);
   std::printf("network %.5g voxel %.5g %.5g %.5g %.5g; extrapolated %.5g (order %.2f) %.5g (order %.2f)\n", an.sigma_eff,
               s[0], s[1], s[2], s[3], x1, p1, x2, p2);
-  EXPECT_GT(p1, 0.5);
-  EXPECT_NEAR(x1, s[3], e1 + 0.01 * s[3]);
-  EXPECT_NEAR(an.sigma_eff, x1, 0.35 * x1);
-  EXPECT_GT(an.sigma_eff, x1);
+  for (int k = 0; k < 3; ++k) EXPECT_GT(s[k], s[k + 1]) << k;
+  EXPECT_GT(p1, 0.7);
+  EXPECT_LT(p1, 1.5);
+  EXPECT_GT(p2, 0.7);
+  EXPECT_LT(p2, 1.5);
+  EXPECT_NEAR(x1, x2, e1);
+  EXPECT_NEAR(an.sigma_eff, x2, 0.35 * x2);
+  EXPECT_GT(an.sigma_eff, x2);
+}
+
+// Partial volumes against an exact volume: touching spheres on a simple cubic lattice fill π/6
+// of space. A 3×3×3 periodic lattice at 16 voxels per diameter (4³ samples in each voxel cut by
+// a sphere: 64 samples per diameter). The sampled volume of a sphere is a lattice-point count,
+// whose relative error falls faster than 1/(samples per diameter) = 1.6 %; measured 1e-4; 1e-3
+// asserted. A box filled by one sphere is exactly 1.
+TEST(Voxel, PartialVolumesGiveTheSolidFractionOfTouchingSpheres) {
+  const double pi = 3.14159265358979323846;
+  Packing p = test::sc_lattice(3, 3, 3, 1.0, 0.5, true);
+  VoxelOptions o;
+  o.resolution = 16;
+  o.per_diameter = true;
+  o.bonds = false;
+  const VoxelResult v = voxel_conductivity(p, o);
+  EXPECT_EQ(v.nx, 48);
+  EXPECT_NEAR(v.voxels_per_diameter, 16.0, 1e-12);
+  EXPECT_NEAR(v.solid_fraction, pi / 6, 1e-3);
+  Packing full = test::sc_lattice(1, 1, 1, 1.0, 0.5, false);
+  full.bonds = BondTable{};
+  full.particles.radius[0] = 2.0;  // covers [0, 2]³
+  o.per_diameter = false;
+  EXPECT_DOUBLE_EQ(voxel_conductivity(full, o).solid_fraction, 1.0);
+}
+
+namespace {
+// One period of the simple cubic lattice of touching spheres (radius R = 1, spacing 2) joined by
+// bonds of radius a_b: the cube [0, 2]³ holding one sphere, and the six neighbours outside it so
+// that the bonds run to the faces (the rasteriser clips them at the box). Along x the faces are
+// neck planes (equipotential by symmetry), the others symmetry planes (no flux): the voxel
+// answer of this cube is the infinite lattice's. Network of the lattice (Holm): each bond 2σa_b,
+// a chain of period 2 through a cross-section 4: σ_net = σ a_b exactly.
+Packing bonded_cell(double ab) {
+  Packing p;
+  p.cell = Cell::box({0, 0, 0}, {2, 2, 2}, false);
+  p.particles.resize(7);
+  p.particles.position[0] = {1, 1, 1};
+  for (int k = 0; k < 6; ++k) {
+    Vec3 x(1, 1, 1);
+    x[k / 2] += k % 2 ? 2.0 : -2.0;
+    p.particles.position[k + 1] = x;
+    p.bonds.i.push_back(0);
+    p.bonds.j.push_back(k + 1);
+    p.bonds.radius.push_back(ab);
+    p.bonds.rest_length.push_back(2);
+    p.bonds.state.push_back(BondTable::intact);
+    p.bonds.broken_at.push_back(0.0);
+  }
+  for (std::size_t k = 0; k < 7; ++k) {
+    p.particles.radius[k] = 1.0;
+    p.particles.phase[k] = 0;
+  }
+  p.materials.resize(1);
+  p.materials[0].name = "A";
+  p.materials[0].conductivity = 1.0;
+  return p;
+}
+}  // namespace
+
+// The bonded packing of issue 20 item 3: touching spheres joined by bonds (the image holds a
+// cylinder of radius a_b for each bond: the neck the network gives it) at 16, 32, 64, 128 voxels
+// per diameter. Measured (σ = 1):
+//   a_b = 0.5 R:  0.35516 0.35884 0.36119 0.36225  (q = a²/(R*h) = 4, 8, 16, 32)
+//   a_b = 0.25 R: 0.25854 0.20996 0.19330 0.19432  (q = 1, 2, 4, 8)
+// Independent numbers: (1) the network's Holm value σa_b is an upper bound (a disc between two
+// half-spaces is less constricted than the bond between two spheres: Rayleigh monotonicity);
+// (2) a series estimate, Holm plus the bond cylinder over the gap ℓ = 2(R − sqrt(R² − a²)) it
+// bridges, 1/G = 1/(2σa) + ℓ/(σπa²), σ = G/2: 0.373 and 0.215, which the converged voxel answers
+// match within 3 % and 10 % (the estimate ignores the spreading inside the cylinder). Asserted:
+// a_b = 0.5: monotone on 32/64/128 (q ≥ 8) with order 0.7–1.6, within 1 % of its extrapolation
+// at 128; a_b = 0.25: the grids with q ≥ 4 agree within 1 % and q = 1 is > 20 % off (the threshold
+// kNeckResolution = 4); both below σa_b and within 15 % of the series estimate. Network model error
+// against the converged voxel answer: +38 % (a_b = 0.5) and +29 % (a_b = 0.25).
+TEST(Voxel, BondedLatticeConvergesAndTheNetworkErrorIsMeasured) {
+  for (double ab : {0.5, 0.25}) {
+    const Packing p = bonded_cell(ab);
+    std::vector<double> s, q;
+    for (int res : {16, 32, 64, 128}) {
+      VoxelOptions o;
+      o.resolution = res;
+      o.per_diameter = true;
+      o.solver.tolerance = 1e-10;
+      o.neck_radii = {ab};
+      o.neck_reduced_radii = {0.5};
+      const VoxelResult v = voxel_conductivity(p, o);
+      ASSERT_TRUE(v.percolates);
+      EXPECT_LT(v.conservation_error, 1e-6);
+      s.push_back(v.sigma_eff);
+      q.push_back(v.neck_resolution_median);
+    }
+    double order = 0, err = 0;
+    const double ext = richardson(s[1], s[2], s[3], 2.0, &order, &err);
+    const double gap = 2 * (1 - std::sqrt(1 - ab * ab)), pi = 3.14159265358979323846;
+    const double series = 0.5 / (1 / (2 * ab) + gap / (pi * ab * ab));
+    std::printf("a_b %.3g: voxel %.5g %.5g %.5g %.5g (q %.3g..%.3g), extrapolated %.5g (order %.2f), network %.3g (%+.0f %%), "
+                "series %.4g\n", ab, s[0], s[1], s[2], s[3], q[0], q[3], ext, order, ab, 100 * (ab - s[3]) / s[3], series);
+    EXPECT_NEAR(q[0], ab * ab / 0.5 * 8, 1e-9);  // h = 2/16
+    EXPECT_LT(s[3], ab);
+    EXPECT_NEAR(s[3], series, 0.15 * series);
+    if (ab == 0.5) {
+      EXPECT_LT(s[1], s[2]);
+      EXPECT_LT(s[2], s[3]);
+      EXPECT_GT(order, 0.7);
+      EXPECT_LT(order, 1.6);
+      EXPECT_NEAR(s[3], ext, 0.01 * ext);
+    } else {
+      EXPECT_NEAR(s[2], s[3], 0.01 * s[3]);
+      EXPECT_GT(s[0], 1.2 * s[3]);
+    }
+  }
 }

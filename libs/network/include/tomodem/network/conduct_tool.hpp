@@ -21,14 +21,20 @@ struct ConductConfig {
   // Composite electrode (enabled when both lists are given).
   std::vector<std::string> electronic, ionic;
   double charge_transfer = 0;        ///< S/m per metre of TPB
-  // Voxel cross-check: resolutions (voxels along the longest edge), e.g. {16, 32, 64}.
+  // Voxel cross-check: resolutions (voxels along the longest edge), e.g. {16, 32, 64}, or voxels
+  // per mean diameter of the conducting particles when voxel_per_diameter (--voxel-check 16d,32d).
   std::vector<int> voxel;
+  bool voxel_per_diameter = false;
   // Transport in a segmented image (--image): a label volume instead of a packing.
   std::string image;                 ///< labels (.h5, dataset /labels) from tomodem-segment
   int phase = -1;                    ///< the conducting label (σ = 1); -1: not given
   std::string phase_conductivity;    ///< "1:1.0,2:0.3": several conducting labels
   std::string sides = "noflux";      ///< faces parallel to the axis: "noflux" | "periodic"
 };
+
+/// --voxel-check values: "16" (voxels along the longest edge) or "16d" (per mean diameter), one
+/// unit for all; fills config.voxel and config.voxel_per_diameter. InputError for anything else.
+void parse_voxel_resolutions(const std::vector<std::string>& values, ConductConfig& config);
 
 /// Runs the computation and writes the outputs (atomically). Returns the JSON summary text.
 /// Throws InputError for bad input (exit 2).
