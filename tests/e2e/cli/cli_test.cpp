@@ -5,11 +5,13 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace fs = std::filesystem;
@@ -255,6 +257,40 @@ TEST(Threads, ZeroIsAllCoresInEveryToolAndMinusOneIsRefused) {
     const Result minus = run(t.exe, t.args + " --threads -1", dir);
     EXPECT_EQ(minus.code, 2);
     EXPECT_NE(minus.err.find("--threads"), std::string::npos) << minus.err;
+  }
+}
+
+// The default is every core (OMP_NUM_THREADS when set, docs/cli.md) in dem and pack too; a
+// count the scene or config writes is used when --threads is not given, and --threads wins.
+TEST(Threads, DefaultIsAllCoresAndACountTheInputWritesIsKept) {
+  const char* env = std::getenv("OMP_NUM_THREADS");
+  const long cores = env && std::atoi(env) > 0 ? std::atoi(env) : long(std::max(1u, std::thread::hardware_concurrency()));
+  const auto threads_of = [](const fs::path& json) { return nlohmann::json::parse(text_of(json)).value("threads", -1L); };
+  if (built("tomodem-dem")) {
+    const fs::path dir = fresh_dir("threads_dem");
+    Inputs in(dir);
+    const std::string scene = in.dem_scene();
+    ASSERT_EQ(run("tomodem-dem", scene + " --output-dir a --json a.json -q", dir).code, 0);
+    EXPECT_EQ(threads_of(dir / "a.json"), cores);
+    std::ofstream(dir / scene, std::ios::app) << "settings: {threads: 1}\n";
+    ASSERT_EQ(run("tomodem-dem", scene + " --output-dir b --json b.json -q", dir).code, 0);
+    EXPECT_EQ(threads_of(dir / "b.json"), 1);
+    ASSERT_EQ(run("tomodem-dem", scene + " --output-dir c --json c.json -q --threads 2", dir).code, 0);
+    EXPECT_EQ(threads_of(dir / "c.json"), 2);
+  }
+  if (built("tomodem-pack")) {
+    const fs::path dir = fresh_dir("threads_pack");
+    const std::string config =
+        "particles: 50\nphases:\n  - {name: a, material: {density: 1000, youngs_modulus: 1.0e8}, "
+        "size_distribution: {kind: monodisperse, diameter: 1.0e-3}}\ntarget: {solid_fraction: 0.3}\n";
+    std::ofstream(dir / "a.yaml") << config;
+    std::ofstream(dir / "b.yaml") << config << "threads: 1\n";
+    ASSERT_EQ(run("tomodem-pack", "a.yaml -o a.h5 --no-tessellation --json a.json -q", dir).code, 0);
+    EXPECT_EQ(threads_of(dir / "a.json"), cores);
+    ASSERT_EQ(run("tomodem-pack", "b.yaml -o b.h5 --no-tessellation --json b.json -q", dir).code, 0);
+    EXPECT_EQ(threads_of(dir / "b.json"), 1);
+    ASSERT_EQ(run("tomodem-pack", "b.yaml -o c.h5 --no-tessellation --json c.json -q --threads 2", dir).code, 0);
+    EXPECT_EQ(threads_of(dir / "c.json"), 2);
   }
 }
 
