@@ -86,10 +86,11 @@ double rayleigh_limit(const SimState& s, const NeighbourList& nl, const LawInfo&
 /// Bonds: the two-particle limit of the normal spring, and of the rotation about the centres
 /// under the bending spring plus the shear spring's lever (k_bend + 2 k_t R²).
 double bond_limit(const SimState& s, double best) {
+  const BondLawInfo& bond_law = bond_law_entries().front();  // the law the bond loop runs (law_list.hpp)
   for (std::size_t b = 0; b < s.bonds.size(); ++b) {
     const int i = s.bonds.i[b], j = s.bonds.j[b];
     const BondLaw& law = s.bond_laws[s.p.phase[i] * s.model.n_phases + s.p.phase[j]];
-    const BondStiffness k = bond_stiffness(law, s.bonds.radius[b], s.p.r[i], s.p.r[j]);
+    const BondStiffness k = bond_law.stiffness(law, s.bonds.radius[b], s.p.r[i], s.p.r[j]);
     const double ms = s.p.m[i] * s.p.m[j] / (s.p.m[i] + s.p.m[j]);
     const double Ii = s.p.inertia(i), Ij = s.p.inertia(j), is = Ii * Ij / (Ii + Ij);
     const double rmax = std::max(s.p.r[i], s.p.r[j]);

@@ -269,7 +269,7 @@ FailureOptions check_fracture_options(const FractureConfig& c) {
   check_widths(c);
   require_positive("--transits", c.explicit_.transits, "elastic-wave transits");
   require_non_negative("--strain-rate", c.explicit_.strain_rate, "1/s; 0: from --transits");
-  require_non_negative("--damping-ratio", c.explicit_.damping_ratio, "bond dashpot ratio");
+  check_bond_damping_ratio(c.explicit_.damping_ratio);
   require_range("--local-damping", c.explicit_.local_damping, 0, false, 1, true, "Cundall local damping");
   require_range("--timestep-fraction", c.explicit_.timestep_fraction, 0, true, 1, false, "of the critical step");
   if (c.explicit_.max_steps < 1)

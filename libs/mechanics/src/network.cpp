@@ -122,6 +122,10 @@ void check_material_overrides(const std::optional<double>& youngs_modulus, const
 
 void check_law_options(const LawOptions& o) { dem::check_bond_settings(bond_law_entry(), law_settings(o)); }
 
+void check_bond_damping_ratio(double zeta) {
+  dem::check_bond_settings(bond_law_entry(), {{"damping_ratio", zeta, true}});
+}
+
 void override_materials(Packing& p, const std::optional<double>& youngs_modulus,
                         const std::optional<double>& poisson_ratio, const std::optional<double>& density) {
   check_material_overrides(youngs_modulus, poisson_ratio, density);

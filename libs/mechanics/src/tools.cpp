@@ -217,7 +217,7 @@ void check_young_options(const YoungConfig& c) {
     throw InputError("", "--max-iterations", std::to_string(c.implicit.max_iterations), "must be >= 0 (0: automatic)");
   require_range("--strain", c.explicit_.strain, 0, true, 0.05, true, "a small-strain test");
   require_positive("--transits", c.explicit_.transits, "elastic-wave transits of the cell");
-  require_non_negative("--damping-ratio", c.explicit_.damping_ratio, "bond dashpot ratio");
+  check_bond_damping_ratio(c.explicit_.damping_ratio);
   require_range("--local-damping", c.explicit_.local_damping, 0, false, 1, true, "Cundall local damping");
   require_range("--relax-ratio", c.explicit_.relax_ratio, 0, true, 1, true, "unbalanced-force ratio");
   require_range("--timestep-fraction", c.explicit_.timestep_fraction, 0, true, 1, false, "of the critical step");

@@ -53,8 +53,11 @@ void override_materials(Packing& p, const std::optional<double>& youngs_modulus,
 /// --youngs-modulus finite > 0, --poisson-ratio in (−1, 0.5), --density finite > 0.
 void check_material_overrides(const std::optional<double>& youngs_modulus, const std::optional<double>& poisson_ratio,
                               const std::optional<double>& density);
-/// Refuses --gn-coefficient / --gt-coefficient that are not finite and >= 0.
+/// Refuses --gn-coefficient / --gt-coefficient / a law damping ratio outside the bond law's
+/// ranges (dem/law_registry.hpp: finite and >= 0).
 void check_law_options(const LawOptions& o);
+/// Refuses a bond dashpot ratio ζ (--damping-ratio of the explicit tests) outside the bond law's range.
+void check_bond_damping_ratio(double zeta);
 
 /// Per-bond stiffnesses (dem::bond_stiffness, the formula of the DEM bond loop).
 struct BondStiffnesses {
