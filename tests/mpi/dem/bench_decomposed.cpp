@@ -3,7 +3,8 @@
 //
 //   mpirun -np R dem_decomposition_bench [--lattice 20] [--threads T] [--steps 1000] [--warm 200] [--serial]
 //
-// --serial runs the undecomposed engine (one rank only). CPU seconds are this process's (rank
+// --serial runs the undecomposed engine (one rank only). position_checksum_m (Σ x + 2y + 3z over
+// the particles in id order, 17 digits) is the same on every rank count: the trajectories are. CPU seconds are this process's (rank
 // 0's) and the sum over ranks; the loop wall time is rank 0's, between two barriers.
 #include <mpi.h>
 #include <time.h>
@@ -101,6 +102,10 @@ int main(int argc, char** argv) {
   double cpu_all = 0;
   MPI_Reduce(&cpu, &cpu_all, 1, MPI_DOUBLE, MPI_SUM, 0, MPI_COMM_WORLD);
   const Measurements m = sim.measure();
+  // Σ (x + 2y + 3z) over the particles in id order: equal on any rank count iff the positions are.
+  const Particles all = gather_particles(sim);
+  double checksum = 0;
+  for (const Vec3& x : all.x) checksum += x.x + 2 * x.y + 3 * x.z;
   const DomainLayout l = layout(sim);
   long ghosts = 0;
   MPI_Reduce(&l.ghosts, &ghosts, 1, MPI_LONG, MPI_SUM, 0, MPI_COMM_WORLD);
@@ -109,8 +114,8 @@ int main(int argc, char** argv) {
     std::printf("ranks %d\nthreads %d\ndecomposed %d\nN %.0f\ntimed_steps %ld\n", size, threads, serial ? 0 : 1, n, steps);
     std::printf("dims %dx%dx%d\nghosts_total %ld\n", l.dims[0], l.dims[1], l.dims[2], ghosts);
     std::printf("loop_wall_s %.6f\ncpu_s_rank0 %.6f\ncpu_s_all_ranks %.6f\n", wall, cpu, cpu_all);
-    std::printf("particle_steps_per_second %.6e\npressure_Pa %.6e\ncoordination %.4f\n", n * double(steps) / wall,
-                m.pressure, m.coordination);
+    std::printf("particle_steps_per_second %.6e\npressure_Pa %.10e\ncoordination %.4f\nposition_checksum_m %.17g\n",
+                n * double(steps) / wall, m.pressure, m.coordination, checksum);
   }
   MPI_Finalize();
   return 0;
