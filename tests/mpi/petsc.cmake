@@ -4,3 +4,13 @@ tomodem_mpi_test(petsc_mpi
   SOURCES ${CMAKE_CURRENT_LIST_DIR}/petsc/main.cpp ${CMAKE_CURRENT_LIST_DIR}/petsc/petsc_agreement_test.cpp
   LIBS tomodem_mechanics tomodem_network tomodem_linalg tomodem_dem tomodem_core
   RANKS 1 2)
+
+# The worked example of docs/solvers.md, run as the page writes it (pack, bond, young with the
+# in-house multigrid, then mpirun -np 2 with PETSc) and checked (docs_example.py). Not under
+# mpirun itself: the page's block calls mpirun.
+find_package(Python3 REQUIRED COMPONENTS Interpreter)
+add_test(NAME petsc_docs_example
+  COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_LIST_DIR}/petsc/docs_example.py ${CMAKE_SOURCE_DIR} ${CMAKE_BINARY_DIR}/bin)
+set_tests_properties(petsc_docs_example PROPERTIES LABELS mpi PROCESSORS 2
+  ENVIRONMENT "OMP_NUM_THREADS=1;OMPI_MCA_rmaps_base_oversubscribe=1;OMPI_ALLOW_RUN_AS_ROOT=1;OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1")
+add_dependencies(tomodem_mpi_tests tomodem-pack tomodem-bond tomodem-young)

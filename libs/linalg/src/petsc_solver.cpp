@@ -242,6 +242,12 @@ void PetscSolver::Impl::build_solver() {
   } else {
     TOMODEM_PETSC(PCSetType(pc, PCGAMG));
     TOMODEM_PETSC(PCGAMGSetReuseInterpolation(pc, PETSC_TRUE));
+    // Chebyshev smoothing with point Jacobi took 3x the iterations of the in-house multigrid on
+    // the 6-DOF networks (494 against 166 per strain case at 10^5 unknowns); point-block Jacobi
+    // (the particle's 6x6 block, as the in-house smoother) 156. A user's PETSC_OPTIONS decides.
+    PetscBool set = PETSC_FALSE;
+    TOMODEM_PETSC(PetscOptionsHasName(nullptr, nullptr, "-mg_levels_pc_type", &set));
+    if (!set && bs > 1) TOMODEM_PETSC(PetscOptionsSetValue(nullptr, "-mg_levels_pc_type", "pbjacobi"));
   }
   TOMODEM_PETSC(KSPSetFromOptions(ksp));
 }
