@@ -156,10 +156,7 @@ ContactGraph contact_graph(const Packing& p, double gap) {
   ContactGraph cg;
   cg.n = p.particles.size();
   if (cg.n < 2) return cg;
-  const std::vector<double>& r = p.particles.radius;
-  const double rmax = *std::max_element(r.begin(), r.end());
-  for (const auto& q : spatial::pairs_within(p.particles.position, r, p.cell, spatial::contact_reach(rmax, gap))) {
-    if (!spatial::in_contact(q.distance, r[std::size_t(q.i)], r[std::size_t(q.j)], gap)) continue;
+  for (const auto& q : spatial::contacts_within(p.particles.position, p.particles.radius, p.cell, gap)) {
     cg.i.push_back(q.i);
     cg.j.push_back(q.j);
     cg.image.push_back(q.image);

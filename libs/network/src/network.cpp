@@ -28,10 +28,7 @@ Vec3 Network::branch(std::size_t e) const {
 ContactPairs find_contacts(const std::vector<Vec3>& x, const std::vector<double>& r, const Cell& cell,
                            double tol) {
   ContactPairs out;
-  if (x.empty()) return out;
-  const double rmax = *std::max_element(r.begin(), r.end());
-  for (const spatial::Pair& q : spatial::pairs_within(x, r, cell, spatial::contact_reach(rmax, tol))) {
-    if (!spatial::in_contact(q.distance, r[std::size_t(q.i)], r[std::size_t(q.j)], tol)) continue;
+  for (const spatial::Pair& q : spatial::contacts_within(x, r, cell, tol)) {
     out.i.push_back(q.i);
     out.j.push_back(q.j);
     out.image.push_back(q.image);

@@ -1,5 +1,7 @@
 #include "tomodem/spatial/grid.hpp"
 
+#include "tomodem/spatial/overlap.hpp"
+
 #include <omp.h>
 
 #include <cstdlib>
@@ -237,6 +239,16 @@ std::vector<Pair> pairs_within(const std::vector<Vec3>& x0, const std::vector<do
       for (int a = 0; a < 3; ++a) n0[std::size_t(a)] += w[i][std::size_t(a)] - w[j][std::size_t(a)];
       out.push_back({int32_t(i), int32_t(j), n0, norm(x[j] + shift[std::size_t(c)] - x[i])});
     }
+  return out;
+}
+
+std::vector<Pair> contacts_within(const std::vector<Vec3>& x, const std::vector<double>& r, const Cell& cell,
+                                  double tolerance, int threads) {
+  std::vector<Pair> out;
+  if (x.size() < 2) return out;
+  const double rmax = *std::max_element(r.begin(), r.end());
+  for (const Pair& q : pairs_within(x, r, cell, contact_reach(rmax, tolerance), threads))
+    if (in_contact(q.distance, r[std::size_t(q.i)], r[std::size_t(q.j)], tolerance)) out.push_back(q);
   return out;
 }
 

@@ -20,10 +20,13 @@ namespace fs = std::filesystem;
 namespace {
 
 const std::vector<std::string>& forbidden() {
-  const std::string folder = std::string("sha") + "red", md = ".md";
+  const std::string folder = std::string("sha") + "red", md = ".md", work = std::string("/wo") + "rk/";
   static const std::vector<std::string> k = {
-      "../" + folder,      "/work/" + folder,  folder + "/PHYSICS", folder + "/peers", "PHYSICS" + md,
+      "../" + folder,      work + folder,      folder + "/PHYSICS", folder + "/peers", "PHYSICS" + md,
       "DESIGN" + md,       "CONVENTIONS" + md, "STYLE" + md,        std::string("STYLE") + " P",
+      // Any absolute path into the machine the repository was written on (its workspace, the
+      // tool library beside it): a clone elsewhere has neither.
+      work, std::string("/.lib") + "rary/",
   };
   return k;
 }

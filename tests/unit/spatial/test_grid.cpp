@@ -172,6 +172,20 @@ TEST(SpatialImage, CodesAndMinimumImage) {
   EXPECT_EQ(minimum_image(c, c.h.inverse(), xi, xj), (Image{-1, 1, 0}));
 }
 
+TEST(SpatialGrid, ContactsWithinKeepsThePairsWithinTheGapTolerance) {
+  // Unit spheres at x = 0, 2 (touching) and 4.5 (gap 0.5 = 0.5 R̄ from the second) in an open box:
+  // tolerance 0 finds the touching pair, 0.5 both, 0.49 still one.
+  const Cell c = Cell::box({-2, -2, -2}, {7, 2, 2}, false);
+  const std::vector<Vec3> x = {{0, 0, 0}, {2, 0, 0}, {4.5, 0, 0}};
+  const std::vector<double> r = {1, 1, 1};
+  EXPECT_EQ(contacts_within(x, r, c, 0.0).size(), 1u);
+  EXPECT_EQ(contacts_within(x, r, c, 0.49).size(), 1u);
+  const std::vector<Pair> both = contacts_within(x, r, c, 0.5);
+  ASSERT_EQ(both.size(), 2u);
+  EXPECT_NEAR(both[1].distance, 2.5, 1e-12);
+  EXPECT_TRUE(contacts_within({x[0]}, {1.0}, c, 1.0).empty());
+}
+
 TEST(SpatialImage, ShortestBranchTakesTheNearestImageAlongPeriodicAxesOnly) {
   // Unit box periodic along x only: j at x = 0.9 is 0.2 behind i at 0.1 through the −x image;
   // along the open y it stays 0.8 away.

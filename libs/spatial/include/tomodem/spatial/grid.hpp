@@ -149,5 +149,9 @@ struct Pair {
 /// Every pair (images −1..1) with distance < r_i + r_j + extra; positions anywhere.
 std::vector<Pair> pairs_within(const std::vector<Vec3>& x, const std::vector<double>& r, const Cell& cell,
                                double extra, int threads = 1);
+/// The pairs in contact (in_contact with this gap tolerance, overlap.hpp): the one contact search
+/// of bond, conduct and carve.
+std::vector<Pair> contacts_within(const std::vector<Vec3>& x, const std::vector<double>& r, const Cell& cell,
+                                  double tolerance, int threads = 1);
 
 }  // namespace tomodem::spatial
