@@ -74,7 +74,12 @@ int all_threads() {
     const int n = std::atoi(s);  // "4,2": the first level's count
     if (n > 0) return n;
   }
-  return int(std::max(1u, std::thread::hardware_concurrency()));
+  // Several ranks on one node share its cores: each takes its part (OpenMPI and MPICH say how many
+  // ranks run on this node), so an MPI + OpenMP run does not start ranks x cores threads.
+  int ranks_here = 1;
+  for (const char* name : {"OMPI_COMM_WORLD_LOCAL_SIZE", "MPI_LOCALNRANKS"})
+    if (const char* s = std::getenv(name)) ranks_here = std::max(ranks_here, std::atoi(s));
+  return std::max(1, int(std::thread::hardware_concurrency()) / ranks_here);
 }
 
 namespace {

@@ -33,7 +33,7 @@ void set_command_line(int argc, char** argv);
 const std::string& command_line();
 
 /// What --threads 0 means (docs/cli.md): OMP_NUM_THREADS when set (its first number), else every
-/// core of the machine.
+/// core of the machine, shared out among the MPI ranks running on it.
 int all_threads();
 
 }  // namespace tomodem
