@@ -293,8 +293,14 @@ std::vector<std::string> write_overlays(const std::string& prefix, const Overlay
         img.at<cv::Vec3b>(int(b), int(a)) = cv::Vec3b(cv::saturate_cast<uint8_t>(c[0]), cv::saturate_cast<uint8_t>(c[1]),
                                                       cv::saturate_cast<uint8_t>(c[2]));
       }
-    const int scale = std::max(1, int(std::ceil(256.0 / double(std::max(planes[p].w, planes[p].h)))));
-    if (scale > 1) cv::resize(img, img, cv::Size(), scale, scale, cv::INTER_NEAREST);
+    // Pixels as long as the voxels are (anisotropic scans): a plane through a coarser z is
+    // stretched along z by s_z / s_finest, so shapes look as they are in metres.
+    const double finest = std::min({phases.spacing[0], phases.spacing[1], phases.spacing[2]});
+    const double sa = phases.spacing[p == 2 ? 1 : 0] / finest, sb = phases.spacing[p == 0 ? 1 : 2] / finest;
+    const double wa = double(planes[p].w) * sa, hb = double(planes[p].h) * sb;
+    const double scale = std::max(1.0, std::ceil(256.0 / std::max(wa, hb)));
+    const cv::Size size(int(std::lround(wa * scale)), int(std::lround(hb * scale)));
+    if (size != img.size()) cv::resize(img, img, size, 0, 0, cv::INTER_NEAREST);
     std::vector<uchar> png;
     if (!cv::imencode(".png", img, png)) throw RuntimeFailure("PNG encoding failed");
     const std::string path = prefix + "_" + planes[p].name + ".png";
