@@ -28,6 +28,9 @@ int main(int argc, char** argv) {
     app.add_option("--density", c.density, "solid density of every phase, kg/m^3 (default: the materials')");
     app.add_option("--bond-forces", c.bond_forces, "auto | stored (/bonds/force) | stretch | none")
         ->capture_default_str();
+    app.add_option("--compare-image", c.compare_image,
+                   "a segmented scan (.h5 /labels) beside the (carved) packing: both solid fractions, tortuosities");
+    app.add_option("--phase", c.compare_phase, "--compare-image: the scan's solid label(s), 0 or 0,1");
     tomodem::cli::Common common;
     tomodem::cli::add_common(app, "tomodem-cg", common);
     if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;

@@ -250,6 +250,7 @@ Setup setup(const CgConfig& c, const Packing& first, std::vector<std::string>& w
 }  // namespace
 
 std::string run_cg(const CgConfig& c) {
+  if (!c.compare_image.empty()) return run_compare_image(c);
   if (c.inputs.empty()) throw InputError("", "input", "", "at least one packing is needed");
   if (c.output.empty()) throw InputError("", "-o", "", "an output file (.h5) is needed");
   if (c.bond_forces != "auto" && c.bond_forces != "stored" && c.bond_forces != "stretch" && c.bond_forces != "none")

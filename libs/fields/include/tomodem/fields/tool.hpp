@@ -25,10 +25,14 @@ struct CgConfig {
   double density = 0;               ///< kg/m^3 for every phase (0: from the materials)
   std::string bond_forces = "auto"; ///< auto | stored | stretch | none
   int threads = 0;
+  std::string compare_image;        ///< --compare-image: a segmented scan (.h5 /labels) beside the packing
+  std::string compare_phase;        ///< --phase: its solid label(s), "0" or "0,1"
 };
 
 /// Runs the tool; returns the JSON summary text (the caller emits it: emit_summary).
 std::string run_cg(const CgConfig& c);
+/// The --compare-image mode (docs/cg.md#image-and-model-side-by-side); run_cg calls it.
+std::string run_compare_image(const CgConfig& c);
 
 /// How the snapshot gets its masses and pair forces (for tests that build packings in memory).
 struct SnapshotOptions {
