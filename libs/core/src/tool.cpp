@@ -112,10 +112,27 @@ void spin_briefly_unless_told() {
 }
 }  // namespace
 
-std::string build_features() {
+namespace {
+// Tools whose run on several ranks is one job, not N copies of the serial run: their linear
+// solves go to PETSc with rows split across the ranks (docs/solvers.md). The DEM tools (dem,
+// sinter, pack, bond) are not on this list: the decomposed engine exists in libs/dem
+// (docs/dem.md, "Running on several ranks") but these tools do not call it yet.
+bool runs_on_ranks(const std::string& tool) {
 #ifdef TOMODEM_HAVE_MPI
-  return "openmp mpi petsc";
+  return tool == "tomodem-young" || tool == "tomodem-fracture" || tool == "tomodem-conduct";
 #else
+  (void)tool;
+  return false;
+#endif
+}
+}  // namespace
+
+std::string build_features(const std::string& tool) {
+#ifdef TOMODEM_HAVE_MPI
+  if (tool.empty()) return "openmp mpi petsc";
+  return runs_on_ranks(tool) ? "openmp mpi petsc" : "openmp petsc";
+#else
+  (void)tool;
   return "openmp";
 #endif
 }
@@ -126,30 +143,33 @@ int env_int(const char* name, int fallback) {
   return s && *s ? std::atoi(s) : fallback;
 }
 
-// A build without MPI started by a launcher on several ranks would run that many copies of the
-// serial run, all writing the same outputs. The launchers say so in the environment: OpenMPI's
-// mpirun (OMPI_COMM_WORLD_SIZE), MPICH's Hydra and srun --mpi=pmi2 (PMI_SIZE), srun itself
+// A tool started by a launcher on several ranks that cannot share one run among them (a build
+// without MPI, or a tool not on runs_on_ranks' list) would run that many copies of the serial run,
+// all writing the same outputs. The launchers say so in the environment: OpenMPI's mpirun
+// (OMPI_COMM_WORLD_SIZE), MPICH's Hydra and srun --mpi=pmi2 (PMI_SIZE), srun itself
 // (SLURM_STEP_NUM_TASKS; not SLURM_NTASKS, which a batch script with --ntasks also has, and from
 // which tomodem-run starts serial steps). Refused on every rank, said once, by rank 0.
-std::optional<int> refuse_serial_build_on_ranks(const std::string& tool) {
-#ifdef TOMODEM_HAVE_MPI
-  (void)tool;
-  return std::nullopt;
-#else
+std::optional<int> refuse_copies_on_ranks(const std::string& tool) {
+  if (runs_on_ranks(tool)) return std::nullopt;
   const int size = std::max({env_int("OMPI_COMM_WORLD_SIZE", 1), env_int("PMI_SIZE", 1), env_int("SLURM_STEP_NUM_TASKS", 1)});
   if (size <= 1) return std::nullopt;
   const int rank = std::max({env_int("OMPI_COMM_WORLD_RANK", 0), env_int("PMI_RANK", 0), env_int("SLURM_PROCID", 0)});
-  if (rank == 0)
+  if (rank == 0) {
+#ifdef TOMODEM_HAVE_MPI
+    std::cerr << tool << ": error: " << tool << " does not run on several ranks yet (started on " << size
+              << "; only young, fracture and conduct share one run among ranks, docs/scaling.md): run it on one rank\n";
+#else
     std::cerr << tool << ": error: this build has no MPI: started on " << size
               << " ranks, it would run that many copies of the serial run; configure with -DTOMODEM_MPI=ON, "
                  "or run it on one rank\n";
-  return exit_code::bad_input;
 #endif
+  }
+  return exit_code::bad_input;
 }
 }  // namespace
 
 int run_tool(const std::string& tool_name, const std::function<int()>& body) {
-  if (const auto refused = refuse_serial_build_on_ranks(tool_name)) return *refused;
+  if (const auto refused = refuse_copies_on_ranks(tool_name)) return *refused;
   spin_briefly_unless_told();
   g_tool = tool_name;
   install_cleanup_handlers();

@@ -21,7 +21,7 @@ inline void add_version(CLI::App& app, const std::string& tool) {
   app.add_flag_callback(
       "--version",
       [tool] {
-        std::cout << tool << " " << version_string() << "\nfeatures: " << build_features() << "\n";
+        std::cout << tool << " " << version_string() << "\nfeatures: " << build_features(tool) << "\n";
         throw CLI::Success();
       },
       "print the version and exit");

@@ -8,10 +8,11 @@ namespace tomodem {
 /// "tomodem 0.1.0 (git abc123)".
 std::string version_string();
 
-/// What this build can do, for the second line of every tool's --version ("features: openmp",
-/// "features: openmp mpi petsc" with -DTOMODEM_MPI=ON); tomodem-run reads it before it starts a
-/// step on several ranks.
-std::string build_features();
+/// What this build (and `tool`, when named) can do, for the second line of every tool's --version:
+/// "openmp"; with -DTOMODEM_MPI=ON "openmp mpi petsc", where `mpi` is said only by the tools that
+/// share one run among several ranks (young, fracture, conduct). tomodem-run reads it before it
+/// starts a step on several ranks.
+std::string build_features(const std::string& tool = "");
 
 /// Runs `body` and maps exceptions onto the documented exit codes, printing one clear line:
 ///   InputError -> 2 ("tomodem-dem: error: scene.yaml: field 'x': value 'y': why")
