@@ -7,6 +7,8 @@
 #include <fstream>
 #include <sstream>
 
+#include <unistd.h>
+
 namespace fs = std::filesystem;
 
 namespace {
@@ -17,7 +19,9 @@ struct CliRun {
   std::string out;
 };
 CliRun run(const std::string& args) {
-  const std::string log = ::testing::TempDir() + "pack_cli.log";
+  // One log per process: ctest runs this file's tests side by side, and a shared name let one
+  // test read another's output.
+  const std::string log = ::testing::TempDir() + "pack_cli." + std::to_string(::getpid()) + ".log";
   const int rc = std::system((kTool + " " + args + " > " + log + " 2>&1").c_str());
   std::ifstream in(log);
   std::stringstream s;
