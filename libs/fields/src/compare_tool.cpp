@@ -1,16 +1,15 @@
 // tomodem-cg --compare-image: a carved packing and the scan it was carved from, side by side
 // (docs/cg.md#image-and-model-side-by-side).
 #include <cmath>
-#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "tomodem/core/error.hpp"
-#include "tomodem/core/h5.hpp"
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/packing_io.hpp"
 #include "tomodem/core/summary.hpp"
 #include "tomodem/core/tool.hpp"
+#include "tomodem/core/uniform_grid.hpp"
 #include "tomodem/core/units.hpp"
 #include "tomodem/fields/compare_image.hpp"
 #include "tomodem/fields/tool.hpp"
@@ -132,38 +131,24 @@ void write_comparison(const std::string& path, const GridSpec& g, const Cell& ce
   };
   std::vector<double> diff(N), m(mask.begin(), mask.end());
   for (std::size_t i = 0; i < N; ++i) diff[i] = pk[i] - img[i];
-  const std::vector<std::size_t> dims{std::size_t(g.n[2]), std::size_t(g.n[1]), std::size_t(g.n[0])};
-  const std::string tmp = temporary_path(path);
-  try {
-    h5::File f(tmp, h5::File::Mode::create);
-    f.write("/image_solid_fraction", xfast(img), dims, "1 (CG of the scan's solid voxels)");
-    f.write("/packing_solid_fraction", xfast(pk), dims, "1 (CG density of the packing / solid density)");
-    f.write("/difference", xfast(diff), dims, "1 (packing - image)");
-    f.write("/compared", xfast(m), dims, "1 where the kernel support lies inside the image and the cell");
-    f.set_attr("/", "parameters", params);
-    f.set_attr("/", "tool", std::string("tomodem-cg --compare-image"));
-    write_provenance(f);
-    f.close();
-  } catch (...) {
-    std::remove(tmp.c_str());
-    discard_output(path);
-    throw;
+  const std::vector<double> img_x = xfast(img), pk_x = xfast(pk), diff_x = xfast(diff), m_x = xfast(m);
+  UniformGrid grid;
+  for (int k = 0; k < 3; ++k) {
+    grid.dims[k] = std::size_t(g.n[k]);
+    grid.spacing[k] = cell.h(k, k) / g.n[k];
+    grid.corner[k] = cell.origin[k];
   }
-  commit_output(path);
-  const std::string file = std::filesystem::path(path).filename().string();
-  const std::string d = std::to_string(g.n[2]) + " " + std::to_string(g.n[1]) + " " + std::to_string(g.n[0]);
-  std::ostringstream x;
-  x << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n  <Grid Name=\"compare\" GridType=\"Uniform\">\n"
-    << "   <Topology TopologyType=\"3DCoRectMesh\" Dimensions=\"" << g.n[2] + 1 << " " << g.n[1] + 1 << " " << g.n[0] + 1
-    << "\"/>\n   <Geometry GeometryType=\"ORIGIN_DXDYDZ\">\n    <DataItem Dimensions=\"3\" Format=\"XML\">" << cell.origin[2]
-    << " " << cell.origin[1] << " " << cell.origin[0] << "</DataItem>\n    <DataItem Dimensions=\"3\" Format=\"XML\">"
-    << cell.h(2, 2) / g.n[2] << " " << cell.h(1, 1) / g.n[1] << " " << cell.h(0, 0) / g.n[0]
-    << "</DataItem>\n   </Geometry>\n";
-  for (const char* ds : {"image_solid_fraction", "packing_solid_fraction", "difference", "compared"})
-    x << "   <Attribute Name=\"" << ds << "\" AttributeType=\"Scalar\" Center=\"Cell\">\n    <DataItem Dimensions=\"" << d
-      << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << file << ":/" << ds << "</DataItem>\n   </Attribute>\n";
-  x << "  </Grid>\n </Domain>\n</Xdmf>\n";
-  write_text_atomic(xdmf_sidecar_of(path), x.str());
+  GridProvenance prov;
+  prov.tool = "tomodem-cg --compare-image";
+  prov.attributes = {{"parameters", params}};
+  write_uniform_grid(path, grid,
+                     {{"",
+                       {{"image_solid_fraction", img_x, "1 (CG of the scan's solid voxels)"},
+                        {"packing_solid_fraction", pk_x, "1 (CG density of the packing / solid density)"},
+                        {"difference", diff_x, "1 (packing - image)"},
+                        {"compared", m_x, "1 where the kernel support lies inside the image and the cell"}},
+                       "compare"}},
+                     prov);
 }
 }  // namespace
 

@@ -14,6 +14,7 @@
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/packing_io.hpp"
 #include "tomodem/core/tool.hpp"
+#include "tomodem/core/uniform_grid.hpp"
 
 namespace tomodem::network {
 
@@ -358,56 +359,19 @@ ImageAxisResult image_conductivity(const LabelImage& im, const ImageTransportOpt
 
 void write_image_fields(const std::string& path, const LabelImage& im, const std::vector<ImageAxisResult>& results,
                         const std::string& parameters) {
-  const std::vector<std::size_t> dims{im.nz, im.ny, im.nx};
-  const std::string tmp = temporary_path(path);
-  try {
-    h5::File f(tmp, h5::File::Mode::create);
-    const std::vector<double> sp(im.spacing.begin(), im.spacing.end()), org(im.origin.begin(), im.origin.end());
-    std::vector<double> buf;
-    for (const auto& r : results) {
-      const std::string g = std::string("/") + kAxis[r.axis];
-      buf.assign(r.potential.begin(), r.potential.end());
-      f.write(g + "/potential", buf, dims, "V per V applied (1 on the low face, 0 on the high face)");
-      buf.assign(r.current.begin(), r.current.end());
-      f.write(g + "/current_magnitude", buf, dims, "A/m^2 per V and per unit conductivity");
-      for (const char* ds : {"/potential", "/current_magnitude"}) {
-        f.set_attr(g + ds, "spacing", sp);
-        f.set_attr(g + ds, "origin", org);
-      }
-    }
-    f.set_attr("/", "parameters", parameters);
-    f.set_attr("/", "tool", std::string("tomodem-conduct --image"));
-    write_provenance(f);  // units = "m", version, command line, time
-    f.close();  // a full disk is found here, before the rename
-  } catch (...) {
-    std::remove(tmp.c_str());
-    discard_output(path);
-    throw;
-  }
-  commit_output(path);
-  // XDMF sidecar: cell-centred values on a co-rectilinear grid (ParaView's Xdmf3 reader).
-  const std::string file = std::filesystem::path(path).filename().string();
-  std::ostringstream x;
-  x << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n";
-  const std::string d = std::to_string(im.nz) + " " + std::to_string(im.ny) + " " + std::to_string(im.nx);
-  for (const auto& r : results) {
-    const std::string g = kAxis[r.axis];
-    x << "  <Grid Name=\"" << g << "\" GridType=\"Uniform\">\n"
-      << "   <Topology TopologyType=\"3DCoRectMesh\" Dimensions=\"" << im.nz + 1 << " " << im.ny + 1 << " " << im.nx + 1
-      << "\"/>\n   <Geometry GeometryType=\"ORIGIN_DXDYDZ\">\n"
-      // the mesh nodes are voxel corners: half a voxel below the centre of voxel (0,0,0)
-      << "    <DataItem Dimensions=\"3\" Format=\"XML\">" << im.origin[2] - 0.5 * im.spacing[2] << " "
-      << im.origin[1] - 0.5 * im.spacing[1] << " " << im.origin[0] - 0.5 * im.spacing[0]
-      << "</DataItem>\n    <DataItem Dimensions=\"3\" Format=\"XML\">" << im.spacing[2] << " " << im.spacing[1] << " "
-      << im.spacing[0] << "</DataItem>\n   </Geometry>\n";
-    for (const char* ds : {"potential", "current_magnitude"})
-      x << "   <Attribute Name=\"" << ds << "\" AttributeType=\"Scalar\" Center=\"Cell\">\n"
-        << "    <DataItem Dimensions=\"" << d << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << file << ":/"
-        << g << "/" << ds << "</DataItem>\n   </Attribute>\n";
-    x << "  </Grid>\n";
-  }
-  x << " </Domain>\n</Xdmf>\n";
-  write_text_atomic(xdmf_sidecar_of(path), x.str());
+  UniformGrid grid;
+  grid.dims = {im.nx, im.ny, im.nz};
+  grid.spacing = im.spacing;
+  for (int k = 0; k < 3; ++k) grid.corner[k] = im.origin[k] - 0.5 * im.spacing[k];  // origin: centre of voxel 0
+  std::vector<GridBlock> blocks;
+  for (const auto& r : results)
+    blocks.push_back({kAxis[r.axis],
+                      {{"potential", r.potential, "V per V applied (1 on the low face, 0 on the high face)"},
+                       {"current_magnitude", r.current, "A/m^2 per V and per unit conductivity"}}});
+  GridProvenance prov;
+  prov.tool = "tomodem-conduct --image";
+  prov.attributes = {{"parameters", parameters}};
+  write_uniform_grid(path, grid, blocks, prov);
 }
 
 }  // namespace tomodem::network
