@@ -13,6 +13,7 @@
 #include "tomodem/core/tool.hpp"
 #include "tomodem/dem/law_registry.hpp"
 #include "tomodem/spatial/clusters.hpp"
+#include "tomodem/spatial/grid.hpp"
 
 namespace tomodem::mechanics {
 
@@ -47,21 +48,11 @@ std::array<double, 3> check_cell(const Packing& p, const std::string& file) {
 }
 
 /// Wraps the particles into the cell along periodic directions; the bond images follow.
-void wrap_into_cell(FractureSample& s, const std::array<double, 3>& L) {
+void wrap_into_cell(FractureSample& s) {
   Packing& p = s.packing;
-  const std::size_t n = p.particles.size(), m = p.bonds.size();
-  std::vector<std::array<int32_t, 3>> w(n, {0, 0, 0});
-  for (std::size_t i = 0; i < n; ++i)
-    for (int k = 0; k < 3; ++k)
-      if (p.cell.periodic[k]) {
-        const double f = std::floor((p.particles.position[i][k] - p.cell.origin[k]) / L[k]);
-        if (f != 0) {
-          p.particles.position[i][k] -= f * L[k];
-          w[i][k] = int32_t(f);
-        }
-      }
-  for (std::size_t b = 0; b < m; ++b)
-    for (int k = 0; k < 3; ++k) s.image[b][k] += w[p.bonds.j[b]][k] - w[p.bonds.i[b]][k];
+  const std::vector<Image> w = spatial::wrap_into_cell(p.particles.position, p.cell);
+  for (std::size_t b = 0; b < p.bonds.size(); ++b)
+    for (int k = 0; k < 3; ++k) s.image[b][k] += w[std::size_t(p.bonds.j[b])][k] - w[std::size_t(p.bonds.i[b])][k];
 }
 
 /// Crack length, plane and extent along x; the grip layers at the z ends. Refuses a crack longer
@@ -180,7 +171,7 @@ FractureSample make_sample(const Network& net, const CrackOptions& o, const std:
   const std::size_t n = p.particles.size();
   s.geometry = o.geometry;
   const std::array<double, 3> L = check_cell(p, file);
-  wrap_into_cell(s, L);
+  wrap_into_cell(s);
 
   double dsum = 0, zmin = HUGE_VAL, zmax = -HUGE_VAL;
   for (std::size_t i = 0; i < n; ++i) {

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "tomodem/mechanics/network.hpp"
+#include "tomodem/spatial/grid.hpp"
 
 namespace tomodem::mechanics {
 
@@ -91,17 +92,8 @@ inline Network crop_network(const Network& net, double width, double height) {
   const Vec3 lo = p.cell.origin;
   const double L[3] = {p.cell.h(0, 0), p.cell.h(1, 1), p.cell.h(2, 2)};
   const std::size_t n = p.particles.size();
-  std::vector<Vec3> x(n);
-  std::vector<std::array<int32_t, 3>> wrap(n, {0, 0, 0});
-  for (std::size_t i = 0; i < n; ++i) {
-    x[i] = p.particles.position[i];
-    for (int k = 0; k < 3; ++k)
-      if (p.cell.periodic[k]) {
-        const double f = std::floor((x[i][k] - lo[k]) / L[k]);
-        x[i][k] -= f * L[k];
-        wrap[i][k] = int32_t(f);
-      }
-  }
+  std::vector<Vec3> x = p.particles.position;
+  const std::vector<Image> wrap = spatial::wrap_into_cell(x, p.cell);
   const double x0 = lo.x + 0.5 * (L[0] - width), z0 = lo.z + 0.5 * (L[2] - height);
   Network out;
   Packing& q = out.packing;
