@@ -136,6 +136,7 @@ void result_keys(Summary& j, const dem::SinterReport& rep, std::vector<double> r
   j["steps"] = rep.steps;
   j["relative_density"] = f.density;
   j["relative_density_cell"] = f.density_cell;
+  j["relative_density_pairwise"] = f.density_pairwise;  // the former estimate, for comparison
   j["initial_relative_density"] = rep.initial.density;
   j["mean_neck_ratio"] = f.mean_neck_ratio;
   j["sintering_time_s"] = f.time;

@@ -23,6 +23,7 @@
 #include "tomodem/dem/law_registry.hpp"
 #include "tomodem/dem/yaml_fields.hpp"
 #include "tomodem/spatial/image.hpp"
+#include "tomodem/spatial/union_volume.hpp"
 
 namespace tomodem::dem {
 
@@ -305,13 +306,38 @@ namespace {
 
 Vec3 image_of(int code) { return spatial::image_vector(code); }
 
-/// One pass over the neighbour list: overlaps, necks and the per-particle lens shares.
+/// One pass over the neighbour list: overlaps, necks and each particle's part of the union.
 struct Scan {
   double solid = 0, lens = 0, neck_sum = 0, force_l = 0, area_sum = 0, r_sum = 0;
+  double solid_pairwise = 0;  ///< Σ 4/3 π r³ − Σ lens (triple overlaps subtracted twice: low)
   double modulus = 0;  ///< Σ (η_n + ⅔ η_t) l²: V × 5 × the affine viscous modulus of a normal component
   long necks = 0, contacts = 0;
-  std::vector<double> share, dshare;  ///< per particle: ½ Σ lens, ½ Σ ∂lens/∂r_i
+  /// Per particle: 4/3 π r³ less its part of the union (the sphere clipped to its power cell),
+  /// and 4π r² less its exposed area (∂/∂r_i of that part with the radical planes held).
+  std::vector<double> share, dshare;
 };
+
+/// The exact part of the union of a sphere of radius r cut by its radical planes (spatial::
+/// clip_sphere), with a closed form when no two caps meet inside the sphere (then the part is
+/// the sphere less its caps).
+spatial::ClippedSphere sphere_part(double r, const std::vector<spatial::HalfSpace>& cuts) {
+  bool disjoint = true;
+  for (std::size_t a = 0; a < cuts.size() && disjoint; ++a)
+    for (std::size_t b = a + 1; b < cuts.size() && disjoint; ++b) {
+      // Caps of half-angles α = acos(h/r), β meet when the angle between their axes is below
+      // α + β, i.e. when n_a·n_b > cos(α + β) = cos α cos β − sin α sin β (α + β < π here).
+      const double ca = std::clamp(cuts[a].h / r, -1.0, 1.0), cb = std::clamp(cuts[b].h / r, -1.0, 1.0);
+      if (ca <= 0 || cb <= 0) disjoint = false;  // a cap past the centre: leave it to the exact clip
+      else disjoint = dot(cuts[a].n, cuts[b].n) < ca * cb - std::sqrt((1 - ca * ca) * (1 - cb * cb)) - 1e-9;
+    }
+  if (!disjoint) return spatial::clip_sphere(r, cuts);
+  spatial::ClippedSphere c{4.0 / 3.0 * M_PI * r * r * r, 4 * M_PI * r * r};
+  for (const spatial::HalfSpace& q : cuts) {
+    c.volume -= spatial::cap_volume(r, q.h);
+    c.sphere_area -= 2 * M_PI * r * (r - std::clamp(q.h, -r, r));
+  }
+  return c;
+}
 
 Scan scan(const Simulation& sim, bool per_particle) {
   const Simulation::EngineState e = sim.engine_state();
@@ -321,7 +347,9 @@ Scan scan(const Simulation& sim, bool per_particle) {
   const std::size_t n = p.size();
   Scan sc;
   if (per_particle) sc.share.assign(n, 0.0), sc.dshare.assign(n, 0.0);
-  for (std::size_t i = 0; i < n; ++i) sc.solid += 4.0 / 3.0 * M_PI * p.r[i] * p.r[i] * p.r[i];
+  std::vector<std::vector<spatial::HalfSpace>> cuts(n);
+  double spheres = 0;
+  for (std::size_t i = 0; i < n; ++i) spheres += 4.0 / 3.0 * M_PI * p.r[i] * p.r[i] * p.r[i];
   const std::size_t stride = e.j.empty() ? 0 : e.history.size() / e.j.size();
   if (e.start.size() == n + 1)
     for (std::size_t i = 0; i < n; ++i)
@@ -330,16 +358,11 @@ Scan scan(const Simulation& sim, bool per_particle) {
         const Vec3 dv = p.x[j] + H * image_of(e.image[k]) - p.x[i];
         const double d = norm(dv), ri = p.r[i], rj = p.r[j];
         if (d >= ri + rj) continue;
-        const double v = lens_volume(ri, rj, d);
-        sc.lens += v;
+        sc.lens += lens_volume(ri, rj, d);
         ++sc.contacts;
-        if (per_particle) {
-          // ∂lens/∂r_i is the area of i's surface inside j: 2π r_i h_i, h_i = r_i − (d² + r_i² − r_j²)/(2d).
-          const double hi = ri - (d * d + ri * ri - rj * rj) / (2 * d), hj = rj - (d * d + rj * rj - ri * ri) / (2 * d);
-          sc.share[i] += 0.5 * v;
-          sc.share[std::size_t(j)] += 0.5 * v;
-          sc.dshare[i] += M_PI * ri * std::max(hi, 0.0);
-          sc.dshare[std::size_t(j)] += M_PI * rj * std::max(hj, 0.0);
+        if (d > 0) {
+          cuts[i].push_back(spatial::radical_plane(dv, ri, rj));
+          cuts[std::size_t(j)].push_back(spatial::radical_plane(-dv, rj, ri));
         }
         const PairParams& pp = model.pair(p.phase[i], p.phase[j]);
         if (!(pp.sinter_delta_b > 0)) continue;
@@ -356,7 +379,16 @@ Scan scan(const Simulation& sim, bool per_particle) {
         sc.modulus += (law::NormalSintering::viscosity(pp, a) + 2.0 / 3.0 * et) * d * d;
         ++sc.necks;
       }
-  sc.solid -= sc.lens;
+  // The union, exactly: each sphere clipped to its power cell (triple overlaps counted right).
+  sc.solid_pairwise = spheres - sc.lens;
+  for (std::size_t i = 0; i < n; ++i) {
+    const spatial::ClippedSphere c = sphere_part(p.r[i], cuts[i]);
+    sc.solid += c.volume;
+    if (per_particle) {
+      sc.share[i] = 4.0 / 3.0 * M_PI * p.r[i] * p.r[i] * p.r[i] - c.volume;
+      sc.dshare[i] = 4 * M_PI * p.r[i] * p.r[i] - c.sphere_area;
+    }
+  }
   return sc;
 }
 
@@ -411,6 +443,7 @@ DensityState density_state(const Simulation& sim) {
   DensityState d;
   d.solid_volume = sc.solid;
   d.density = sc.solid / sim.cell().volume();
+  d.density_pairwise = sc.solid_pairwise / sim.cell().volume();
   d.mean_neck_ratio = sc.necks ? sc.neck_sum / double(sc.necks) : 0;
   d.contacts = sc.contacts;
   return d;
@@ -593,6 +626,7 @@ SinterRow SinterRun::make_row(const Scan& q, double dt_now, double mass_scale, d
   r.temperature = s_.program.temperature(sim_.time());
   const double V = sim_.cell().volume();
   r.density = q.solid / V;
+  r.density_pairwise = q.solid_pairwise / V;
   r.density_cell = rho0_ * V0_ / V;
   r.rate = (sim_.time() > t_prev) ? (r.density - rho_prev) / (sim_.time() - t_prev) : 0;
   for (int k = 0; k < 3; ++k) r.shrinkage[k] = 1 - axis_length(sim_.cell(), k) / L0_[k];

@@ -1,5 +1,5 @@
 // tomodem-bond's core: neck radii by rule on the pairs in contact (libs/spatial), relative density
-// with overlaps counted once, clusters.
+// from the exact union volume of the spheres (spatial/union_volume.hpp), clusters.
 #include "tomodem/mechanics/bonding.hpp"
 
 #include <algorithm>
@@ -8,7 +8,9 @@
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/tool.hpp"
+#include "tomodem/dem/bonds.hpp"
 #include "tomodem/dem/sinter.hpp"
+#include "tomodem/spatial/union_volume.hpp"
 
 namespace tomodem::mechanics {
 
@@ -19,18 +21,25 @@ std::vector<Neighbor> neighbor_pairs(const Packing& p, double reach) {
 }
 
 namespace {
-double density_of(const Packing& p, const std::vector<Neighbor>& pairs, double scale) {
-  // Positions scaled by `scale` (radii fixed): distances scale, the cell volume by scale³.
-  double v = 0;
-  for (double r : p.particles.radius) v += 4.0 / 3.0 * M_PI * r * r * r;
-  for (const Neighbor& q : pairs) v -= lens_volume(p.particles.radius[q.i], p.particles.radius[q.j], q.distance * scale);
-  return v / (p.cell.volume() * scale * scale * scale);
+/// Exact union density (spatial::union_volume) with the centres and the cell scaled by `scale`
+/// about the origin (radii fixed).
+double density_of(const Packing& p, double scale) {
+  Cell c = p.cell;
+  c.h *= scale;
+  std::vector<Vec3> x(p.particles.position);
+  for (Vec3& v : x) v = p.cell.origin + scale * (v - p.cell.origin);
+  return spatial::union_relative_density(x, p.particles.radius, c);
 }
 }  // namespace
 
 double relative_density(const Packing& p) {
   if (p.particles.size() == 0) return 0;
-  return density_of(p, neighbor_pairs(p, 0), 1.0);
+  return density_of(p, 1.0);
+}
+
+double relative_density_pairwise(const Packing& p) {
+  if (p.particles.size() == 0) return 0;
+  return spatial::union_volume(p.particles.position, p.particles.radius, p.cell).pairwise / p.cell.volume();
 }
 
 namespace {
@@ -69,21 +78,14 @@ void densify_to_target(Packing& p, const BondingOptions& o, BondingReport& rep) 
   // Without overlaps the density would grow as 1/s³; overlaps slow it down, so start there and
   // lower the bracket until the target is passed.
   double hi = 1.0, lo = std::cbrt(rep.initial_relative_density / o.target_density) * 0.98;
-  double rmax = 0;
-  for (double r : p.particles.radius) rmax = std::max(rmax, r);
-  std::vector<Neighbor> pairs;
-  for (;;) {
-    // Pairs that overlap at scale lo: d·lo < R_i + R_j, i.e. d < R_i + R_j + (R_i + R_j)(1/lo − 1).
-    pairs = neighbor_pairs(p, 2 * rmax * (1 / lo - 1) * 1.001);
-    if (density_of(p, pairs, lo) > o.target_density || lo < 0.3) break;
-    lo *= 0.97;
-  }
-  if (density_of(p, pairs, lo) <= o.target_density)
+  while (density_of(p, lo) <= o.target_density && lo >= 0.3) lo *= 0.97;
+  if (density_of(p, lo) <= o.target_density)
     throw InputError("", "--target-density", value_text(o.target_density),
-                     "not reached by densifying this packing (pairwise lens formula)");
-  for (int it = 0; it < 100 && hi - lo > 1e-13; ++it) {
+                     "not reached by densifying this packing (centres scaled by down to " + value_text(lo) + ")");
+  // The union density rises monotonically as the centres close in; bisection to 1e-10 in s.
+  for (int it = 0; it < 60 && hi - lo > 1e-10; ++it) {
     const double mid = 0.5 * (lo + hi);
-    (density_of(p, pairs, mid) > o.target_density ? lo : hi) = mid;
+    (density_of(p, mid) > o.target_density ? lo : hi) = mid;
   }
   const double s = 0.5 * (lo + hi);
   rep.scale = s;
@@ -144,6 +146,27 @@ void bond_contacts(Network& net, const BondingOptions& o, BondingReport& rep) {
 
 }  // namespace
 
+NeckRange neck_range(const Packing& p) {
+  NeckRange r;
+  r.valid_up_to = dem::kNeckCorrectionMaxRatio;
+  for (std::size_t b = 0; b < p.bonds.size(); ++b) {
+    if (p.bonds.state[b] != BondTable::intact) continue;
+    const double q = p.bonds.radius[b] / harmonic_radius(p.particles.radius[std::size_t(p.bonds.i[b])],
+                                                         p.particles.radius[std::size_t(p.bonds.j[b])]);
+    r.max_ratio = std::max(r.max_ratio, q);
+    if (q > r.valid_up_to) ++r.bonds_beyond;
+  }
+  return r;
+}
+
+std::string neck_range_warning(const NeckRange& r, long n_bonds) {
+  if (r.bonds_beyond == 0) return "";
+  return std::to_string(r.bonds_beyond) + " of " + std::to_string(n_bonds) + " necks have a/R above " +
+         value_text(r.valid_up_to) + " (largest " + value_text(r.max_ratio) +
+         "), beyond the range the neck stiffness corrections g_n, g_t are derived for: their g is held at its a/R = " +
+         value_text(r.valid_up_to) + " value (docs/bond.md#neck-laws)";
+}
+
 BondingReport bond_network(Network& net, const BondingOptions& o) {
   Packing& p = net.packing;
   BondingReport rep;
@@ -158,7 +181,8 @@ BondingReport bond_network(Network& net, const BondingOptions& o) {
   const std::size_t n = p.particles.size();
   rep.n_bonds = long(p.bonds.size());
   rep.bonds_per_particle = n ? 2.0 * double(rep.n_bonds) / double(n) : 0;
-  rep.relative_density = relative_density(p);  // rule sinter: the grown radii, the same lens formula
+  rep.relative_density = relative_density(p);  // rule sinter: the grown radii, the same union as the run
+  rep.relative_density_pairwise = relative_density_pairwise(p);
   rep.clusters = find_clusters(p, net.image);
   return rep;
 }

@@ -10,6 +10,7 @@
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/summary.hpp"
 #include "tomodem/core/tool.hpp"
+#include "tomodem/mechanics/bounds.hpp"
 
 namespace tomodem::mechanics {
 
@@ -183,9 +184,14 @@ std::string run_bond(const BondConfig& c) {
   out["n_bonds"] = rep.n_bonds;
   out["bonds_per_particle"] = rep.bonds_per_particle;
   out["relative_density"] = rep.relative_density;
+  out["relative_density_pairwise"] = rep.relative_density_pairwise;  // former estimate, comparison only
   out["initial_relative_density"] = rep.initial_relative_density;
   out["densification_scale"] = rep.scale;
   out["neck_ratio"] = neck_ratio_json(rep.neck_ratio);
+  const NeckRange nr = neck_range(p);
+  out["neck_ratio"]["g_valid_up_to"] = nr.valid_up_to;
+  out["neck_ratio"]["beyond_g_range"] = nr.bonds_beyond;
+  if (nr.bonds_beyond) warn(neck_range_warning(nr, rep.n_bonds));
   out["clusters"] = clusters_json(cl, spans);
   out.unit("neck_ratio", "1 (a_b / R)");
   out.unit("relative_density", "1");
@@ -328,6 +334,20 @@ std::string run_young(const YoungConfig& c) {
   out["E_error"] = want_implicit ? ir.E_error : er.E_error;
   out["C"] = want_implicit ? tensor_json(ir.C, ir.full_tensor) : json(nullptr);
   if (want_implicit && want_explicit) out["explicit_vs_implicit"] = (er.E - ir.E) / ir.E;
+  // E against the Hashin–Shtrikman upper bound at the union-volume density (docs/physics.md#bounds).
+  const StiffnessBoundCheck bc = check_stiffness_bound(p, want_implicit ? ir.E : er.E);
+  out["relative_density"] = bc.relative_density;
+  out["E_over_Es"] = bc.E_over_Es;
+  out["hs_upper_E_over_Es"] = bc.hs_upper_E_over_Es;
+  out["voigt_E_over_Es"] = bc.voigt_E_over_Es;
+  out["bound_exceeded"] = bc.exceeded;
+  const NeckRange nr = neck_range(p);
+  out["neck_correction"] = {{"valid_up_to", nr.valid_up_to}, {"max_neck_ratio", nr.max_ratio}, {"bonds_beyond", nr.bonds_beyond}};
+  if (nr.bonds_beyond) warn(neck_range_warning(nr, long(p.bonds.size())));
+  if (bc.exceeded)
+    warn("E/E_s = " + value_text(bc.E_over_Es) + " exceeds the Hashin-Shtrikman upper bound " +
+         value_text(bc.hs_upper_E_over_Es) + " of an isotropic porous solid at relative density " +
+         value_text(bc.relative_density) + " (docs/young.md#bounds)");
   out.unit("E", "Pa");
   out.unit("C", "Pa (Voigt xx, yy, zz, yz, xz, xy; engineering shear strains)");
   return out.text();

@@ -4,6 +4,7 @@
 // force, a twisting and a bending moment from the relative motion since bonding; its radius
 // does not change. Broken bonds leave the pair to the scene's contact law. Scenes without
 // bonds allocate and run nothing of this.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -35,9 +36,13 @@ struct BondLaw {
 struct BondStiffness {
   double kn, kt, ktwist, kbend, gn, gt;
 };
+/// The largest a/R̄ for which the corrections g_n, g_t are derived (the finite-element necks of
+/// Jauffrès et al. 2012 reach a/R = 0.5, docs/bond.md#neck-laws): larger necks get the g of
+/// a/R̄ = 0.5 (held, not extrapolated; young, fracture and bond count and warn about them).
+inline constexpr double kNeckCorrectionMaxRatio = 0.5;
 inline BondStiffness bond_stiffness(const BondLaw& law, double a, double ri, double rj) {
   const double rb = 2 * ri * rj / (ri + rj);
-  const double s = (a / rb) * (a / rb);
+  const double q = std::min(a / rb, kNeckCorrectionMaxRatio), s = q * q;
   BondStiffness k;
   k.gn = 1 + law.g_n_coefficient * s;
   k.gt = 1 + law.g_t_coefficient * s;

@@ -74,7 +74,8 @@ SinterSettings read_sinter_settings(const Scene& scene);
 struct SinterRow {
   long step = 0;
   double time = 0, temperature = 0;
-  double density = 0;        ///< union of the spheres (overlaps counted once) / cell volume
+  double density = 0;        ///< union of the spheres (exact: power-cell clipping) / cell volume
+  double density_pairwise = 0;  ///< Σ 4/3 π r³ − Σ lens over V: the former estimate (low by the triple overlaps)
   double density_cell = 0;   ///< ρ₀ V₀ / V (mass conservation through the cell shrinkage)
   double rate = 0;           ///< dρ/dt, 1/s
   double shrinkage[3] = {0, 0, 0};  ///< 1 − L_k/L_k0 per cell axis
@@ -96,10 +97,11 @@ struct SinterReport {
   double max_viscous_step_ratio = 0;
 };
 
-/// Relative density of the spheres with the overlaps counted once (pair lenses subtracted;
-/// triple overlaps neglected), and the mean neck ratio ⟨a/R⟩.
+/// Relative density of the spheres from their exact union volume (each sphere clipped to its
+/// power cell: spatial/union_volume.hpp), and the mean neck ratio ⟨a/R⟩.
 struct DensityState {
-  double solid_volume = 0, density = 0, mean_neck_ratio = 0;
+  double solid_volume = 0, density = 0, mean_neck_ratio = 0;  ///< density: exact union / cell
+  double density_pairwise = 0;  ///< pairwise lens sum (triple overlaps subtracted twice)
   long contacts = 0;
 };
 DensityState density_state(const Simulation& sim);

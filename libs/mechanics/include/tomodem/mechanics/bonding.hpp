@@ -45,14 +45,29 @@ std::vector<Neighbor> neighbor_pairs(const Packing& p, double reach);
 
 using spatial::intersection_radius;
 using spatial::lens_volume;
-/// Union volume of the spheres (pairwise lenses subtracted: triple overlaps neglected) over the
-/// cell volume.
+/// Union volume of the spheres over the cell volume, exact (spatial::union_volume: each sphere
+/// clipped to its power cell, so triple and higher overlaps count right).
 double relative_density(const Packing& p);
+/// The former estimate Σ 4/3 π r³ − Σ_pairs lens over the cell volume: low by the triple overlaps
+/// (subtracted twice); reported beside the exact value for comparison only.
+double relative_density_pairwise(const Packing& p);
+
+/// The intact bonds against the range of the neck corrections g_n, g_t (dem::bond_stiffness:
+/// derived up to a/R̄ = dem::kNeckCorrectionMaxRatio; larger necks get the g of that ratio).
+struct NeckRange {
+  double valid_up_to = 0;   ///< a/R̄ where the derivation of g_n, g_t ends
+  double max_ratio = 0;     ///< largest a/R̄ of an intact bond
+  long bonds_beyond = 0;    ///< intact bonds above valid_up_to (their g held at its value)
+};
+NeckRange neck_range(const Packing& p);
+/// The warning for necks beyond the range ("" when none), naming the tool's input.
+std::string neck_range_warning(const NeckRange& r, long n_bonds);
 
 struct BondingReport {
   long n_bonds = 0;
   double bonds_per_particle = 0;      ///< Z = 2 M / N
-  double relative_density = 0;        ///< after bonding (and densification)
+  double relative_density = 0;        ///< after bonding (and densification): exact union
+  double relative_density_pairwise = 0;  ///< the same, pairwise lens formula (low: comparison only)
   double initial_relative_density = 0;
   double scale = 1;                   ///< densification: positions and cell scaled by this factor
   double sintering_time_s = 0;        ///< rule sinter: simulated time to the target density
