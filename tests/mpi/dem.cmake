@@ -15,3 +15,20 @@ add_test(NAME dem_decomposition_doc_example
           $<TARGET_FILE:dem_decomposition_bench> ${CMAKE_SOURCE_DIR}/docs/dem.md)
 set_tests_properties(dem_decomposition_doc_example PROPERTIES LABELS mpi PROCESSORS 3
   ENVIRONMENT "OMP_NUM_THREADS=1;OMPI_ALLOW_RUN_AS_ROOT=1;OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1")
+
+# tomodem-dem started by mpirun on 1, 2 and 3 ranks against its run without mpirun: the test
+# starts the launcher itself (it is not an MPI program), so it is an ordinary executable.
+add_executable(dem_tool_ranks_tests ${CMAKE_CURRENT_SOURCE_DIR}/dem/test_dem_tool.cpp)
+target_link_libraries(dem_tool_ranks_tests PRIVATE tomodem_core nlohmann_json::nlohmann_json GTest::gtest_main)
+target_compile_definitions(dem_tool_ranks_tests PRIVATE
+  TOMODEM_BIN_DIR="${CMAKE_BINARY_DIR}/bin" TOMODEM_MPIEXEC="${MPIEXEC_EXECUTABLE}")
+add_dependencies(tomodem_mpi_tests dem_tool_ranks_tests tomodem-dem)
+add_test(NAME dem_tool_ranks COMMAND dem_tool_ranks_tests)
+set_tests_properties(dem_tool_ranks PROPERTIES LABELS mpi PROCESSORS 3
+  ENVIRONMENT "OMP_NUM_THREADS=1;OMPI_ALLOW_RUN_AS_ROOT=1;OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1")
+
+# A bonded lattice pulled to failure: the same bonds break in the same steps on 1 to 4 ranks.
+tomodem_mpi_test(dem_decomposition_bond_tests
+  SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/dem/test_bonds_decomposed.cpp
+  LIBS tomodem_dem
+  RANKS 1 2 3 4)

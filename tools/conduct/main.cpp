@@ -57,5 +57,5 @@ int main(int argc, char** argv) {
     if (!c.image.empty() || !c.input.empty()) tomodem::info("reading " + (c.image.empty() ? c.input : c.image));
     tomodem::emit_summary(tomodem::network::run_conduct(c), c.json);
     return tomodem::exit_code::ok;
-  });
+  }, tomodem::RankUse::shared);  // rows of the PETSc solves split across the ranks
 }

@@ -13,6 +13,9 @@
 #include "tomodem/core/tool.hpp"
 #include "tomodem/dem/law_registry.hpp"
 #include "tomodem/dem/scene.hpp"
+#if TOMODEM_HAVE_MPI
+#include "tomodem/dem/decomposition.hpp"
+#endif
 
 using namespace tomodem;
 using json = nlohmann::json;
@@ -82,7 +85,14 @@ int run(int argc, char** argv) {
   // every core (the scene reader's default, as for every tool: docs/cli.md).
   const int threads = app.count("--threads") ? (common.threads > 0 ? common.threads : all_threads()) : 0;
 
+  // Started on several ranks (MPI build only: run_tool refuses it elsewhere): one run, the scene
+  // decomposed into sub-domains (docs/dem.md, "Running on several ranks"); rank 0 reports and writes.
+  const int ranks = launched_ranks();
+  const bool rank0 = launched_rank() == 0;
+  if (!rank0) set_quiet(true);
+
   dem::Scene scene = dem::load_scene(scene_path, threads);
+  const std::size_t n_particles = scene.sim->particles().size();
   if (steps > 0) {
     scene.protocol.steps = steps;
     const double rows = double(steps / scene.protocol.output_interval + 2);
@@ -115,15 +125,36 @@ int run(int argc, char** argv) {
     const dem::RestartInfo ri = dem::read_checkpoint(restart, scene, changed_physics);
     for (const auto& c : ri.physics_changes) warn("--restart-changed-physics: continuing with changed physics: " + c);
   }
-  std::filesystem::create_directories(out_dir);
-  info(scene.sim->describe() + "; " + std::to_string(scene.sim->particles().size()) + " particles, dt " +
-       std::to_string(scene.sim->time_step()) + " s");
+  if (ranks > 1) {
+    // Refused before anything is written, the same on every rank (rank 0 says it).
+    if (!restart.empty()) throw InputError("", "--restart", restart, "checkpoints are not decomposed yet: restart on one rank");
+    if (!scene.outputs.checkpoint.empty())
+      throw InputError(scene_path, "output.checkpoint", scene.outputs.checkpoint,
+                       "checkpoints are not decomposed yet: run on one rank, or drop the checkpoint");
+#if TOMODEM_HAVE_MPI
+    try {
+      dem::decompose(*scene.sim);  // refuses walls, bonds, track_energy, too many ranks
+    } catch (const InputError& e) {
+      throw InputError(scene_path, e.field() == "ranks" ? "mpirun -np" : e.field(), e.value(), e.why());
+    }
+#endif
+  }
+  const std::string physics = scene.sim->describe();
+  if (rank0) std::filesystem::create_directories(out_dir);
+  info(physics + "; " + std::to_string(n_particles) + " particles, dt " + std::to_string(scene.sim->time_step()) +
+       " s" + (ranks > 1 ? ", " + std::to_string(ranks) + " ranks" : ""));
 
-  const dem::RunReport rep = dem::run_protocol(scene, out(scene.outputs.checkpoint), !common.quiet);
+  const dem::RunReport rep = dem::run_protocol(scene, out(scene.outputs.checkpoint), !common.quiet && rank0);
   const dem::Measurements& m = rep.final;
+  const double critical_step = scene.sim->critical_time_step();  // collective on ranks
 
   // Outputs: each written under a temporary name and renamed (core/output.hpp).
+#if TOMODEM_HAVE_MPI
+  Packing packing = dem::gather_packing(*scene.sim, scene.materials);  // to_packing when not decomposed
+  if (!rank0) return 0;  // the gathered state and the reduced measurements are rank 0's to write
+#else
   Packing packing = dem::to_packing(*scene.sim, scene.materials);
+#endif
   packing.provenance.tool = "tomodem-dem";
   packing.provenance.version = version_string();
   packing.provenance.parameters = scene.text;
@@ -149,16 +180,18 @@ int run(int argc, char** argv) {
   Summary j("tomodem-dem");
   j.input(scene_path, {{"reads", scene.inputs}});
   if (!restart.empty()) j["input"]["restart"] = restart;
-  j.n_particles(scene.sim->particles().size());
-  j["physics"] = scene.sim->describe();
+  j.n_particles(n_particles);
+  j["physics"] = physics;
   j["steps"] = rep.steps;
   j["step"] = scene.sim->step_count();
   j["stop_reason"] = rep.stop_reason;
   j["threads"] = scene.sim->settings().threads;
+  if (ranks > 1) j["ranks"] = ranks;
   j["run_time_s"] = rep.wall_time_s;  // the protocol alone (wall_time_s: the whole process)
-  j["particle_steps_per_second"] = rep.particle_steps_per_second;
+  // Of the whole sample (a rank's particles().size() counts its part and its ghosts).
+  j["particle_steps_per_second"] = rep.wall_time_s > 0 ? double(rep.steps) * double(n_particles) / rep.wall_time_s : 0.0;
   j["time_step_s"] = scene.sim->time_step();
-  j["critical_time_step_s"] = scene.sim->critical_time_step();
+  j["critical_time_step_s"] = critical_step;
   measurement_keys(j, m, scene.sim->settings().track_energy);
   j.output("packing", out(scene.outputs.packing));
   j.output("xdmf", std::filesystem::path(out(scene.outputs.packing)).replace_extension(".xdmf").string());
@@ -171,5 +204,5 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return run_tool("tomodem-dem", [&] { return run(argc, argv); });
+  return run_tool("tomodem-dem", [&] { return run(argc, argv); }, RankUse::shared);
 }

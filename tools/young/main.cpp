@@ -71,5 +71,5 @@ int main(int argc, char** argv) {
     tomodem::info("reading " + c.input);
     tomodem::emit_summary(tomodem::mechanics::run_young(c), c.json);
     return tomodem::exit_code::ok;
-  });
+  }, tomodem::RankUse::shared);  // rows of the PETSc solves split across the ranks
 }

@@ -14,6 +14,13 @@
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
 
+#ifdef TOMODEM_HAVE_MPI
+// The C API only: core links MPI::MPI_C (the C++ bindings would need MPI::MPI_CXX).
+#define OMPI_SKIP_MPICXX 1
+#define MPICH_SKIP_MPICXX 1
+#include <mpi.h>
+#endif
+
 namespace tomodem {
 
 namespace {
@@ -113,24 +120,29 @@ void spin_briefly_unless_told() {
 }  // namespace
 
 namespace {
-// Tools whose run on several ranks is one job, not N copies of the serial run: their linear
-// solves go to PETSc with rows split across the ranks (docs/solvers.md). The DEM tools (dem,
-// sinter, pack, bond) are not on this list: the decomposed engine exists in libs/dem
-// (docs/dem.md, "Running on several ranks") but these tools do not call it yet.
-bool runs_on_ranks(const std::string& tool) {
-#ifdef TOMODEM_HAVE_MPI
-  return tool == "tomodem-young" || tool == "tomodem-fracture" || tool == "tomodem-conduct";
-#else
-  (void)tool;
-  return false;
-#endif
+int env_int(const char* name, int fallback) {
+  const char* s = std::getenv(name);
+  return s && *s ? std::atoi(s) : fallback;
 }
+
+// What the running tool declared in its run_tool call (docs/scaling.md lists which tools do).
+RankUse g_ranks = RankUse::one_rank;
 }  // namespace
+
+// OpenMPI's mpirun (OMPI_COMM_WORLD_SIZE), MPICH's Hydra and srun --mpi=pmi2 (PMI_SIZE), srun
+// itself (SLURM_STEP_NUM_TASKS; not SLURM_NTASKS, which a batch script with --ntasks also has,
+// and from which tomodem-run starts serial steps).
+int launched_ranks() {
+  return std::max({env_int("OMPI_COMM_WORLD_SIZE", 1), env_int("PMI_SIZE", 1), env_int("SLURM_STEP_NUM_TASKS", 1)});
+}
+int launched_rank() {
+  return std::max({env_int("OMPI_COMM_WORLD_RANK", 0), env_int("PMI_RANK", 0), env_int("SLURM_PROCID", 0)});
+}
 
 std::string build_features(const std::string& tool) {
 #ifdef TOMODEM_HAVE_MPI
   if (tool.empty()) return "openmp mpi petsc";
-  return runs_on_ranks(tool) ? "openmp mpi petsc" : "openmp petsc";
+  return (tool == g_tool && g_ranks == RankUse::shared) ? "openmp mpi petsc" : "openmp petsc";
 #else
   (void)tool;
   return "openmp";
@@ -138,26 +150,21 @@ std::string build_features(const std::string& tool) {
 }
 
 namespace {
-int env_int(const char* name, int fallback) {
-  const char* s = std::getenv(name);
-  return s && *s ? std::atoi(s) : fallback;
-}
-
 // A tool started by a launcher on several ranks that cannot share one run among them (a build
-// without MPI, or a tool not on runs_on_ranks' list) would run that many copies of the serial run,
-// all writing the same outputs. The launchers say so in the environment: OpenMPI's mpirun
-// (OMPI_COMM_WORLD_SIZE), MPICH's Hydra and srun --mpi=pmi2 (PMI_SIZE), srun itself
-// (SLURM_STEP_NUM_TASKS; not SLURM_NTASKS, which a batch script with --ntasks also has, and from
-// which tomodem-run starts serial steps). Refused on every rank, said once, by rank 0.
-std::optional<int> refuse_copies_on_ranks(const std::string& tool) {
-  if (runs_on_ranks(tool)) return std::nullopt;
-  const int size = std::max({env_int("OMPI_COMM_WORLD_SIZE", 1), env_int("PMI_SIZE", 1), env_int("SLURM_STEP_NUM_TASKS", 1)});
+// without MPI, or a tool that does not declare RankUse::shared) would run that many copies of
+// the serial run, all writing the same outputs. Refused on every rank, said once, by rank 0.
+std::optional<int> refuse_copies_on_ranks(const std::string& tool, RankUse use) {
+  const int size = launched_ranks();
+#ifdef TOMODEM_HAVE_MPI
+  if (use == RankUse::shared || size <= 1) return std::nullopt;
+#else
+  (void)use;
   if (size <= 1) return std::nullopt;
-  const int rank = std::max({env_int("OMPI_COMM_WORLD_RANK", 0), env_int("PMI_RANK", 0), env_int("SLURM_PROCID", 0)});
-  if (rank == 0) {
+#endif
+  if (launched_rank() == 0) {
 #ifdef TOMODEM_HAVE_MPI
     std::cerr << tool << ": error: " << tool << " does not run on several ranks yet (started on " << size
-              << "; only young, fracture and conduct share one run among ranks, docs/scaling.md): run it on one rank\n";
+              << "; only dem, young, fracture and conduct share one run among ranks, docs/scaling.md): run it on one rank\n";
 #else
     std::cerr << tool << ": error: this build has no MPI: started on " << size
               << " ranks, it would run that many copies of the serial run; configure with -DTOMODEM_MPI=ON, "
@@ -166,13 +173,54 @@ std::optional<int> refuse_copies_on_ranks(const std::string& tool) {
   }
   return exit_code::bad_input;
 }
+
+#ifdef TOMODEM_HAVE_MPI
+void finalize_mpi_at_exit() {
+  int done = 0;
+  MPI_Finalized(&done);
+  if (!done) MPI_Finalize();
+}
+#endif
+
+/// A shared tool on several ranks: MPI is started here, before the tool's body (PETSc starts on
+/// top of it; PETSc's own finalisation, registered later, runs first at exit).
+bool start_ranks(RankUse use) {
+#ifdef TOMODEM_HAVE_MPI
+  if (use != RankUse::shared || launched_ranks() <= 1) return false;
+  int started = 0;
+  MPI_Initialized(&started);
+  if (!started) {
+    int provided = 0;
+    MPI_Init_thread(nullptr, nullptr, MPI_THREAD_FUNNELED, &provided);
+    std::atexit(finalize_mpi_at_exit);
+  }
+  return true;
+#else
+  (void)use;
+  return false;
+#endif
+}
+
+/// A failure on one rank of a shared run: the others may wait in a collective this rank never
+/// reaches, so the whole job ends with the exit code (after the message is out).
+[[noreturn]] void abort_ranks(int code) {
+#ifdef TOMODEM_HAVE_MPI
+  std::cerr.flush();
+  MPI_Abort(MPI_COMM_WORLD, code);
+#endif
+  std::_Exit(code);
+}
 }  // namespace
 
-int run_tool(const std::string& tool_name, const std::function<int()>& body) {
-  if (const auto refused = refuse_copies_on_ranks(tool_name)) return *refused;
+int run_tool(const std::string& tool_name, const std::function<int()>& body, RankUse ranks) {
+  if (const auto refused = refuse_copies_on_ranks(tool_name, ranks)) return *refused;
   spin_briefly_unless_told();
   g_tool = tool_name;
+  g_ranks = ranks;
   install_cleanup_handlers();
+  const bool on_ranks = start_ranks(ranks);
+  const bool speaks = !on_ranks || launched_rank() == 0;
+  const std::string who = on_ranks ? tool_name + " (rank " + std::to_string(launched_rank()) + ")" : tool_name;
   // However the body ends, a temporary it did not commit must not stay behind.
   struct Cleanup {
     ~Cleanup() { remove_registered_temporaries(); }
@@ -180,13 +228,15 @@ int run_tool(const std::string& tool_name, const std::function<int()>& body) {
   try {
     return body();
   } catch (const InputError& e) {
-    std::cerr << tool_name << ": error: " << e.what() << '\n';
+    if (speaks) std::cerr << tool_name << ": error: " << e.what() << '\n';
     return exit_code::bad_input;
   } catch (const NumericalError& e) {
-    std::cerr << tool_name << ": numerical failure: " << e.what() << '\n';
+    std::cerr << who << ": numerical failure: " << e.what() << '\n';
+    if (on_ranks) remove_registered_temporaries(), abort_ranks(exit_code::numerical);
     return exit_code::numerical;
   } catch (const std::exception& e) {
-    std::cerr << tool_name << ": failure: " << e.what() << '\n';
+    std::cerr << who << ": failure: " << e.what() << '\n';
+    if (on_ranks) remove_registered_temporaries(), abort_ranks(exit_code::failure);
     return exit_code::failure;
   }
 }

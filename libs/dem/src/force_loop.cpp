@@ -96,8 +96,25 @@ void ForceLoop::compute(SimState& s, NeighbourList& nl, bool tally, Vec3* pair_f
     } else
 #endif
     s.kern.pair[tally](jb, split[tid], split[tid + 1], f, tq, &tallies[tid], st);
-    if (have_bonds)
+    if (have_bonds) {
+#if TOMODEM_HAVE_MPI
+      if (s.domain) {
+        // As for pairs: a bond with a ghost is computed on both ranks (the same failure on both);
+        // its tally and its failure event count where its first particle is owned.
+        const uint8_t* ghost = s.domain->ghost.data();
+        const std::size_t e = nl.bond_split[tid + 1];
+        Tally elsewhere;
+        std::vector<BondEvent> told_elsewhere;
+        for (std::size_t a = nl.bond_split[tid], b; a < e; a = b) {
+          const uint8_t g = ghost[s.bonds.i[a]];
+          for (b = a + 1; b < e && ghost[s.bonds.i[b]] == g;) ++b;
+          s.bond_kernel[tally](bj, a, b, f, tq, g ? &elsewhere : &tallies[tid], st, g ? &told_elsewhere : &event_buf[tid]);
+        }
+        for (BondEvent& ev : event_buf[tid]) ev.bond = s.domain->bond_id[std::size_t(ev.bond)];
+      } else
+#endif
       s.bond_kernel[tally](bj, nl.bond_split[tid], nl.bond_split[tid + 1], f, tq, &tallies[tid], st, &event_buf[tid]);
+    }
 #pragma omp barrier
     // Reduce the per-thread buffers in a fixed order: the result depends on the thread count
     // only through round-off, and not at all on scheduling.

@@ -160,6 +160,14 @@ struct Simulation::Impl : SimState {
     bond_events.resize(n_events);
     nl.need_build = build_flag;
     m.bonds = long(bonds.intact_count());
+#if TOMODEM_HAVE_MPI
+    if (domain) {  // each bond counted where its first particle is owned
+      double intact = 0;
+      for (std::size_t b = 0; b < bonds.size(); ++b) intact += bonds.state[b] == BondSet::intact && !domain->ghost[bonds.i[b]];
+      domain->sum(&intact, 1);
+      m.bonds = long(intact);
+    }
+#endif
     return m;
   }
 };
@@ -220,6 +228,7 @@ void Simulation::attach_domain(std::unique_ptr<DomainHooks> d) {
   Impl& s = *impl_;
   s.domain_owner = std::move(d);
   s.domain = s.domain_owner.get();
+  const bool valid_list = !s.nl.need_build && !s.nl.start.empty();
   try {
     s.domain->before_build(s, s.nl);
   } catch (...) {  // refused before anything changed (decomposition.hpp)
@@ -227,7 +236,11 @@ void Simulation::attach_domain(std::unique_ptr<DomainHooks> d) {
     s.domain_owner.reset();
     throw;
   }
+  // The build that installs the decomposition is not one the trajectory asked for: the count
+  // of rebuilds stays the serial run's (a list that was valid would not have been rebuilt).
+  const long builds = s.nl.builds + (valid_list ? 0 : 1);
   s.nl.build(s);
+  s.nl.builds = builds;
   s.domain->after_build(s, s.nl);
 }
 DomainHooks* Simulation::domain() const { return impl_->domain; }

@@ -25,12 +25,14 @@
 #include <cstring>
 #include <numeric>
 #include <sstream>
+#include <map>
 #include <unordered_map>
 
 #include "../measure.hpp"
 #include "../neighbour_list.hpp"
 #include "../sim_state.hpp"
 #include "tomodem/core/error.hpp"
+#include "tomodem/dem/scene.hpp"
 #include "tomodem/dem/simulation.hpp"
 #include "tomodem/spatial/grid.hpp"
 
@@ -101,6 +103,19 @@ struct Record {
   std::size_t hist = 0;  // offset in the history pool
 };
 
+/// A bond as it travels and as a rank keeps it between builds (decomposition.hpp, "Bonds").
+struct BondRec {
+  int32_t gid = 0;       // index in the whole sample's bond set
+  int64_t a = 0, b = 0;  // ids of its particles (a: the set's i)
+  Image k{0, 0, 0};      // image n − (W_b − W_a): unchanged by wrapping
+  double radius = 0, rest = 0;
+  uint8_t state = 0, mode = 0, local = 0;
+  double broken_at = 0, twist = 0;
+  Vec3 shear, bend, image;  // image: the last one it was computed with
+};
+
+void copy_bond_state(std::map<int32_t, BondRec>& recs, const BondSet& B, const std::vector<int32_t>& ids);
+
 class Domain final : public DomainHooks {
  public:
   explicit Domain(const DecompositionOptions& opt);
@@ -116,6 +131,7 @@ class Domain final : public DomainHooks {
 
   DomainLayout layout() const;
   MPI_Comm comm() const { return comm_; }
+  int32_t bond_count() const { return n_bonds_; }
   ~Domain() override {
     int finalized = 0;
     MPI_Finalized(&finalized);
@@ -134,6 +150,9 @@ class Domain final : public DomainHooks {
   std::vector<double> pool_;
   bool initial_ = true;
   long migrated_ = 0, exchanges_ = 0;
+  bool has_bonds_ = false;               // the sample has bonds (the same on every rank)
+  int32_t n_bonds_ = 0;                  // in the whole sample
+  std::map<int32_t, BondRec> bonds_;     // every bond with an owned end, by global index
 
   int rank_of(const int c[3]) const { return (c[0] * dims_[1] + c[1]) * dims_[2] + c[2]; }
   int box_of(double s, int k) const { return std::clamp(int(std::floor(s * dims_[k])), 0, dims_[k] - 1); }
@@ -147,6 +166,12 @@ class Domain final : public DomainHooks {
   void install(SimState& s, std::vector<Entry>& all);
   void init(const SimState& s, const NeighbourList& nl);
   static Entry entry_of(const SimState& s, std::size_t i, const Image& w, uint8_t ghost);
+  void bonds_from_local(const SimState& s);
+  void install_bonds(SimState& s);
+
+ public:
+  /// Records of the bonds with an owned end, their state as `local` (the rank's set) has it now.
+  std::vector<BondRec> bond_records(const BondSet& local) const;
 };
 
 Domain::Domain(const DecompositionOptions& opt) {
@@ -172,7 +197,23 @@ Domain::Domain(const DecompositionOptions& opt) {
 /// the start, so every rank finds the same numbers).
 void Domain::init(const SimState& s, const NeighbourList& nl) {
   const double rmax = *std::max_element(s.p.r.begin(), s.p.r.end());
-  reach_ = (2 * rmax + nl.skin + nl.reach_max) * (1 + 1e-9);  // margin: round-off of fractional coordinates
+  // A bond's partner must be a ghost while the bond can act: its rest length counts as a reach
+  // (a broken bond farther apart than that is out of contact: it only resets its shear spring).
+  double bond_reach = 0;
+  for (double l : s.bonds.rest_length) bond_reach = std::max(bond_reach, l);
+  reach_ = (std::max(2 * rmax, bond_reach) + nl.skin + nl.reach_max) * (1 + 1e-9);  // margin: round-off of fractional coordinates
+  has_bonds_ = s.bonds.size() > 0;
+  n_bonds_ = int32_t(s.bonds.size());
+  bond_id.resize(s.bonds.size());
+  std::iota(bond_id.begin(), bond_id.end(), 0);
+  for (std::size_t b = 0; b < s.bonds.size(); ++b) {
+    BondRec r;
+    r.gid = int32_t(b);
+    r.a = s.p.id[std::size_t(s.bonds.i[b])], r.b = s.p.id[std::size_t(s.bonds.j[b])];
+    for (int k = 0; k < 3; ++k) r.k[std::size_t(k)] = int(std::lround(s.bonds.image[b][k]));
+    r.radius = s.bonds.radius[b], r.rest = s.bonds.rest_length[b];
+    bonds_.emplace(r.gid, r);
+  }
   for (int a = -1; a <= 1; ++a)
     for (int b = -1; b <= 1; ++b)
       for (int c = -1; c <= 1; ++c) {
@@ -398,6 +439,10 @@ void Domain::before_build(SimState& s, NeighbourList& nl) {
   if (initial_) init(s, nl), ghost.assign(n, 0);
   double e[3];
   margins(s, e);  // first: a refusal leaves the state as it was
+  bonds_from_local(s);
+  // The bonds of each owned particle, to travel with it.
+  std::unordered_multimap<int64_t, int32_t> bonds_of;
+  for (const auto& [gid, r] : bonds_) bonds_of.emplace(r.a, gid), bonds_of.emplace(r.b, gid);
   std::vector<std::vector<int>> attached;
   std::vector<Record> records;
   std::vector<double> pool;
@@ -446,6 +491,9 @@ void Domain::before_build(SimState& s, NeighbourList& nl) {
       w.put(records[std::size_t(r)].key), w.put(records[std::size_t(r)].touch);
       w.put(&pool[records[std::size_t(r)].hist], stride);
     }
+    const auto range = bonds_of.equal_range(s.p.id[i]);
+    w.put(uint32_t(std::distance(range.first, range.second)));
+    for (auto it2 = range.first; it2 != range.second; ++it2) w.put(bonds_.at(it2->second));
     ++migrated_;
   }
   // History that stays: pairs with an owned particle that stays here.
@@ -476,10 +524,22 @@ void Domain::before_build(SimState& s, NeighbourList& nl) {
         rd.get(&pool_[rec.hist], stride);
         kept_.emplace(rec.key, rec);
       }
+      const uint32_t nb = rd.get<uint32_t>();
+      for (uint32_t q = 0; q < nb; ++q) {
+        const BondRec br = rd.get<BondRec>();
+        bonds_.emplace(br.gid, br);  // already here (its other end is owned here): the same state
+      }
     }
   }
   // Ghosts: each owned particle to every neighbour whose box it reaches (through any image).
   std::sort(mine.begin(), mine.end(), [](const Entry& a, const Entry& b) { return a.id < b.id; });
+  // The rank keeps the bonds with an end it owns now.
+  const auto owned_here = [&](int64_t id) {
+    const auto it = std::lower_bound(mine.begin(), mine.end(), id, [](const Entry& en, int64_t v) { return en.id < v; });
+    return it != mine.end() && it->id == id;
+  };
+  for (auto it = bonds_.begin(); it != bonds_.end();)
+    it = (owned_here(it->second.a) || owned_here(it->second.b)) ? std::next(it) : bonds_.erase(it);
   std::vector<std::vector<char>> gout(nbr_.size());
   std::vector<std::vector<int64_t>> sent(nbr_.size());
   for (const Entry& en : mine) {
@@ -510,6 +570,7 @@ void Domain::before_build(SimState& s, NeighbourList& nl) {
     }
   }
   install(s, all);
+  install_bonds(s);
   // Forward lists in local indices (ids are unique on a rank, and sorted).
   const auto local = [&](int64_t id) {
     return int32_t(std::lower_bound(s.p.id.begin(), s.p.id.end(), id) - s.p.id.begin());
@@ -525,6 +586,62 @@ void Domain::before_build(SimState& s, NeighbourList& nl) {
   nl.need_build = true;
   initial_ = false;
   ++exchanges_;
+}
+
+/// Copies the state of the bonds in `B` (the rank's set, bond_id mapping it) into `recs`.
+void copy_bond_state(std::map<int32_t, BondRec>& recs, const BondSet& B, const std::vector<int32_t>& ids) {
+  for (std::size_t b = 0; b < B.size(); ++b) {
+    BondRec& r = recs.at(ids[b]);
+    r.state = B.state[b], r.mode = B.mode[b], r.broken_at = B.broken_at[b];
+    r.shear = B.shear_force[b], r.twist = B.twist[b], r.bend = B.bend[b], r.image = B.image[b];
+  }
+}
+
+void Domain::bonds_from_local(const SimState& s) { copy_bond_state(bonds_, s.bonds, bond_id); }
+
+/// The rank's bond set: every kept bond whose two particles are here, in the whole set's order
+/// (the serial order of the force sums), with local indices and the image n = K + W_b − W_a.
+void Domain::install_bonds(SimState& s) {
+  BondSet& B = s.bonds;
+  B = BondSet{};
+  bond_id.clear();
+  const auto local = [&](int64_t id) {
+    const auto it = std::lower_bound(s.p.id.begin(), s.p.id.end(), id);
+    return (it != s.p.id.end() && *it == id) ? int32_t(it - s.p.id.begin()) : int32_t(-1);
+  };
+  bool lost = false;
+  int64_t lost_a = 0, lost_b = 0;
+  for (auto& [gid, r] : bonds_) {
+    const int32_t i = local(r.a), j = local(r.b);
+    r.local = i >= 0 && j >= 0;
+    if (!r.local) {
+      // Out of each other's reach: farther apart than the rest length plus the skin, so out of
+      // contact until they come back within reach (the serial engine resets the spring too).
+      if (r.state == BondSet::intact) lost = true, lost_a = r.a, lost_b = r.b;
+      r.shear = Vec3{};
+      continue;
+    }
+    Vec3 image;
+    for (int k = 0; k < 3; ++k) image[k] = double(r.k[std::size_t(k)] + w_[std::size_t(j)][std::size_t(k)] - w_[std::size_t(i)][std::size_t(k)]);
+    B.i.push_back(i), B.j.push_back(j), B.image.push_back(image), B.radius.push_back(r.radius);
+    B.rest_length.push_back(r.rest), B.state.push_back(r.state), B.mode.push_back(r.mode);
+    B.broken_at.push_back(r.broken_at), B.shear_force.push_back(r.shear), B.twist.push_back(r.twist);
+    B.bend.push_back(r.bend);
+    bond_id.push_back(gid);
+  }
+  if (has_bonds_ && any(lost))
+    throw NumericalError(lost ? "the intact bond of particles " + std::to_string(lost_a) + " and " + std::to_string(lost_b) +
+                                    " stretched beyond the ghost reach (" + std::to_string(reach_) +
+                                    " m): the run is unstable or the bonds need failure"
+                              : std::string("an intact bond stretched beyond the ghost reach on another rank: the run is unstable"));
+}
+
+std::vector<BondRec> Domain::bond_records(const BondSet& local) const {
+  std::map<int32_t, BondRec> now = bonds_;
+  copy_bond_state(now, local, bond_id);
+  std::vector<BondRec> out;
+  for (const auto& kv : now) out.push_back(kv.second);
+  return out;
 }
 
 void Domain::after_build(SimState& s, NeighbourList& nl) {
@@ -603,13 +720,69 @@ DomainLayout Domain::layout() const {
   return l;
 }
 
+/// Every rank's bytes, concatenated in rank order on rank 0 (empty elsewhere).
+std::vector<char> gather_bytes(MPI_Comm comm, const std::vector<char>& mine) {
+  int rank = 0, size = 1;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
+  const int len = int(mine.size());
+  std::vector<int> lens(static_cast<std::size_t>(size)), offs(static_cast<std::size_t>(size), 0);
+  MPI_Gather(&len, 1, MPI_INT, lens.data(), 1, MPI_INT, 0, comm);
+  std::vector<char> all;
+  if (rank == 0) {
+    std::partial_sum(lens.begin(), lens.end() - 1, offs.begin() + 1);
+    all.resize(std::size_t(offs.back() + lens.back()));
+  }
+  MPI_Gatherv(mine.data(), len, MPI_BYTE, all.data(), lens.data(), offs.data(), MPI_BYTE, 0, comm);
+  return all;
+}
+
+/// The owned rows of this rank's contact table, gathered on rank 0 in the serial order, indexed
+/// by position in `ids` (the gathered particles' ids, sorted; rank 0 only).
+ContactTable contacts_on_rank0(Simulation& sim, const Domain& d, const std::vector<int64_t>& ids) {
+  ContactTable local = sim.contacts();
+  const Particles& p = sim.particles();
+  // Rows of owned particles only (a ghost's row is listed by its owner).
+  std::vector<char> mine;
+  Writer w{mine};
+  for (std::size_t c = 0; c < local.size(); ++c)
+    if (!d.ghost[std::size_t(local.i[c])]) {
+      w.put(p.id[std::size_t(local.i[c])]), w.put(p.id[std::size_t(local.j[c])]);
+      w.put(local.overlap[c]), w.put(local.normal_force[c]), w.put(local.tangential_force[c]);
+    }
+  const std::vector<char> all = gather_bytes(d.comm(), mine);
+  ContactTable out;
+  if (d.layout().rank != 0) return out;
+  struct Row {
+    int64_t a, b;
+    double overlap;
+    Vec3 fn, ft;
+  };
+  std::vector<Row> rows;
+  Reader rd{all.data(), all.data() + all.size()};
+  while (!rd.done()) {
+    Row r;
+    r.a = rd.get<int64_t>(), r.b = rd.get<int64_t>(), r.overlap = rd.get<double>();
+    r.fn = rd.get<Vec3>(), r.ft = rd.get<Vec3>();
+    rows.push_back(r);
+  }
+  // A row comes whole from its owner, already by (partner, image): a stable sort by the two ids
+  // keeps the images' order, so the table is the serial one.
+  std::stable_sort(rows.begin(), rows.end(), [](const Row& x, const Row& y) { return x.a != y.a ? x.a < y.a : x.b < y.b; });
+  const auto index = [&](int64_t id) { return int32_t(std::lower_bound(ids.begin(), ids.end(), id) - ids.begin()); };
+  for (const Row& r : rows) {
+    out.i.push_back(index(r.a)), out.j.push_back(index(r.b));
+    out.overlap.push_back(r.overlap), out.normal_force.push_back(r.fn), out.tangential_force.push_back(r.ft);
+  }
+  return out;
+}
+
 }  // namespace
 
 // ------------------------------------------------------------------------------------ public
 void decompose(Simulation& sim, const DecompositionOptions& opt) {
   if (sim.domain()) throw InputError("", "decompose", "twice", "the simulation is already decomposed");
   if (!sim.walls().empty()) throw InputError("", "walls", std::to_string(sim.walls().size()), "walls are not decomposed yet: run on one rank");
-  if (sim.bonds().size() > 0) throw InputError("", "bonds", std::to_string(sim.bonds().size()), "bonds are not decomposed yet: run on one rank");
   if (sim.settings().track_energy) throw InputError("", "track_energy", "true", "the energy budget is not decomposed yet: run on one rank");
   sim.attach_domain(std::make_unique<Domain>(opt));
 }
@@ -634,18 +807,9 @@ Particles gather_particles(const Simulation& sim) {
       w.put(p.phase[i]), w.put(p.motion[i]);
       if (rot) w.put(p.omega[i]), w.put(p.inv_I[i]);
     }
-  int rank = 0, size = 1;
+  const std::vector<char> all = gather_bytes(d->comm(), mine);
+  int rank = 0;
   MPI_Comm_rank(d->comm(), &rank);
-  MPI_Comm_size(d->comm(), &size);
-  const int len = int(mine.size());
-  std::vector<int> lens(static_cast<std::size_t>(size)), offs(static_cast<std::size_t>(size), 0);
-  MPI_Gather(&len, 1, MPI_INT, lens.data(), 1, MPI_INT, 0, d->comm());
-  std::vector<char> all;
-  if (rank == 0) {
-    std::partial_sum(lens.begin(), lens.end() - 1, offs.begin() + 1);
-    all.resize(std::size_t(offs.back() + lens.back()));
-  }
-  MPI_Gatherv(mine.data(), len, MPI_BYTE, all.data(), lens.data(), offs.data(), MPI_BYTE, 0, d->comm());
   Particles out;
   if (rank != 0) return out;
   std::vector<Entry> es;
@@ -664,6 +828,80 @@ Particles gather_particles(const Simulation& sim) {
     if (rot) out.omega.push_back(e.omega), out.torque.push_back({}), out.inv_I.push_back(e.inv_I);
   }
   out.rotation = rot;
+  return out;
+}
+
+ContactTable gather_contacts(Simulation& sim) {
+  const auto* d = dynamic_cast<const Domain*>(sim.domain());
+  if (!d) return sim.contacts();
+  const Particles p = gather_particles(sim);
+  return contacts_on_rank0(sim, *d, p.id);
+}
+
+Packing gather_packing(Simulation& sim, const std::vector<Material>& materials) {
+  const auto* d = dynamic_cast<const Domain*>(sim.domain());
+  if (!d) return to_packing(sim, materials);
+  const Particles p = gather_particles(sim);
+  ContactTable contacts = contacts_on_rank0(sim, *d, p.id);
+  Packing out;
+  if (d->layout().rank != 0) return out;
+  // The fields of dem::to_packing (checkpoint.cpp), from the gathered arrays.
+  out.particles.position = p.x;
+  out.particles.radius = p.r;
+  out.particles.phase = p.phase;
+  out.particles.velocity = p.v;
+  if (p.has_rotation()) out.particles.angular_velocity = p.omega;
+  out.cell = sim.cell();
+  out.contacts = std::move(contacts);
+  out.materials = materials;
+  return out;
+}
+
+BondSet gather_bonds(const Simulation& sim) {
+  const auto* d = dynamic_cast<const Domain*>(sim.domain());
+  if (!d) return sim.bonds();
+  const Particles ids = gather_particles(sim);
+  const Particles& p = sim.particles();
+  std::vector<char> mine;
+  Writer w{mine};
+  // Each bond once: from the rank that owns its first particle.
+  for (const BondRec& r : d->bond_records(sim.bonds())) {
+    const auto it = std::lower_bound(p.id.begin(), p.id.end(), r.a);
+    if (it != p.id.end() && *it == r.a && !d->ghost[std::size_t(it - p.id.begin())]) w.put(r);
+  }
+  const std::vector<char> all = gather_bytes(d->comm(), mine);
+  BondSet out;
+  if (d->layout().rank != 0) return out;
+  const auto index = [&](int64_t id) { return int32_t(std::lower_bound(ids.id.begin(), ids.id.end(), id) - ids.id.begin()); };
+  std::vector<BondRec> recs(std::size_t(d->bond_count()));
+  Reader rd{all.data(), all.data() + all.size()};
+  while (!rd.done()) {
+    const BondRec r = rd.get<BondRec>();
+    recs.at(std::size_t(r.gid)) = r;
+  }
+  for (const BondRec& r : recs) {
+    out.i.push_back(index(r.a)), out.j.push_back(index(r.b)), out.image.push_back(r.image);
+    out.radius.push_back(r.radius), out.rest_length.push_back(r.rest), out.state.push_back(r.state);
+    out.mode.push_back(r.mode), out.broken_at.push_back(r.broken_at), out.shear_force.push_back(r.shear);
+    out.twist.push_back(r.twist), out.bend.push_back(r.bend);
+  }
+  return out;
+}
+
+std::vector<BondEvent> gather_bond_events(const Simulation& sim) {
+  const auto* d = dynamic_cast<const Domain*>(sim.domain());
+  if (!d) return sim.bond_events();
+  std::vector<char> mine;
+  Writer w{mine};
+  for (const BondEvent& e : sim.bond_events()) w.put(e);  // each kept once, by its first particle's owner
+  const std::vector<char> all = gather_bytes(d->comm(), mine);
+  std::vector<BondEvent> out;
+  if (d->layout().rank != 0) return out;
+  Reader rd{all.data(), all.data() + all.size()};
+  while (!rd.done()) out.push_back(rd.get<BondEvent>());
+  std::stable_sort(out.begin(), out.end(), [](const BondEvent& a, const BondEvent& b) {
+    return a.time != b.time ? a.time < b.time : a.bond < b.bond;
+  });
   return out;
 }
 

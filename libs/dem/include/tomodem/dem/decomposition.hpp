@@ -15,7 +15,9 @@
 #include <cstdint>
 #include <vector>
 
+#include "tomodem/core/packing.hpp"
 #include "tomodem/core/vec3.hpp"
+#include "tomodem/dem/bonds.hpp"
 #include "tomodem/dem/particles.hpp"
 
 namespace tomodem::dem {
@@ -34,6 +36,8 @@ class DomainHooks {
   virtual ~DomainHooks() = default;
   /// Per local particle: 1 for a ghost (a copy of another rank's particle), 0 for an owned one.
   std::vector<uint8_t> ghost;
+  /// Per bond of the rank's bond set: its index in the whole sample's set (events carry it).
+  std::vector<int32_t> bond_id;
   /// Refreshes the ghosts' positions, velocities and spins from their owners (every force pass).
   virtual void forward(SimState& s) = 0;
   /// True on every rank when it is true on any.
@@ -68,7 +72,14 @@ struct DomainLayout {
 /// and settings), into sub-domains: each rank keeps its own particles and gets its ghost layer.
 /// Collective. Throws InputError (the same on every rank) when a sub-domain would be thinner
 /// than the interaction reach plus skin (too many ranks along a cell vector for this sample),
-/// and for what is not decomposed yet (walls, bonds, energy tracking).
+/// and for what is not decomposed yet (walls, energy tracking).
+///
+/// Bonds: a rank holds every bond with an owned end whose other end it holds too (owned or
+/// ghost), in the order of the whole set; a bond between an owned particle and a ghost is
+/// computed on both ranks from the same bits, so both find the same forces, the same history
+/// and the same failure in the same step, with no message. Its tally and its failure event count
+/// where its first particle (the lower index) is owned. The bond state travels with migrating
+/// particles. An intact bond stretched beyond the ghost reach is a NumericalError on every rank.
 void decompose(Simulation& sim, const DecompositionOptions& opt = {});
 
 /// This rank's place in the decomposition (ranks = 1, owned = all, for a serial simulation).
@@ -77,5 +88,23 @@ DomainLayout layout(const Simulation& sim);
 /// The owned particles of every rank, sorted by id, on rank 0 (empty elsewhere). Collective.
 /// Rotational columns are included when the scene has them; forces are not gathered.
 Particles gather_particles(const Simulation& sim);
+
+/// The contact table of the whole cell on rank 0 (empty elsewhere), in the serial order (rows by
+/// particle id, each row by partner and image), indices into gather_particles' order. Collective
+/// (a tally pass, as Simulation::contacts; the trajectory is unchanged).
+ContactTable gather_contacts(Simulation& sim);
+
+/// The whole sample's bond set on rank 0 (empty elsewhere), bonds in their original order, i and
+/// j indices into gather_particles' order. A broken bond whose particles drifted out of each
+/// other's reach keeps the image it had when they were last within reach. Collective.
+BondSet gather_bonds(const Simulation& sim);
+
+/// The bond events of the whole run on rank 0 (empty elsewhere), each once, in the serial order
+/// (by time, then bond). Collective.
+std::vector<BondEvent> gather_bond_events(const Simulation& sim);
+
+/// Simulation::contacts and dem::to_packing of the whole cell, on rank 0 (other ranks get an
+/// empty packing). Collective.
+Packing gather_packing(Simulation& sim, const std::vector<Material>& materials);
 
 }  // namespace tomodem::dem
