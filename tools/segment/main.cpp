@@ -34,9 +34,9 @@ int main(int argc, char** argv) {
     app.add_option("--downsample", c.read.downsample, "block-average by this integer factor")->capture_default_str();
     tomodem::cli::add_choice(app, "--filter", c.filter, tomodem::image::kImageFilterNames, "none | median | gaussian | cad | nlm");
     app.add_option("--filter-radius", c.filter_radius_text,
-                   "median radius / NLM patch radius: voxels of the finest axis (2, 2vox) or a length (2um), the same length on every axis")
+                   "median radius / NLM patch radius: voxels of the finest axis (2vox) or a length (2um), the same length on every axis; a bare number is refused")
         ->capture_default_str();
-    app.add_option("--sigma", c.sigma_text, "gaussian sigma: voxels of the finest axis (1.5) or a length (1.5um)")->capture_default_str();
+    app.add_option("--sigma", c.sigma_text, "gaussian sigma: voxels of the finest axis (1.5vox) or a length (1.5um); a bare number is refused")->capture_default_str();
     app.add_option("--iterations", c.iterations, "cad / nlm iterations")->capture_default_str();
     app.add_option("--conductance", c.conductance, "cad conductance")->capture_default_str();
     tomodem::cli::add_choice(app, "--method", c.method, tomodem::image::kThresholdMethodNames,

@@ -15,6 +15,7 @@
 #include "tomodem/core/packing_io.hpp"
 #include "tomodem/core/summary.hpp"
 #include "tomodem/core/tool.hpp"
+#include "tomodem/core/units.hpp"
 #include "tomodem/image/outputs.hpp"
 #include "tomodem/image/segment.hpp"
 #include "tomodem/image/tools.hpp"
@@ -49,20 +50,19 @@ double to_voxels(const std::string& option, const std::string& text, double voxe
 
 double finest_spacing(const Volume& v) { return std::min({v.spacing[0], v.spacing[1], v.spacing[2]}); }
 
-// --filter-radius and --sigma: a bare number (what they always meant) or "2vox" is voxels of the
-// finest axis, "2um" a length. Returns voxels of the finest axis; finest = 0: the check only
-// (before the volume is read), lengths then give 0.
+// --filter-radius and --sigma: "2vox" is voxels of the finest axis, "2um" a length. A bare number
+// is refused: these options read it as voxels until issue 21, while every other length option
+// reads it as metres, so neither reading can be assumed for a number already in a script.
+// Returns voxels of the finest axis; finest = 0: the check only (before the volume is read),
+// lengths then give 0.
 bool bare_number(const std::string& text) {
-  try {
-    std::size_t pos = 0;
-    std::stod(text, &pos);
-    return pos == text.size();
-  } catch (const std::exception&) {
-    return false;
-  }
+  double x = 0;
+  std::string unit;
+  return split_number_unit(text, x, unit) && unit.empty();
 }
 double voxels_of(const std::string& option, const std::string& text, double finest) {
-  if (bare_number(text)) return std::stod(text);
+  if (bare_number(text))
+    throw InputError("", option, text, "give a unit: 2vox or 1.5um (a bare number is not read as voxels or metres here)");
   const double L = parse_length(option, text);
   if (L < 0) return -L;
   return finest > 0 ? L / finest : 0;
@@ -116,15 +116,12 @@ void check_segment_options(const SegmentConfig& c) {
     }
     return tomodem::image::num_text(x);
   };
-  // In voxels: the range now; a length: > 0 now, the range in voxels once the volume is read.
+  // In voxels: the range now; a length: > 0 now (parse_length), the range in voxels once the volume is read.
   const double filter_radius = voxels_of("--filter-radius", c.filter_radius_text, 0);
-  if (bare_number(c.filter_radius_text) ? !(filter_radius >= 1 && filter_radius <= 10)
-                                        : !(parse_length("--filter-radius", c.filter_radius_text) != 0 && filter_radius >= 0))
-    throw InputError("", "--filter-radius", c.filter_radius_text, "must be in [1, 10] voxels (or a length, e.g. 2um)");
+  if (filter_radius != 0 && !(filter_radius >= 1 && filter_radius <= 10))
+    throw InputError("", "--filter-radius", c.filter_radius_text, "must be in [1, 10] voxels (1vox to 10vox, or a length, e.g. 2um)");
   const double sigma = voxels_of("--sigma", c.sigma_text, 0);
-  if (bare_number(c.sigma_text) ? !(std::isfinite(sigma) && sigma > 0 && sigma <= 100)
-                                : !(parse_length("--sigma", c.sigma_text) != 0 && sigma >= 0))
-    throw InputError("", "--sigma", c.sigma_text, "must be finite, > 0 and <= 100 voxels (or a length, e.g. 1.5um)");
+  if (!(sigma <= 100)) throw InputError("", "--sigma", c.sigma_text, "must be > 0 and <= 100 voxels (e.g. 1.5vox, or a length, e.g. 1.5um)");
   if (c.iterations < 1 || c.iterations > 1000)
     throw InputError("", "--iterations", std::to_string(c.iterations), "must be an integer in [1, 1000]");
   if (!finite_pos(c.conductance)) throw InputError("", "--conductance", num_text(c.conductance, "--conductance"), "must be finite and > 0");

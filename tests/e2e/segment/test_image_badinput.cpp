@@ -248,7 +248,11 @@ const std::vector<Row> kRows = {
     {"SegOutputFolderMissing", "segment", "{W}/g.mha --json {W}/nosuch/s.json", {"g.mha=mha"}, 2, {"--json", "nosuch"}},
     // options, each named with its value
     {"SegSigmaNan", "segment", "{W}/g.mha --filter gaussian --sigma nan", {"g.mha=mha"}, 2, {"--sigma", "nan"}},
-    {"SegFilterRadiusZero", "segment", "{W}/g.mha --filter-radius 0", {"g.mha=mha"}, 2, {"--filter-radius", "0"}},
+    {"SegFilterRadiusZero", "segment", "{W}/g.mha --filter-radius 0vox", {"g.mha=mha"}, 2, {"--filter-radius", "0vox"}},
+    // A bare number was voxels here and is metres elsewhere: refused, not silently reread.
+    {"SegFilterRadiusBare", "segment", "{W}/g.mha --filter-radius 2", {"g.mha=mha"}, 2, {"--filter-radius", "'2'", "give a unit: 2vox or 1.5um"}},
+    {"SegSigmaBare", "segment", "{W}/g.mha --filter gaussian --sigma 1.5", {"g.mha=mha"}, 2, {"--sigma", "'1.5'", "give a unit"}},
+    {"SegFilterRadiusUnknownUnit", "segment", "{W}/g.mha --filter-radius 2px", {"g.mha=mha"}, 2, {"--filter-radius", "2px", "unknown length unit"}},
     {"SegIterationsZero", "segment", "{W}/g.mha --filter cad --iterations 0", {"g.mha=mha"}, 2, {"--iterations", "0"}},
     {"SegConductanceNegative", "segment", "{W}/g.mha --filter cad --conductance -1", {"g.mha=mha"}, 2, {"--conductance", "-1"}},
     {"SegLevelsNan", "segment", "{W}/g.mha --method manual --levels nan", {"g.mha=mha"}, 2, {"--levels", "nan"}},

@@ -226,7 +226,7 @@ TEST(RealSample, SoilCornerRunsWithDefaults) {
   g.output.clear();
   g.overlay.clear();
   g.filter = ImageFilter::gaussian;
-  g.sigma_text = "1.1";
+  g.sigma_text = "1.1vox";
   const json sg = json::parse(run_segment(g));
   std::cout << "soil corner, gaussian 1.1 + Otsu: porosity " << sg["porosity"] << " (published 0.4307)\n";
   EXPECT_NEAR(sg["porosity"].get<double>(), 0.4307, 0.03);  // per-slice vs global Otsu; see docs/segment.md

@@ -57,10 +57,10 @@ struct SegmentConfig {
   std::string spacing_text, roi_text, macro_radius_text = "3vox", raw_dims_text;
   // filtering
   ImageFilter filter = ImageFilter::median;
-  /// Median box radius / NLM patch radius and Gaussian sigma: a bare number or "2vox" in voxels
-  /// of the finest axis, or a length ("2um"); the same length on every axis (anisotropic voxels).
-  std::string filter_radius_text = "1";
-  std::string sigma_text = "1";
+  /// Median box radius / NLM patch radius and Gaussian sigma: "2vox" in voxels of the finest axis,
+  /// or a length ("2um"); the same length on every axis (anisotropic voxels). A bare number is refused.
+  std::string filter_radius_text = "1vox";
+  std::string sigma_text = "1vox";
   int iterations = 5;                 ///< cad / nlm iterations
   double conductance = 1.0;           ///< cad
   // thresholding
