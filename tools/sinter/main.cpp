@@ -55,20 +55,21 @@ void plot_outputs(const std::string& dir, const std::vector<std::vector<double>>
     return v;
   };
   const std::vector<double> t = column(1);
-  PlotSpec d{"Densification", "time (s)", "relative density", false, false, {}};
+  PlotSpec d{"Densification", "time (s)", "relative density (-)", false, false, {}};
   d.series.push_back({"overlaps counted once", t, column(3)});
   d.series.push_back({"from the cell, rho0 V0 / V", t, column(4)});
   write_plot(dir + "/densification", d);
-  PlotSpec dt{"Densification against temperature", "temperature (K)", "relative density", false, false, {}};
+  PlotSpec dt{"Densification against temperature", "temperature (K)", "relative density (-)", false, false, {}};
   dt.series.push_back({"overlaps counted once", column(2), column(3)});
   write_plot(dir + "/densification_temperature", dt);
-  PlotSpec sh{"Linear shrinkage per cell axis", "time (s)", "shrinkage 1 - L/L0", false, false, {}};
+  PlotSpec sh{"Linear shrinkage per cell axis", "time (s)", "shrinkage 1 - L/L0 (-)", false, false, {}};
   sh.series.push_back({"x", t, column(6)});
   sh.series.push_back({"y", t, column(7)});
   sh.series.push_back({"z", t, column(8)});
   write_plot(dir + "/shrinkage", sh);
-  PlotSpec nk{"Neck-size distribution", "neck ratio a/R (bin centre)", "fraction of necks", false, false, {}};
+  PlotSpec nk{"Neck-size distribution", "neck ratio a/R (-)", "fraction of necks (-)", false, false, {}};
   PlotSeries ns{"necks", {}, {}};
+  ns.draw = PlotDraw::steps;  // a histogram: flat bins, not a curve through their centres
   for (const auto& b : necks) {
     ns.x.push_back(0.5 * (b[0] + b[1]));
     ns.y.push_back(b[3]);

@@ -370,12 +370,14 @@ void write_fracture_outputs(const FractureConfig& c, const FractureSample& s, co
   if (!c.plot.empty()) {
     PlotSpec spec;
     spec.title = "tomodem-fracture: " + std::string(to_string(s.geometry)) + " crack, a/W = " + std::to_string(s.a / s.W);
-    spec.xlabel = "grip opening (um)";
+    spec.xlabel = "grip opening (µm)";
     spec.ylabel = "load (N)";
     for (const FractureResult* r : {&sla, &ex}) {
       if (r->curve.empty()) continue;
       PlotSeries se;
-      se.title = to_string(r->method);
+      se.title = r == &sla ? "sequentially linear (SLA events)" : "explicit DEM test";
+      // The SLA saw-tooth is drawn as given: each drop a vertical segment at its event opening.
+      se.draw = r == &sla ? PlotDraw::lines : PlotDraw::points_and_lines;
       for (const FracturePoint& q : r->curve) se.x.push_back(q.displacement * 1e6), se.y.push_back(q.force);
       spec.series.push_back(se);
     }

@@ -48,7 +48,7 @@ TEST(FractureBench, ErrorAgainstRunTime) {
   PlotSpec spec;
   spec.title = "K_IC of a pre-cracked network: explicit test against SLA";
   spec.xlabel = "wall time (s)";
-  spec.ylabel = "|K_IC / K_IC(SLA) - 1|";
+  spec.ylabel = "|K_IC / K_IC(SLA) - 1| (-)";
   spec.logx = spec.logy = true;
   const int sizes[2][3] = {{12, 3, 18}, {24, 3, 36}};
   for (const auto& sz : sizes) {

@@ -213,15 +213,23 @@ def plot(folder, name, title, ylabel, series):
             for P, (m, lo, hi) in rows:
                 f.write(f"{P} {m:.6g} {lo:.6g} {hi:.6g}\n")
             f.write("\n\n")
-    plots = ", ".join(f"'{name}.dat' index {k} using 1:2:3:4 with yerrorlines title '{label}'"
+    plots = ", ".join(f"'{name}.dat' index {k} using 1:2:3:4 with yerrorlines linetype {k + 1} title '{label}' noenhanced"
                       for k, (label, _) in enumerate(series))
-    for term, ext in (("pngcairo size 900,600", "png"), ("svg size 900,600", "svg")):
-        gp = os.path.join(folder, name + ".gp")
-        with open(gp, "w") as f:
-            f.write(f"set terminal {term}\nset output '{name}.{ext}'\nset logscale x 2\nset xrange [0.8:1300]\n"
-                    f"set yrange [0:1.1]\nset grid\nset key bottom left\nset xlabel 'MPI ranks'\n"
-                    f"set ylabel '{ylabel}'\nset title '{title}'\nplot {plots}\n")
-        subprocess.run(["gnuplot", name + ".gp"], cwd=folder, check=True)
+    # tomodem's one plot style (libs/core/share/plot_style.gp, also compiled into core's write_plot),
+    # copied into the script so that it re-runs on its own: gnuplot NAME.gp.
+    style = open(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "..", "libs", "core", "share",
+                              "plot_style.gp")).read()
+    gp = os.path.join(folder, name + ".gp")
+    with open(gp, "w") as f:
+        f.write(f"# {name}: made by tests/bench/mpi/scaling_model.py. Re-make: gnuplot {name}.gp, or\n"
+                f"# gnuplot -e \"output_file='{name}.svg'\" {name}.gp\n{style}\n"
+                f"if (!exists('output_file')) output_file = '{name}.png'\n"
+                f"eval('set terminal ' . (output_file[strlen(output_file)-2:] eq 'svg' ? plot_terminal_svg : plot_terminal_png))\n"
+                f"set output output_file\nset logscale x 2\nset xrange [0.8:1300]\n"
+                f"set yrange [0:1.1]\nset key bottom left\nset xlabel 'MPI ranks (-)'\n"
+                f"set ylabel '{ylabel}'\nset title '{title}' noenhanced\nplot {plots}\n")
+    for ext in ("png", "svg"):
+        subprocess.run(["gnuplot", "-e", f"output_file='{name}.{ext}'", name + ".gp"], cwd=folder, check=True)
 
 
 def self_test():
@@ -364,9 +372,9 @@ def main(argv):
               f"{', '.join(r['load1'] for r in lam[P])} | {fmt(pred)} s |")
 
     if plots:
-        plot(plots, "scaling-strong", "Strong scaling (model, scene A density)", "parallel efficiency",
+        plot(plots, "scaling-strong", "Strong scaling (model, scene A density)", "parallel efficiency (-)",
              [(f"N=10^{e}, {n.split(' (')[0]}", tables[(e, n)]) for e in (6, 8) for n, _, _ in nets])
-        plot(plots, "scaling-weak", "Weak scaling (model, scene A density)", "weak efficiency",
+        plot(plots, "scaling-weak", "Weak scaling (model, scene A density)", "weak efficiency (-)",
              [(f"{per_rank[e]:.0f} per rank, {n.split(' (')[0]}", wtables[(e, n)]) for e in (6, 8) for n, _, _ in nets])
 
 

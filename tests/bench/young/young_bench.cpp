@@ -47,7 +47,7 @@ TEST(YoungBench, ErrorAgainstRunTime) {
   PlotSpec spec;
   spec.title = "Young's modulus of a bonded network (N = 2000): error against run time";
   spec.xlabel = "wall time (s)";
-  spec.ylabel = "relative error of E";
+  spec.ylabel = "relative error of E (-)";
   spec.logx = spec.logy = true;
   std::string csv = "method,setting,E_Pa,true_error,reported_error,wall_time_s,iterations\n";
   for (const char* solver : {"amg", "cg"}) {

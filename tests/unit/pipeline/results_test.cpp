@@ -64,14 +64,22 @@ TEST(Results, RowNamesBadItems) {
 }
 
 TEST(Results, PlotSpecParsingAndErrors) {
-  const auto p = tp::parse_plot("name=E;x=density;y=E_rel,G_rel;by=family;logy;title=It's E");
+  const auto p = tp::parse_plot(
+      "name=E;x=density;y=E_rel,G_rel;legend=Young's modulus,shear modulus;by=family;logy;title=It's E;"
+      "xlabel=relative density (-);ylabel=modulus / solid's [1]");
   EXPECT_EQ(p.x, "density");
   EXPECT_EQ(p.y, (std::vector<std::string>{"E_rel", "G_rel"}));
   EXPECT_EQ(p.by, "family");
   EXPECT_TRUE(p.logy);
   EXPECT_FALSE(p.logx);
   EXPECT_EQ(p.title, "It's E");
-  EXPECT_EQ(p.xlabel, "density");  // defaults to the column
+  EXPECT_EQ(p.xlabel, "relative density (-)");
+  EXPECT_EQ(p.legend, (std::vector<std::string>{"Young's modulus", "shear modulus"}));
+  // Axis labels need their unit (core/plot.hpp): missing, or a column name alone, is refused.
+  EXPECT_THROW(tp::parse_plot("name=p;x=a;y=b;ylabel=b (s)"), tomodem::InputError);
+  EXPECT_THROW(tp::parse_plot("name=p;x=a;y=b;xlabel=a (s);ylabel=b"), tomodem::InputError);
+  EXPECT_THROW(tp::parse_plot("name=p;x=a;y=b;xlabel=a (s);ylabel=b (per run)"), tomodem::InputError);
+  EXPECT_THROW(tp::parse_plot("name=p;x=a;y=b,c;legend=one;xlabel=a (s);ylabel=b (s)"), tomodem::InputError);  // 2 y, 1 name
   EXPECT_THROW(tp::parse_plot("x=a;y=b"), tomodem::InputError);              // no name
   EXPECT_THROW(tp::parse_plot("name=p;x=a"), tomodem::InputError);           // no y
   EXPECT_THROW(tp::parse_plot("name=p;x=a;y=b;logz"), tomodem::InputError);  // unknown flag
@@ -85,7 +93,7 @@ TEST(Results, TableRatiosPlotMeansAndReport) {
   o.title = "t";
   o.columns = {"family", "density", "replica", "young.E", "E_rel"};
   o.ratios = {"E_rel=young.E/E_s"};
-  o.plots = {"name=stiffness;x=density;y=E_rel;by=family;logy"};
+  o.plots = {"name=stiffness;x=density;y=E_rel;by=family;logy;xlabel=relative density (-);ylabel=E/E_s (-)"};
   // tools/scripts/install-deps.sh installs gnuplot: its absence is a broken install, not a skip.
   ASSERT_TRUE(tomodem::plotting_available()) << "gnuplot is not installed: apt-get install gnuplot-nox (tools/scripts/install-deps.sh)";
   const auto f = tp::write_report(s.path("report"), files, o);
@@ -137,7 +145,7 @@ TEST(Results, BadReportRequestsWriteNothing) {
   o.ratios = {"r=young.E/missing"};
   bad(o);
   o = {};
-  o.plots = {"name=p;x=density;y=nope"};
+  o.plots = {"name=p;x=density;y=nope;xlabel=relative density (-);ylabel=nope (-)"};
   bad(o);
   EXPECT_THROW(tp::write_report(s.path("report"), {s.write("x.json", "{\"E\": {\"a\": 1}}")}, {}), tomodem::InputError);
 }

@@ -39,6 +39,7 @@ double own_error(const Row& row, const std::string& column, double value);
 struct PlotRequest {
   std::string name, x, by, title, xlabel, ylabel;
   std::vector<std::string> y;
+  std::vector<std::string> legend;  // legend=NAME,...: one readable name per y column (default: the column)
   bool logx = false, logy = false;
 };
 PlotRequest parse_plot(const std::string& spec);
