@@ -6,12 +6,14 @@
 #include <unistd.h>
 #include <xxhash.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <chrono>
 #include <climits>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <ctime>
 #include <filesystem>
@@ -19,6 +21,7 @@
 #include <sstream>
 
 #include "tomodem/core/error.hpp"
+#include "tomodem/core/tool.hpp"
 
 namespace tomodem {
 
@@ -60,12 +63,36 @@ extern "C" void cleanup_and_reraise(int sig) {
 }
 
 std::string errno_text(int e) { return e == ENOSPC ? "no space left on device" : std::strerror(e); }
+
+int env_int(const char* name, int fallback) {
+  const char* s = std::getenv(name);
+  return s && *s ? std::atoi(s) : fallback;
+}
+
+// This process's rank in a job of several, as the launcher says: OpenMPI's mpirun, PMI (MPICH's
+// Hydra, srun --mpi=pmi2), srun. A rank counts only where its job has more than one (a serial
+// step inside one task of a Slurm job keeps rank 0).
+int launched_rank_of_several() {
+  int rank = 0;
+  if (env_int("OMPI_COMM_WORLD_SIZE", 1) > 1) rank = std::max(rank, env_int("OMPI_COMM_WORLD_RANK", 0));
+  if (env_int("PMI_SIZE", 1) > 1) rank = std::max(rank, env_int("PMI_RANK", 0));
+  if (env_int("SLURM_STEP_NUM_TASKS", 1) > 1) rank = std::max(rank, env_int("SLURM_PROCID", 0));
+  return rank;
+}
 }  // namespace
+
+bool writes_outputs() {
+  // Decided once the tool is named (run_tool names it before its body runs); before that, and in
+  // programs that are not tools (tests under mpirun), every rank writes.
+  static const bool silent = [] { return launched_rank_of_several() > 0; }();
+  return !silent || tool_name() == "tomodem";
+}
 
 std::string temporary_path(const std::string& final_path) {
   // Same folder as the result, so the final rename stays on one file system (atomic).
   const std::string tmp = final_path + ".tmp" + std::to_string(::getpid());
-  register_temporary(tmp);
+  // A silent rank creates no temporary (HDF5 builds its files in memory, text is not written).
+  if (writes_outputs()) register_temporary(tmp);
   return tmp;
 }
 
@@ -92,6 +119,10 @@ void discard_output(const std::string& final_path) {
 
 void commit_output(const std::string& final_path) {
   const std::string tmp = temporary_path(final_path);
+  if (!writes_outputs()) {  // rank 0 writes the file; whatever a writer left under this rank's name goes
+    ::unlink(tmp.c_str());
+    return;
+  }
   if (std::rename(tmp.c_str(), final_path.c_str()) != 0) {
     const int e = errno;
     ::unlink(tmp.c_str());
@@ -102,6 +133,7 @@ void commit_output(const std::string& final_path) {
 }
 
 void write_text_atomic(const std::string& path, const std::string& text) {
+  if (!writes_outputs()) return;
   const std::string tmp = temporary_path(path);
   const auto fail = [&](int fd, int e) {
     if (fd >= 0) ::close(fd);

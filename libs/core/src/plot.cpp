@@ -96,6 +96,7 @@ const std::string& plot_style() {
 }
 
 void write_plot(const std::filesystem::path& stem, const PlotSpec& spec) {
+  if (!writes_outputs()) return;  // a silent rank (output.hpp): gnuplot would write its own files
   for (const auto& s : spec.series)
     if (s.x.size() != s.y.size() || (!s.yerr.empty() && s.yerr.size() != s.y.size()))
       throw InputError(stem.string(), "series '" + s.title + "'", std::to_string(s.x.size()) + " x values",

@@ -77,6 +77,7 @@ std::string Summary::text() {
 }
 
 void emit_summary(const std::string& text, const std::string& json_path) {
+  if (!writes_outputs()) return;  // rank 0 prints it (output.hpp)
   if (json_path.empty() || json_path == "-") {
     std::cout << text << std::flush;
     return;

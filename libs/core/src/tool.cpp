@@ -33,11 +33,14 @@ std::string version_string() {
 }
 
 void set_quiet(bool q) { g_quiet = q; }
-bool quiet() { return g_quiet; }
+// A silent rank (output.hpp, writes_outputs) says nothing: rank 0 says it once.
+bool quiet() { return g_quiet || !writes_outputs(); }
 void info(const std::string& m) {
-  if (!g_quiet) std::cerr << g_tool << ": " << m << '\n';
+  if (!quiet()) std::cerr << g_tool << ": " << m << '\n';
 }
-void warn(const std::string& m) { std::cerr << g_tool << ": warning: " << m << '\n'; }
+void warn(const std::string& m) {
+  if (writes_outputs()) std::cerr << g_tool << ": warning: " << m << '\n';
+}
 const std::string& tool_name() { return g_tool; }
 
 namespace {

@@ -11,6 +11,7 @@
 
 #include "tomodem/core/cli_docs.hpp"
 #include "tomodem/core/error.hpp"
+#include "tomodem/core/output.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/core/units.hpp"
 
@@ -21,7 +22,7 @@ inline void add_version(CLI::App& app, const std::string& tool) {
   app.add_flag_callback(
       "--version",
       [tool] {
-        std::cout << tool << " " << version_string() << "\nfeatures: " << build_features(tool) << "\n";
+        if (writes_outputs()) std::cout << tool << " " << version_string() << "\nfeatures: " << build_features(tool) << "\n";
         throw CLI::Success();
       },
       "print the version and exit");
@@ -129,10 +130,10 @@ inline std::optional<int> parse(CLI::App& app, int argc, char** argv) {
   }
   try {
     app.parse(argc, argv);
-  } catch (const CLI::Success& e) {
-    return app.exit(e);
+  } catch (const CLI::Success& e) {  // --help; on several ranks rank 0 alone prints (output.hpp)
+    return writes_outputs() ? app.exit(e) : exit_code::ok;
   } catch (const CLI::ParseError& e) {
-    app.exit(e);
+    if (writes_outputs()) app.exit(e);
     return exit_code::bad_input;
   }
   return std::nullopt;

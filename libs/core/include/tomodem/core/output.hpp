@@ -8,6 +8,14 @@
 
 namespace tomodem {
 
+/// One rank writes (docs/scaling.md, "Outputs on several ranks"). A tool (named by run_tool)
+/// started by mpirun or srun on several ranks computes the same results on every rank, and only
+/// rank 0 prints and writes: on the others this is false, and their info, warnings, progress and
+/// summary are not printed and their outputs not written (write_text_atomic returns at once,
+/// HDF5 files are built in memory and dropped, temporaries are never created, commit_output
+/// renames nothing). Programs that are not tools (tests under mpirun) write on every rank.
+bool writes_outputs();
+
 /// The temporary name used for `final_path` (same folder, so rename is atomic). Registered for
 /// removal on SIGINT/SIGTERM until commit_output or discard_output.
 std::string temporary_path(const std::string& final_path);
