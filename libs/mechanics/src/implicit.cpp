@@ -184,6 +184,13 @@ void StiffnessSystem::Impl::prepare(bool first) {
     ldlt = std::make_unique<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double, Eigen::ColMajor, int>, Eigen::Lower>>(
         Eigen::SparseMatrix<double, Eigen::ColMajor, int>(K));
     if (ldlt->info() != Eigen::Success) throw RuntimeFailure("stiffness matrix: LDLT factorisation failed");
+    const auto& L = ldlt->matrixL().nestedExpression();  // the factor's columns: what the cost model predicts
+    info.factor_nonzeros = info.factor_flops = 0;
+    for (Eigen::Index j = 0; j < L.outerSize(); ++j) {
+      const double cj = double(L.outerIndexPtr()[j + 1] - L.outerIndexPtr()[j]);
+      info.factor_nonzeros += cj;
+      info.factor_flops += cj * cj;
+    }
   } else if (kind == ElasticSolver::petsc) {
     if (first) {
       PetscSolveOptions po;
@@ -285,10 +292,14 @@ StiffnessSystem::StiffnessSystem(const Packing& p, const std::vector<Image>& ima
     m.nbr[a].erase(std::unique(m.nbr[a].begin(), m.nbr[a].end()), m.nbr[a].end());
     m.bstart[a + 1] = m.bstart[a] + int64_t(m.nbr[a].size());
   }
-  if (o.solver == ElasticSolver::automatic)
-    m.kind = m.np < 2000 ? ElasticSolver::ldlt : ElasticSolver::amg;
-  else
-    m.kind = o.solver;
+  // The cost model sees the matrix before assembly: 6 unknowns per particle, 3 when no bond carries
+  // moments (the rotations are dropped then), and 36 or 9 entries per block of the pattern.
+  bool moments = false;
+  for (std::size_t b : m.used) moments = moments || k.kt[b] > 0 || k.ktwist[b] > 0 || k.kbend[b] > 0;
+  const int per = moments ? 6 : 3;
+  m.info.predicted = predict_solver_costs(m.nbr, long(per) * m.np, double(per * per) * double(m.bstart[m.np]),
+                                          o.full_tensor ? 6 : 3, o.tolerance);
+  m.kind = o.solver == ElasticSolver::automatic ? m.info.predicted.cheapest : o.solver;
   m.info.solver = m.kind;
   m.assemble(true);
   m.info.dofs = m.ndof;

@@ -248,6 +248,7 @@ json implicit_json(const ImplicitResult& ir, double tolerance) {
           {"C", tensor_json(ir.C, ir.full_tensor)},
           {"residual", ir.residual},
           {"solver", to_string(ir.solver)},
+          {"predicted_s", {{"ldlt", ir.predicted.ldlt_s}, {"amg", ir.predicted.amg_s}, {"cg", ir.predicted.cg_s}}},
           {"tolerance", tolerance},
           {"iterations", ir.iterations},
           {"multigrid_levels", ir.levels},
@@ -274,6 +275,9 @@ json explicit_json(const ExplicitResult& er, const ExplicitOptions& eo) {
           {"E_half_time", er.E_half_time},
           {"rate_check", eo.rate_check},
           {"nu_error", er.nu_error},
+          {"E_error_lateral", er.E_error_lateral},
+          {"nu_error_lateral", er.nu_error_lateral},
+          {"nu_error_rate", er.nu_error_rate},
           {"loading", to_string(eo.loading)},
           {"protocol", to_string(eo.protocol)},
           {"strain", eo.strain},
@@ -332,6 +336,7 @@ std::string run_young(const YoungConfig& c) {
   out["E"] = want_implicit ? ir.E : er.E;
   out["nu"] = want_implicit ? ir.nu : er.nu;
   out["E_error"] = want_implicit ? ir.E_error : er.E_error;
+  out["nu_error"] = want_implicit ? ir.E_error : er.nu_error;  // implicit: the relative residual, as for E
   out["C"] = want_implicit ? tensor_json(ir.C, ir.full_tensor) : json(nullptr);
   if (want_implicit && want_explicit) out["explicit_vs_implicit"] = (er.E - ir.E) / ir.E;
   // E against the Hashin–Shtrikman upper bound at the union-volume density (docs/physics.md#bounds).

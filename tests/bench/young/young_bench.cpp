@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 #include <omp.h>
 #include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <Eigen/Dense>
 #include <chrono>
@@ -167,4 +169,139 @@ TEST(YoungBench, ExplicitAgreesWithImplicit5000) {
   std::printf("N=5000: E_impl %.5e Pa (%.1f s), E_expl %.5e Pa (%.1f s, %ld steps), diff %.2e; nu %.4f vs %.4f\n", ir.E,
               ir.wall_time_s, er.E, er.wall_time_s, er.steps, er.E / ir.E - 1, ir.nu, er.nu);
   EXPECT_NEAR(er.E / ir.E, 1.0, 0.01);
+}
+
+
+namespace {
+/// One solver path on one network, in a child process: its CPU time (user + system, the child's
+/// own) and its peak resident memory above what the child started with (peak reset through
+/// /proc/self/clear_refs), so each path is measured alone and the runs do not share a peak.
+struct PathRun {
+  bool ok = false;
+  double cpu_s = 0, rss_mb = 0, E = 0;
+  long iterations = 0;
+  double factor_nonzeros = 0, factor_flops = 0;
+};
+double status_kb(const char* key) {
+  std::ifstream in("/proc/self/status");
+  std::string k;
+  double v = 0;
+  while (in >> k)
+    if (k == key) return in >> v, v;
+  return 0;
+}
+PathRun run_path(const Network& net, const std::vector<dem::BondLaw>& laws, ElasticSolver solver, double tol) {
+  int fd[2];
+  if (pipe(fd) != 0) return {};
+  std::fflush(stdout);  // the child must not inherit (and print again) what is buffered
+  const pid_t pid = fork();
+  if (pid == 0) {
+    close(fd[0]);
+    { std::ofstream("/proc/self/clear_refs") << "5"; }
+    const double rss0 = status_kb("VmRSS:");
+    PathRun r;
+    ImplicitOptions o;
+    o.solver = solver;
+    o.tolerance = tol;
+    const ImplicitResult ir = solve_implicit(net.packing, net.image, bond_stiffnesses(net.packing, laws), o);
+    rusage u{};
+    getrusage(RUSAGE_SELF, &u);
+    r.ok = true;
+    r.cpu_s = double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+    r.rss_mb = (status_kb("VmHWM:") - rss0) / 1024;
+    r.E = ir.E;
+    r.iterations = ir.iterations;
+    r.factor_nonzeros = ir.factor_nonzeros;
+    r.factor_flops = ir.factor_flops;
+    if (write(fd[1], &r, sizeof r) != ssize_t(sizeof r)) _exit(1);
+    _exit(0);
+  }
+  close(fd[1]);
+  PathRun r;
+  if (read(fd[0], &r, sizeof r) != ssize_t(sizeof r)) r.ok = false;
+  close(fd[0]);
+  int st = 0;
+  waitpid(pid, &st, 0);
+  return r;
+}
+}  // namespace
+
+// The table of docs/young.md "How auto chooses": every serial path of the implicit test (ldlt,
+// amg, cg, cg-ic) on random networks at three densities (Z ≈ 3.7, 5, 6.5) and on SC (Z = 6) and
+// BCC (Z = 8) lattices, N from ~100 up to TOMODEM_BENCH_MAX_N (default 10 000; 100 000 adds the
+// multigrid-only row), six strain cases to 1e-10 (the CLI defaults), one thread. Per path: CPU
+// time (user + system, the child process's own: comparable under load) and peak memory; the
+// model's prediction beside it; a path is skipped when the model predicts more than
+// TOMODEM_BENCH_MAX_S (default 60) CPU seconds for it. Writes young-solver-costs.csv.
+TEST(YoungBench, SolverCostTable) {
+  omp_set_num_threads(1);
+  const char* env_n = std::getenv("TOMODEM_BENCH_MAX_N");
+  const char* env_s = std::getenv("TOMODEM_BENCH_MAX_S");
+  const int max_n = env_n ? std::atoi(env_n) : 10000;
+  const double max_s = env_s ? std::atof(env_s) : 60;
+  const double tol = 1e-10;
+  struct Case {
+    std::string family;
+    int n;
+  };
+  std::vector<Case> cases;
+  for (int n : {100, 300, 1000, 3000, 10000, 100000})
+    for (const char* f : {"random 0.55", "random 0.65", "random 0.75"})
+      if (n <= max_n) cases.push_back({f, n});
+  for (int c : {5, 7, 10, 14, 22})
+    if (c * c * c <= max_n) cases.push_back({"sc", c});
+  for (int c : {4, 6, 8, 11, 17})
+    if (2 * c * c * c <= max_n) cases.push_back({"bcc", c});
+  std::string csv = "network,N,Z,dofs,path,predicted_s,cpu_s,peak_mb,iterations_per_case,predicted_iterations,"
+                    "factor_flops,predicted_factor_flops,auto\n";
+  std::printf("load %.1f\n| network | N | Z | path | predicted CPU s | CPU s | peak MB | it./case (pred.) | "
+              "factor flops (pred.) | auto |\n",
+              load_average());
+  for (const Case& c : cases) {
+    Network net;
+    if (c.family == "sc" || c.family == "bcc") {
+      net.packing = test::lattice(c.family == "sc" ? "simple_cubic" : "bcc", c.n, 1e-3,
+                                  c.family == "sc" ? 0.5e-3 : 0.25e-3 * std::sqrt(3.0));
+      test::bond_ratio(net, 0.1);
+    } else {
+      net = test::random_network(c.n, 0.5e-3, 0.30, std::atof(c.family.c_str() + 7), 11, 0.05);
+    }
+    const auto laws = bond_laws(net.packing, "", LawOptions{}, false);
+    ImplicitOptions po;
+    po.tolerance = tol;
+    po.solver = ElasticSolver::amg;  // any: the prediction does not depend on it
+    const StiffnessSystem probe(net.packing, net.image, bond_stiffnesses(net.packing, laws), po);
+    const ImplicitResult& s = probe.summary();
+    const SolverCosts& pc = s.predicted;
+    const double Z = 2.0 * double(s.bonds_used) / double(s.particles_used);
+    const std::string label = c.family + (c.family == "sc" || c.family == "bcc" ? " " + std::to_string(c.n) + "^3" : "");
+    for (ElasticSolver path : {ElasticSolver::ldlt, ElasticSolver::amg, ElasticSolver::cg, ElasticSolver::cg_ic}) {
+      const double pred = path == ElasticSolver::ldlt ? pc.ldlt_s
+                          : path == ElasticSolver::amg ? pc.amg_s
+                          : path == ElasticSolver::cg  ? pc.cg_s
+                                                       : 2 * pc.ldlt_s;  // cg-ic: not modelled; fill like ldlt
+      if (pred > max_s && !(path == ElasticSolver::amg)) {
+        std::printf("| %s | %ld | %.2f | %s | %.3g | skipped | | | | |\n", label.c_str(), s.particles_used, Z,
+                    to_string(path), pred);
+        continue;
+      }
+      const PathRun r = run_path(net, laws, path, tol);
+      const double ipc = double(r.iterations) / 6;
+      const double pit = path == ElasticSolver::amg ? pc.amg_iterations : path == ElasticSolver::cg ? pc.cg_iterations : 0;
+      std::printf("| %s | %ld | %.2f | %s | %.3g | %s | %.0f | %.0f (%.0f) | %.3g (%.3g) | %s |\n", label.c_str(),
+                  s.particles_used, Z, to_string(path), pred, r.ok ? std::to_string(r.cpu_s).c_str() : "failed",
+                  r.rss_mb, ipc, pit, r.factor_flops, path == ElasticSolver::ldlt ? pc.factor_flops : 0.0,
+                  path == pc.cheapest ? "auto" : "");
+      std::fflush(stdout);
+      csv += label + "," + std::to_string(s.particles_used) + "," + std::to_string(Z) + "," + std::to_string(s.dofs) +
+             "," + to_string(path) + "," + std::to_string(pred) + "," + std::to_string(r.ok ? r.cpu_s : -1) + "," +
+             std::to_string(r.rss_mb) + "," + std::to_string(ipc) + "," + std::to_string(pit) + "," +
+             std::to_string(r.factor_flops) + "," + std::to_string(path == ElasticSolver::ldlt ? pc.factor_flops : 0.0) +
+             "," + (path == pc.cheapest ? "1" : "0") + "\n";
+    }
+  }
+  const char* dir = std::getenv("TOMODEM_BENCH_OUT");
+  const std::filesystem::path out = std::filesystem::path(dir ? dir : ".") / "young-solver-costs.csv";
+  write_text_atomic(out.string(), csv);
+  std::printf("load at the end %.1f; wrote %s\n", load_average(), out.c_str());
 }

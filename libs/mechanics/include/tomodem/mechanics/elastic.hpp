@@ -24,8 +24,8 @@ void uniaxial_from_tensor(const Matrix6& C, int axis, double& E, double& nu);
 /// Linear solver of the implicit test: ldlt (Eigen SimplicialLDLT, exact), amg (conjugate
 /// gradients preconditioned by smoothed-aggregation multigrid with the rigid-body modes,
 /// tomodem/linalg/amg.hpp), cg (Jacobi), cg-ic (Eigen incomplete Cholesky), petsc (PETSc's CG +
-/// GAMG with the rigid-body modes, MPI build only: docs/solvers.md), auto (ldlt below 2 000
-/// particles: its fill-in grows fast in 3-D; amg above).
+/// GAMG with the rigid-body modes, MPI build only: docs/solvers.md), auto (the path of least
+/// predicted cost among ldlt, amg and cg: predict_solver_costs, docs/young.md "How auto chooses").
 enum class ElasticSolver : uint8_t { automatic, ldlt, amg, cg, cg_ic, petsc };
 inline constexpr NameTable<ElasticSolver, 6> kElasticSolverNames = {{{ElasticSolver::automatic, "auto"},
                                                                     {ElasticSolver::ldlt, "ldlt"},
@@ -46,6 +46,31 @@ struct ImplicitOptions {
   int axis = 2;
 };
 
+/// The cost model behind `--solver auto` (docs/young.md, "How auto chooses"): operation counts
+/// from the matrix's graph, converted to CPU seconds by constants measured with the bench
+/// YoungBench.SolverCostTable (single thread).
+struct SolverCosts {
+  double matrix_nonzeros = 0;        ///< of K
+  double coordination = 0;           ///< bonded neighbours per particle (Z) of the graph
+  double factor_nonzeros = 0;        ///< ldlt: nonzeros of L (symbolic, AMD order of the particle graph)
+  double factor_flops = 0;           ///< ldlt: Σ_j c_j² over the columns of L (multiply-adds)
+  bool factor_truncated = false;     ///< the symbolic count stopped early: ldlt costs more than the counts say
+  double amg_iterations = 0, cg_iterations = 0;  ///< predicted CG iterations per strain case
+  double ldlt_s = 0, amg_s = 0, cg_s = 0;        ///< predicted CPU seconds (set-up + solves)
+  ElasticSolver cheapest = ElasticSolver::amg;   ///< least predicted seconds (ldlt, amg or cg)
+};
+
+/// Predicted costs for a stiffness matrix whose particle graph is `graph` (per particle: the
+/// bonded particles and itself), with `dofs` unknowns and `nonzeros` entries, solved for `cases`
+/// strain cases to `tolerance`. The symbolic count of L stops once ldlt is clearly the dearest
+/// (8× the cheaper iterative prediction), so it never costs more than a fraction of the solve.
+/// Seconds and the cheapest path from the counts in `counts` (matrix and factor nonzeros, factor
+/// flops, iterations per case): the conversion that predict_solver_costs uses, open so that tests
+/// can feed it measured counts.
+SolverCosts solver_costs_from_counts(const SolverCosts& counts, int cases);
+SolverCosts predict_solver_costs(const std::vector<std::vector<int64_t>>& graph, long dofs, double nonzeros,
+                                 int cases, double tolerance);
+
 struct ImplicitResult {
   Matrix6 C{};                  ///< Pa, Voigt (xx, yy, zz, yz, xz, xy), engineering shear strains
   bool full_tensor = true;
@@ -58,6 +83,8 @@ struct ImplicitResult {
   double operator_complexity = 0;  ///< amg: Σ nonzeros of all levels / nonzeros of K
   double setup_s = 0;           ///< factorisation or preconditioner set-up
   ElasticSolver solver = ElasticSolver::ldlt;  ///< the one used (auto resolved)
+  SolverCosts predicted;        ///< the cost model's counts and seconds for this matrix
+  double factor_nonzeros = 0, factor_flops = 0;  ///< ldlt: of the factor computed (Σ c_j² over L's columns)
   long dofs = 0, particles_used = 0, bonds_used = 0;
   long particles_removed = 0, bonds_removed = 0;  ///< outside the load-bearing cluster
   double assembly_s = 0, solve_s = 0, wall_time_s = 0;
@@ -141,8 +168,8 @@ struct ExplicitOptions {
   long max_steps = 50'000'000;
   int threads = 1;
   bool quiet = true;
-  /// Run again over half the loading time; E_error = max(slope spread, 2 |E(T) − E(T/2)| / E, largest
-  /// strain) (rate protocol and increments alike; costs 1.5× the single run).
+  /// Run again over half the loading time; E_error = max(slope spread, largest strain) + lateral
+  /// term + 2 |E_iso(T) − E_iso(T/2)| / E (docs/young.md; costs 1.5× the single run).
   bool rate_check = true;
 };
 
@@ -151,6 +178,11 @@ struct ExplicitResult {
   double E_error_spread = 0;         ///< largest relative deviation of a segment slope from the fit
   double E_error_rate = 0;           ///< rate check: 2 |E(T) − E(T/2)| / E(T) (0 without it)
   double E_error_strain = 0;         ///< finite-strain floor: the largest strain reached
+  /// Stress loading: what the lateral stress the servo let through explains (|E − E_iso| / E with
+  /// E_iso, ν_iso from an isotropic reading of all four slopes; docs/young.md); 0 for strain loading.
+  double E_error_lateral = 0, nu_error_lateral = 0;
+  double nu_error_rate = 0;          ///< rate check: 2 |ν_iso(T) − ν_iso(T/2)| (0 without it)
+  double E_iso = 0, nu_iso = 0;      ///< the isotropic reading (= E, ν when the lateral stress stays 0)
   double E_half_time = 0;            ///< rate check: E over half the loading time
   double strain_rate = 0, time_step = 0, transit_time = 0;
   double inertial_number = 0, unbalanced_force_ratio = 0;
@@ -158,6 +190,7 @@ struct ExplicitResult {
   long steps = 0, broken_bonds = 0;
   double wall_time_s = 0;
   std::vector<double> strain, stress, lateral_strain;  ///< measured points (axial ε, σ in Pa, lateral ε)
+  std::vector<double> lateral_stress;                  ///< mean lateral normal stress at the points (Pa)
 };
 
 ExplicitResult run_explicit(const Packing& p, const std::vector<Image>& image, const std::vector<dem::BondLaw>& laws,
