@@ -1,0 +1,241 @@
+// Crack-tip field (issue 20, "How it is measured"): the pre-cracked sample of tomodem-fracture
+// (centre crack 2a, free faces normal to x, clamped grips at the z faces, periodic along the
+// front y: plane strain), solved for a grip opening in the linear regime before any bond fails
+// (sla_response: the SLA's first solve, multigrid PCG), coarse-grained, and the stress around the
+// two tips fitted to the mode-I field. Its K is compared with fracture's own K = Y σ sqrt(π a),
+// σ = F/(W B), Y = sqrt(sec(π a/W)) (Feddersen; libs/mechanics fracture.cpp finish_result).
+//
+// The fit (docs/validation.md#coarse-grained-fields-against-elasticity): least squares over the
+// annulus r_min ≤ r ≤ r_max, |θ| ≤ 135° (away from the crack faces) around both tips, every model
+// convolved with the CG kernel by quadrature (the field is uniform along y). Asserted: Westergaard's
+// whole field of the centre crack, Z = σ z/sqrt(z² − a²), with K = σ sqrt(π a) its one parameter.
+// Printed for comparison: the singular term alone, σ_zz = K/sqrt(2πr) cos(θ/2)[1 + sin(θ/2)
+// sin(3θ/2)], and with the next term B r^{1/2}[cos(θ/2) − ½ sin θ sin(θ/2)]. On the crack line the
+// finite crack gives K/sqrt(2πr)(1 + 3r/4a − …): over any annulus wider than a particle at this
+// crack size the singular term alone reads ~15 % high (the K-dominated zone, r ≲ 0.05 a, is below
+// one diameter), and the two-term fit trades K against B in the noise.
+// - r_min = 2w: inside, the smoothed field depends on the network at r < w, where the tip is a
+//   discrete bond and its position is known to ± half a bond length only;
+// - r_max = 0.5 a: the free faces and grips are more than 2a away; the finite width changes the
+//   shape little (Irwin's periodic crack array fitted with the single crack's field: K within 0.4 %).
+// Tolerance 10 % (issue 20). Budget: noise (rms residual ~10 % per node, ~100 independent kernel
+// areas: ~1 %), tip position (± 0.5 R: ± 0.4 %), annulus (r_min, r_max varied: ± 3 %), the clamped
+// grips at H = 1.2 W against the handbook's remote stress behind Y.
+#include <gtest/gtest.h>
+
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <complex>
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include "../fracture/samples.hpp"
+#include "tomodem/fields/cg.hpp"
+#include "tomodem/mechanics/fracture.hpp"
+
+using namespace tomodem;
+using namespace tomodem::mechanics;
+
+namespace {
+
+double cpu_seconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
+/// Mode-I σ_zz per unit K (singular term) and per unit B (r^{1/2} term) at (r, θ), θ from the
+/// growth direction in the x–z plane.
+void mode_one(double r, double th, double& g1, double& g3) {
+  const double c = std::cos(th / 2), s = std::sin(th / 2);
+  g1 = c * (1 + s * std::sin(1.5 * th)) / std::sqrt(2 * M_PI * r);
+  g3 = std::sqrt(r) * (c - 0.5 * std::sin(th) * s);
+}
+
+/// Both functions convolved with the kernel at (X, Z) from the tip (midpoint rule over the
+/// support, 2n steps per direction; the field is uniform along y).
+void smoothed_mode_one(const fields::Kernel& k, double X, double Z, double& g1, double& g3, int n = 20) {
+  const double c = k.cutoff, h = c / n;
+  double s1 = 0, s3 = 0, total = 0;
+  for (int i = -n; i < n; ++i)
+    for (int j = -n; j < n; ++j)
+      for (int l = -n; l < n; ++l) {
+        const double dx = (i + 0.5) * h, dy = (j + 0.5) * h, dz = (l + 0.5) * h;
+        const double w = k.value(std::sqrt(dx * dx + dy * dy + dz * dz));
+        if (w == 0) continue;
+        total += w;
+        const double x = X + dx, z = Z + dz;
+        double a, b;
+        mode_one(std::hypot(x, z), std::atan2(z, x), a, b);
+        s1 += w * a;
+        s3 += w * b;
+      }
+  g1 = s1 / total;
+  g3 = s3 / total;
+}
+
+/// σ_zz / σ of Westergaard's centre crack (half length a) in an infinite plate under remote σ
+/// normal to it: Z = z/sqrt(z² − a²), σ_zz = Re Z + z_c Im Z', Z' = −a²/(z² − a²)^{3/2}
+/// (z = x + i z_c from the crack's centre). K = σ sqrt(π a); near a tip, K/sqrt(2πr)(1 + 3r/4a …)
+/// on the crack line: the finite crack's own non-singular terms, which a fit of the singular term
+/// alone takes for K.
+double westergaard_szz(double x, double zc, double a) {
+  const std::complex<double> z(x, zc);
+  const std::complex<double> root = std::sqrt(z - a) * std::sqrt(z + a);  // cut on [−a, a] only
+  const std::complex<double> Z = z / root, dZ = -a * a / (root * root * root);
+  return Z.real() + zc * dZ.imag();
+}
+double smoothed_westergaard(const fields::Kernel& k, double x, double zc, double a, int n = 16) {
+  const double c = k.cutoff, h = c / n;
+  double sum = 0, total = 0;
+  for (int i = -n; i < n; ++i)
+    for (int j = -n; j < n; ++j)
+      for (int l = -n; l < n; ++l) {
+        const double dx = (i + 0.5) * h, dy = (j + 0.5) * h, dz = (l + 0.5) * h;
+        const double w = k.value(std::sqrt(dx * dx + dy * dy + dz * dz));
+        if (w == 0) continue;
+        total += w;
+        sum += w * westergaard_szz(x + dx, zc + dz, a);
+      }
+  return sum / total;
+}
+
+struct Fit {
+  double K = 0, B = 0, rms = 0;
+  long points = 0;
+};
+
+}  // namespace
+
+TEST(CrackTip, CoarseGrainedFieldGivesFractureK) {
+  const double t0 = cpu_seconds();
+  const double R = 1e-6, d = 2 * R;
+  // Final sample W × B × H = 60 × 3 × 72 d: test::slab inserts at 0.30 (random sequential
+  // insertion slows down near its jamming limit, 0.38) and densifies to 0.66, lengths × 0.769.
+  const double shrink = std::cbrt(0.30 / 0.66);
+  Network net = test::slab(60 / shrink, 3 / shrink, 72 / shrink, 17, test::alumina(), R, 0.30, 0.66);
+  const double t_net = cpu_seconds();
+  CrackOptions co;
+  co.geometry = CrackGeometry::centre;
+  co.a_over_w = 0.2;  // 2a/W = 0.4
+  const FractureSample s = make_sample(net, co);
+  FailureOptions fo;
+  const auto laws = test::lefm_laws(s.packing, fo);
+  SlaOptions so;
+  so.solver = SlaSolver::pcg;
+  so.cg_tolerance = 1e-9;
+  const SlaResponse resp = sla_response(s, laws, fo, so, {});
+  const double t_solve = cpu_seconds();
+  // Fracture's K at a unit grip opening: the load is the sample's stiffness.
+  const double sigma = resp.stiffness / (s.W * s.B);
+  const double K_fracture = geometry_factor(s.geometry, s.a / s.W) * sigma * std::sqrt(M_PI * s.a);
+
+  // Snapshot at unit opening (forces in N per m, displacements in m per m: linear).
+  const Packing& p = s.packing;
+  fields::Snapshot snap;
+  snap.cell = p.cell;
+  snap.h_reference = p.cell.h;
+  const double mass = p.materials[0].density * 4.0 / 3.0 * M_PI * R * R * R;
+  std::vector<int32_t> id(p.particles.size(), -1);
+  for (std::size_t i = 0; i < p.particles.size(); ++i) {
+    if (s.role[i] == ParticleRole::removed) continue;
+    id[i] = int32_t(snap.x.size());
+    snap.x.push_back(p.particles.position[i]);
+    snap.m.push_back(mass);
+    snap.u.push_back(resp.displacement[i]);
+  }
+  for (std::size_t b = 0; b < p.bonds.size(); ++b) {
+    if (s.bond_role[b] != BondRole::load || id[p.bonds.i[b]] < 0 || id[p.bonds.j[b]] < 0) continue;
+    snap.bonds.push_back({id[p.bonds.i[b]], id[p.bonds.j[b]], bond_vector(p, s.image[b], b), resp.force[b]});
+  }
+  const double w = 1.0 * d;
+  const fields::Kernel kern = fields::Kernel::make(fields::KernelType::gaussian, w, 3);
+  const double Lx = p.cell.h.a[0][0], Lz = p.cell.h.a[2][2];
+  fields::GridSpec g;
+  g.kind = fields::GridSpec::Kind::full;
+  g.n = {int(std::ceil(Lx / (w / 2))), 4, int(std::ceil(Lz / (w / 2)))};
+  fields::Accumulator acc(kern, g, p.cell, 0, 1);
+  acc.add(snap);
+  const auto F = acc.fields();
+  const double t_cg = cpu_seconds();
+
+  // Average over y (the field is uniform along the front): a 2-D map.
+  const int nx = g.n[0], ny = g.n[1], nz = g.n[2];
+  std::vector<double> map(std::size_t(nx) * nz, 0.0);
+  std::vector<Vec3> where(std::size_t(nx) * nz);
+  for (int i = 0; i < nx; ++i)
+    for (int k = 0; k < nz; ++k) {
+      for (int j = 0; j < ny; ++j) map[std::size_t(i) * nz + k] += F.stress[9 * ((std::size_t(i) * ny + j) * nz + k) + 8] / ny;
+      where[std::size_t(i) * nz + k] = F.points[(std::size_t(i) * ny) * nz + k];
+    }
+  // Least squares for K and B over the annulus of both tips.
+  // model: singular term alone (K), singular + r^{1/2} terms (K, B), or Westergaard's whole
+  // field of the centre crack (K = σ sqrt(π a)). Tips moved by `shift` along their growth direction.
+  enum Model { singular, two_terms, westergaard };
+  const double xc = 0.5 * (s.crack_x0 + s.crack_x1);
+  auto fit = [&](Model model, double r_min, double r_max, double shift) {
+    double A11 = 0, A12 = 0, A22 = 0, b1 = 0, b2 = 0;
+    std::vector<std::array<double, 3>> rows;
+    for (std::size_t q = 0; q < map.size(); ++q) {
+      const double Z = where[q].z - s.crack_z;
+      for (int tip = 0; tip < 2; ++tip) {
+        const double X = tip == 0 ? where[q].x - (s.crack_x1 + shift) : (s.crack_x0 - shift) - where[q].x;
+        const double r = std::hypot(X, Z);
+        if (r < r_min || r > r_max || std::abs(std::atan2(Z, X)) > 0.75 * M_PI) continue;
+        double g1, g3 = 0;
+        if (model == westergaard) {
+          const double a = s.a + shift;
+          g1 = smoothed_westergaard(kern, where[q].x - xc, Z, a) * std::sqrt(1 / (M_PI * a));
+        } else {
+          smoothed_mode_one(kern, X, Z, g1, g3);
+          if (model == singular) g3 = 0;
+        }
+        rows.push_back({g1, g3, map[q]});
+        A11 += g1 * g1, A12 += g1 * g3, A22 += g3 * g3, b1 += g1 * map[q], b2 += g3 * map[q];
+      }
+    }
+    Fit f;
+    if (model == two_terms) {
+      const double det = A11 * A22 - A12 * A12;
+      f.K = (b1 * A22 - b2 * A12) / det;
+      f.B = (A11 * b2 - A12 * b1) / det;
+    } else {
+      f.K = b1 / A11;
+    }
+    double ss = 0, mm = 0;
+    for (const auto& r : rows) ss += std::pow(r[2] - f.K * r[0] - f.B * r[1], 2), mm += r[2] * r[2];
+    f.rms = std::sqrt(ss / mm);
+    f.points = long(rows.size());
+    return f;
+  };
+  const double r_min = 2 * w, r_max = 0.5 * s.a;
+  const Fit main = fit(westergaard, r_min, r_max, 0);
+  const Fit single = fit(singular, r_min, r_max, 0), pair = fit(two_terms, r_min, r_max, 0);
+  const double t_end = cpu_seconds();
+  std::printf("sample W %.1f d, B %.1f d, H %.1f d, a %.1f d (2a/W %.2f), %zu particles, %zu bonds, %ld ligament bonds, "
+              "mean bond %.3f d\n",
+              s.W / d, s.B / d, s.H / d, s.a / d, 2 * s.a / s.W, snap.x.size(), snap.bonds.size(), s.ligament_bonds,
+              s.mean_bond_length / d);
+  std::printf("K_fracture %.5g (Y %.4f, sigma %.5g per m opening), stiffness %.5g N/m, %ld CG iterations\n", K_fracture,
+              geometry_factor(s.geometry, s.a / s.W), sigma, resp.stiffness, resp.cg_iterations);
+  std::printf("r in [%.2f, %.2f] d, %ld nodes: Westergaard K %.5g (%+.2f%%, rms residual %.3f); singular term alone "
+              "%+.2f%%; singular + r^1/2 %+.2f%%\n",
+              r_min / d, r_max / d, main.points, main.K, 100 * (main.K / K_fracture - 1), main.rms,
+              100 * (single.K / K_fracture - 1), 100 * (pair.K / K_fracture - 1));
+  for (double shift : {-0.5 * R, 0.5 * R})
+    std::printf("  tips moved %+.1f R: Westergaard %+.2f%%, singular %+.2f%%, two terms %+.2f%%\n", shift / R,
+                100 * (fit(westergaard, r_min, r_max, shift).K / K_fracture - 1),
+                100 * (fit(singular, r_min, r_max, shift).K / K_fracture - 1),
+                100 * (fit(two_terms, r_min, r_max, shift).K / K_fracture - 1));
+  for (auto range : {std::array<double, 2>{1.5 * w, 0.5 * s.a}, std::array<double, 2>{3 * w, 0.5 * s.a},
+                     std::array<double, 2>{2 * w, 0.3 * s.a}, std::array<double, 2>{2 * w, 0.7 * s.a}})
+    std::printf("  r in [%.2f, %.2f] d: Westergaard %+.2f%%, singular %+.2f%%, two terms %+.2f%%\n", range[0] / d,
+                range[1] / d, 100 * (fit(westergaard, range[0], range[1], 0).K / K_fracture - 1),
+                100 * (fit(singular, range[0], range[1], 0).K / K_fracture - 1),
+                100 * (fit(two_terms, range[0], range[1], 0).K / K_fracture - 1));
+  std::printf("CPU: network %.1f s, solve %.1f s, CG %.1f s, fits %.1f s, total %.1f s\n", t_net - t0,
+              t_solve - t_net, t_cg - t_solve, t_end - t_cg, t_end - t0);
+  EXPECT_NEAR(main.K / K_fracture, 1.0, 0.10);
+}
