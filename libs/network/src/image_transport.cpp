@@ -4,10 +4,13 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <limits>
+#include <fstream>
 #include <sstream>
 
+#include "image_multigrid.hpp"
 #include "tomodem/linalg/amg.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/h5.hpp"
@@ -27,6 +30,20 @@ std::string num(double v) {
   std::ostringstream s;
   s << v;
   return s.str();
+}
+
+// TOMODEM_IMAGE_DEBUG=1: the resident and peak memory after each stage of a solve (how the
+// bytes per voxel of image_transport_bytes_per_voxel were measured).
+void stage(const char* what) {
+  static const bool on = std::getenv("TOMODEM_IMAGE_DEBUG") != nullptr;
+  if (!on) return;
+  std::ifstream f("/proc/self/status");
+  std::string line, rss, hwm;
+  while (std::getline(f, line)) {
+    if (line.rfind("VmRSS:", 0) == 0) rss = line.substr(6);
+    if (line.rfind("VmHWM:", 0) == 0) hwm = line.substr(6);
+  }
+  std::fprintf(stderr, "  image %-28s RSS %s, peak %s\n", what, rss.c_str(), hwm.c_str());
 }
 }  // namespace
 
@@ -76,12 +93,14 @@ LabelImage read_label_image(const std::string& path, const std::string& dataset)
   return im;
 }
 
-// Per voxel: the labels (1), the reach marks (1), the unknown index (4). Per unknown (at most one
-// per voxel): CSR row start (4), 7 columns (28) and values (56), right-hand side and solution (16),
-// the voxel of each unknown (4), CG vectors, the multigrid hierarchy and Eigen's temporaries while
-// it is built. Measured: peak RSS 0.86 GB for a 128³ phantom with 1.97 M unknowns (~420 bytes per
-// unknown); 450 is used. Fields: two floats per voxel and axis, and one double while writing.
-double image_transport_bytes_per_voxel(bool fields) { return 450 + (fields ? 8 + 8 : 0); }
+// Matrix-free path, per voxel: the labels (1), the reach marks or the unknown index (4). Per
+// unknown: the solution and the CG vectors r, p, w and the cycle's scratch (40), the inverse
+// diagonal (4, float), the map to the first coarse level (4), the coarse levels (~1/7 of a fine
+// row each as compressed rows: ~16). Measured peak RSS: 162 MB for a 128³ phantom (2.03 M
+// unknowns), 1.20 GB at 256³ (16.3 M): ~72 bytes per voxel; 80 is used. The assembled reference
+// path (ImageTransportOptions::assembled) needs ~420. Fields: two floats per voxel and a double
+// while writing.
+double image_transport_bytes_per_voxel(bool fields) { return 80 + (fields ? 8 + 8 : 0); }
 
 namespace {
 /// The voxel grid of one solve: sizes, spacing, the axis of the potential drop and the sides.
@@ -257,15 +276,16 @@ void solve(System& S, const ImageTransportOptions& opt, ImageAxisResult& res) {
 }
 
 /// Currents through the two Dirichlet faces (A per volt), σ_eff and the tortuosity.
-void face_currents(const Grid& g, const System& S, ImageAxisResult& res) {
+void face_currents(const Grid& g, const std::vector<int32_t>& index, const std::vector<double>& x, ImageAxisResult& res) {
   const int ax = g.ax;
   double in = 0, out = 0;
-  for (int32_t r = 0; r < S.nu; ++r) {
-    const long i = S.vox[r];
+  for (long i = 0; i < static_cast<long>(g.nv); ++i) {
+    const int32_t r = index[i];
+    if (r < 0) continue;
     long c[3];
     g.coords(i, c);
-    if (c[ax] == 0) in += g.boundary_g(g.sig(i)) * (1.0 - S.x[r]);
-    if (c[ax] == g.n[ax] - 1) out += g.boundary_g(g.sig(i)) * S.x[r];
+    if (c[ax] == 0) in += g.boundary_g(g.sig(i)) * (1.0 - x[r]);
+    if (c[ax] == g.n[ax] - 1) out += g.boundary_g(g.sig(i)) * x[r];
   }
   const double length = g.n[ax] * g.h[ax], cross = g.area[ax] * (static_cast<double>(g.nv) / g.n[ax]);
   res.current_in = in;
@@ -277,13 +297,13 @@ void face_currents(const Grid& g, const System& S, ImageAxisResult& res) {
 }
 
 /// Per voxel: the potential and the magnitude of the current density (face fluxes averaged per axis).
-void fill_fields(const Grid& g, const System& S, ImageAxisResult& res) {
-  const auto& x = S.x;
+void fill_fields(const Grid& g, const std::vector<int32_t>& index, const std::vector<double>& x, ImageAxisResult& res) {
   res.potential.assign(g.nv, std::numeric_limits<float>::quiet_NaN());
   res.current.assign(g.nv, 0.0f);
-  for (int32_t r = 0; r < S.nu; ++r) res.potential[S.vox[r]] = static_cast<float>(x[r]);
-  for (int32_t r = 0; r < S.nu; ++r) {
-    const long i = S.vox[r];
+  for (long i = 0; i < static_cast<long>(g.nv); ++i) {
+    const int32_t r = index[i];
+    if (r < 0) continue;
+    res.potential[i] = static_cast<float>(x[r]);
     long c[3];
     g.coords(i, c);
     const double si = g.sig(i);
@@ -293,9 +313,9 @@ void fill_fields(const Grid& g, const System& S, ImageAxisResult& res) {
       for (int side = 0; side < 2; ++side) {
         const int dir = side == 0 ? -1 : 1;
         const long j = g.neighbour(i, c, k, dir);
-        if (j >= 0 && j != i && S.index[j] >= 0) {
+        if (j >= 0 && j != i && index[j] >= 0) {
           const double gk = 2.0 * si * g.sig(j) / (si + g.sig(j)) / g.h[k];
-          jf[side] = side == 0 ? gk * (x[S.index[j]] - x[r]) : gk * (x[r] - x[S.index[j]]);
+          jf[side] = side == 0 ? gk * (x[index[j]] - x[r]) : gk * (x[r] - x[index[j]]);
         } else if (k == g.ax && side == 0 && c[k] == 0) {
           jf[0] = 2.0 * si / g.h[k] * (1.0 - x[r]);
         } else if (k == g.ax && side == 1 && c[k] == g.n[k] - 1) {
@@ -307,6 +327,54 @@ void fill_fields(const Grid& g, const System& S, ImageAxisResult& res) {
     }
     res.current[i] = static_cast<float>(std::sqrt(j2));
   }
+}
+
+/// The matrix-free path: per voxel its unknown (4 bytes), per unknown the CG vectors and the
+/// voxel-aggregation multigrid of image_multigrid.hpp.
+void solve_matrix_free(const Grid& g, std::vector<uint8_t>& mark, ImageAxisResult& res) {
+  std::vector<int32_t> index(g.nv, -1);
+  int32_t nu = 0;
+  for (std::size_t i = 0; i < g.nv; ++i)
+    if (mark[i] == 3) index[i] = nu++;
+  std::vector<uint8_t>().swap(mark);
+  stage("unknowns numbered");
+  res.unknowns = static_cast<std::size_t>(nu);
+  std::vector<double> x(static_cast<std::size_t>(nu));
+  for (long i = 0; i < static_cast<long>(g.nv); ++i)
+    if (index[i] >= 0) {
+      long c[3];
+      g.coords(i, c);
+      x[index[i]] = 1.0 - (c[g.ax] + 0.5) / g.n[g.ax];  // the linear profile of a straight channel
+    }
+  detail::VoxelSystem vs;
+  for (int k = 0; k < 3; ++k) {
+    vs.n[k] = g.n[k];
+    vs.g[k] = g.area[k] / g.h[k];
+  }
+  vs.axis = g.ax;
+  vs.periodic = g.opt.periodic_sides;
+  vs.g_boundary = 2.0 * g.area[g.ax] / g.h[g.ax];
+  vs.label = g.im.v.data();
+  vs.sigma = g.opt.conductivity.data();
+  vs.index = index.data();
+  vs.unknowns = nu;
+  detail::MatrixFreeOptions mo;
+  mo.tolerance = g.opt.tolerance;
+  mo.max_iterations = g.opt.max_iterations > 0 ? g.opt.max_iterations : 10000;
+  if (const char* e = std::getenv("TOMODEM_IMAGE_MG"))  // tuning: "cycle,sweeps,omega"
+    std::sscanf(e, "%d,%d,%lf", &mo.cycle, &mo.sweeps, &mo.omega);
+  const detail::MatrixFreeReport mr = detail::solve_matrix_free(vs, x, mo);
+  stage("solved (matrix-free)");
+  res.nonzeros = mr.nonzeros;
+  res.levels = mr.levels;
+  res.operator_complexity = mr.operator_complexity;
+  res.setup_time_s = mr.setup_s;
+  res.solve_time_s = mr.solve_s;
+  res.iterations = mr.iterations;
+  res.residual = mr.residual;
+  res.converged = mr.converged;
+  face_currents(g, index, x, res);
+  if (g.opt.fields) fill_fields(g, index, x, res);
 }
 }  // namespace
 
@@ -325,6 +393,7 @@ ImageAxisResult image_conductivity(const LabelImage& im, const ImageTransportOpt
   for (std::size_t i = 0; i < nv; ++i) conducting += g.sig(i) > 0;
   res.porosity = static_cast<double>(conducting) / static_cast<double>(nv);
   std::vector<uint8_t> mark = reach(g);
+  stage("flood fill");
   const std::size_t spanning = classify(mark, conducting, res);
   if (!res.percolates) {
     res.tortuosity = std::numeric_limits<double>::infinity();
@@ -340,18 +409,24 @@ ImageAxisResult image_conductivity(const LabelImage& im, const ImageTransportOpt
     throw InputError("", "--image", std::to_string(spanning) + " connected voxels",
                      "more matrix entries than the solver's 32-bit indices hold; crop or downsample the volume");
 
-  System S;
-  number_unknowns(mark, S);
-  std::vector<uint8_t>().swap(mark);
-  res.unknowns = static_cast<std::size_t>(S.nu);
-  assemble(g, S);
-  res.nonzeros = S.column.size();
-  solve(S, opt, res);
-  face_currents(g, S, res);
-  if (opt.fields) {
-    std::vector<int32_t>().swap(S.column);
-    std::vector<double>().swap(S.value);
-    fill_fields(g, S, res);
+  if (!opt.assembled) {
+    solve_matrix_free(g, mark, res);
+  } else {
+    System S;
+    number_unknowns(mark, S);
+    std::vector<uint8_t>().swap(mark);
+    res.unknowns = static_cast<std::size_t>(S.nu);
+    assemble(g, S);
+    stage("assembled");
+    res.nonzeros = S.column.size();
+    solve(S, opt, res);
+    stage("solved (assembled)");
+    face_currents(g, S.index, S.x, res);
+    if (opt.fields) {
+      std::vector<int32_t>().swap(S.column);
+      std::vector<double>().swap(S.value);
+      fill_fields(g, S.index, S.x, res);
+    }
   }
   res.wall_time_s = seconds_since(t0);
   return res;

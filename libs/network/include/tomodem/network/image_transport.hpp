@@ -5,8 +5,10 @@
 // (a boundary voxel meets its face through half a voxel, conductance 2σA/h), no-flux or periodic
 // side faces, the harmonic mean 2σ₁σ₂/(σ₁+σ₂) of the two voxel conductivities on an inner face.
 // Only the voxels connected (6-neighbourhood, the faces the scheme couples) to both Dirichlet faces
-// are solved for; the linear system is solved by conjugate gradients preconditioned with the
-// smoothed-aggregation multigrid of tomodem/linalg/amg.hpp.
+// are solved for; the linear system is solved by conjugate gradients, the operator applied from the
+// labels (matrix-free), preconditioned with a multigrid whose coarse levels aggregate the voxels in
+// 2×2×2 blocks (Galerkin products), the smoothed-aggregation multigrid of tomodem/linalg/amg.hpp
+// below them.
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -41,6 +43,11 @@ struct ImageTransportOptions {
   double tolerance = 1e-10;      ///< relative residual of the CG solve
   int max_iterations = 0;        ///< 0: automatic
   bool fields = false;           ///< keep the potential and the current magnitude per voxel
+  /// false (default): the fine operator is applied from the labels (matrix-free) and preconditioned by
+  /// the voxel-aggregation multigrid (src/image_multigrid.hpp). true: the reference path, the matrix
+  /// assembled in compressed rows with the smoothed-aggregation multigrid of amg.hpp on it (~7x the
+  /// memory; the tests compare the two).
+  bool assembled = false;
 };
 
 struct ImageAxisResult {
