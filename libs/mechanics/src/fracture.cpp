@@ -247,13 +247,18 @@ void set_failure(std::vector<dem::BondLaw>& laws, const Packing& p, const Failur
   const dem::BondFailureInfo& c = dem::bond_failure_info(f.criterion);
   const std::size_t n = p.materials.size();
   const bool gamma_from_materials = c.needs_surface_energy && f.fracture_energy == 0;
+  // Only the materials of bonded particles need a surface energy: a pore former's material stays in
+  // the file after its particles are removed, and a phase without bonds never breaks one.
+  std::vector<bool> bonded(n, false);
+  for (std::size_t b = 0; b < p.bonds.size(); ++b)
+    for (const int32_t i : {p.bonds.i[b], p.bonds.j[b]}) bonded[std::size_t(p.particles.phase[std::size_t(i)])] = true;
   if (gamma_from_materials)
     for (std::size_t k = 0; k < n; ++k)
-      if (!(p.materials[k].surface_energy > 0))
+      if (bonded[k] && !(p.materials[k].surface_energy > 0))
         throw InputError(file, "/materials/" + std::to_string(k) + " (" + p.materials[k].name + ")@surface_energy_J_per_m2",
                          num(p.materials[k].surface_energy),
                          "the " + c.key + " criterion needs the fracture energy Γ = 2γ_s: give --fracture-energy or a "
-                         "surface energy > 0 for every material");
+                         "surface energy > 0 for every material of a bonded particle");
   const std::vector<dem::BondSetting> settings = failure_settings(f);
   for (std::size_t a = 0; a < n; ++a)
     for (std::size_t b = 0; b < n; ++b) {

@@ -44,7 +44,12 @@ void select_phases(const Packing& pk, const NetworkOptions& opt, Network& net) {
   const std::string& src = opt.source;
   const std::size_t nm = pk.materials.size();
   for (const auto& m : pk.materials) net.phase_names.push_back(m.name);
-  net.conducting.assign(nm, opt.phases.empty() ? 1 : 0);
+  // Without --phases every phase that has particles conducts; a material without particles (a
+  // pore former's, removed after packing) is not asked for a conductivity.
+  net.conducting.assign(nm, 0);
+  if (opt.phases.empty())
+    for (const int32_t ph : pk.particles.phase)
+      if (ph >= 0 && std::size_t(ph) < nm) net.conducting[std::size_t(ph)] = 1;
   for (const auto& name : opt.phases) {
     auto it = std::find(net.phase_names.begin(), net.phase_names.end(), name);
     if (it == net.phase_names.end()) {

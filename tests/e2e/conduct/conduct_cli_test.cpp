@@ -47,12 +47,12 @@ class ConductCli : public ::testing::Test {
     return nlohmann::json::parse(in);
   }
   // Lattice 5×4×4 of spheres R = 5 µm, bonds a = 1 µm, σ = 1e4 S/m: σ_eff = 2σa/(2R) = 2000 S/m.
-  std::string lattice(bool periodic = false, double sigma_b = 1.0) const {
+  std::string lattice(bool periodic = false) const {
     Packing p = network::test::sc_lattice(5, 4, 4, 5e-6, 1e-6, periodic);
     p.materials[0].name = "LSM";
     p.materials[0].conductivity = 1e4;
     p.materials[1].name = "YSZ";
-    p.materials[1].conductivity = sigma_b;
+    p.materials[1].conductivity = 1.0;
     const std::string f = path(periodic ? "periodic.h5" : "lattice.h5");
     write_packing(f, p);
     return f;
@@ -173,7 +173,14 @@ TEST_F(ConductCli, UnknownPhaseExitsTwoWithoutOutput) {
 }
 
 TEST_F(ConductCli, NonPositiveConductivityNamesFileFieldValue) {
-  const std::string in = lattice(false, -2.0);
+  // A YSZ layer (x = 0) with σ = -2: a phase with particles conducts by default and needs σ > 0.
+  Packing p = network::test::sc_lattice(5, 4, 4, 5e-6, 1e-6, false, [](int x, int, int) { return x == 0 ? 1 : 0; });
+  p.materials[0].name = "LSM";
+  p.materials[0].conductivity = 1e4;
+  p.materials[1].name = "YSZ";
+  p.materials[1].conductivity = -2.0;
+  const std::string in = path("lattice.h5");
+  write_packing(in, p);
   const CliResult r = run(in + " -o " + path("f.h5") + " --json " + path("s.json"));
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find(in), std::string::npos) << r.err;

@@ -119,6 +119,21 @@ TEST_F(FractureCli, MissingStrengthsExit2WithoutOutput) {
   expect_no_output();
 }
 
+// A material no bonded particle uses (a pore former's, whose particles were removed after packing)
+// needs no surface energy: the same network with such a second material runs, with the same K_IC.
+TEST_F(FractureCli, UnbondedMaterialNeedsNoSurfaceEnergy) {
+  mechanics::Network net = mechanics::test::slab(12, 3, 18, 11);
+  auto [c0, e0] = run(network(net) + " --a-over-w 0.2 --stop-fraction 0.5 --no-elastic" + outputs());
+  ASSERT_EQ(c0, 0) << e0;
+  const double k0 = nlohmann::json::parse(std::ifstream(path("out.json")))["K_IC"];
+  Material pore_former = mechanics::test::alumina(3e9, 0.35, 1190, 0.0);
+  pore_former.name = "pore_former";
+  net.packing.materials.push_back(pore_former);
+  auto [c1, e1] = run(network(net) + " --a-over-w 0.2 --stop-fraction 0.5 --no-elastic" + outputs());
+  ASSERT_EQ(c1, 0) << e1;
+  EXPECT_EQ(nlohmann::json::parse(std::ifstream(path("out.json")))["K_IC"].get<double>(), k0);
+}
+
 TEST_F(FractureCli, NoBondsAcrossTheCrackPathExit2WithoutOutput) {
   mechanics::Network net = mechanics::test::slab(12, 3, 18, 11);
   Packing& p = net.packing;

@@ -167,6 +167,7 @@ TEST(NetworkBadInput, UnknownPhaseNamesTheFieldAndValue) {
 
 TEST(NetworkBadInput, NonPositiveConductivity) {
   Packing p = test::sc_lattice(2, 1, 1, 1.0, 0.2, false);
+  p.particles.phase[1] = 1;  // B has a particle, so it conducts by default
   p.materials[1].conductivity = -3;
   NetworkOptions o;
   o.source = "in.h5";
@@ -180,6 +181,23 @@ TEST(NetworkBadInput, NonPositiveConductivity) {
   }
   o.phases = {"A"};  // B does not conduct: its conductivity is not needed
   EXPECT_NO_THROW(build_network(p, o));
+}
+
+// A material without particles (a pore former removed after packing) is not asked for a
+// conductivity by default; named in --phases it still is.
+TEST(NetworkBadInput, MaterialWithoutParticlesNeedsNoConductivity) {
+  Packing p = test::sc_lattice(2, 1, 1, 1.0, 0.2, false);
+  Material pore_former = p.materials[0];
+  pore_former.name = "pore_former";
+  pore_former.conductivity = 0;
+  p.materials.push_back(pore_former);
+  const Network reference = build_network(test::sc_lattice(2, 1, 1, 1.0, 0.2, false), NetworkOptions{});
+  const Network net = build_network(p, NetworkOptions{});
+  EXPECT_EQ(net.conducting[2], 0);
+  EXPECT_EQ(net.n_edges(), reference.n_edges());
+  NetworkOptions o;
+  o.phases = {"A", "pore_former"};
+  EXPECT_THROW(build_network(p, o), InputError);
 }
 
 TEST(NetworkBadInput, EmptyPackingAndNoConductingParticle) {
