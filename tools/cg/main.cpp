@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     app.add_option("--cutoff", c.cutoff, "Gaussian cut-off in widths")->capture_default_str();
     app.add_option("--nodes", c.grid, "nodes along the cell vectors: N or NX,NY,NZ (default: one per half width)");
+    app.add_option("--vdb", c.vdb, "also write the scalar and vector fields as OpenVDB grids (full grids; metres)");
     app.add_option("--slice", c.slice, "a plane instead of the 3-D grid: AXIS=FRACTION, e.g. z=0.5");
     app.add_option("--profile", c.profile, "a 1-D profile along x, y or z (averaged over the other two)");
     app.add_option("--reference", c.reference, "packing the displacement and strain are measured from");

@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <iostream>
+#include <memory>
 
 #include "tomodem/core/cli.hpp"
 #include "tomodem/core/error.hpp"
@@ -13,6 +14,7 @@
 #include "tomodem/core/tool.hpp"
 #include "tomodem/dem/law_registry.hpp"
 #include "tomodem/dem/scene.hpp"
+#include "tomodem/fields/block.hpp"
 #if TOMODEM_HAVE_MPI
 #include "tomodem/dem/decomposition.hpp"
 #endif
@@ -92,6 +94,7 @@ int run(int argc, char** argv) {
   if (!rank0) set_quiet(true);
 
   dem::Scene scene = dem::load_scene(scene_path, threads);
+  const fields::FieldsBlock fields_block = fields::parse_fields_block(scene.text, scene_path);  // docs/cg.md
   const std::size_t n_particles = scene.sim->particles().size();
   if (steps > 0) {
     scene.protocol.steps = steps;
@@ -117,6 +120,7 @@ int run(int argc, char** argv) {
     refuse_output_over_input(out(scene.outputs.series), "output.series", with_restart);
     if (!scene.outputs.checkpoint.empty()) refuse_output_over_input(out(scene.outputs.checkpoint), "output.checkpoint", inputs);
     refuse_output_over_input(json_path, "--json", with_restart);
+    for (const auto& [field, path] : fields::output_names(fields_block.settings)) refuse_output_over_input(out(path), field, with_restart);
     for (const std::string& o : {packing, sidecar, out(scene.outputs.series), out(scene.outputs.checkpoint)})
       if (!json_path.empty() && !o.empty() && std::filesystem::path(o).lexically_normal() == std::filesystem::path(json_path).lexically_normal())
         throw InputError("", "--json", json_path, "is also the output " + o + ": choose another name");
@@ -138,6 +142,13 @@ int run(int argc, char** argv) {
       throw InputError(scene_path, e.field() == "ranks" ? "mpirun -np" : e.field(), e.value(), e.why());
     }
 #endif
+  }
+  // The fields: block: checked against the scene before the first step, snapshots along the run.
+  std::unique_ptr<fields::DemFields> cg;
+  if (fields_block.present) {
+    cg = std::make_unique<fields::DemFields>(fields_block, *scene.sim, scene.materials, scene_path,
+                                             out(fields_block.settings.output), out(fields_block.settings.vdb));
+    scene.observer = {cg->every(), [&cg](dem::Simulation& s) { cg->at_step(s); }};
   }
   const std::string physics = scene.sim->describe();
   if (rank0) std::filesystem::create_directories(out_dir);
@@ -176,6 +187,7 @@ int run(int argc, char** argv) {
   write_packing(out(scene.outputs.packing), packing);
   write_text_atomic(out(scene.outputs.series), csv_table(kSeriesColumns, rows));
   if (!scene.outputs.checkpoint.empty()) dem::write_checkpoint(out(scene.outputs.checkpoint), *scene.sim, scene.text, rows);
+  const json fields_summary = cg ? json::parse(cg->write(*scene.sim, scene.text)) : json();
 
   Summary j("tomodem-dem");
   j.input(scene_path, {{"reads", scene.inputs}});
@@ -197,6 +209,7 @@ int run(int argc, char** argv) {
   j.output("xdmf", std::filesystem::path(out(scene.outputs.packing)).replace_extension(".xdmf").string());
   j.output("series", out(scene.outputs.series));
   j.output("checkpoint", out(scene.outputs.checkpoint));
+  if (cg) j["fields"] = fields_summary, j.output("fields", out(fields_block.settings.output));
   emit_summary(j.text(), json_path);
   return 0;
 }

@@ -11,6 +11,7 @@
 #include "tomodem/core/tool.hpp"
 #include "tomodem/dem/law_registry.hpp"
 #include "tomodem/linalg/petsc_solver.hpp"
+#include "tomodem/fields/cli.hpp"
 #include "tomodem/mechanics/fracture.hpp"
 
 int main(int argc, char** argv) {
@@ -74,6 +75,7 @@ int main(int argc, char** argv) {
     app.add_option("--curve", c.curve_csv, "write the load-opening curve as CSV");
     app.add_option("--plot", c.plot, "write the curve as STEM.png and STEM.svg (gnuplot)");
     app.add_option("--map", c.map, "write the broken-bond map (HDF5 + .xdmf for ParaView)");
+    tomodem::fields::add_fields_options(app, c.fields, "the state at the peak load (sla)");
     tomodem::cli::Common common;
     tomodem::cli::add_common(app, "tomodem-fracture", common);
     if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;

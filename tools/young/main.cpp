@@ -9,6 +9,7 @@
 #include "tomodem/core/summary.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/linalg/petsc_solver.hpp"
+#include "tomodem/fields/cli.hpp"
 #include "tomodem/mechanics/tools.hpp"
 
 int main(int argc, char** argv) {
@@ -54,6 +55,7 @@ int main(int argc, char** argv) {
     app.add_flag("--no-rate-check", no_rate_check,
                  "explicit: skip the second run over half the loading time (E_error is then the slope spread only)");
     app.add_option("--curve", c.output_csv, "explicit: write the stress-strain points as CSV");
+    tomodem::fields::add_fields_options(app, c.fields, "the loaded network (uniaxial stress, linear solve)");
     tomodem::cli::Common common;
     tomodem::cli::add_common(app, "tomodem-young", common);
     if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;

@@ -39,6 +39,9 @@ RunReport run_protocol(Scene& scene, const std::string& checkpoint_path, bool pr
   rep.stop_reason = "steps";
   const long first = sim.step_count();
   rep.series.push_back(sim.measure());
+  const StepObserver& observer = scene.observer;
+  const long every = observer.at_step ? observer.every : 0;
+  if (every > 0 && first % every == 0) observer.at_step(sim);
   const auto t0 = std::chrono::steady_clock::now();
   Progress bar("steps", double(p.steps - first));
   while (sim.step_count() < p.steps) {
@@ -46,7 +49,9 @@ RunReport run_protocol(Scene& scene, const std::string& checkpoint_path, bool pr
     long next = std::min(p.steps, (sim.step_count() / p.output_interval + 1) * p.output_interval);
     if (p.checkpoint_interval > 0)
       next = std::min(next, (sim.step_count() / p.checkpoint_interval + 1) * p.checkpoint_interval);
+    if (every > 0) next = std::min(next, (sim.step_count() / every + 1) * every);
     sim.run(next - sim.step_count());
+    if (every > 0 && sim.step_count() % every == 0) observer.at_step(sim);
     if (sim.step_count() % p.output_interval == 0 || sim.step_count() == p.steps) {
       const Measurements m = sim.measure();
       rep.series.push_back(m);

@@ -599,9 +599,10 @@ void check_start_overlaps(Scene& scene) {
 
 void read_scene(Scene& scene, const YAML::Node& doc, const std::string& path, int threads) {
   const Map root(doc, "", scene.file);
-  // `sintering` is read by the sintering driver (tomodem-sinter, docs/sintering.md) from scene.text.
+  // `sintering` is read by the sintering driver (tomodem-sinter, docs/sintering.md) from scene.text,
+  // `fields` by tomodem-dem's coarse-graining (libs/fields: parse_fields_block, docs/cg.md).
   root.allow({"particles", "materials", "physics", "cell", "walls", "boundary", "protocol", "settings", "output",
-              "sintering"});
+              "sintering", "fields"});
   Cell cell;
   bool have_cell = false;
   Particles particles = read_particles(root, scene, path, cell, have_cell);

@@ -3,6 +3,7 @@
 
 #include "tomodem/core/error.hpp"
 #include "tomodem/dem/bonds.hpp"
+#include "tomodem/fields/block.hpp"
 #include "tomodem/fields/tool.hpp"
 
 namespace tomodem::fields {
@@ -12,7 +13,9 @@ using spatial::shortest_branch;
 namespace {
 constexpr double kPi = 3.14159265358979323846;
 
-std::vector<double> masses(const Packing& p, const std::string& file, double density) {
+}  // namespace
+
+std::vector<double> particle_masses(const Packing& p, const std::string& file, double density) {
   const auto& P = p.particles;
   std::vector<double> m(P.size());
   for (std::size_t i = 0; i < P.size(); ++i) {
@@ -30,6 +33,8 @@ std::vector<double> masses(const Packing& p, const std::string& file, double den
   }
   return m;
 }
+
+namespace {
 
 /// Normal bond force from the stretch, F_n = -k_n (|d| - L0) on j (docs/physics.md#bond-forces),
 /// with the bond stiffness of the DEM loop at its default large-neck coefficients.
@@ -108,7 +113,7 @@ Snapshot make_snapshot(const Packing& p, const std::string& file, const Snapshot
   s.cell = p.cell;
   s.x = p.particles.position;
   s.v = p.particles.velocity;
-  s.m = masses(p, file, o.density);
+  s.m = particle_masses(p, file, o.density);
   const auto& C = p.contacts;
   s.contacts.reserve(C.size());
   for (std::size_t c = 0; c < C.size(); ++c) {

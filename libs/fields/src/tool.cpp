@@ -4,9 +4,11 @@
 #include <omp.h>
 
 #include <cmath>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 
 #include "geometry.hpp"
+#include "common.hpp"
 #include "output.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/h5.hpp"
@@ -21,76 +23,6 @@ namespace tomodem::fields {
 using json = nlohmann::json;
 
 namespace {
-/// "1.5" or "1.5d" (mean diameters), or a length with a unit ("20um", "0.02mm": the shared
-/// parser of docs/cli.md). A bare number is diameters here, unlike plain length options, since a
-/// kernel width is chosen against the particle size.
-double parse_width(const std::string& text, double mean_d, bool* in_diameters) {
-  double v = 0;
-  std::string unit;
-  if (!split_number_unit(text, v, unit))
-    throw InputError("", "--width", text, "expected a number of mean diameters or a length with a unit (20um)");
-  while (!unit.empty() && unit.front() == ' ') unit.erase(unit.begin());
-  *in_diameters = unit.empty() || unit == "d" || unit == "D";
-  if (!*in_diameters) v = parse_length("--width", text);
-  require_positive("--width", v, *in_diameters ? "mean diameters" : "length");
-  return *in_diameters ? v * mean_d : v;
-}
-
-int parse_axis(const std::string& s, const std::string& option, const std::string& text) {
-  if (s == "x" || s == "0") return 0;
-  if (s == "y" || s == "1") return 1;
-  if (s == "z" || s == "2") return 2;
-  throw InputError("", option, text, "expected the cell vector x, y or z");
-}
-
-GridSpec parse_grid(const CgConfig& c, const Cell& cell, double width) {
-  GridSpec g;
-  if (!c.slice.empty() && !c.profile.empty())
-    throw InputError("", "--slice", c.slice, "--slice and --profile exclude each other");
-  if (!c.slice.empty()) {
-    const auto eq = c.slice.find('=');
-    if (eq == std::string::npos) throw InputError("", "--slice", c.slice, "expected AXIS=FRACTION, e.g. z=0.5");
-    g.kind = GridSpec::Kind::slice;
-    g.axis = parse_axis(c.slice.substr(0, eq), "--slice", c.slice);
-    try {
-      g.fraction = std::stod(c.slice.substr(eq + 1));
-    } catch (const std::exception&) {
-      throw InputError("", "--slice", c.slice, "the fraction is not a number");
-    }
-    require_range("--slice", g.fraction, 0, false, 1, false, "fraction of the cell vector");
-  } else if (!c.profile.empty()) {
-    g.kind = GridSpec::Kind::profile;
-    g.axis = parse_axis(c.profile, "--profile", c.profile);
-  }
-  // Automatic: a node every half width, so the kernel is sampled at two or more nodes per width.
-  for (int a = 0; a < 3; ++a)
-    g.n[a] = int(std::min(1e6, std::max(1.0, std::ceil(detail::plane_distance(cell, a) / (0.5 * width)))));
-  if (!c.grid.empty()) {
-    std::vector<double> v;
-    std::size_t pos = 0;
-    while (pos <= c.grid.size()) {
-      const auto comma = c.grid.find(',', pos);
-      const std::string part = c.grid.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
-      double x = 0;
-      std::size_t used = 0;
-      try {
-        x = std::stod(part, &used);
-      } catch (const std::exception&) {
-        used = 0;
-      }
-      if (used != part.size() || part.empty() || !(x >= 1) || x != std::floor(x) || x > 1e9)
-        throw InputError("", "--nodes", c.grid, "expected N or NX,NY,NZ: whole numbers of nodes >= 1");
-      v.push_back(x);
-      if (comma == std::string::npos) break;
-      pos = comma + 1;
-    }
-    if (v.size() != 1 && v.size() != 3) throw InputError("", "--nodes", c.grid, "expected one or three counts");
-    for (int a = 0; a < 3; ++a) g.n[a] = int(v.size() == 1 ? v[0] : v[a]);
-  }
-  if (g.kind == GridSpec::Kind::slice) g.n[g.axis] = 1;
-  return g;
-}
-
 json mat_json(const Mat3& m) {
   json r = json::array();
   for (int i = 0; i < 3; ++i) r.push_back({m(i, 0), m(i, 1), m(i, 2)});
@@ -167,84 +99,18 @@ void same_cell(const Cell& a, const Cell& b, const std::string& file) {
 }  // namespace
 
 namespace {
-struct Diagnostics {
-  double mass_error = NAN, divergence_residual = NAN, stress_scale = 0;
-  Mat3 mean_static;  ///< grid mean of σ_contact + σ_bond (full grids)
-};
-
-Diagnostics diagnose(const Accumulator::Fields& f, GridSpec::Kind kind, double total_mass, double width) {
-  Diagnostics d;
-  const std::size_t N = f.points.size();
-  if (f.node_volume > 0 && total_mass > 0) {
-    double mass = 0;
-    for (double rho : f.density) mass += rho * f.node_volume;
-    d.mass_error = (mass - total_mass) / total_mass;
-  }
-  // ‖∇·σ‖ against ‖σ‖/w over the nodes whose kernel stays inside the body (no wall forces there).
-  double div2 = 0, sig2 = 0;
-  std::size_t n = 0;
-  for (std::size_t k = 0; k < N; ++k) {
-    for (int c = 0; c < 9; ++c) {
-      const double s = f.stress_contact[9 * k + c] + f.stress_bond[9 * k + c];
-      if (kind == GridSpec::Kind::full) d.mean_static.a[c / 3][c % 3] += s / double(N);
-      if (f.interior[k]) sig2 += s * s;
-    }
-    if (f.interior[k]) div2 += norm2(f.divergence[k]), ++n;
-  }
-  if (n && sig2 > 0) {
-    d.stress_scale = std::sqrt(sig2 / double(n));
-    d.divergence_residual = std::sqrt(div2 / double(n)) * width / d.stress_scale;
-  }
-  return d;
-}
-
-/// Love-Weber static stress -(1/V) Σ F⊗d of one snapshot (docs/physics.md#stress-and-measurements).
-Mat3 love_static(const Snapshot& s) {
-  Mat3 m;
-  for (const auto* list : {&s.contacts, &s.bonds})
-    for (const PairForce& c : *list) m += outer(c.force, c.branch);
-  m *= -1 / s.cell.volume();
-  return m;
-}
-
-struct Setup {
-  double mean_d = 0, width = 0;
-  bool in_diameters = true;
-  Kernel kernel;
-  GridSpec grid;
-};
-
-Setup setup(const CgConfig& c, const Packing& first, std::vector<std::string>& warnings) {
-  Setup s;
-  const std::string& file = c.inputs.front();
-  if (first.particles.size() == 0) throw InputError(file, "/particles/radius", "0 particles", "nothing to coarse-grain");
-  if (std::abs(first.cell.h.det()) <= 0 || !std::isfinite(first.cell.h.det()))
-    throw InputError(file, "/cell/h", value_text(first.cell.h.det()) + " m^3", "the cell must have a positive volume");
-  s.mean_d = mean_diameter(first);
-  s.width = parse_width(c.width, s.mean_d, &s.in_diameters);
-  double smallest = 1e300;
-  for (int a = 0; a < 3; ++a) smallest = std::min(smallest, detail::plane_distance(first.cell, a));
-  if (s.width > smallest)
-    throw InputError("", "--width", c.width,
-                     "the width " + value_text(s.width) + " m exceeds the cell (smallest extent " + value_text(smallest) +
-                         " m): every node would see the cell mean");
-  if (s.width < 0.5 * s.mean_d) {
-    warnings.push_back("--width " + c.width + " is " + value_text(s.width / s.mean_d) +
-                       " mean diameters: below 0.5 the fields resolve single particles, not a continuum");
-    warn(warnings.back());
-  }
-  KernelType type;
-  if (c.kernel == "gaussian") type = KernelType::gaussian;
-  else if (c.kernel == "lucy") type = KernelType::lucy;
-  else throw InputError("", "--kernel", c.kernel, "expected gaussian or lucy");
-  require_range("--cutoff", c.cutoff, 2, false, 8, false, "Gaussian cut-off in widths");
-  s.kernel = Kernel::make(type, s.width, c.cutoff);
-  s.grid = parse_grid(c, first.cell, s.width);
-  double points = s.grid.kind == GridSpec::Kind::profile ? s.grid.n[s.grid.axis]
-                                                         : double(s.grid.n[0]) * s.grid.n[1] * s.grid.n[2];
-  // 34 sums and about 80 output values per node, as doubles.
-  check_memory_request(points * 114 * 8, "", "--nodes", c.grid.empty() ? "automatic" : c.grid,
-                       "a grid of " + value_text(points) + " nodes");
+/// tomodem-cg's options as the settings every fields output shares.
+FieldsSettings settings_of(const CgConfig& c) {
+  FieldsSettings s;
+  s.output = c.output;
+  s.vdb = c.vdb;
+  s.kernel = c.kernel;
+  s.width = c.width;
+  s.cutoff = c.cutoff;
+  s.nodes = c.grid;
+  s.slice = c.slice;
+  s.profile = c.profile;
+  s.quadrature = c.quadrature;
   return s;
 }
 }  // namespace
@@ -256,14 +122,20 @@ std::string run_cg(const CgConfig& c) {
   if (c.bond_forces != "auto" && c.bond_forces != "stored" && c.bond_forces != "stretch" && c.bond_forces != "none")
     throw InputError("", "--bond-forces", c.bond_forces, "expected auto, stored, stretch or none");
   if (c.density != 0) require_positive("--density", c.density, "kg/m^3");
-  if (c.quadrature < 0 || c.quadrature > 16)
-    throw InputError("", "--quadrature", std::to_string(c.quadrature), "expected 0 (automatic) to 16");
+  const FieldsSettings settings = settings_of(c);
+  check_settings(settings);
   std::vector<std::string> all_inputs = c.inputs;
   if (!c.reference.empty()) all_inputs.push_back(c.reference);
-  check_outputs(all_inputs, {{"-o", c.output}, {"-o (its .xdmf sidecar)", xdmf_sidecar_of(c.output)}, {"--json", c.json}});
+  std::vector<OutputName> outputs = {{"--json", c.json}};
+  for (const auto& [option, path] : output_names(settings)) outputs.push_back({option, path});
+  check_outputs(all_inputs, outputs);
   std::vector<std::string> warnings;
   Packing first = read_snapshot(c.inputs.front());
-  const Setup s = setup(c, first, warnings);
+  const std::string& file = c.inputs.front();
+  if (first.particles.size() == 0) throw InputError(file, "/particles/radius", "0 particles", "nothing to coarse-grain");
+  if (std::abs(first.cell.h.det()) <= 0 || !std::isfinite(first.cell.h.det()))
+    throw InputError(file, "/cell/h", value_text(first.cell.h.det()) + " m^3", "the cell must have a positive volume");
+  const FieldsSetup s = make_setup(settings, first.cell, mean_diameter(first));
   Packing reference;
   if (!c.reference.empty()) reference = read_snapshot(c.reference);
   // Every snapshot is read and checked before the grid is allocated.
@@ -285,7 +157,7 @@ std::string run_cg(const CgConfig& c) {
     info("coarse-graining " + c.inputs[k] + ": " + std::to_string(snap.x.size()) + " particles, " +
          std::to_string(snap.contacts.size()) + " contacts, " + std::to_string(snap.bonds.size()) + " bonds");
     for (double m : snap.m) mass += m / double(c.inputs.size());
-    Mat3 l = love_static(snap);
+    Mat3 l = detail::love_static(snap);
     l *= 1.0 / double(c.inputs.size());
     love += l;
     n_contacts += snap.contacts.size(), n_bonds += snap.bonds.size();
@@ -297,13 +169,21 @@ std::string run_cg(const CgConfig& c) {
     warn(warnings.back());
   }
   const Accumulator::Fields f = acc.fields();
-  const Diagnostics d = diagnose(f, s.grid.kind, mass, s.width);
+  const detail::Diagnostics d = detail::diagnose(f, s.grid.kind, mass, s.width);
   json params = {{"kernel", c.kernel}, {"width", c.width}, {"cutoff_widths", c.cutoff}, {"grid", c.grid},
                  {"slice", c.slice},   {"profile", c.profile}, {"quadrature", c.quadrature},
                  {"density", c.density}, {"bond_forces", c.bond_forces}, {"reference", c.reference}};
-  detail::write_fields(c.output, f, s.grid.kind, s.grid.axis,
-                       {{"tool", "tomodem-cg"}, {"version", version_string()}, {"parameters", params.dump()},
-                        {"created_utc", utc_now()}});
+  if (!c.vdb.empty()) params["vdb"] = c.vdb;
+  const std::vector<std::pair<std::string, std::string>> root = {
+      {"tool", "tomodem-cg"}, {"version", version_string()}, {"parameters", params.dump()}, {"created_utc", utc_now()}};
+  // The VDB first: when it fails, no fields file is left either.
+  if (!c.vdb.empty()) detail::write_vdb(c.vdb, f, first.cell, root);
+  try {
+    detail::write_fields(c.output, f, s.grid.kind, s.grid.axis, root);
+  } catch (...) {
+    if (!c.vdb.empty()) std::filesystem::remove(c.vdb);
+    throw;
+  }
   double love_norm = 0, diff = 0;
   for (int i = 0; i < 9; ++i)
     love_norm += love.a[i / 3][i % 3] * love.a[i / 3][i % 3],
@@ -312,6 +192,7 @@ std::string run_cg(const CgConfig& c) {
   out.input(c.inputs.front(), {{"snapshots", c.inputs}, {"reference", c.reference}});
   out.output("fields", c.output);
   out.output("xdmf", xdmf_sidecar_of(c.output));
+  if (!c.vdb.empty()) out.output("vdb", c.vdb);
   out.n_particles(first.particles.size());
   out["parameters"] = params;
   out["grid"] = s.grid.kind == GridSpec::Kind::full ? "full" : s.grid.kind == GridSpec::Kind::slice ? "slice" : "profile";
@@ -319,9 +200,9 @@ std::string run_cg(const CgConfig& c) {
   out["n_points"] = f.points.size();
   out["kernel"] = s.kernel.name();
   out["width_m"] = s.width;
-  out["width_mean_diameters"] = s.width / s.mean_d;
+  out["width_mean_diameters"] = s.width / s.mean_diameter;
   out["cutoff_m"] = s.kernel.cutoff;
-  out["mean_diameter_m"] = s.mean_d;
+  out["mean_diameter_m"] = s.mean_diameter;
   out["quadrature_points_max"] = acc.max_quadrature();
   out["snapshots"] = c.inputs.size();
   out["n_contacts"] = n_contacts;

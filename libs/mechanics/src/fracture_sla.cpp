@@ -793,6 +793,27 @@ SlaResponse sla_response(const FractureSample& s, const std::vector<dem::BondLaw
       out.normal_force[b] = sla.k.kn[b] * sla.stretch(b, x);
       out.contacts += sla.touch[b];
     }
+  // The state as vectors (tomodem-fracture --fields, docs/cg.md): translations, and the force on j
+  // of the translational rows (all of an intact bond, the normal row of closed faces).
+  auto value = [&](int64_t e) { const int64_t d = sla.dof[std::size_t(e)]; return d >= 0 ? x[d] : sla.qp[std::size_t(e)]; };
+  out.displacement.assign(s.packing.particles.size(), Vec3{});
+  for (std::size_t i = 0; i < s.packing.particles.size(); ++i)
+    for (int c = 0; sla.active[i] && c < 3; ++c) out.displacement[i][c] = value(int64_t(i) * 6 + c);
+  out.force.assign(s.packing.bonds.size(), Vec3{});
+  out.closed.assign(s.packing.bonds.size(), 0);
+  Row rows[8];
+  for (std::size_t b = 0; b < s.packing.bonds.size(); ++b) {
+    if (!(sla.intact[b] || sla.touch[b]) || !sla.active[std::size_t(s.packing.bonds.i[b])]) continue;
+    out.closed[b] = !sla.intact[b];
+    const int nr = sla.rows_of(b, rows);
+    for (int r = 0; r < nr; ++r) {
+      if (rows[r].kind != Row::normal && (rows[r].kind != Row::shear || !sla.intact[b])) continue;
+      double e = 0;
+      for (int c = 0; c < 12; ++c)
+        if (rows[r].g[c] != 0) e += rows[r].g[c] * value(sla.entry(b, c));
+      out.force[b] -= rows[r].k * e * Vec3{rows[r].g[6], rows[r].g[7], rows[r].g[8]};
+    }
+  }
   out.active_set_iterations = int(sla.active_set_iterations);
   out.cg_iterations = sla.cg_total;
   return out;

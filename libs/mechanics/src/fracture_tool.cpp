@@ -15,6 +15,7 @@
 #include "tomodem/core/tool.hpp"
 #include "tomodem/mechanics/fracture.hpp"
 #include "tomodem/mechanics/size_effect.hpp"
+#include "fields_output.hpp"
 
 namespace tomodem::mechanics {
 
@@ -249,6 +250,9 @@ FailureOptions check_fracture_options(const FractureConfig& c) {
   // Every option is checked whatever the method and criterion: out of range is refused, never ignored.
   // The criterion's parameters from the registry: one it does not take is refused, not ignored.
   check_failure_options(fo);
+  fields::check_settings(c.fields);
+  if (c.fields.requested() && c.method == FractureMethod::explicit_test)
+    throw InputError("", "--fields", c.fields.output, "the fields are of the SLA's peak load: use --method sla or both");
   {
     const bool centre = c.crack.geometry == CrackGeometry::centre;
     const double a = c.crack.a_over_w, amax = centre ? 0.5 : 1;
@@ -292,6 +296,7 @@ void check_fracture_outputs(const FractureConfig& c) {
     outs.push_back({"--map", c.map});
     outs.push_back({"--map (its .xdmf sidecar)", stem_of(c.map) + ".xdmf"});
   }
+  for (const auto& [option, path] : fields::output_names(c.fields)) outs.push_back({option, path});
   check_outputs({c.input}, outs);
 }
 
@@ -411,6 +416,7 @@ std::string run_fracture(const FractureConfig& c) {
   set_failure(laws, p, fo, c.input);
   const FractureSample s = make_sample(net, c.crack, c.input);
   check_widths_fit(c, net, s.mean_diameter);
+  if (c.fields.requested()) check_fracture_fields(c.fields, s);  // width and grid, before any solve
   if (want_sla && !sla_uses_pcg(c.sla, long(s.packing.particles.size() - s.removed_particles)))
     // the Woodbury block K0^-1 U: 6 dofs per particle x 6 columns per broken bond, float64
     check_memory_request(6.0 * double(s.packing.particles.size()) * 6.0 * std::max(1, c.sla.woodbury_bonds) * 8.0, "",
@@ -448,6 +454,8 @@ std::string run_fracture(const FractureConfig& c) {
   if (want_sla && want_explicit) out["explicit_vs_sla"] = ex.K_IC / sla.K_IC - 1;
   if (!c.widths.empty()) out["size_effect"] = size_effect_study(c, net, laws, fo, s.mean_diameter);
   write_fracture_outputs(c, s, sla, ex, primary, out);
+  if (c.fields.requested())
+    out["fields"] = json::parse(fracture_fields(c.fields, s, laws, fo, c.sla, sla, c.input)), out.output("fields", c.fields.output);
   return out.text();
 }
 

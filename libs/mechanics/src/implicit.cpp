@@ -350,6 +350,13 @@ LinearResponse StiffnessSystem::solve(const std::array<double, 6>& strain) const
   out.shear_force.assign(nb, 0.0);
   out.twist_moment.assign(nb, 0.0);
   out.bend_moment.assign(nb, 0.0);
+  out.force.assign(nb, Vec3{});
+  out.fluctuation.assign(m.pid.size(), Vec3{});
+  for (std::size_t i = 0; i < m.pid.size(); ++i)
+    for (int x = 0; m.pid[i] >= 0 && x < 3; ++x) {
+      const int64_t g = m.dof[m.pid[i] * 6 + x];
+      if (g >= 0) out.fluctuation[i][x] = q[g];
+    }
   Eigen::Matrix<double, 6, 1> sigma = Eigen::Matrix<double, 6, 1>::Zero();
   Row rows[8];
   for (std::size_t b : m.used) {
@@ -367,6 +374,8 @@ LinearResponse StiffnessSystem::solve(const std::array<double, 6>& strain) const
       for (int x = 0; x < 6; ++x) e += w.a[x] * strain[x];
       const double force = w.k * e;
       for (int x = 0; x < 6; ++x) sigma[x] += force * w.a[x];
+      if (w.kind != Row::twist && w.kind != Row::bend)  // translational rows: force along their direction
+        out.force[b] -= force * Vec3{w.g[6], w.g[7], w.g[8]};
       switch (w.kind) {
         case Row::normal: out.normal_force[b] = force; break;
         case Row::shear: shear2 += force * force; break;

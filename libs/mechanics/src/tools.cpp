@@ -11,6 +11,7 @@
 #include "tomodem/core/summary.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/mechanics/bounds.hpp"
+#include "fields_output.hpp"
 
 namespace tomodem::mechanics {
 
@@ -236,7 +237,10 @@ void check_young_options(const YoungConfig& c) {
   check_law_options(c.law);
   if (!c.output_csv.empty() && c.method == YoungMethod::implicit)
     throw InputError("", "--curve", c.output_csv, "the stress-strain curve comes from --method explicit or both");
-  check_outputs({c.input}, {{"--json", c.json}, {"--curve", c.output_csv}});
+  fields::check_settings(c.fields);
+  std::vector<OutputName> outs = {{"--json", c.json}, {"--curve", c.output_csv}};
+  for (const auto& [option, path] : fields::output_names(c.fields)) outs.push_back({option, path});
+  check_outputs({c.input}, outs);
 }
 
 json implicit_json(const ImplicitResult& ir, double tolerance) {
@@ -303,6 +307,7 @@ std::string run_young(const YoungConfig& c) {
   if (p.bonds.size() == 0)
     throw InputError(c.input, "/bonds", "missing", "a packing without bonds: make the network with tomodem-bond first");
   override_materials(p, c.youngs_modulus, c.poisson_ratio, c.density);  // every phase
+  if (c.fields.requested()) fields::make_setup(c.fields, p.cell, fields::mean_diameter(p));  // before any solve
   const bool want_explicit = c.method != YoungMethod::implicit, want_implicit = c.method != YoungMethod::explicit_test;
   const std::vector<dem::BondLaw> laws = bond_laws(p, c.input, c.law, want_explicit);
   Summary out("tomodem-young");
@@ -332,6 +337,11 @@ std::string run_young(const YoungConfig& c) {
       write_text_atomic(c.output_csv, csv_table({"axial_strain", "lateral_strain", "axial_stress_Pa"}, rows));
       out.output("curve", c.output_csv);
     }
+  }
+  if (c.fields.requested()) {
+    out["fields"] = json::parse(young_fields(c.fields, p, net.image, bond_stiffnesses(p, laws), c.implicit, axis,
+                                             c.explicit_.strain, c.input));
+    out.output("fields", c.fields.output);
   }
   out["E"] = want_implicit ? ir.E : er.E;
   out["nu"] = want_implicit ? ir.nu : er.nu;

@@ -2,6 +2,7 @@
 // A tomodem-dem scene: particles (from a packing file or generated), materials, physics,
 // boundaries, a protocol and outputs, read from YAML (format: docs/dem.md).
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -31,6 +32,13 @@ struct SceneOutputs {
   std::string checkpoint;  ///< HDF5 checkpoint
 };
 
+/// Called by run_protocol at the steps that are multiples of `every` (the first step of the run
+/// included): the coarse-graining snapshots of tomodem-dem's fields: block (docs/cg.md).
+struct StepObserver {
+  long every = 0;  ///< 0: never
+  std::function<void(Simulation&)> at_step;
+};
+
 struct Scene {
   std::string file;        ///< the scene file, for messages
   std::string text;        ///< the scene as read, stored as provenance
@@ -42,6 +50,7 @@ struct Scene {
   /// Time-series rows (series_columns()) of the runs before a restart, from the checkpoint: the
   /// series continues instead of starting again.
   std::vector<std::vector<double>> series_before;
+  StepObserver observer;   ///< set by the tool (not read from the scene)
 };
 
 /// The columns of the time series (CSV header and /results/series/dem), with their units.
@@ -85,7 +94,8 @@ struct RunReport {
 };
 
 /// Runs the protocol from the current step to protocol.steps; measurements every
-/// output_interval steps; checkpoints if asked (`checkpoint_path`, written atomically).
+/// output_interval steps; checkpoints if asked (`checkpoint_path`, written atomically); the
+/// scene's observer at the multiples of its `every`.
 RunReport run_protocol(Scene& scene, const std::string& checkpoint_path, bool progress);
 
 /// Checkpoint: particles, cell, walls, cell control and the engine state, bit-exact, and the time

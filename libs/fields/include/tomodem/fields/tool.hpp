@@ -14,6 +14,7 @@ struct CgConfig {
   std::vector<std::string> inputs;  ///< snapshots of one cell; the fields are their time average
   std::string reference;            ///< packing the displacement is measured from ("" none)
   std::string output;               ///< fields .h5 (and its .xdmf sidecar)
+  std::string vdb;                  ///< --vdb: the scalar and vector fields as OpenVDB grids ("" none; full grids only)
   std::string json;                 ///< summary file ("" or "-": stdout only)
   std::string kernel = "gaussian";  ///< gaussian | lucy
   std::string width = "1";          ///< mean diameters, or a length with a unit ("20um")

@@ -98,6 +98,10 @@ struct LinearResponse {
   /// increments, normal force > 0 in tension (N), shear force and bending moment magnitudes (N, N m),
   /// twisting moment (N m, signed about n).
   std::vector<double> normal_force, shear_force, twist_moment, bend_moment;
+  /// Per bond: the force increment on j from i (normal, shear and prestress rows), N; per particle:
+  /// the translation about the affine field ε·x, m (0 outside the solve and for the cluster's
+  /// first particle, held fixed). What tomodem-young --fields coarse-grains (docs/cg.md).
+  std::vector<Vec3> force, fluctuation;
   long iterations = 0;             ///< iterative solvers
   double residual = 0;             ///< |K q − f| / |f|
 };

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "tomodem/dem/bonds.hpp"
+#include "tomodem/fields/block.hpp"
 #include "tomodem/mechanics/elastic.hpp"
 #include "tomodem/mechanics/network.hpp"
 
@@ -171,6 +172,9 @@ inline bool sla_uses_pcg(const SlaOptions& o, long particles) {
 struct SlaResponse {
   double stiffness = 0;              ///< N/m: grip force per unit opening (Σ k e² over the springs)
   std::vector<double> normal_force;  ///< per bond, N per m of opening (+ tension): intact bonds and closed faces
+  std::vector<Vec3> force;           ///< per bond, force on j from i (normal and shear rows), N per m of opening
+  std::vector<uint8_t> closed;       ///< per bond: broken faces in contact (the force is a contact's)
+  std::vector<Vec3> displacement;    ///< per particle, m per m of opening (0 for particles left out)
   long contacts = 0;                 ///< broken bonds whose faces touch (carrying compression)
   int active_set_iterations = 0;
   long cg_iterations = 0;
@@ -210,6 +214,7 @@ struct FractureConfig {
   bool elastic = true;                   ///< compute E, ν of the periodic network (G = K²(1−ν²)/E check)
   std::vector<double> widths;            ///< size-effect study (SLA): sample widths in mean diameters, ≥ 3 (docs/fracture.md#size-effect)
   std::optional<double> youngs_modulus, poisson_ratio, density;  ///< overrides for every phase (unset: file)
+  fields::FieldsSettings fields;  ///< --fields: the state at the SLA's peak load, coarse-grained (docs/cg.md)
 };
 /// Returns the JSON summary (also written to `json` when set).
 std::string run_fracture(const FractureConfig& c);

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "tomodem/mechanics/bonding.hpp"
+#include "tomodem/fields/block.hpp"
 #include "tomodem/mechanics/elastic.hpp"
 
 namespace tomodem::mechanics {
@@ -39,6 +40,7 @@ struct YoungConfig {
   ImplicitOptions implicit;
   ExplicitOptions explicit_;
   std::optional<double> youngs_modulus, poisson_ratio, density;  ///< overrides for every phase (unset: file)
+  fields::FieldsSettings fields;  ///< --fields: the state under uniaxial stress at --strain, coarse-grained (docs/cg.md)
 };
 std::string run_young(const YoungConfig& c);
 
