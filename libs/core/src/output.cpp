@@ -88,9 +88,47 @@ bool writes_outputs() {
   return !silent || tool_name() == "tomodem";
 }
 
+namespace {
+// An existing output that is not a regular file (/dev/null, a FIFO, a terminal): it is written
+// through, never renamed over. Renaming a temporary onto /dev/null replaced the device with a file.
+bool is_special_file(const std::string& path) {
+  struct stat st {};
+  return ::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode);
+}
+
+// Copies the finished temporary into the special file `final_path`.
+void write_through(const std::string& tmp, const std::string& final_path) {
+  const int in = ::open(tmp.c_str(), O_RDONLY | O_CLOEXEC);
+  const int out = in < 0 ? -1 : ::open(final_path.c_str(), O_WRONLY | O_CLOEXEC);
+  int e = in < 0 || out < 0 ? errno : 0;
+  char buf[1 << 16];
+  for (ssize_t n; e == 0 && (n = ::read(in, buf, sizeof buf)) != 0;) {
+    if (n < 0) {
+      if (errno != EINTR) e = errno;
+      continue;
+    }
+    for (ssize_t done = 0; e == 0 && done < n;) {
+      const ssize_t w = ::write(out, buf + done, std::size_t(n - done));
+      if (w < 0 && errno == EINTR) continue;
+      if (w <= 0) e = w < 0 ? errno : ENOSPC;
+      else done += w;
+    }
+  }
+  if (in >= 0) ::close(in);
+  if (out >= 0 && ::close(out) != 0 && e == 0) e = errno;
+  ::unlink(tmp.c_str());
+  if (e != 0) throw RuntimeFailure("cannot write " + final_path + ": " + std::strerror(e));
+}
+}  // namespace
+
 std::string temporary_path(const std::string& final_path) {
-  // Same folder as the result, so the final rename stays on one file system (atomic).
-  const std::string tmp = final_path + ".tmp" + std::to_string(::getpid());
+  // Same folder as the result, so the final rename stays on one file system (atomic); for a
+  // special file (/dev/null) the temporary goes to the temporary folder instead of /dev.
+  const std::string tmp =
+      is_special_file(final_path)
+          ? (fs::temp_directory_path() / ("tomodem-" + fs::path(final_path).filename().string())).string() +
+                ".tmp" + std::to_string(::getpid())
+          : final_path + ".tmp" + std::to_string(::getpid());
   // A silent rank creates no temporary (HDF5 builds its files in memory, text is not written).
   if (writes_outputs()) register_temporary(tmp);
   return tmp;
@@ -121,6 +159,11 @@ void commit_output(const std::string& final_path) {
   const std::string tmp = temporary_path(final_path);
   if (!writes_outputs()) {  // rank 0 writes the file; whatever a writer left under this rank's name goes
     ::unlink(tmp.c_str());
+    return;
+  }
+  if (is_special_file(final_path)) {
+    unregister_temporary(tmp);
+    write_through(tmp, final_path);
     return;
   }
   if (std::rename(tmp.c_str(), final_path.c_str()) != 0) {

@@ -6,11 +6,13 @@
 #include <signal.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cmath>
 #include <csignal>
 #include <regex>
+#include <thread>
 
 #include "tmpdir.hpp"
 #include "tomodem/core/error.hpp"
@@ -45,6 +47,23 @@ TEST_F(Output, WriteTextAtomicWritesAndReplaces) {
   write_text_atomic(file("a.txt"), std::string("sec\0ond", 7));  // binary-safe
   EXPECT_EQ(test::slurp(file("a.txt")), std::string("sec\0ond", 7));
   EXPECT_EQ(test::entries(dir), (std::vector<std::string>{"a.txt"}));  // no temporary left
+}
+
+// An output that is a special file (here a FIFO, as /dev/null or a pipe given to --json) is written
+// through and stays what it was: renaming a temporary onto /dev/null replaced the device with a
+// regular file for every later program on the machine.
+TEST_F(Output, SpecialFileIsWrittenThroughNotReplaced) {
+  const std::string fifo = file("pipe");
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  std::string got;
+  std::thread reader([&] { got = test::slurp(fifo); });
+  write_text_atomic(fifo, "{\"a\": 1}\n");
+  reader.join();
+  EXPECT_EQ(got, "{\"a\": 1}\n");
+  struct stat st {};
+  ASSERT_EQ(::stat(fifo.c_str(), &st), 0);
+  EXPECT_TRUE(S_ISFIFO(st.st_mode));
+  EXPECT_EQ(test::entries(dir), (std::vector<std::string>{"pipe"}));  // no temporary beside it
 }
 
 TEST_F(Output, WriteTextAtomicFailsCleanly) {
