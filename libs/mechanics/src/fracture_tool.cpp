@@ -374,7 +374,7 @@ void write_fracture_outputs(const FractureConfig& c, const FractureSample& s, co
   }
   if (!c.plot.empty()) {
     PlotSpec spec;
-    spec.title = "tomodem-fracture: " + std::string(to_string(s.geometry)) + " crack, a/W = " + std::to_string(s.a / s.W);
+    spec.title = "tomodem-fracture: " + std::string(to_string(s.geometry)) + " crack, a/W = " + value_text(s.a / s.W);
     spec.xlabel = "grip opening (µm)";
     spec.ylabel = "load (N)";
     for (const FractureResult* r : {&sla, &ex}) {
