@@ -64,27 +64,12 @@ extern "C" void cleanup_and_reraise(int sig) {
 
 std::string errno_text(int e) { return e == ENOSPC ? "no space left on device" : std::strerror(e); }
 
-int env_int(const char* name, int fallback) {
-  const char* s = std::getenv(name);
-  return s && *s ? std::atoi(s) : fallback;
-}
-
-// This process's rank in a job of several, as the launcher says: OpenMPI's mpirun, PMI (MPICH's
-// Hydra, srun --mpi=pmi2), srun. A rank counts only where its job has more than one (a serial
-// step inside one task of a Slurm job keeps rank 0).
-int launched_rank_of_several() {
-  int rank = 0;
-  if (env_int("OMPI_COMM_WORLD_SIZE", 1) > 1) rank = std::max(rank, env_int("OMPI_COMM_WORLD_RANK", 0));
-  if (env_int("PMI_SIZE", 1) > 1) rank = std::max(rank, env_int("PMI_RANK", 0));
-  if (env_int("SLURM_STEP_NUM_TASKS", 1) > 1) rank = std::max(rank, env_int("SLURM_PROCID", 0));
-  return rank;
-}
 }  // namespace
 
 bool writes_outputs() {
   // Decided once the tool is named (run_tool names it before its body runs); before that, and in
   // programs that are not tools (tests under mpirun), every rank writes.
-  static const bool silent = [] { return launched_rank_of_several() > 0; }();
+  static const bool silent = launched_rank() > 0;
   return !silent || tool_name() == "tomodem";
 }
 
@@ -343,6 +328,21 @@ std::string utc_now() {
   char buf[32];
   std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
   return buf;
+}
+
+std::string xml_escape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      case '\'': out += "&apos;"; break;
+      default: out += c;
+    }
+  }
+  return out;
 }
 
 }  // namespace tomodem

@@ -138,8 +138,14 @@ RankUse g_ranks = RankUse::one_rank;
 int launched_ranks() {
   return std::max({env_int("OMPI_COMM_WORLD_SIZE", 1), env_int("PMI_SIZE", 1), env_int("SLURM_STEP_NUM_TASKS", 1)});
 }
+// A launcher's rank counts only where its job has more than one (a serial step inside one task of
+// a Slurm job keeps rank 0).
 int launched_rank() {
-  return std::max({env_int("OMPI_COMM_WORLD_RANK", 0), env_int("PMI_RANK", 0), env_int("SLURM_PROCID", 0)});
+  int rank = 0;
+  if (env_int("OMPI_COMM_WORLD_SIZE", 1) > 1) rank = std::max(rank, env_int("OMPI_COMM_WORLD_RANK", 0));
+  if (env_int("PMI_SIZE", 1) > 1) rank = std::max(rank, env_int("PMI_RANK", 0));
+  if (env_int("SLURM_STEP_NUM_TASKS", 1) > 1) rank = std::max(rank, env_int("SLURM_PROCID", 0));
+  return rank;
 }
 
 std::string build_features(const std::string& tool) {

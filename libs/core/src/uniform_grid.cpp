@@ -21,19 +21,6 @@ GridField::GridField(std::string n, const std::vector<uint8_t>& v, std::string u
 std::size_t GridField::size() const { return f64 ? f64->size() : f32 ? f32->size() : u8 ? u8->size() : 0; }
 
 namespace {
-std::string escape(const std::string& s) {
-  std::string o;
-  for (char c : s) {
-    switch (c) {
-      case '&': o += "&amp;"; break;
-      case '<': o += "&lt;"; break;
-      case '>': o += "&gt;"; break;
-      case '"': o += "&quot;"; break;
-      default: o += c;
-    }
-  }
-  return o;
-}
 std::string dataset_path(const GridBlock& b, const GridField& f) {
   return (b.name.empty() ? std::string() : "/" + b.name) + "/" + f.name;
 }
@@ -59,7 +46,7 @@ std::string uniform_grid_xdmf(const std::string& h5_name, const UniformGrid& g, 
   const std::string d = std::to_string(g.dims[2]) + " " + std::to_string(g.dims[1]) + " " + std::to_string(g.dims[0]);
   x << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n";
   for (const GridBlock& b : blocks) {
-    x << "  <Grid Name=\"" << escape(b.name.empty() ? b.xdmf_name : b.name) << "\" GridType=\"Uniform\">\n"
+    x << "  <Grid Name=\"" << xml_escape(b.name.empty() ? b.xdmf_name : b.name) << "\" GridType=\"Uniform\">\n"
       << "   <Topology TopologyType=\"3DCoRectMesh\" Dimensions=\"" << g.dims[2] + 1 << " " << g.dims[1] + 1 << " "
       << g.dims[0] + 1 << "\"/>\n   <Geometry GeometryType=\"ORIGIN_DXDYDZ\">\n"
       // XDMF orders the geometry z y x, as the datasets; the mesh nodes are the cell corners
@@ -68,10 +55,10 @@ std::string uniform_grid_xdmf(const std::string& h5_name, const UniformGrid& g, 
       << g.spacing[0] << "</DataItem>\n   </Geometry>\n";
     for (const GridField& f : b.fields) {
       const char* type = f.components == 1 ? "Scalar" : f.components == 3 ? "Vector" : "Tensor";
-      x << "   <Attribute Name=\"" << escape(f.name) << "\" AttributeType=\"" << type << "\" Center=\"Cell\">\n"
+      x << "   <Attribute Name=\"" << xml_escape(f.name) << "\" AttributeType=\"" << type << "\" Center=\"Cell\">\n"
         << "    <DataItem Dimensions=\"" << d << (f.components > 1 ? " " + std::to_string(f.components) : "")
         << (f.u8 ? "\" NumberType=\"UChar\" Precision=\"1\"" : "\" NumberType=\"Float\" Precision=\"8\"")
-        << " Format=\"HDF\">" << escape(h5_name) << ":" << escape(dataset_path(b, f)) << "</DataItem>\n   </Attribute>\n";
+        << " Format=\"HDF\">" << xml_escape(h5_name) << ":" << xml_escape(dataset_path(b, f)) << "</DataItem>\n   </Attribute>\n";
     }
     x << "  </Grid>\n";
   }

@@ -81,20 +81,6 @@ std::string csv_field(const std::string& s) {
   return q + "\"";
 }
 
-std::string html(const std::string& s) {
-  std::string o;
-  for (char c : s) {
-    switch (c) {
-      case '&': o += "&amp;"; break;
-      case '<': o += "&lt;"; break;
-      case '>': o += "&gt;"; break;
-      case '"': o += "&quot;"; break;
-      default: o += c;
-    }
-  }
-  return o;
-}
-
 std::string number_text(double x) {
   std::ostringstream s;
   s.precision(10);
@@ -572,7 +558,7 @@ struct Page {
 };
 
 std::string figure(const std::string& name, const std::string& title) {
-  return "<figure>\n<img src=\"" + name + ".svg\" alt=\"" + html(title) + "\">\n<figcaption>" + html(title) + ": <a href=\"" +
+  return "<figure>\n<img src=\"" + name + ".svg\" alt=\"" + xml_escape(title) + "\">\n<figcaption>" + xml_escape(title) + ": <a href=\"" +
          name + ".png\">PNG</a>, <a href=\"" + name + ".svg\">SVG</a>, <a href=\"" + name + ".gp\">gnuplot script</a>, <a href=\"" +
          name + ".dat\">data</a></figcaption>\n</figure>\n";
 }
@@ -587,7 +573,7 @@ std::string short_number(double x) {
 
 std::string html_statistics(const Page& pg) {
   std::string g;
-  for (const auto& c : pg.o.group) g += (g.empty() ? "" : " &times; ") + html(c);
+  for (const auto& c : pg.o.group) g += (g.empty() ? "" : " &times; ") + xml_escape(c);
   std::ostringstream h;
   h << "<h2>Statistics</h2>\n<p>Cells: " << (g.empty() ? "all rows" : g)
     << ". Mean of the replicas, 95 % confidence interval t<sub>0.975,&nu;</sub> u with u = &radic;(sem&sup2; + "
@@ -598,18 +584,18 @@ std::string html_statistics(const Page& pg) {
     for (const auto& c : pg.cells) {
       const stats::Estimate e = estimate_of(c.rows, prop);
       if (e.n == 0) continue;
-      h << "<tr><td>" << html(cell_text(c.key)) << "</td><td>" << html(prop) << "</td><td>" << e.n << "</td><td>"
+      h << "<tr><td>" << xml_escape(cell_text(c.key)) << "</td><td>" << xml_escape(prop) << "</td><td>" << e.n << "</td><td>"
         << short_number(e.mean) << "</td><td>"
         << (std::isfinite(e.half95) ? short_number(e.mean - e.half95) + " &ndash; " + short_number(e.mean + e.half95) : "")
         << "</td><td>" << (std::isfinite(e.rel_half95()) ? short_number(100 * e.rel_half95()) : "") << "</td><td>"
-        << html(c.stopped_because) << "</td><td>" << short_number(c.cpu_s) << "</td></tr>\n";
+        << xml_escape(c.stopped_because) << "</td><td>" << short_number(c.cpu_s) << "</td></tr>\n";
     }
   h << "</table>\n";
   if (!pg.rankings.empty()) {
     h << "<h3>Rankings</h3>\n<p>Welch's t-test (Welch 1947), two-sided; \"not resolved\" when p &ge; 0.05.</p>\n<ul>\n";
     for (const auto& r : pg.rankings)
       if (std::find(pg.shown_props.begin(), pg.shown_props.end(), r.property) != pg.shown_props.end())
-        h << "<li>" << html(r.text) << "</li>\n";
+        h << "<li>" << xml_escape(r.text) << "</li>\n";
     h << "</ul>\n";
   }
   for (const auto& stem : pg.error_plots) h << figure(stem, "error against CPU time: " + stem.substr(13));
@@ -629,14 +615,14 @@ std::string html_page(const Page& pg) {
     if (shown.empty()) shown = t.all;
   }
   std::ostringstream h;
-  h << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>" << html(pg.o.title)
+  h << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>" << xml_escape(pg.o.title)
     << "</title>\n<style>body{font-family:sans-serif;max-width:60em;margin:2em auto;padding:0 1em}"
        "table{border-collapse:collapse;font-size:90%}td,th{border:1px solid #bbb;padding:2px 6px;text-align:right}"
        "figure{margin:1em 0}img{max-width:100%}code{background:#f4f4f4}</style>\n</head>\n<body>\n<h1>"
-    << html(pg.o.title) << "</h1>\n<p>" << t.rows.size() << " rows, " << pg.columns.size()
+    << xml_escape(pg.o.title) << "</h1>\n<p>" << t.rows.size() << " rows, " << pg.columns.size()
     << " columns: <a href=\"table.csv\">table.csv</a>. "
-    << "Made " << html(utc_now()) << " by " << html(version_string());
-  if (!pg.o.command.empty()) h << "; to make it again: <code>" << html(pg.o.command) << "</code>";
+    << "Made " << xml_escape(utc_now()) << " by " << xml_escape(version_string());
+  if (!pg.o.command.empty()) h << "; to make it again: <code>" << xml_escape(pg.o.command) << "</code>";
   h << ".</p>\n";
   if (!pg.plots.empty())
     h << "<h2>Plots</h2>\n<p>Points are the mean over the rows (replicas) that share an x value; error bars are its "
@@ -647,13 +633,13 @@ std::string html_page(const Page& pg) {
   h << "<h2>Table</h2>\n";
   if (shown.size() < t.all.size()) h << "<p>Selected columns; every column is in <a href=\"table.csv\">table.csv</a>.</p>\n";
   h << "<table>\n<tr>";
-  for (const auto& c : shown) h << "<th>" << html(c) << "</th>";
+  for (const auto& c : shown) h << "<th>" << xml_escape(c) << "</th>";
   h << "</tr>\n";
   for (std::size_t i = 0; i < t.rows.size() && i < kMaxRows; ++i) {
     h << "<tr>";
     for (const auto& c : shown) {
       const Value* v = find(t.rows[i], c);
-      h << "<td>" << (v ? html(v->number ? number_text(v->x) : v->text) : "") << "</td>";
+      h << "<td>" << (v ? xml_escape(v->number ? number_text(v->x) : v->text) : "") << "</td>";
     }
     h << "</tr>\n";
   }

@@ -77,4 +77,7 @@ std::string file_hash(const std::string& path);
 /// Current time as ISO 8601 UTC.
 std::string utc_now();
 
+/// `s` with & < > " ' as XML/HTML entities (XDMF sidecars, the HTML report).
+std::string xml_escape(const std::string& s);
+
 }  // namespace tomodem
