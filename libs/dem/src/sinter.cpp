@@ -453,13 +453,14 @@ DensityState density_state(const Simulation& sim) {
 namespace {
 /// Free two-particle neck over the whole program (quasi-static N = 0): the shrinkage h/(2R)
 /// it reaches, as the test of a program that never reaches sintering temperatures.
-double two_particle_shrinkage(const SinterPhase& ph, const TemperatureProgram& prog, double R, double a0) {
+double two_particle_shrinkage(const SinterPhase& ph, const TemperatureProgram& prog, double R, double a0,
+                              double cap = 0.05) {
   PairParams pp;
   pp.sinter_gamma = ph.surface_energy;
   pp.sinter_dihedral = ph.dihedral_angle;
   const double tend = prog.duration();
   double t = 0, a2 = a0 * a0, h = 0;
-  while (t < tend && h < 0.05 * R) {
+  while (t < tend && h < cap * R) {
     const double T = prog.temperature(t);
     pp.sinter_delta_b = ph.delta_b(T);
     const double a = std::sqrt(a2);
@@ -477,6 +478,18 @@ double two_particle_shrinkage(const SinterPhase& ph, const TemperatureProgram& p
   return h / (2 * R);
 }
 }  // namespace
+
+double program_reach_estimate(const Simulation& sim, const SinterSettings& s) {
+  const Particles& p = sim.particles();
+  double rmean = 0;
+  for (double r : p.r) rmean += r;
+  rmean /= double(p.size());
+  double best = 0;  // two spheres' shrinkage h/(2R) up to h = R (the centres meet: no further)
+  for (const auto& ph : s.phases)
+    if (ph.sinters) best = std::max(best, two_particle_shrinkage(ph, s.program, rmean, s.initial_neck * rmean, 1.0));
+  const double rho0 = density_state(sim).density;
+  return std::min(1.0, rho0 / std::pow(std::max(1e-12, 1 - best), 3));
+}
 
 void check_sinter_settings(const Scene& scene, const SinterSettings& s) {
   const Simulation& sim = *scene.sim;
@@ -513,8 +526,8 @@ namespace {
 /// of a step; run() is the loop.
 class SinterRun {
  public:
-  SinterRun(Simulation& sim, const SinterSettings& s, bool progress)
-      : sim_(sim), s_(s), progress_(progress), p_(sim.particles()), n_(p_.size()), m_phys_(p_.m),
+  SinterRun(Simulation& sim, const SinterSettings& s, bool progress, const SinterSnapshots* snaps = nullptr)
+      : sim_(sim), s_(s), progress_(progress), snaps_(snaps), p_(sim.particles()), n_(p_.size()), m_phys_(p_.m),
         inv_m_phys_(p_.inv_m), inv_I_phys_(p_.inv_I), rot_(p_.has_rotation()), cc_(sim.cell_control()) {}
   SinterReport run();
 
@@ -534,6 +547,8 @@ class SinterRun {
   Simulation& sim_;
   const SinterSettings& s_;
   const bool progress_;
+  const SinterSnapshots* snaps_;  // null: none
+  std::size_t next_snap_ = 0;
   const std::chrono::steady_clock::time_point wall0_ = std::chrono::steady_clock::now();
   Particles& p_;
   const std::size_t n_;
@@ -763,7 +778,8 @@ void SinterRun::take_step(double T) {
 /// A row of the curve when one is due, and the density check; true when the target is reached.
 bool SinterRun::record_rows() {
   const bool row_due = sim_.time() >= next_row_ * (1 - 1e-12) || sim_.time() >= t_end_ * (1 - 1e-12);
-  const bool check = s_.target_density > 0 && since_update_ >= s_.update_interval;
+  const bool snap_due = snaps_ && next_snap_ < snaps_->densities.size();
+  const bool check = (s_.target_density > 0 || snap_due) && since_update_ >= s_.update_interval;
   if (!(row_due || check)) return false;
   // Radii brought up to date first, so the density is not late by the update interval.
   if (s_.conserve_volume) {
@@ -773,6 +789,11 @@ bool SinterRun::record_rows() {
   const Scan q = scan(sim_, false);
   const double dens = q.solid / sim_.cell().volume();
   const bool reached = s_.target_density > 0 && dens >= s_.target_density;
+  if (snap_due && check && dens >= snaps_->densities[next_snap_]) {
+    const SinterRow r = make_row(q, dt_, mass_scale_, rho_last_, t_last_);
+    while (next_snap_ < snaps_->densities.size() && dens >= snaps_->densities[next_snap_])
+      snaps_->take(sim_, r, next_snap_++);
+  }
   if (row_due || reached) {
     rep_.rows.push_back(make_row(q, dt_, mass_scale_, rho_last_, t_last_));
     rho_last_ = rep_.rows.back().density;
@@ -842,6 +863,10 @@ SinterReport run_sintering(Simulation& sim, const SinterSettings& s, bool progre
   return SinterRun(sim, s, progress).run();
 }
 
+SinterReport run_sintering(Simulation& sim, const SinterSettings& s, bool progress, const SinterSnapshots& snapshots) {
+  return SinterRun(sim, s, progress, &snapshots).run();
+}
+
 // ---------------------------------------------------------------- necks → bonds
 BondSet necks_to_bonds(const Simulation& sim) {
   const Simulation::EngineState e = sim.engine_state();
@@ -888,8 +913,7 @@ BondTable bond_table(const BondSet& b) {
 BondTable necks_to_bond_table(const Simulation& sim) { return bond_table(necks_to_bonds(sim)); }
 
 // ---------------------------------------------------------------- tomodem-bond's sinter method
-SinteredPacking sinter_packing(const Packing& green, const std::string& source, const std::string& settings_file,
-                               double target_density, int threads, bool progress) {
+Scene sinter_scene(const Packing& green, const std::string& source, const std::string& settings_file, int threads) {
   // The settings file: a `sintering` section and optional physics (tangential law, restitution).
   Scene scene;
   scene.file = settings_file;
@@ -940,7 +964,12 @@ SinteredPacking sinter_packing(const Packing& green, const std::string& source, 
   set.threads = std::max(1, threads);
   scene.materials = green.materials;
   scene.sim = std::make_unique<Simulation>(std::move(parts), green.cell, model, set);
+  return scene;
+}
 
+SinteredPacking sinter_packing(const Packing& green, const std::string& source, const std::string& settings_file,
+                               double target_density, int threads, bool progress) {
+  Scene scene = sinter_scene(green, source, settings_file, threads);
   SinterSettings s = read_sinter_settings(scene);
   if (target_density > 0) {
     scene.sim->measure();  // the neighbour list, so the density counts the overlaps once

@@ -2,6 +2,7 @@
 // Sintering in the DEM core (docs/sintering.md): temperature programs, free and constrained
 // sintering of a periodic packing under the `sintering` contact law, stops at a target relative
 // density or time, and the necks handed over as bonds.
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -122,6 +123,27 @@ void check_sinter_settings(const Scene& scene, const SinterSettings& s);
 /// Runs the program on a scene's simulation: mass scaling and the automatic step, the stress-free
 /// (or constrained) cell, radius growth; restores the physical masses at the end.
 SinterReport run_sintering(Simulation& sim, const SinterSettings& s, bool progress = false);
+
+/// Snapshots of one run at given relative densities (tomodem-sinter --snapshots-at): `take(sim,
+/// row, k)` is called once per density, ascending, the first time the density check (every
+/// update_interval steps, after the radius update) finds the run at or above densities[k]; the
+/// simulation then has its scaled masses and its velocities (the run goes on after the call).
+struct SinterSnapshots {
+  std::vector<double> densities;
+  std::function<void(Simulation&, const SinterRow&, std::size_t)> take;
+};
+SinterReport run_sintering(Simulation& sim, const SinterSettings& s, bool progress, const SinterSnapshots& snapshots);
+
+/// Estimate of the relative density the program reaches: two free spheres of the mean radius
+/// (quasi-static, neck from initial_neck R) integrated over the whole program give the linear
+/// shrinkage s; the packing's density then scales as rho0 / (1 - s)^3 (mass conservation, affine
+/// shrinkage). The mean-field strain rate of a packing is this pair's rate for equal necks, and
+/// larger necks are slower, so it is an estimate from above for a packing (docs/sintering.md).
+double program_reach_estimate(const Simulation& sim, const SinterSettings& s);
+
+/// The first half of sinter_packing: a green packing as a periodic sintering scene with the
+/// settings file's `sintering` and `physics` sections (the same checks and messages).
+Scene sinter_scene(const Packing& green, const std::string& source, const std::string& settings_file, int threads = 1);
 
 /// The necks as bonds: every sintering contact becomes a bond with radius = neck radius and
 /// rest length = current centre distance (image through the periodic cell).
