@@ -66,8 +66,13 @@ TEST(FractureBench, ErrorAgainstRunTime) {
                 ref.wall_time_s, ref_cpu);
     csv += std::to_string(n) + ",sla,," + std::to_string(ref.K_IC) + ",0," + std::to_string(ref.K_IC_error) + "," +
            std::to_string(ref.wall_time_s) + "\n";
-    PlotSeries ps{"explicit, N = " + std::to_string(n), {}, {}};
-    PlotSeries pl{"SLA, N = " + std::to_string(n) + " (K_IC_error)", {ref.wall_time_s}, {ref.K_IC_error}, true};
+    PlotSeries ps;
+    ps.title = "explicit, N = " + std::to_string(n);
+    PlotSeries pl;
+    pl.title = "SLA, N = " + std::to_string(n) + " (K_IC_error)";
+    pl.x = {ref.wall_time_s};
+    pl.y = {ref.K_IC_error};
+    pl.draw = PlotDraw::points;
     for (double transits : {50.0, 100.0, 200.0}) {
       ExplicitFractureOptions eo;
       eo.transits = transits;
