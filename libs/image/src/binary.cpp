@@ -174,42 +174,43 @@ Volume median(const Volume& v, int r) {
 }
 
 // ---------------------------------------------------------------- thresholds
-namespace {
-struct Histogram {
-  double lo = 0, width = 1;
-  std::vector<double> h;
-};
-Histogram histogram(const Volume& v, int bins) {
+GreyHistogram grey_histogram(const Volume& v, int bins) {
   float lo = std::numeric_limits<float>::max(), hi = std::numeric_limits<float>::lowest();
 #pragma omp parallel for reduction(min : lo) reduction(max : hi)
   for (std::size_t i = 0; i < v.v.size(); ++i) { lo = std::min(lo, v.v[i]); hi = std::max(hi, v.v[i]); }
-  if (!(hi > lo)) throw InputError("", "volume", std::to_string(lo), "constant volume: nothing to threshold");
-  Histogram H;
-  H.lo = lo;
-  H.width = (double(hi) - double(lo)) / bins;
-  H.h.assign(std::size_t(bins), 0.0);
-  std::vector<std::vector<double>> part;
+  GreyHistogram H = empty_histogram(lo, hi, bins);
 #pragma omp parallel
   {
     std::vector<double> mine(std::size_t(bins), 0.0);
 #pragma omp for nowait
-    for (std::size_t i = 0; i < v.v.size(); ++i) {
-      const int b = std::min(bins - 1, int((double(v.v[i]) - H.lo) / H.width));
-      mine[std::size_t(b)] += 1;
-    }
+    for (std::size_t i = 0; i < v.v.size(); ++i) mine[std::size_t(H.bin(v.v[i]))] += 1;
 #pragma omp critical
     for (int b = 0; b < bins; ++b) H.h[std::size_t(b)] += mine[std::size_t(b)];
   }
   return H;
 }
-}  // namespace
+
+GreyHistogram empty_histogram(float lo, float hi, int bins) {
+  if (!(hi > lo)) throw InputError("", "volume", std::to_string(lo), "constant volume: nothing to threshold");
+  GreyHistogram H;
+  H.lo = lo;
+  H.width = (double(hi) - double(lo)) / bins;
+  H.h.assign(std::size_t(bins), 0.0);
+  return H;
+}
 
 double otsu_threshold(const Volume& v, int bins) { return multi_otsu_thresholds(v, 2, bins).front(); }
 
 std::vector<double> multi_otsu_thresholds(const Volume& v, int classes, int bins) {
   if (classes != 2 && classes != 3)
     throw InputError("", "--method", "multiotsu" + std::to_string(classes), "2 or 3 classes are supported");
-  const Histogram H = histogram(v, bins);
+  return multi_otsu_thresholds(grey_histogram(v, bins), classes);
+}
+
+std::vector<double> multi_otsu_thresholds(const GreyHistogram& H, int classes) {
+  if (classes != 2 && classes != 3)
+    throw InputError("", "--method", "multiotsu" + std::to_string(classes), "2 or 3 classes are supported");
+  const int bins = int(H.h.size());
   // Cumulative weight and first moment (bin index units); maximise the between-class variance
   // sum_k w_k mu_k^2 (the total mean is constant).
   std::vector<double> P(std::size_t(bins) + 1, 0), S(std::size_t(bins) + 1, 0);
@@ -247,10 +248,11 @@ std::vector<double> multi_otsu_thresholds(const Volume& v, int classes, int bins
   return t;  // a voxel in bin >= k has value >= t: "value >= t" is the upper class
 }
 
-double intermeans_threshold(const Volume& v, double start) {
+double intermeans_threshold(const Volume& v, double start) { return intermeans_threshold(grey_histogram(v, 4096), start); }
+
+double intermeans_threshold(const GreyHistogram& H, double start) {
   // Ridler & Calvard (1978) iterative intermeans on a fine histogram (4096 bins), from `start`.
-  const int bins = 4096;
-  const Histogram H = histogram(v, bins);
+  const int bins = int(H.h.size());
   double t = start;
   for (int it = 0; it < 200; ++it) {
     double w0 = 0, s0 = 0, w1 = 0, s1 = 0;
@@ -267,12 +269,13 @@ double intermeans_threshold(const Volume& v, double start) {
   return t;
 }
 
-double peaks_threshold(const Volume& v, double start) {
+double peaks_threshold(const Volume& v, double start) { return peaks_threshold(grey_histogram(v, 1024), start); }
+
+double peaks_threshold(const GreyHistogram& H, double start) {
   // Midpoint of the two phase peaks: the histogram modes below and above `start`, on a
   // 1024-bin histogram smoothed over 9 bins. Under a symmetric blur, an edge between two pure
   // phases crosses this level at its true position (50 % partial volume).
-  const int bins = 1024, half = 4;
-  const Histogram H = histogram(v, bins);
+  const int bins = int(H.h.size()), half = 4;
   std::vector<double> sm(std::size_t(bins), 0);
   for (int b = 0; b < bins; ++b)
     for (int k = std::max(0, b - half); k <= std::min(bins - 1, b + half); ++k) sm[std::size_t(b)] += H.h[std::size_t(k)];
@@ -552,30 +555,36 @@ double specific_surface(const Mask& m) {
         if (z + 1 < nz && a != (m.v[m.index(x, y, z + 1)] != 0)) fz += 1;
       }
   }
-  const auto& s = m.spacing;
+  return specific_surface(fx, fy, fz, m.dims, m.spacing);
+}
+
+double specific_surface(double fx, double fy, double fz, const Dims& d, const std::array<double, 3>& s) {
   const double area = fx * s[1] * s[2] + fy * s[0] * s[2] + fz * s[0] * s[1];
-  const double volume = double(m.dims.count()) * s[0] * s[1] * s[2];
+  const double volume = double(d.count()) * s[0] * s[1] * s[2];
   return (2.0 / 3.0) * area / volume;
 }
 
-Labels macropores(const Mask& pores, double r, std::size_t min_voxels, int* count) {
+Mask macropore_mask(const Mask& pores, double r) {
   // Opening by a digital ball loses a few percent of a digital sphere's surface voxels (see the
   // unit test); dilating the eroded cores by r + 1 and keeping only pore voxels recovers them
   // without reaching across the solid.
   // One float field for both passes (memory: 4 bytes per voxel plus the result mask): distances
   // to the solid, then the ball centres (d2 > r^2) as seeds, then distances to the seeds.
   Mask opened;
-  {
-    std::vector<float> g = edt_to(pores, false);
-    const float r2 = float(r * r), r12 = float((r + 1) * (r + 1));
+  std::vector<float> g = edt_to(pores, false);
+  const float r2 = float(r * r), r12 = float((r + 1) * (r + 1));
 #pragma omp parallel for schedule(static)
-    for (std::size_t i = 0; i < g.size(); ++i) g[i] = g[i] > r2 ? 0.0f : kInf;
-    edt_inplace(g, pores.dims, pores.spacing);
-    opened.copy_geometry(pores);
-    opened.v.resize(pores.v.size());
+  for (std::size_t i = 0; i < g.size(); ++i) g[i] = g[i] > r2 ? 0.0f : kInf;
+  edt_inplace(g, pores.dims, pores.spacing);
+  opened.copy_geometry(pores);
+  opened.v.resize(pores.v.size());
 #pragma omp parallel for schedule(static)
-    for (std::size_t i = 0; i < g.size(); ++i) opened.v[i] = g[i] <= r12 && pores.v[i];
-  }
+  for (std::size_t i = 0; i < g.size(); ++i) opened.v[i] = g[i] <= r12 && pores.v[i];
+  return opened;
+}
+
+Labels macropores(const Mask& pores, double r, std::size_t min_voxels, int* count) {
+  const Mask opened = macropore_mask(pores, r);
   int n = 0;
   Labels L = components(opened, 6, &n);
   std::vector<std::size_t> size(std::size_t(n) + 1, 0);

@@ -460,6 +460,7 @@ void write_segment_outputs(const SegmentConfig& cfg, const Mask& phases, const L
 
 std::string run_segment(const SegmentConfig& cfg) {
   const ReadOptions ro = prepare_segment(cfg);
+  if (cfg.chunk > 0 || !cfg.memory_text.empty()) return run_segment_chunked(cfg, ro);  // out of core
   ReadInfo rinfo;
   StageClock clock;
   info("reading " + cfg.input);

@@ -3,6 +3,7 @@
 // Lengths are in voxels unless a name says otherwise; all filters are 3-D and use OpenMP/ITK threads.
 // Anisotropic voxels (a scan's coarser z): a length "in voxels" is in voxels of the finest axis,
 // and filters, distances and balls follow each axis's spacing, so they are the same in metres.
+#include <algorithm>
 #include <array>
 #include <string>
 #include <vector>
@@ -40,6 +41,21 @@ Volume nlm(const Volume& v, int patch_radius, int iterations);
 void set_threads(int n);
 
 // ---- thresholds (binary.cpp) ----
+/// A histogram of grey values: `bins` equal bins from the smallest to the largest value; counts
+/// are whole numbers held in doubles (exact below 2^53), so one built chunk by chunk is the same.
+struct GreyHistogram {
+  double lo = 0, width = 1;
+  std::vector<double> h;
+  int bin(float x) const { return std::min(int(h.size()) - 1, int((double(x) - lo) / width)); }
+};
+/// The volume's histogram (InputError on a constant volume).
+GreyHistogram grey_histogram(const Volume& v, int bins);
+/// Empty bins between lo and hi, to be filled with bin() (InputError unless hi > lo).
+GreyHistogram empty_histogram(float lo, float hi, int bins);
+/// The thresholds below from a histogram (256 bins for Otsu, 4096 intermeans, 1024 peaks).
+std::vector<double> multi_otsu_thresholds(const GreyHistogram& h, int classes);
+double intermeans_threshold(const GreyHistogram& h4096, double start);
+double peaks_threshold(const GreyHistogram& h1024, double start);
 /// Histogram of `bins` bins between the volume's min and max; thresholds in grey values.
 double otsu_threshold(const Volume& v, int bins = 256);
 /// Multi-Otsu with n classes (2 or 3): n-1 thresholds, ascending (exhaustive search).
@@ -85,12 +101,17 @@ std::vector<Region> regions(const Labels& l, int n);
 /// Interface area between m != 0 and m == 0 per unit total volume (1/m): face count × 2/3,
 /// the mean-projection correction of voxel faces for isotropic surfaces (Lang et al. 2001).
 double specific_surface(const Mask& m);
+/// The same from the counts of unlike neighbour pairs along x, y and z (one formula for both paths).
+double specific_surface(double fx, double fy, double fz, const Dims& d, const std::array<double, 3>& spacing);
 
 // ---- macropores and grains (morph_itk.cpp, binary.cpp) ----
 /// Macropores = pore voxels within r + 1 of the centres where a ball of radius r (voxels) fits
 /// in the pores (an opening whose dilation is one voxel wider, restricted to the pores, so the
 /// digital ball's lost surface voxels come back); labelled (6-connectivity), filtered by min_voxels.
 Labels macropores(const Mask& pores, double r, std::size_t min_voxels, int* count);
+/// The macropore voxels before labelling (what macropores() labels). A voxel's value depends on
+/// the pores within 2r + 2 (finest) voxels of it only, so a block with that halo gives its core exactly.
+Mask macropore_mask(const Mask& pores, double r);
 
 struct GrainOptions {
   double h = 1.0;            ///< h-maxima height of the distance map (voxels)

@@ -83,12 +83,19 @@ struct SegmentConfig {
   std::string vdb;                    ///< macropores level set
   std::string overlay;                ///< PNG prefix: <prefix>_xy.png, _xz, _yz
   std::string json;                   ///< "" or "-": stdout
+  // out of core (docs/segment.md, "Volumes larger than memory")
+  std::size_t chunk = 0;              ///< --chunk: block side in voxels (0: from --memory, or in memory)
+  std::string memory_text;            ///< --memory: budget ("8GB"); the block side is chosen from it
   /// Option values as the user typed them ("--sigma" -> "1e-0"), for messages that echo them.
   std::map<std::string, std::string> as_written;
 };
 
 /// Runs the whole segmentation; returns the JSON summary (also written to cfg.json when set).
+/// With --chunk or --memory: run_segment_chunked.
 std::string run_segment(const SegmentConfig& cfg);
+/// The out-of-core path (chunked.cpp): a raw volume read and processed in blocks with halos,
+/// labels written block by block; the same labels as run_segment. `ro`: checked read options.
+std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro);
 
 struct PhantomConfig {
   PhantomOptions opt;

@@ -1,0 +1,792 @@
+// Out-of-core tomodem-segment (--chunk / --memory, docs/segment.md "Volumes larger than memory"):
+// the volume is read block by block (pread of a raw file), never whole. Held for the whole run:
+// the solid and macropore masks as bits (2 bits per voxel, 3 with a second solid phase); every
+// other array is one block with its halo. Each stage gives the in-memory path's result exactly:
+// - median: a block with a halo of the box radius gives its core exactly (borders are replicated
+//   only at the volume's faces, which are the block's faces there);
+// - thresholds: the histograms are sums of whole counts, the same chunk by chunk; the filtered
+//   values of an integer scan of <= 16 bits are its own values (a median selects one), so one
+//   pass counts every value and builds each histogram; other types take a min/max pass first;
+// - macropores: a voxel depends on the pores within 2r + 2 voxels (segment.hpp, macropore_mask);
+// - labels: each block's core labelled on its own, the labels joined across block faces by
+//   union-find (6-connectivity), numbered by their first voxel in x-fastest order and filtered by
+//   size as components()/macropores() do; a second pass writes them.
+#include <hdf5.h>
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <memory>
+#include <numeric>
+#include <sstream>
+
+#include "tomodem/core/error.hpp"
+#include "tomodem/core/h5.hpp"
+#include "tomodem/core/output.hpp"
+#include "tomodem/core/packing_io.hpp"
+#include "tomodem/core/summary.hpp"
+#include "tomodem/core/tool.hpp"
+#include "tomodem/image/segment.hpp"
+#include "tomodem/image/tools.hpp"
+
+namespace tomodem::image {
+namespace {
+
+using json = nlohmann::json;
+namespace fs = std::filesystem;
+
+std::string num(double x) {
+  std::ostringstream s;
+  s << x;
+  return s.str();
+}
+
+// A box of voxels [lo, hi) per axis (x, y, z).
+struct Box {
+  std::array<std::size_t, 3> lo{}, hi{};
+  std::size_t n(int a) const { return hi[std::size_t(a)] - lo[std::size_t(a)]; }
+  Dims dims() const { return {n(0), n(1), n(2)}; }
+  Box grown(const std::array<std::size_t, 3>& h, const Dims& d) const {
+    const std::size_t N[3] = {d.nx, d.ny, d.nz};
+    Box b;
+    for (std::size_t a = 0; a < 3; ++a) {
+      b.lo[a] = lo[a] > h[a] ? lo[a] - h[a] : 0;
+      b.hi[a] = std::min(N[a], hi[a] + h[a]);
+    }
+    return b;
+  }
+};
+
+// One bit per voxel, rows of x padded to 64-bit words.
+struct Bits {
+  Dims d;
+  std::size_t W = 0;
+  std::vector<uint64_t> w;
+  explicit Bits(Dims dims = {}) : d(dims), W((dims.nx + 63) / 64), w(W * dims.ny * dims.nz, 0) {}
+  const uint64_t* row(std::size_t y, std::size_t z) const { return &w[(z * d.ny + y) * W]; }
+  uint64_t* row(std::size_t y, std::size_t z) { return &w[(z * d.ny + y) * W]; }
+  bool get(std::size_t x, std::size_t y, std::size_t z) const { return (row(y, z)[x >> 6] >> (x & 63)) & 1u; }
+  void set(std::size_t x, std::size_t y, std::size_t z) { row(y, z)[x >> 6] |= uint64_t(1) << (x & 63); }
+  std::size_t count() const {
+    std::size_t n = 0;
+    for (auto x : w) n += std::size_t(__builtin_popcountll(x));
+    return n;
+  }
+};
+
+// A raw file read block by block (pread per row), converted to float as read_raw does.
+class RawBlocks {
+ public:
+  RawBlocks(const std::string& path, const ReadOptions& o) : path_(path), o_(o) {
+    const auto [nx, ny, nz] = o.raw_dims;
+    if (nx == 0 || ny == 0 || nz == 0)
+      throw InputError(path, "--raw-dims", "", "a raw file needs its dimensions (--raw-dims NX,NY,NZ)");
+    d_ = {nx, ny, nz};
+    bytes_ = type_size();
+    const std::uintmax_t expected = o.raw_header + nx * ny * nz * bytes_;
+    std::error_code ec;
+    if (fs::is_directory(path)) throw InputError(path, "", "", "is a folder, not a raw file");
+    const std::uintmax_t size = fs::file_size(path, ec);
+    if (ec) throw InputError(path, "", "", "cannot read file size: " + ec.message());
+    const std::string dims = std::to_string(nx) + "x" + std::to_string(ny) + "x" + std::to_string(nz) + " " + to_string(o.raw_type);
+    if (size < expected)
+      throw InputError(path, "size", std::to_string(size) + " bytes", "truncated: dims " + dims + " need " + std::to_string(expected) + " bytes");
+    if (size > expected)
+      throw InputError(path, "size", std::to_string(size) + " bytes",
+                       "does not match dims " + dims + " (" + std::to_string(expected) + " bytes); check --raw-dims/--raw-type/--raw-header");
+    fd_ = ::open(path.c_str(), O_RDONLY);
+    if (fd_ < 0) throw InputError(path, "", "", std::string("cannot open: ") + std::strerror(errno));
+  }
+  ~RawBlocks() { if (fd_ >= 0) ::close(fd_); }
+  RawBlocks(const RawBlocks&) = delete;
+  RawBlocks& operator=(const RawBlocks&) = delete;
+  const Dims& dims() const { return d_; }
+  std::size_t type_bytes() const { return bytes_; }
+  // Values of <= 16-bit integer types are whole numbers in [offset, offset + 65535].
+  bool small_integers() const { return o_.raw_type == RawType::uint8 || o_.raw_type == RawType::int8 || o_.raw_type == RawType::uint16 || o_.raw_type == RawType::int16; }
+  long offset() const { return (o_.raw_type == RawType::int8) ? -128 : (o_.raw_type == RawType::int16) ? -32768 : 0; }
+
+  // The block b as floats (x fastest); NaN/Inf refused naming the voxel.
+  void read(const Box& b, Volume& out) {
+    out.dims = b.dims();
+    out.v.resize(out.dims.count());
+    const std::size_t nxb = b.n(0);
+    std::vector<char> buf(nxb * bytes_);
+    const bool swap = o_.byte_order == ByteOrder::big;
+    for (std::size_t z = b.lo[2]; z < b.hi[2]; ++z)
+      for (std::size_t y = b.lo[1]; y < b.hi[1]; ++y) {
+        const off_t at = off_t(o_.raw_header + ((z * d_.ny + y) * d_.nx + b.lo[0]) * bytes_);
+        std::size_t got = 0;
+        while (got < buf.size()) {
+          const ssize_t r = ::pread(fd_, buf.data() + got, buf.size() - got, at + off_t(got));
+          if (r <= 0) throw InputError(path_, "data", "row y " + std::to_string(y) + ", z " + std::to_string(z), "read failed (truncated?)");
+          got += std::size_t(r);
+        }
+        float* o = &out.v[((z - b.lo[2]) * b.n(1) + (y - b.lo[1])) * nxb];
+        convert_row(buf.data(), nxb, swap, o);
+        for (std::size_t x = 0; x < nxb; ++x) {
+          if (!std::isfinite(o[x]))
+            throw InputError(path_, "data", "voxel (" + std::to_string(b.lo[0] + x) + ", " + std::to_string(y) + ", " + std::to_string(z) + ")",
+                             "is NaN or infinite");
+          vmin = std::min(vmin, o[x]);
+          vmax = std::max(vmax, o[x]);
+        }
+      }
+  }
+  float vmin = std::numeric_limits<float>::max(), vmax = std::numeric_limits<float>::lowest();  ///< raw values seen
+
+ private:
+  std::size_t type_size() const {
+    switch (o_.raw_type) {
+      case RawType::uint8: case RawType::int8: return 1;
+      case RawType::uint16: case RawType::int16: return 2;
+      case RawType::uint32: case RawType::int32: case RawType::float32: return 4;
+      case RawType::float64: return 8;
+    }
+    return 1;
+  }
+  template <class T>
+  static void conv(const char* p, std::size_t n, bool swap, float* out) {
+    for (std::size_t i = 0; i < n; ++i) {
+      unsigned char b[sizeof(T)];
+      std::memcpy(b, p + i * sizeof(T), sizeof(T));
+      if (swap) std::reverse(b, b + sizeof(T));
+      T val;
+      std::memcpy(&val, b, sizeof(T));
+      out[i] = static_cast<float>(val);
+    }
+  }
+  void convert_row(const char* p, std::size_t n, bool swap, float* out) const {
+    switch (o_.raw_type) {
+      case RawType::uint8: conv<uint8_t>(p, n, false, out); break;
+      case RawType::int8: conv<int8_t>(p, n, false, out); break;
+      case RawType::uint16: conv<uint16_t>(p, n, swap, out); break;
+      case RawType::int16: conv<int16_t>(p, n, swap, out); break;
+      case RawType::uint32: conv<uint32_t>(p, n, swap, out); break;
+      case RawType::int32: conv<int32_t>(p, n, swap, out); break;
+      case RawType::float32: conv<float>(p, n, swap, out); break;
+      case RawType::float64: conv<double>(p, n, swap, out); break;
+    }
+  }
+  std::string path_;
+  ReadOptions o_;
+  Dims d_;
+  std::size_t bytes_ = 1;
+  int fd_ = -1;
+};
+
+// The block grid: cores of `chunk` voxels per side (the last ones shorter), in x-fastest order.
+struct Grid3 {
+  Dims d;
+  std::size_t c = 0, n[3] = {0, 0, 0};
+  Grid3(Dims dims, std::size_t chunk) : d(dims), c(chunk) {
+    n[0] = (d.nx + c - 1) / c;
+    n[1] = (d.ny + c - 1) / c;
+    n[2] = (d.nz + c - 1) / c;
+  }
+  std::size_t count() const { return n[0] * n[1] * n[2]; }
+  Box core(std::size_t k) const {
+    const std::size_t i[3] = {k % n[0], (k / n[0]) % n[1], k / (n[0] * n[1])};
+    const std::size_t N[3] = {d.nx, d.ny, d.nz};
+    Box b;
+    for (std::size_t a = 0; a < 3; ++a) {
+      b.lo[a] = i[a] * c;
+      b.hi[a] = std::min(N[a], b.lo[a] + c);
+    }
+    return b;
+  }
+};
+
+// Parses a memory size: 8GB, 512MB (decimal), 8GiB (binary), or bytes.
+double parse_bytes(const std::string& text) {
+  std::size_t pos = 0;
+  double x = 0;
+  try {
+    x = std::stod(text, &pos);
+  } catch (const std::exception&) {
+    throw InputError("", "--memory", text, "expected a size such as 8GB, 512MB or 8GiB");
+  }
+  std::string u = text.substr(pos);
+  for (auto& ch : u) ch = char(std::toupper(static_cast<unsigned char>(ch)));
+  const std::map<std::string, double> units{{"", 1}, {"B", 1}, {"KB", 1e3}, {"MB", 1e6}, {"GB", 1e9}, {"TB", 1e12},
+                                            {"KIB", 1024.0}, {"MIB", 1048576.0}, {"GIB", 1073741824.0}, {"TIB", 1099511627776.0}};
+  const auto it = units.find(u);
+  if (it == units.end() || !std::isfinite(x) || !(x > 0))
+    throw InputError("", "--memory", text, "expected a size > 0 such as 8GB, 512MB or 8GiB");
+  return x * it->second;
+}
+
+// What the chunked run holds (bytes): the whole-volume bit masks and face planes, and one block.
+// Per block voxel (side chunk + 2 halo): the float block and its raw rows (filter), or the pores
+// mask, one float distance field and the result (macropores): 6 bytes, 8 with a raw type of 4
+// bytes or more; per core voxel: labels (4), the mask (1), the outputs (uint8 + int32 + HDF5's
+// compression buffers, 10). Checked against /usr/bin/time -v at 96^3 and 512^3 (docs/segment.md).
+struct MemoryModel {
+  double fixed = 0, per_block = 0;
+  double total() const { return fixed + per_block; }
+};
+MemoryModel memory_model(const Dims& d, std::size_t chunk, std::size_t halo, bool phase2, std::size_t type_bytes) {
+  const double N = double(d.nx) * double(d.ny) * double(d.nz);
+  const double words = double((d.nx + 63) / 64) * double(d.ny) * double(d.nz) * 8;
+  MemoryModel m;
+  m.fixed = words * (phase2 ? 3 : 2) + 2.0 * 4 * double(d.nx) * double(d.ny) + 64e6;  // bits, faces, process
+  (void)N;
+  const double s = double(chunk + 2 * halo), c = double(chunk);
+  m.per_block = s * s * s * (6 + double(std::min<std::size_t>(type_bytes, 8)) / 2) + c * c * c * 15;
+  return m;
+}
+
+// The union-find of block-local labels (global id = the block's offset + local label).
+struct Joins {
+  std::vector<int64_t> parent;
+  std::vector<uint64_t> first, size;  ///< first voxel (x-fastest global index), voxel count
+  int64_t find(int64_t a) {
+    while (parent[std::size_t(a)] != a) {
+      parent[std::size_t(a)] = parent[std::size_t(parent[std::size_t(a)])];
+      a = parent[std::size_t(a)];
+    }
+    return a;
+  }
+  void unite(int64_t a, int64_t b) {
+    a = find(a);
+    b = find(b);
+    if (a == b) return;
+    if (first[std::size_t(b)] < first[std::size_t(a)]) std::swap(a, b);
+    parent[std::size_t(b)] = a;  // the root keeps the smaller first voxel
+  }
+};
+
+// HDF5 output written block by block: chunked, deflate-compressed datasets in a file whose root
+// carries tomodem's provenance (written first with h5::File).
+class LabelsWriter {
+ public:
+  LabelsWriter(const std::string& tmp, const Dims& d, std::size_t chunk, const std::vector<std::string>& inputs) : d_(d) {
+    {
+      h5::File f(tmp, h5::File::Mode::create);
+      write_provenance(f, inputs);
+      f.close();
+    }
+    file_ = H5Fopen(tmp.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    if (file_ < 0) throw RuntimeFailure(tmp + ": cannot reopen the labels file");
+    // HDF5 chunks that tile the blocks: 64 when the block is a multiple of it, else the block (<= 128).
+    std::size_t hc = chunk % 64 == 0 ? 64 : (chunk <= 128 ? chunk : std::gcd(chunk, std::size_t(64)));
+    hc = std::max<std::size_t>(hc, 8);
+    const hsize_t dims[3] = {d.nz, d.ny, d.nx};
+    const hsize_t cd[3] = {std::min<hsize_t>(hc, d.nz), std::min<hsize_t>(hc, d.ny), std::min<hsize_t>(hc, d.nx)};
+    labels_ = make(tmp, "labels", H5T_STD_U8LE, dims, cd);
+    macro_ = make(tmp, "macropores", H5T_STD_I32LE, dims, cd);
+    path_ = tmp;
+  }
+  ~LabelsWriter() {
+    if (labels_ >= 0) H5Dclose(labels_);
+    if (macro_ >= 0) H5Dclose(macro_);
+    if (file_ >= 0) H5Fclose(file_);
+  }
+  void write(const Box& b, const std::vector<uint8_t>& phases, const std::vector<int32_t>& ids) {
+    put(labels_, b, H5T_NATIVE_UINT8, phases.data());
+    put(macro_, b, H5T_NATIVE_INT32, ids.data());
+  }
+  void finish(const std::array<double, 3>& spacing, const std::array<double, 3>& origin, const std::string& legend) {
+    for (hid_t ds : {labels_, macro_}) {
+      attr_doubles(ds, "spacing", spacing);
+      attr_doubles(ds, "origin", origin);
+      attr_string(ds, "axes", "z,y,x (spacing and origin listed x,y,z, m)");
+      attr_string(ds, "units", "1");
+    }
+    attr_string(labels_, "legend", legend);
+    H5Dclose(labels_);
+    H5Dclose(macro_);
+    labels_ = macro_ = -1;
+    const herr_t e = H5Fclose(file_);
+    file_ = -1;
+    if (e < 0) throw RuntimeFailure(path_ + ": closing the labels file failed (disk full?)");
+  }
+
+ private:
+  hid_t make(const std::string& tmp, const char* name, hid_t type, const hsize_t* dims, const hsize_t* cd) {
+    const hid_t space = H5Screate_simple(3, dims, nullptr);
+    const hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
+    H5Pset_chunk(dcpl, 3, cd);
+    H5Pset_shuffle(dcpl);
+    H5Pset_deflate(dcpl, 1);  // mostly zeros and long runs: level 1 is as small as 6 within a few percent, and faster
+    const hid_t ds = H5Dcreate2(file_, name, type, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+    H5Pclose(dcpl);
+    H5Sclose(space);
+    if (ds < 0) throw RuntimeFailure(tmp + ": cannot create dataset /" + name);
+    return ds;
+  }
+  void put(hid_t ds, const Box& b, hid_t mem_type, const void* data) {
+    const hsize_t start[3] = {b.lo[2], b.lo[1], b.lo[0]}, count[3] = {b.n(2), b.n(1), b.n(0)};
+    const hid_t fs_ = H5Dget_space(ds);
+    H5Sselect_hyperslab(fs_, H5S_SELECT_SET, start, nullptr, count, nullptr);
+    const hid_t ms = H5Screate_simple(3, count, nullptr);
+    const herr_t e = H5Dwrite(ds, mem_type, ms, fs_, H5P_DEFAULT, data);
+    H5Sclose(ms);
+    H5Sclose(fs_);
+    if (e < 0) throw RuntimeFailure(path_ + ": writing a block of labels failed (disk full?)");
+  }
+  void attr_doubles(hid_t ds, const char* name, const std::array<double, 3>& v) {
+    const hsize_t n = 3;
+    const hid_t sp = H5Screate_simple(1, &n, nullptr);
+    const hid_t a = H5Acreate2(ds, name, H5T_IEEE_F64LE, sp, H5P_DEFAULT, H5P_DEFAULT);
+    H5Awrite(a, H5T_NATIVE_DOUBLE, v.data());
+    H5Aclose(a);
+    H5Sclose(sp);
+  }
+  void attr_string(hid_t ds, const char* name, const std::string& s) {
+    const hid_t t = H5Tcopy(H5T_C_S1);  // variable-length UTF-8, as h5::File writes them
+    H5Tset_size(t, H5T_VARIABLE);
+    H5Tset_cset(t, H5T_CSET_UTF8);
+    const hid_t sp = H5Screate(H5S_SCALAR);
+    const hid_t a = H5Acreate2(ds, name, t, sp, H5P_DEFAULT, H5P_DEFAULT);
+    const char* p = s.c_str();
+    H5Awrite(a, t, &p);
+    H5Aclose(a);
+    H5Sclose(sp);
+    H5Tclose(t);
+  }
+  Dims d_;
+  std::string path_;
+  hid_t file_ = -1, labels_ = -1, macro_ = -1;
+};
+
+// What the chunked path does not do (yet): refused before any work, naming the option.
+void refuse_unsupported(const SegmentConfig& c, const std::string& format) {
+  const std::string why = "is not available with --chunk/--memory (the chunked path, docs/segment.md \"Volumes larger than memory\")";
+  if (format != "raw") throw InputError(c.input, "format", format, "the chunked path reads raw files only (--raw-dims, by block); " + why);
+  if (c.filter != ImageFilter::median && c.filter != ImageFilter::none)
+    throw InputError("", "--filter", to_string(c.filter), why + "; use median or none");
+  if (c.method == ThresholdMethod::hysteresis) throw InputError("", "--method", "hysteresis", why);
+  if (c.grains) throw InputError("", c.packing.empty() ? "--grains" : "--packing", c.packing.empty() ? "" : c.packing, why);
+  if (c.open_r > 0) throw InputError("", "--open", num(c.open_r), why);
+  if (c.close_r > 0) throw InputError("", "--close", num(c.close_r), why);
+  if (c.min_island > 1) throw InputError("", "--min-island", std::to_string(c.min_island), why);
+  if (!c.mha.empty()) throw InputError("", "--mha", c.mha, why + "; -o labels.h5 is written block by block");
+  if (!c.vdb.empty()) throw InputError("", "--vdb", c.vdb, why);
+  if (!c.overlay.empty()) throw InputError("", "--overlay", c.overlay, why);
+  if (c.read.has_roi || !c.roi_text.empty()) throw InputError("", "--roi", c.roi_text, why);
+  if (c.read.downsample != 1) throw InputError("", "--downsample", std::to_string(c.read.downsample), why);
+}
+
+}  // namespace
+
+std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro) {
+  using clk = std::chrono::steady_clock;
+  auto last = clk::now();
+  json times = json::object();
+  const auto done = [&](const char* stage) {
+    const auto t = clk::now();
+    times[stage] = std::chrono::duration<double>(t - last).count();
+    last = t;
+  };
+  std::string format = ro.format == VolumeFormat::automatic ? "" : to_string(ro.format);
+  if (format.empty()) {
+    std::string l = cfg.input;
+    for (auto& ch : l) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+    for (const char* e : {".raw", ".bin", ".vol"})
+      if (l.size() > 4 && l.compare(l.size() - 4, 4, e) == 0) format = "raw";
+    if (format.empty()) format = fs::path(cfg.input).extension().string();
+  }
+  refuse_unsupported(cfg, format);
+  if (!(ro.spacing[0] > 0)) throw InputError(cfg.input, "spacing", "", "raw carries no voxel size; give --spacing (e.g. 60.7um)");
+  RawBlocks src(cfg.input, ro);
+  const Dims D = src.dims();
+  Volume geom;  // geometry only (spacing, origin) for the helpers that take a volume
+  geom.dims = D;
+  geom.spacing = ro.spacing;
+  const double finest = std::min({ro.spacing[0], ro.spacing[1], ro.spacing[2]});
+
+  // Halos: the median's box, and 2r + 2 for the macropores (segment.hpp, macropore_mask).
+  std::array<int, 3> fr{0, 0, 0};
+  double radius = 0;
+  if (cfg.filter == ImageFilter::median) {
+    const double L = parse_length("--filter-radius", cfg.filter_radius_text);
+    radius = L < 0 ? -L : L / finest;
+    if (!(radius >= 1 && radius <= 10))
+      throw InputError("", "--filter-radius", cfg.filter_radius_text, "is " + num(radius) + " voxels of the finest axis here; must be in [1, 10]");
+    fr = radii_for_length(geom, radius);
+  }
+  const double Lm = parse_length("--macropore-radius", cfg.macro_radius_text);
+  const double macro_r = Lm < 0 ? -Lm : Lm / finest;
+  const std::size_t mhalo = std::size_t(std::ceil(2 * macro_r + 2));
+  const std::size_t fhalo = std::size_t(*std::max_element(fr.begin(), fr.end()));
+  const std::size_t halo = std::max(mhalo, fhalo);
+  const bool phase2 = cfg.method == ThresholdMethod::multiotsu3 || (cfg.method == ThresholdMethod::manual && cfg.levels.size() == 2);
+
+  // The block size: given (--chunk), or the largest multiple of 32 the budget (--memory) allows.
+  const double budget = cfg.memory_text.empty() ? 0 : parse_bytes(cfg.memory_text);
+  std::size_t chunk = cfg.chunk;
+  const std::size_t biggest = std::max({D.nx, D.ny, D.nz});
+  if (chunk == 0) {
+    for (std::size_t c = 32; c <= biggest + 31; c += 32)
+      if (memory_model(D, c, halo, phase2, src.type_bytes()).total() <= budget) chunk = c;
+    if (chunk == 0) {
+      const MemoryModel m = memory_model(D, std::max<std::size_t>(halo, 32), halo, phase2, src.type_bytes());
+      throw InputError("", "--memory", cfg.as_written.count("--memory") ? cfg.as_written.at("--memory") : cfg.memory_text,
+                       "is below what one block needs: " + bytes_text(m.total()) + " for the smallest block (" +
+                           std::to_string(std::max<std::size_t>(halo, 32)) + " voxels per side with a halo of " +
+                           std::to_string(halo) + "): " + bytes_text(m.fixed) + " for the whole-volume bit masks of " +
+                           std::to_string(D.nx) + "x" + std::to_string(D.ny) + "x" + std::to_string(D.nz) + " plus " +
+                           bytes_text(m.per_block) + " for the block");
+    }
+  }
+  if (chunk < halo)
+    throw InputError("", "--chunk", std::to_string(chunk),
+                     "is below the halo of " + std::to_string(halo) + " voxels (median box radius " + std::to_string(fhalo) +
+                         ", macropores 2r + 2 = " + std::to_string(mhalo) + " at r = " + num(macro_r) +
+                         " voxels): a block would be mostly halo; give --chunk >= " + std::to_string(halo));
+  chunk = std::min(chunk, biggest);
+  const MemoryModel mem = memory_model(D, chunk, halo, phase2, src.type_bytes());
+  if (budget > 0 && mem.total() > budget)
+    throw InputError("", "--memory", cfg.as_written.count("--memory") ? cfg.as_written.at("--memory") : cfg.memory_text,
+                     "is below what --chunk " + std::to_string(chunk) + " needs: " + bytes_text(mem.total()) + " (" +
+                         bytes_text(mem.fixed) + " whole-volume bit masks + " + bytes_text(mem.per_block) +
+                         " for one block with its halo of " + std::to_string(halo) + "); give a smaller --chunk or more --memory");
+  check_memory_request(mem.total(), cfg.input, "--chunk", std::to_string(chunk),
+                       "a chunked run of a " + std::to_string(D.nx) + "x" + std::to_string(D.ny) + "x" + std::to_string(D.nz) + " volume");
+  const Grid3 G(D, chunk);
+  info("chunked: " + std::to_string(G.count()) + " blocks of " + std::to_string(chunk) + " voxels per side, halo " +
+       std::to_string(halo) + ", planned memory " + bytes_text(mem.total()));
+
+  const std::array<std::size_t, 3> fh{std::size_t(fr[0]), std::size_t(fr[1]), std::size_t(fr[2])};
+  // Filters block k: calls f(block volume, its box, the core box) for the core's filtered values.
+  const auto filtered = [&](auto&& f) {
+    Volume b;
+    b.spacing = ro.spacing;
+    for (std::size_t k = 0; k < G.count(); ++k) {
+      const Box core = G.core(k), outer = core.grown(fh, D);
+      src.read(outer, b);
+      if (cfg.filter == ImageFilter::median) median_inplace(b, fr);
+      f(b, outer, core);
+    }
+  };
+  const auto for_core = [](const Box& outer, const Box& core, auto&& g) {  // g(index in block, x, y, z)
+    for (std::size_t z = core.lo[2]; z < core.hi[2]; ++z)
+      for (std::size_t y = core.lo[1]; y < core.hi[1]; ++y) {
+        const std::size_t row = ((z - outer.lo[2]) * outer.n(1) + (y - outer.lo[1])) * outer.n(0) - outer.lo[0];
+        for (std::size_t x = core.lo[0]; x < core.hi[0]; ++x) g(row + x, x, y, z);
+      }
+  };
+
+  // 1. Histograms of the filtered values (one pass for <= 16-bit integers, else min/max first).
+  float lo = std::numeric_limits<float>::max(), hi = std::numeric_limits<float>::lowest();
+  std::vector<uint64_t> counts;
+  const bool exact = src.small_integers();
+  if (exact) counts.assign(65536, 0);
+  const long off = src.offset();
+  filtered([&](const Volume& b, const Box& outer, const Box& core) {
+    for_core(outer, core, [&](std::size_t i, std::size_t, std::size_t, std::size_t) {
+      const float x = b.v[i];
+      lo = std::min(lo, x);
+      hi = std::max(hi, x);
+      if (exact) ++counts[std::size_t(long(x) - off)];
+    });
+  });
+  if (!(src.vmax > src.vmin))
+    throw InputError(cfg.input, "volume", num(src.vmin), "constant volume (every voxel has this value): nothing to segment");
+  GreyHistogram h256 = empty_histogram(lo, hi, 256), h1024 = empty_histogram(lo, hi, 1024), h4096 = empty_histogram(lo, hi, 4096);
+  const auto add = [&](float x, double n) {
+    h256.h[std::size_t(h256.bin(x))] += n;
+    h1024.h[std::size_t(h1024.bin(x))] += n;
+    h4096.h[std::size_t(h4096.bin(x))] += n;
+  };
+  if (exact) {
+    for (std::size_t k = 0; k < counts.size(); ++k)
+      if (counts[k]) add(float(long(k) + off), double(counts[k]));
+  } else {
+    filtered([&](const Volume& b, const Box& outer, const Box& core) {
+      for_core(outer, core, [&](std::size_t i, std::size_t, std::size_t, std::size_t) { add(b.v[i], 1.0); });
+    });
+  }
+  done("filter_histogram");
+
+  Summary summary("tomodem-segment");
+  const auto range = type_range(to_string(ro.raw_type));
+  summary.input(cfg.input, {{"format", "raw"}, {"pixel_type", to_string(ro.raw_type)}, {"files", 1},
+                            {"dims", {D.nx, D.ny, D.nz}}, {"spacing_m", ro.spacing}, {"origin_m", {0.0, 0.0, 0.0}},
+                            {"spacing_source", "--spacing"}, {"value_range", {src.vmin, src.vmax}}, {"type_range", {range[0], range[1]}}});
+  json filt{{"name", to_string(cfg.filter)}};
+  if (cfg.filter == ImageFilter::median) {
+    filt["radius_vox"] = radius;
+    filt["radius_m"] = radius * finest;
+    filt["box_radii_vox"] = fr;
+  }
+  summary["filter"] = filt;
+  std::vector<double> t;
+  switch (cfg.method) {
+    case ThresholdMethod::otsu: case ThresholdMethod::multiotsu2: t = {multi_otsu_thresholds(h256, 2).front()}; break;
+    case ThresholdMethod::peaks: case ThresholdMethod::intermeans: {
+      const double t_otsu = multi_otsu_thresholds(h256, 2).front();
+      t = {cfg.method == ThresholdMethod::peaks ? peaks_threshold(h1024, t_otsu) : intermeans_threshold(h4096, t_otsu)};
+      summary["otsu_threshold"] = t_otsu;
+      break;
+    }
+    case ThresholdMethod::multiotsu3: t = multi_otsu_thresholds(h256, 3); break;
+    case ThresholdMethod::manual: t = cfg.levels; std::sort(t.begin(), t.end()); break;
+    case ThresholdMethod::hysteresis: break;  // refused above
+  }
+
+  // 2. The solid (and a second solid phase) as bits; the filter runs again.
+  Bits solid(D), second(phase2 ? D : Dims{});
+  const bool dark = !cfg.pores_bright;
+  filtered([&](const Volume& b, const Box& outer, const Box& core) {
+    for_core(outer, core, [&](std::size_t i, std::size_t x, std::size_t y, std::size_t z) {
+      const float v = b.v[i];
+      if (dark ? v >= t.front() : v < t.back()) solid.set(x, y, z);
+      if (phase2 && (dark ? v >= t[1] : v < t[0])) second.set(x, y, z);
+    });
+  });
+  std::size_t n_pore = D.count() - solid.count();
+  done("threshold");
+
+  // Specific surface of the solid: faces between unlike neighbours, counted by words.
+  double fx = 0, fy = 0, fz = 0;
+  {
+    const std::size_t W = solid.W, tail = D.nx % 64;
+    const uint64_t last = tail ? (uint64_t(1) << tail) - 1 : ~uint64_t(0);
+    for (std::size_t z = 0; z < D.nz; ++z)
+      for (std::size_t y = 0; y < D.ny; ++y) {
+        const uint64_t* r = solid.row(y, z);
+        for (std::size_t w = 0; w < W; ++w) {
+          const uint64_t m = w + 1 == W ? last : ~uint64_t(0);
+          // x: bit i against bit i + 1 (the next word's bit 0 for bit 63), pairs inside the row only
+          uint64_t nxt = r[w] >> 1;
+          if (w + 1 < W) nxt |= r[w + 1] << 63;
+          uint64_t pm = m;
+          if (w + 1 == W) pm = tail ? (last >> 1) : (~uint64_t(0) >> 1);
+          fx += double(__builtin_popcountll((r[w] ^ nxt) & pm));
+          if (y + 1 < D.ny) fy += double(__builtin_popcountll((r[w] ^ solid.row(y + 1, z)[w]) & m));
+          if (z + 1 < D.nz) fz += double(__builtin_popcountll((r[w] ^ solid.row(y, z + 1)[w]) & m));
+        }
+      }
+  }
+  const auto& sp = ro.spacing;
+  const double surface = specific_surface(fx, fy, fz, D, sp);
+
+  // 3. Macropore voxels, block by block with the 2r + 2 halo.
+  Bits macro(D);
+  {
+    const std::array<std::size_t, 3> mh{mhalo, mhalo, mhalo};
+    Mask pores;
+    pores.spacing = ro.spacing;
+    for (std::size_t k = 0; k < G.count(); ++k) {
+      const Box core = G.core(k), outer = core.grown(mh, D);
+      pores.dims = outer.dims();
+      pores.v.resize(pores.dims.count());
+      for (std::size_t z = outer.lo[2]; z < outer.hi[2]; ++z)
+        for (std::size_t y = outer.lo[1]; y < outer.hi[1]; ++y) {
+          uint8_t* o = &pores.v[((z - outer.lo[2]) * outer.n(1) + (y - outer.lo[1])) * outer.n(0)];
+          for (std::size_t x = outer.lo[0]; x < outer.hi[0]; ++x) o[x - outer.lo[0]] = !solid.get(x, y, z);
+        }
+      const Mask opened = macropore_mask(pores, macro_r);
+      for_core(outer, core, [&](std::size_t i, std::size_t x, std::size_t y, std::size_t z) {
+        if (opened.v[i]) macro.set(x, y, z);
+      });
+    }
+  }
+  done("macropores");
+
+  // 4. Labels: each core on its own, joined across faces (6-connectivity) by union-find.
+  const auto core_labels = [&](const Box& core, int* n) {
+    Mask m(core.dims());
+    for (std::size_t z = core.lo[2]; z < core.hi[2]; ++z)
+      for (std::size_t y = core.lo[1]; y < core.hi[1]; ++y)
+        for (std::size_t x = core.lo[0]; x < core.hi[0]; ++x)
+          m.v[((z - core.lo[2]) * core.n(1) + (y - core.lo[1])) * core.n(0) + (x - core.lo[0])] = macro.get(x, y, z);
+    return components(m, 6, n);
+  };
+  Joins J;
+  J.parent.push_back(0);
+  J.first.push_back(0);
+  J.size.push_back(0);
+  std::vector<int64_t> offset(G.count(), 0);
+  std::map<std::size_t, std::vector<int64_t>> face[3];  // a block's high faces (global ids), until its neighbour reads them
+  for (std::size_t k = 0; k < G.count(); ++k) {
+    const Box core = G.core(k);
+    int n = 0;
+    const Labels L = core_labels(core, &n);
+    const int64_t base = int64_t(J.parent.size()) - 1;
+    offset[k] = base;
+    for (int a = 1; a <= n; ++a) {
+      J.parent.push_back(base + a);
+      J.first.push_back(std::numeric_limits<uint64_t>::max());
+      J.size.push_back(0);
+    }
+    const std::size_t nx = core.n(0), ny = core.n(1), nz = core.n(2);
+    for (std::size_t z = 0; z < nz; ++z)
+      for (std::size_t y = 0; y < ny; ++y)
+        for (std::size_t x = 0; x < nx; ++x) {
+          const int32_t l = L.v[(z * ny + y) * nx + x];
+          if (!l) continue;
+          const auto g = std::size_t(base + l);
+          if (J.first[g] == std::numeric_limits<uint64_t>::max())
+            J.first[g] = ((core.lo[2] + z) * D.ny + core.lo[1] + y) * D.nx + core.lo[0] + x;
+          ++J.size[g];
+        }
+    const std::size_t ci[3] = {k % G.n[0], (k / G.n[0]) % G.n[1], k / (G.n[0] * G.n[1])};
+    const std::size_t stride[3] = {1, G.n[0], G.n[0] * G.n[1]};
+    const std::size_t n3[3] = {nx, ny, nz};
+    for (int a = 0; a < 3; ++a) {
+      // The plane of this core at index p along axis a, as (u, v) with u the faster remaining axis.
+      const int ua = a == 0 ? 1 : 0, va = a == 2 ? 1 : 2;
+      const auto at = [&](std::size_t p, std::size_t u, std::size_t v) {
+        std::size_t c[3];
+        c[a] = p;
+        c[ua] = u;
+        c[va] = v;
+        return L.v[(c[2] * ny + c[1]) * nx + c[0]];
+      };
+      if (ci[a] > 0) {  // join with the lower neighbour's high face
+        auto it = face[a].find(k - stride[a]);
+        const auto& pl = it->second;
+        for (std::size_t v = 0; v < n3[va]; ++v)
+          for (std::size_t u = 0; u < n3[ua]; ++u) {
+            const int32_t l = at(0, u, v);
+            const int64_t q = pl[v * n3[ua] + u];
+            if (l && q) J.unite(base + l, q);
+          }
+        face[a].erase(it);
+      }
+      if (ci[a] + 1 < G.n[a]) {
+        std::vector<int64_t> pl(n3[ua] * n3[va], 0);
+        for (std::size_t v = 0; v < n3[va]; ++v)
+          for (std::size_t u = 0; u < n3[ua]; ++u) {
+            const int32_t l = at(n3[a] - 1, u, v);
+            if (l) pl[v * n3[ua] + u] = base + l;
+          }
+        face[a][k] = std::move(pl);
+      }
+    }
+  }
+  // Roots: their total size and first voxel; kept ones numbered by first voxel (components()
+  // order), then the size filter's renumbering (macropores()) keeps that order.
+  std::vector<uint64_t> total(J.parent.size(), 0);
+  for (std::size_t g = 1; g < J.parent.size(); ++g) total[std::size_t(J.find(int64_t(g)))] += J.size[g];
+  std::vector<int64_t> kept;
+  for (std::size_t g = 1; g < J.parent.size(); ++g)
+    if (J.parent[g] == int64_t(g) && total[g] >= std::max<std::size_t>(cfg.macro_min_voxels, 1)) kept.push_back(int64_t(g));
+  std::sort(kept.begin(), kept.end(), [&](int64_t a, int64_t b) { return J.first[std::size_t(a)] < J.first[std::size_t(b)]; });
+  if (kept.size() > std::size_t(std::numeric_limits<int32_t>::max()))
+    throw RuntimeFailure(cfg.input + ": more than 2^31 - 1 macropores: int32 ids cannot hold them");
+  std::vector<int32_t> final_id(J.parent.size(), 0);
+  for (std::size_t r = 0; r < kept.size(); ++r) final_id[std::size_t(kept[r])] = int32_t(r + 1);
+  for (std::size_t g = 1; g < J.parent.size(); ++g) final_id[g] = final_id[std::size_t(J.find(int64_t(g)))];
+  std::vector<uint64_t>().swap(total);
+  done("labels");
+
+  // 5. Outputs block by block; each macropore's statistics as regions() sums them (whole
+  // numbers in doubles: the same in any order).
+  const int n_macro = int(kept.size());
+  std::vector<Region> regs(kept.size());
+  std::vector<std::array<double, 3>> sum(kept.size(), std::array<double, 3>{0, 0, 0});
+  std::size_t n_macro_vox = 0;
+  const std::string legend = "0:solid,1:fine_pore,2:macropore,3:solid_phase_2";
+  std::string tmp;
+  std::unique_ptr<LabelsWriter> out;
+  if (!cfg.output.empty()) {
+    tmp = temporary_path(cfg.output);
+    out = std::make_unique<LabelsWriter>(tmp, D, chunk, std::vector<std::string>{cfg.input});
+  }
+  try {
+    std::vector<uint8_t> phases;
+    std::vector<int32_t> ids;
+    for (std::size_t k = 0; k < G.count(); ++k) {
+      const Box core = G.core(k);
+      int n = 0;
+      const Labels L = core_labels(core, &n);
+      phases.assign(L.v.size(), 0);
+      ids.assign(L.v.size(), 0);
+      std::size_t i = 0;
+      for (std::size_t z = core.lo[2]; z < core.hi[2]; ++z)
+        for (std::size_t y = core.lo[1]; y < core.hi[1]; ++y)
+          for (std::size_t x = core.lo[0]; x < core.hi[0]; ++x, ++i) {
+            const int32_t id = L.v[i] ? final_id[std::size_t(offset[k] + L.v[i])] : 0;
+            ids[i] = id;
+            uint8_t p = 0;
+            if (id) {
+              p = 2;
+              ++n_macro_vox;
+              auto& R = regs[std::size_t(id - 1)];
+              ++R.voxels;
+              auto& s = sum[std::size_t(id - 1)];
+              s[0] += double(x);
+              s[1] += double(y);
+              s[2] += double(z);
+              if (x == 0 || y == 0 || z == 0 || x + 1 == D.nx || y + 1 == D.ny || z + 1 == D.nz) R.touches_surface = true;
+            } else if (!solid.get(x, y, z)) p = 1;
+            else if (phase2 && second.get(x, y, z)) p = 3;
+            phases[i] = p;
+          }
+      if (out) out->write(core, phases, ids);
+    }
+    done("outputs_blocks");
+    if (out) {
+      out->finish(ro.spacing, {0, 0, 0}, legend);
+      out.reset();
+      commit_output(cfg.output);
+      write_volume_xdmf(cfg.output, {D.nx, D.ny, D.nz}, {0, 0, 0}, ro.spacing,
+                        {{"labels", "/labels", "UChar", 1}, {"macropores", "/macropores", "Int", 4}});
+    }
+  } catch (...) {
+    out.reset();
+    if (!tmp.empty()) std::remove(tmp.c_str());
+    throw;
+  }
+  summary.output("labels_h5", cfg.output);
+
+  const double N = double(D.count());
+  summary["porosity"] = double(n_pore) / N;
+  summary["macroporosity"] = double(n_macro_vox) / N;
+  summary["fine_porosity"] = double(n_pore - n_macro_vox) / N;
+  summary["n_macropores"] = n_macro;
+  summary["thresholds"] = t;
+  summary["threshold_rule"] = std::string(cfg.pores_bright ? "pores above the threshold" : "pores below the threshold") +
+                              " (value >= t is the brighter class)";
+  summary["method"] = to_string(cfg.method);
+  summary["macropore_radius_m"] = macro_r * finest;
+  summary["macropore_radius_vox"] = macro_r;
+  summary["specific_surface_per_m"] = surface;
+  summary["cleaning"] = {{"open_radius_vox", 0}, {"close_radius_vox", 0}, {"min_island_vox", cfg.min_island},
+                         {"solid_islands_removed", 0}, {"pore_islands_removed", 0}, {"connectivity", cfg.connectivity}};
+  {
+    const double vox = sp[0] * sp[1] * sp[2];
+    json mp = json::array();
+    std::vector<double> diam;
+    int touching = 0;
+    for (std::size_t k = 0; k < regs.size(); ++k) {
+      auto& R = regs[k];
+      R.label = int(k + 1);
+      const double c = double(R.voxels);
+      R.centroid = {sum[k][0] / c * sp[0], sum[k][1] / c * sp[1], sum[k][2] / c * sp[2]};
+      R.volume_m3 = c * vox;
+      R.equivalent_diameter_m = std::cbrt(6.0 * R.volume_m3 / M_PI);
+      mp.push_back({{"id", R.label}, {"voxels", R.voxels}, {"volume_m3", R.volume_m3},
+                    {"equivalent_diameter_m", R.equivalent_diameter_m}, {"centroid_m", {R.centroid.x, R.centroid.y, R.centroid.z}},
+                    {"touches_surface", R.touches_surface}});
+      diam.push_back(R.equivalent_diameter_m);
+      touching += R.touches_surface;
+    }
+    std::sort(diam.begin(), diam.end());
+    summary["macropores"] = mp;
+    summary["n_macropores_touching_surface"] = touching;
+    summary["pore_size_distribution"] = {{"kind", "macropore equivalent diameters (6V/pi)^(1/3), ascending"},
+                                         {"equivalent_diameters_m", diam},
+                                         {"median_m", diam.empty() ? 0.0 : diam[diam.size() / 2]}};
+  }
+  summary["chunked"] = {{"chunk_vox", chunk}, {"halo_vox", halo}, {"blocks", G.count()},
+                        {"memory_budget_bytes", budget > 0 ? json(budget) : json(nullptr)},
+                        {"planned_memory_bytes", mem.total()}, {"histogram_passes", exact ? 1 : 2}};
+  summary["stage_times_s"] = times;
+  summary.unit("stage_times_s", "s");
+  return summary.text();
+}
+
+}  // namespace tomodem::image
