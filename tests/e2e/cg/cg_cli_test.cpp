@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "../../validation/fields/lattices.hpp"
+#include "../common/tool_test.hpp"
 #include "tomodem/core/h5.hpp"
 #include "tomodem/core/packing_io.hpp"
 
@@ -19,48 +20,19 @@ namespace fs = std::filesystem;
 using namespace tomodem;
 
 namespace {
-class CgCli : public ::testing::Test {
+class CgCli : public test::ToolTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("tomodem-cg-e2e-" + std::to_string(::getpid()) + "-" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string path(const std::string& n) const { return (dir_ / n).string(); }
-  int sh(const std::string& cmd) const {
-    const int st = std::system(("cd '" + dir_.string() + "' && " + cmd + " > stdout.txt 2> stderr.txt").c_str());
-    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  }
-  std::string text(const std::string& n) const {
-    std::ifstream in(path(n));
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-  }
-  nlohmann::json json(const std::string& n) const { return nlohmann::json::parse(text(n)); }
+  CgCli() : ToolTest("tomodem-cg-e2e") {}
   std::string cg() const { return std::string(TOMODEM_BIN_DIR) + "/tomodem-cg"; }
-  fs::path dir_;
 };
-
-/// The first ```lang block after `marker` in `doc`.
-std::string block_after(const std::string& doc, const std::string& marker, const std::string& lang) {
-  const auto m = doc.find(marker);
-  if (m == std::string::npos) return "";
-  const auto b = doc.find("```" + lang + "\n", m);
-  if (b == std::string::npos) return "";
-  const auto start = b + 4 + lang.size();
-  return doc.substr(start, doc.find("```", start) - start);
-}
 
 TEST_F(CgCli, WorkedExampleOfTheDocsRunsAsWritten) {
   std::ifstream in(std::string(TOMODEM_SOURCE_DIR) + "/docs/cg.md");
   std::stringstream s;
   s << in.rdbuf();
   const std::string doc = s.str();
-  const std::string yaml = block_after(doc, "<!-- worked example -->", "yaml");
-  const std::string cmds = block_after(doc, "<!-- worked example -->", "sh");
+  const std::string yaml = test::block_after(doc, "<!-- worked example -->", "yaml");
+  const std::string cmds = test::block_after(doc, "<!-- worked example -->", "sh");
   ASSERT_FALSE(yaml.empty());
   ASSERT_FALSE(cmds.empty());
   std::ofstream(path("pack.yaml")) << yaml;

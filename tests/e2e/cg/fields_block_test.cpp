@@ -18,6 +18,7 @@
 
 #include "../../validation/fracture/samples.hpp"
 #include "../../validation/mechanics/networks.hpp"
+#include "../common/tool_test.hpp"
 #include "tomodem/core/h5.hpp"
 #include "tomodem/mechanics/network.hpp"
 
@@ -25,40 +26,10 @@ namespace fs = std::filesystem;
 using namespace tomodem;
 
 namespace {
-class FieldsBlock : public ::testing::Test {
+class FieldsBlock : public test::ToolTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("tomodem-fields-e2e-" + std::to_string(::getpid()) + "-" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string path(const std::string& n) const { return (dir_ / n).string(); }
-  int sh(const std::string& cmd) const {
-    const int st = std::system(("cd '" + dir_.string() + "' && " + cmd + " > stdout.txt 2> stderr.txt").c_str());
-    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  }
-  std::string text(const std::string& n) const {
-    std::ifstream in(path(n));
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-  }
-  nlohmann::json json(const std::string& n) const { return nlohmann::json::parse(text(n)); }
-  static std::string bin(const std::string& tool) { return std::string(TOMODEM_BIN_DIR) + "/" + tool; }
-  fs::path dir_;
+  FieldsBlock() : ToolTest("tomodem-fields-e2e") {}
 };
-
-/// The first ```lang block after `marker` in `doc`.
-std::string block_after(const std::string& doc, const std::string& marker, const std::string& lang) {
-  const auto m = doc.find(marker);
-  if (m == std::string::npos) return "";
-  const auto b = doc.find("```" + lang + "\n", m);
-  if (b == std::string::npos) return "";
-  const auto start = b + 4 + lang.size();
-  return doc.substr(start, doc.find("```", start) - start);
-}
 
 /// Largest |a - b| over a dataset, and the largest |b|.
 std::pair<double, double> difference(const std::vector<double>& a, const std::vector<double>& b) {
@@ -74,8 +45,8 @@ TEST_F(FieldsBlock, WorkedExampleOfTheDocsRunsAsWritten) {
   std::stringstream s;
   s << in.rdbuf();
   const std::string doc = s.str();
-  const std::string yaml = block_after(doc, "<!-- fields block example -->", "yaml");
-  const std::string cmds = block_after(doc, "<!-- fields block example -->", "sh");
+  const std::string yaml = test::block_after(doc, "<!-- fields block example -->", "yaml");
+  const std::string cmds = test::block_after(doc, "<!-- fields block example -->", "sh");
   ASSERT_FALSE(yaml.empty());
   ASSERT_FALSE(cmds.empty());
   std::ofstream(path("lattice.yaml")) << yaml;

@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "../../validation/fields/lattices.hpp"
+#include "../common/tool_test.hpp"
 #include "tomodem/core/h5.hpp"
 #include "tomodem/core/packing_io.hpp"
 
@@ -20,27 +21,9 @@ namespace fs = std::filesystem;
 using namespace tomodem;
 
 namespace {
-class FieldsVdb : public ::testing::Test {
+class FieldsVdb : public test::ToolTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("tomodem-fields-vdb-" + std::to_string(::getpid()) + "-" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string path(const std::string& n) const { return (dir_ / n).string(); }
-  int sh(const std::string& cmd) const {
-    const int st = std::system(("cd '" + dir_.string() + "' && " + cmd + " > stdout.txt 2> stderr.txt").c_str());
-    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  }
-  std::string text(const std::string& n) const {
-    std::ifstream in(path(n));
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-  }
-  fs::path dir_;
+  FieldsVdb() : ToolTest("tomodem-fields-vdb") {}
 };
 }  // namespace
 
