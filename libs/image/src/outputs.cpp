@@ -269,10 +269,79 @@ OverlayPlanes overlay_planes(const Volume& grey) {
   return o;
 }
 
+ScaleBar scale_bar(double metres_per_pixel, int width_px) {
+  if (!(metres_per_pixel > 0) || width_px < 4) throw RuntimeFailure("scale bar: no picture to measure");
+  const double room = 0.25 * width_px * metres_per_pixel;
+  const double decade = std::pow(10.0, std::floor(std::log10(room)));
+  ScaleBar b;
+  for (double m : {5.0, 2.0, 1.0})
+    if (m * decade <= room * (1 + 1e-12)) {
+      b.length_m = m * decade;
+      break;
+    }
+  b.pixels = int(std::lround(b.length_m / metres_per_pixel));
+  // The unit that shows the length as 1 to 999 of it.
+  struct Unit { double m; const char* name; };
+  const Unit units[] = {{1, "m"}, {1e-3, "mm"}, {1e-6, "um"}, {1e-9, "nm"}};
+  Unit u = units[3];
+  for (const Unit& c : units)
+    if (b.length_m >= c.m * (1 - 1e-9)) {
+      u = c;
+      break;
+    }
+  char text[32];
+  std::snprintf(text, sizeof text, "%.0f %s", b.length_m / u.m, u.name);
+  b.label = text;
+  return b;
+}
+
+namespace {
+// The white strip under an overlay: the scale bar on the first row, then one swatch and name per
+// phase present, wrapped to the picture's width.
+cv::Mat with_footer(const cv::Mat& img, double metres_per_pixel, const std::vector<std::pair<cv::Scalar, std::string>>& legend) {
+  const int font = cv::FONT_HERSHEY_SIMPLEX, thick = 1, pad = 6, row = 18, swatch = 10;
+  const double fs = 0.4;
+  const ScaleBar bar = scale_bar(metres_per_pixel, img.cols);
+  // Lay the legend out first to know how many rows it takes.
+  std::vector<cv::Point> at;
+  int x = pad, y = 2 * row;
+  for (const auto& [colour, name] : legend) {
+    int base = 0;
+    const int w = swatch + 4 + cv::getTextSize(name, font, fs, thick, &base).width + 2 * pad;
+    if (x > pad && x + w > img.cols) x = pad, y += row;
+    at.push_back({x, y});
+    x += w;
+  }
+  cv::Mat out(img.rows + y + pad, img.cols, img.type(), cv::Scalar(255, 255, 255));
+  img.copyTo(out(cv::Rect(0, 0, img.cols, img.rows)));
+  const int y0 = img.rows;
+  cv::rectangle(out, cv::Rect(pad, y0 + row - 8, bar.pixels, 5), cv::Scalar(0, 0, 0), cv::FILLED);
+  cv::putText(out, bar.label, cv::Point(pad + bar.pixels + 6, y0 + row - 2), font, fs, cv::Scalar(0, 0, 0), thick, cv::LINE_AA);
+  for (std::size_t k = 0; k < legend.size(); ++k) {
+    const cv::Point p(at[k].x, y0 + at[k].y);
+    cv::rectangle(out, cv::Rect(p.x, p.y - swatch, swatch, swatch), legend[k].first, cv::FILLED);
+    cv::putText(out, legend[k].second, cv::Point(p.x + swatch + 4, p.y), font, fs, cv::Scalar(0, 0, 0), thick, cv::LINE_AA);
+  }
+  return out;
+}
+}  // namespace
+
 std::vector<std::string> write_overlays(const std::string& prefix, const OverlayPlanes& grey, const Mask& phases) {
   const auto& d = grey.dims;
   if (!(phases.dims == d)) throw RuntimeFailure("overlay: grey planes and labels differ in size");
   std::vector<std::string> written;
+  // The legend names what the volume has: grey is the scan, tints the phases (blended 45 %).
+  bool present[4] = {};
+  for (const uint8_t v : phases.v) present[std::min<uint8_t>(v, 3)] = true;
+  const cv::Vec3d tints[4] = {{0, 0, 0}, {255, 80, 0}, {0, 0, 255}, {0, 200, 0}};  // BGR
+  const char* names[4] = {"", "fine pore", "macropore", "solid phase 2"};
+  std::vector<std::pair<cv::Scalar, std::string>> legend;
+  for (int k = 1; k < 4; ++k)
+    if (present[k]) {
+      const cv::Vec3d c = 0.55 * cv::Vec3d(128, 128, 128) + 0.45 * tints[k];
+      legend.push_back({cv::Scalar(c[0], c[1], c[2]), names[k]});
+    }
+  legend.push_back({cv::Scalar(128, 128, 128), "solid (grey: scan)"});
   struct Plane { const char* name; std::size_t w, h; const std::vector<float>* grey; };
   const Plane planes[3] = {{"xy", d.nx, d.ny, &grey.xy}, {"xz", d.nx, d.nz, &grey.xz}, {"yz", d.ny, d.nz, &grey.yz}};
   for (int p = 0; p < 3; ++p) {
@@ -287,9 +356,7 @@ std::vector<std::string> write_overlays(const std::string& prefix, const Overlay
         const double g = std::clamp((gv - grey.lo) / (grey.hi - grey.lo), 0.0, 1.0) * 255.0;
         cv::Vec3d c(g, g, g);  // BGR
         const uint8_t ph = phases.at(x, y, z);
-        const cv::Vec3d tint = ph == 1 ? cv::Vec3d(255, 80, 0) : ph == 2 ? cv::Vec3d(0, 0, 255)
-                                                           : ph == 3 ? cv::Vec3d(0, 200, 0) : c;
-        if (ph != 0) c = 0.55 * c + 0.45 * tint;
+        if (ph != 0) c = 0.55 * c + 0.45 * tints[std::min<uint8_t>(ph, 3)];
         img.at<cv::Vec3b>(int(b), int(a)) = cv::Vec3b(cv::saturate_cast<uint8_t>(c[0]), cv::saturate_cast<uint8_t>(c[1]),
                                                       cv::saturate_cast<uint8_t>(c[2]));
       }
@@ -301,6 +368,8 @@ std::vector<std::string> write_overlays(const std::string& prefix, const Overlay
     const double scale = std::max(1.0, std::ceil(256.0 / std::max(wa, hb)));
     const cv::Size size(int(std::lround(wa * scale)), int(std::lround(hb * scale)));
     if (size != img.size()) cv::resize(img, img, size, 0, 0, cv::INTER_NEAREST);
+    const double metres_per_pixel = phases.spacing[p == 2 ? 1 : 0] * double(planes[p].w) / double(size.width);
+    img = with_footer(img, metres_per_pixel, legend);
     std::vector<uchar> png;
     if (!cv::imencode(".png", img, png)) throw RuntimeFailure("PNG encoding failed");
     const std::string path = prefix + "_" + planes[p].name + ".png";

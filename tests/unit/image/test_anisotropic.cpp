@@ -142,14 +142,20 @@ TEST(Anisotropic, SphereSampledWithCoarseZKeepsVolumeAndRadius) {
   EXPECT_NEAR(s["macropores"][0]["equivalent_diameter_m"].get<double>() / (2 * R), 1.0, 0.01);
   EXPECT_NEAR(s["porosity"].get<double>() / (V / box), 1.0, 0.02);
   EXPECT_EQ(s["filter"]["box_radii_vox"], nlohmann::json({1, 1, 0}));
-  // The x-z overlay is 64 x 32 voxels of 1 x 2 µm: square in metres, so a square picture (PNG IHDR
-  // width and height, big-endian at bytes 16 and 20), where pixels per voxel would make it 2:1.
+  // The x-z overlay is 64 x 32 voxels of 1 x 2 µm: square in metres, so the same picture size as
+  // the x-y overlay's 64 x 64 voxels of 1 x 1 µm (PNG IHDR width and height, big-endian at bytes 16
+  // and 20; both carry the same scale-bar strip below), where pixels per voxel would make it 2:1.
   {
-    std::ifstream png(d / "ov_xz.png", std::ios::binary);
-    unsigned char h[24] = {};
-    png.read(reinterpret_cast<char*>(h), 24);
-    const auto be = [&](int o) { return (h[o] << 24) | (h[o + 1] << 16) | (h[o + 2] << 8) | h[o + 3]; };
-    EXPECT_EQ(be(16), be(20)) << "x-z overlay " << be(16) << " x " << be(20);
+    const auto size = [&](const char* name) {
+      std::ifstream png(d / name, std::ios::binary);
+      unsigned char h[24] = {};
+      png.read(reinterpret_cast<char*>(h), 24);
+      const auto be = [&](int o) { return (h[o] << 24) | (h[o + 1] << 16) | (h[o + 2] << 8) | h[o + 3]; };
+      return std::pair<int, int>(be(16), be(20));
+    };
+    const auto xy = size("ov_xy.png"), xz = size("ov_xz.png");
+    EXPECT_EQ(xz, xy) << "x-z overlay " << xz.first << " x " << xz.second << ", x-y " << xy.first << " x " << xy.second;
+    EXPECT_GT(xy.second, xy.first) << "the strip with the scale bar and legend is below the square picture";
   }
   ReadOptions ro;
   ro.h5_dataset = "/labels";

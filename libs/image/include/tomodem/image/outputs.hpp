@@ -38,8 +38,20 @@ struct OverlayPlanes {
   std::vector<float> xy, xz, yz;
 };
 OverlayPlanes overlay_planes(const Volume& grey);
+/// A scale bar for a picture of `width_px` pixels of `metres_per_pixel` each: the longest of 1, 2
+/// or 5 x 10^k m that fits in a quarter of the width, its length in pixels and its label
+/// ("200 um", "1 mm"; ASCII "um" because the overlay font has no micro sign).
+struct ScaleBar {
+  double length_m = 0;
+  int pixels = 0;
+  std::string label;
+};
+ScaleBar scale_bar(double metres_per_pixel, int width_px);
+
 /// Mid-plane overlays <prefix>_xy.png, _xz.png, _yz.png (OpenCV): grey between the 0.5 and 99.5
-/// percentiles; fine pores blue, macropores red, a second solid phase green. Returns the paths.
+/// percentiles; fine pores blue, macropores red, a second solid phase green. Below the picture a
+/// white strip with a scale bar (scale_bar) and a legend of the phases the volume has (grey is
+/// the scan). Returns the paths.
 std::vector<std::string> write_overlays(const std::string& prefix, const OverlayPlanes& grey, const Mask& phases);
 
 }  // namespace tomodem::image
