@@ -6,8 +6,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <map>
+#include <sstream>
 
 #include "tomodem/core/cli.hpp"
 #include "tomodem/core/error.hpp"
@@ -17,6 +20,7 @@
 #include "tomodem/core/summary.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/dem/sinter.hpp"
+#include "tomodem/mechanics/network.hpp"
 
 using namespace tomodem;
 using json = nlohmann::json;
@@ -157,11 +161,134 @@ void result_keys(Summary& j, const dem::SinterReport& rep, std::vector<double> r
     j.unit(k, u);
 }
 
+// ---------------------------------------------------------------- snapshots (--snapshots-at)
+struct SnapshotTarget {
+  double density = 0;
+  std::string text;  ///< as written: names the file ({density} in --snapshot-name)
+};
+
+/// "0.55,0.6 0.7": ascending, distinct, each in (0, 1); the text of each kept for its file name.
+std::vector<SnapshotTarget> parse_snapshots(const std::string& list) {
+  std::vector<SnapshotTarget> out;
+  std::string tok, all;
+  for (char c : list) all += (c == ',' ? ' ' : c);
+  std::istringstream words(all);
+  while (words >> tok) {
+    char* end = nullptr;
+    const double d = std::strtod(tok.c_str(), &end);
+    if (end == tok.c_str() || *end != '\0' || !std::isfinite(d) || !(d > 0 && d < 1))
+      throw InputError("", "--snapshots-at", tok, "a relative density in (0, 1) is expected");
+    if (!out.empty() && !(d > out.back().density))
+      throw InputError("", "--snapshots-at", list, "the densities must be ascending and distinct");
+    out.push_back({d, tok});
+  }
+  if (out.empty()) throw InputError("", "--snapshots-at", list, "no density given");
+  return out;
+}
+
+std::string snapshot_file(const std::string& pattern, const std::string& density) {
+  std::string name = pattern;
+  const auto at = name.find("{density}");
+  name.replace(at, 9, density);
+  return name;
+}
+
+/// The line of the temperature program in a settings or scene text (the refusal names it).
+std::string program_field(const std::string& text) {
+  std::istringstream in(text);
+  std::string line;
+  bool in_sinter = false;
+  for (int n = 1; std::getline(in, line); ++n) {
+    const auto first = line.find_first_not_of(' ');
+    if (first == 0) in_sinter = line.rfind("sintering:", 0) == 0;
+    if (in_sinter && first != std::string::npos && line.compare(first, 12, "temperature:") == 0)
+      return "sintering.temperature (line " + std::to_string(n) + ")";
+  }
+  return "sintering.temperature";
+}
+
+/// One snapshot: the packing as the run has it then (velocities zeroed, contacts left out: the
+/// necks are the bonds, with their periodic images), and its row of the curve.
+struct Snapshot {
+  mechanics::Network net;
+  dem::SinterRow row;
+  std::size_t bonds = 0;
+};
+
+Snapshot take_snapshot(dem::Simulation& sim, const std::vector<Material>& materials, const dem::SinterRow& r,
+                       const SnapshotTarget& target, const std::string& source) {
+  Snapshot s;
+  s.row = r;
+  Packing& p = s.net.packing;
+  p = dem::to_packing(sim, materials);
+  p.contacts = ContactTable{};
+  for (auto& v : p.particles.velocity) v = Vec3{};
+  p.particles.angular_velocity.clear();
+  const dem::BondSet b = dem::necks_to_bonds(sim);
+  p.bonds = dem::necks_to_bond_table(sim);
+  for (const Vec3& im : b.image)
+    s.net.image.push_back({int32_t(std::lround(im.x)), int32_t(std::lround(im.y)), int32_t(std::lround(im.z))});
+  s.bonds = b.size();
+  p.provenance.tool = "tomodem-sinter";
+  p.provenance.version = version_string();
+  p.provenance.created_utc = utc_now();
+  p.provenance.input_hashes[source] = file_hash(source);
+  p.results.scalars = {{"relative_density", r.density},     {"snapshot_target_density", target.density},
+                       {"mean_neck_ratio", r.mean_neck_ratio}, {"sintering_time_s", r.time},
+                       {"temperature", r.temperature}};
+  p.results.units = {{"relative_density", "1"}, {"snapshot_target_density", "1"}, {"mean_neck_ratio", "1"},
+                     {"sintering_time_s", "s"}, {"temperature", "K"}};
+  return s;
+}
+
+/// Pre-sintered aggregates: the green packing's bonds (tomodem-pack's clusters) start as necks of
+/// their bond radius instead of a_min R (the sintering law keeps a neck radius it finds in the
+/// contact's history). Returns how many necks were seeded (pairs that touch at the start).
+std::size_t seed_aggregate_necks(dem::Simulation& sim, const BondTable& bonds) {
+  if (bonds.size() == 0) return 0;
+  std::map<std::pair<int, int>, double> radius;
+  for (std::size_t b = 0; b < bonds.size(); ++b)
+    radius[{std::min(bonds.i[b], bonds.j[b]), std::max(bonds.i[b], bonds.j[b])}] = bonds.radius[b];
+  sim.measure();  // the neighbour list and the contacts' first necks
+  dem::Simulation::EngineState e = sim.engine_state();
+  if (e.j.empty() || e.start.size() != sim.particles().size() + 1) return 0;
+  const std::size_t stride = e.history.size() / e.j.size();
+  if (stride == 0) return 0;
+  const auto& p = sim.particles();
+  std::size_t seeded = 0;
+  for (std::size_t i = 0; i + 1 < e.start.size(); ++i)
+    for (int k = e.start[i]; k < e.start[i + 1]; ++k) {
+      const int j = e.j[k];
+      const auto it = radius.find({std::min(int(i), j), std::max(int(i), j)});
+      if (it == radius.end()) continue;
+      const Vec3 d = p.x[std::size_t(j)] + sim.cell().h * spatial::image_vector(e.image[k]) - p.x[i];
+      if (norm(d) >= p.r[i] + p.r[std::size_t(j)]) continue;  // apart: a neck only forms on contact
+      double& a = e.history[std::size_t(k) * stride];
+      a = std::max(a, it->second);
+      ++seeded;
+    }
+  // restore() wants a step; the run sets its own before its first step.
+  if (!(e.dt > 0)) e.dt = 1e-12;
+  sim.restore(e);
+  return seeded;
+}
+
 int run(int argc, char** argv) {
   CLI::App app{"tomodem-sinter: sinter a packing (scene YAML with a sintering section, docs/sintering.md)"};
   std::string scene_path, out_dir = ".", o_value;
   cli::Common common;
-  app.add_option("scene", scene_path, "scene file (YAML, see docs/sintering.md)");
+  std::string settings_path, snapshots_at, snapshot_name = "snapshot-{density}.h5";
+  app.add_option("scene", scene_path,
+                 "scene file (YAML, see docs/sintering.md), or with --sinter-config a packing (.h5, e.g. tomodem-pack's)");
+  app.add_option("--sinter-config", settings_path,
+                 "the input is a packing: sinter it freely with this settings file (sintering section, as tomodem-bond "
+                 "--rule sinter)");
+  app.add_option("--snapshots-at", snapshots_at,
+                 "relative densities (ascending, comma-separated): one packing per density from this one run, its necks "
+                 "as /bonds");
+  app.add_option("--snapshot-name", snapshot_name,
+                 "file name of a snapshot in --output-dir; {density} is the density as written in --snapshots-at "
+                 "(default snapshot-{density}.h5)");
   app.add_option("--output-dir", out_dir, "folder for the outputs the scene names (created if missing; default .)");
   cli::refuse_o_as_folder(app, o_value);
   cli::add_json(app, common.json);
@@ -178,17 +305,83 @@ int run(int argc, char** argv) {
   // --threads given: it wins (0: every core); not given: the scene's settings.threads if it writes one, else
   // every core (the scene reader's default, as for every tool: docs/cli.md).
   const int threads = app.count("--threads") ? (common.threads > 0 ? common.threads : all_threads()) : 0;
+  std::vector<SnapshotTarget> targets;
+  if (app.count("--snapshots-at")) targets = parse_snapshots(snapshots_at);
+  if (snapshot_name.find("{density}") == std::string::npos || snapshot_name.find('/') != std::string::npos)
+    throw InputError("", "--snapshot-name", snapshot_name, "a file name with {density} in it (no folder) is expected");
 
-  dem::Scene scene = dem::load_scene(scene_path, threads);
-  const dem::SinterSettings settings = dem::read_sinter_settings(scene);
+  // The scene: a scene file, or a packing with a settings file (tomodem-bond's sinter method).
+  dem::Scene scene;
+  std::size_t seeded = 0;
+  const std::string packing_path = settings_path.empty() ? "" : scene_path;
+  if (settings_path.empty()) {
+    scene = dem::load_scene(scene_path, threads);
+  } else {
+    const Packing green = read_packing(packing_path);
+    scene = dem::sinter_scene(green, packing_path, settings_path, threads > 0 ? threads : all_threads());
+    scene.inputs = {packing_path};
+    scene_path = settings_path;  // the settings are the scene's text from here on
+    seeded = seed_aggregate_necks(*scene.sim, green.bonds);
+  }
+  dem::SinterSettings settings = dem::read_sinter_settings(scene);
+  if (!packing_path.empty() && !targets.empty()) settings.target_density = 0;  // the snapshots set the stop
   dem::check_sinter_settings(scene, settings);
+  double reach = 0;
+  if (!targets.empty()) {
+    // Refused before anything runs: a snapshot at or below the start, one beyond the stop the
+    // scene sets, or one above what the program can reach (the two-sphere estimate).
+    const double rho0 = dem::density_state(*scene.sim).density;
+    for (const auto& t : targets)
+      if (!(t.density > rho0))
+        throw InputError("", "--snapshots-at", t.text,
+                         "at or below the starting relative density " + std::to_string(rho0));
+    if (settings.target_density > 0 && settings.target_density < targets.back().density)
+      throw InputError(scene_path, "sintering.stop.relative_density", std::to_string(settings.target_density),
+                       "the run stops below the snapshot density " + targets.back().text);
+    reach = dem::program_reach_estimate(*scene.sim, settings);
+    if (targets.back().density > reach) {
+      std::ostringstream v;
+      v << "reaches about " << reach << " from " << rho0;
+      throw InputError(scene_path, program_field(scene.text), v.str(),
+                       "the program ends below the snapshot density " + targets.back().text +
+                           " (two free spheres of the mean radius over the whole program, an estimate from above): "
+                           "lengthen the hold or raise the temperature");
+    }
+    if (settings.target_density == 0 && settings.max_time == 0) settings.target_density = targets.back().density;
+  }
   const auto out = [&](const std::string& name) { return out_dir + "/" + name; };
   const bool plots = settings.plots && !no_plot;
   check_sinter_outputs(scene_path, scene, settings, out_dir, plots, json_path);
+  {
+    std::vector<std::string> inputs = {scene_path};
+    inputs.insert(inputs.end(), scene.inputs.begin(), scene.inputs.end());
+    for (const auto& t : targets) {
+      const std::string f = out(snapshot_file(snapshot_name, t.text));
+      refuse_output_over_input(f, "--snapshot-name", inputs);
+      refuse_output_over_input(xdmf_sidecar_of(f), "--snapshot-name (its .xdmf sidecar)", inputs);
+      if (f == out(settings.packing)) throw InputError("", "--snapshot-name", snapshot_name, "names the final packing");
+      if (!json_path.empty()) refuse_output_over_input(json_path, "--json", {f});
+    }
+  }
   std::filesystem::create_directories(out_dir);
   info(scene.sim->describe() + "; " + std::to_string(scene.sim->particles().size()) + " particles");
 
-  const dem::SinterReport rep = dem::run_sintering(*scene.sim, settings, !common.quiet);
+  std::vector<Snapshot> snaps;
+  dem::SinterSnapshots hook;
+  for (const auto& t : targets) hook.densities.push_back(t.density);
+  const std::string source = packing_path.empty() ? scene_path : packing_path;
+  hook.take = [&](dem::Simulation& sim, const dem::SinterRow& r, std::size_t k) {
+    snaps.push_back(take_snapshot(sim, scene.materials, r, targets[k], source));
+  };
+  const dem::SinterReport rep = dem::run_sintering(*scene.sim, settings, !common.quiet, hook);
+  if (snaps.size() < targets.size()) {
+    // Nothing is written: the run ended below a snapshot (the estimate let it through).
+    std::ostringstream v;
+    v << "relative density " << rep.final.density << " at t = " << rep.final.time << " s";
+    throw InputError(scene_path, program_field(scene.text), v.str(),
+                     "the program ends below the snapshot density " + targets[snaps.size()].text +
+                         ": lengthen the hold or raise the temperature");
+  }
 
   std::vector<std::vector<double>> rows;
   for (const auto& r : rep.rows) rows.push_back(row(r));
@@ -198,6 +391,16 @@ int run(int argc, char** argv) {
   write_text_atomic(out(settings.necks), csv_table({"neck_ratio_lower", "neck_ratio_upper", "count", "fraction"}, necks));
   const Packing packing = sintered_packing(scene_path, scene, rep, rows);
   write_packing(out(settings.packing), packing);
+  json snap_keys = json::array();
+  for (std::size_t k = 0; k < snaps.size(); ++k) {
+    const std::string f = out(snapshot_file(snapshot_name, targets[k].text));
+    mechanics::write_network(f, snaps[k].net);
+    const dem::SinterRow& r = snaps[k].row;
+    snap_keys.push_back({{"target", targets[k].density}, {"relative_density", r.density},
+                         {"relative_density_cell", r.density_cell}, {"time_s", r.time}, {"temperature_K", r.temperature},
+                         {"mean_neck_ratio", r.mean_neck_ratio}, {"coordination", r.coordination},
+                         {"bonds", snaps[k].bonds}, {"step", r.step}, {"file", f}});
+  }
   bool plotted = false;
   if (plots) {
     if (plotting_available()) {
@@ -214,6 +417,14 @@ int run(int argc, char** argv) {
   j["physics"] = scene.sim->describe();
   result_keys(j, rep, ratio);
   j["bonds"] = packing.bonds.size();
+  if (!packing_path.empty()) j["presintered_necks"] = seeded;
+  if (!targets.empty()) {
+    j["snapshots"] = snap_keys;
+    j["reach_estimate"] = reach;
+    json files = json::array();
+    for (const auto& s : snap_keys) files.push_back(s["file"]);
+    j.output("snapshots", files);
+  }
   j.output("curve", out(settings.curve));
   j.output("packing", out(settings.packing));
   j.output("xdmf", xdmf_sidecar_of(out(settings.packing)));
