@@ -16,6 +16,7 @@
 #include "tomodem/dem/scene.hpp"
 #include "tomodem/fields/block.hpp"
 #if TOMODEM_HAVE_MPI
+#include "tomodem/dem/checkpoint_ranks.hpp"
 #include "tomodem/dem/decomposition.hpp"
 #endif
 
@@ -130,14 +131,15 @@ int run(int argc, char** argv) {
     for (const auto& c : ri.physics_changes) warn("--restart-changed-physics: continuing with changed physics: " + c);
   }
   if (ranks > 1) {
-    // Refused before anything is written, the same on every rank (rank 0 says it).
-    if (!restart.empty()) throw InputError("", "--restart", restart, "checkpoints are not decomposed yet: restart on one rank");
-    if (!scene.outputs.checkpoint.empty())
-      throw InputError(scene_path, "output.checkpoint", scene.outputs.checkpoint,
-                       "checkpoints are not decomposed yet: run on one rank, or drop the checkpoint");
+    if (!scene.sim->walls().empty() && (!restart.empty() || !scene.outputs.checkpoint.empty()))
+      throw InputError(scene_path, restart.empty() ? "output.checkpoint" : "--restart",
+                       restart.empty() ? scene.outputs.checkpoint : restart,
+                       "checkpoints of a scene with walls are not decomposed yet: run on one rank");
 #if TOMODEM_HAVE_MPI
     try {
-      dem::decompose(*scene.sim);  // refuses walls, bonds, track_energy, too many ranks
+      // Checkpoints: every rank restored the whole sample and keeps its own (docs/dem.md, "Checkpoints").
+      if (!restart.empty()) dem::decompose_restored(*scene.sim);
+      else dem::decompose(*scene.sim);  // refuses walls, bonds, track_energy, too many ranks
     } catch (const InputError& e) {
       throw InputError(scene_path, e.field() == "ranks" ? "mpirun -np" : e.field(), e.value(), e.why());
     }
@@ -161,6 +163,8 @@ int run(int argc, char** argv) {
 
   // Outputs: each written under a temporary name and renamed (core/output.hpp).
 #if TOMODEM_HAVE_MPI
+  if (ranks > 1 && !scene.outputs.checkpoint.empty())  // collective: every rank writes its particles
+    dem::write_checkpoint(out(scene.outputs.checkpoint), *scene.sim, scene.text, dem::full_series(scene, rep.series));
   Packing packing = dem::gather_packing(*scene.sim, scene.materials);  // to_packing when not decomposed
   if (!rank0) return 0;  // the gathered state and the reduced measurements are rank 0's to write
 #else
@@ -186,7 +190,7 @@ int run(int argc, char** argv) {
     for (const auto& r : rows) series[kSeriesColumns[c]].push_back(r[c]);
   write_packing(out(scene.outputs.packing), packing);
   write_text_atomic(out(scene.outputs.series), csv_table(kSeriesColumns, rows));
-  if (!scene.outputs.checkpoint.empty()) dem::write_checkpoint(out(scene.outputs.checkpoint), *scene.sim, scene.text, rows);
+  if (!scene.outputs.checkpoint.empty() && ranks == 1) dem::write_checkpoint(out(scene.outputs.checkpoint), *scene.sim, scene.text, rows);
   const json fields_summary = cg ? json::parse(cg->write(*scene.sim, scene.text)) : json();
 
   Summary j("tomodem-dem");

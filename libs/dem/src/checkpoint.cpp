@@ -2,6 +2,7 @@
 // uninterrupted run bit for bit (same thread count).
 #include <cmath>
 #include <cstring>
+#include <sstream>
 
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/h5.hpp"
@@ -10,11 +11,23 @@
 #include "tomodem/core/tool.hpp"
 #include "tomodem/dem/scene.hpp"
 #include "tomodem/dem/yaml_fields.hpp"
+#include "checkpoint_format.hpp"
+#if TOMODEM_HAVE_MPI
+#include "mpi/checkpoint_mpi.hpp"
+#endif
 
 namespace tomodem::dem {
 
+std::string release_version(const std::string& version) {
+  // "tomodem 0.1.0 (git 1234abcd)" -> "0.1.0": the git hash is provenance (it is that of the
+  // build's configure step), the release is what a checkpoint must match.
+  std::string v = version;
+  if (v.rfind("tomodem ", 0) == 0) v = v.substr(8);
+  const std::size_t paren = v.find(" (");
+  return paren == std::string::npos ? v : v.substr(0, paren);
+}
+
 namespace {
-constexpr double kFormat = 1;
 
 std::vector<double> flat(const std::vector<Vec3>& v) {
   std::vector<double> out;
@@ -42,11 +55,16 @@ static void read_checkpoint_checked(const std::string& path, Simulation& sim);
 
 void write_checkpoint(const std::string& path, const Simulation& sim, const std::string& scene_text,
                       const std::vector<std::vector<double>>& series) {
+#if TOMODEM_HAVE_MPI
+  // Decomposed: every rank writes its particles into the same file (mpi/checkpoint_mpi.cpp).
+  if (sim.domain()) return write_checkpoint_ranks(path, sim, scene_text, series);
+#endif
   const std::string tmp = temporary_path(path);
   {
     h5::File f(tmp, h5::File::Mode::create);
-    f.set_attr("/", "tomodem_checkpoint_format", kFormat);
+    f.set_attr("/", "tomodem_checkpoint_format", kCheckpointFormat);
     f.set_attr("/", "version", version_string());
+    f.set_attr("/", "tomodem_version", release_version(version_string()));
     f.set_attr("/", "scene", scene_text);
     const Particles& p = sim.particles();
     write3(f, "/particles/position", p.x, "m");
@@ -167,6 +185,31 @@ class CheckpointReader {
 };
 }  // namespace
 
+namespace {
+/// A checkpoint continues the run bit for bit only in the program that wrote it: another layout
+/// (format) or another tomodem release is refused (exit 2) before anything is read or written.
+/// Hand-made files without a version attribute (tests of damaged checkpoints) pass this check.
+void check_checkpoint_version(const std::string& path, const h5::File& f) {
+  const double format = f.attr_double("/", "tomodem_checkpoint_format");
+  if (format != kCheckpointFormat) {
+    std::ostringstream v;
+    v << format;
+    throw InputError(path, "/tomodem_checkpoint_format", v.str(),
+                     "this tomodem-dem (" + version_string() + ") reads checkpoint format " +
+                         std::to_string(int(kCheckpointFormat)) +
+                         " only: continue with the version that wrote it, or start the run again");
+  }
+  const std::string attr = f.has_attr("/", "tomodem_version") ? "tomodem_version" : "version";
+  if (!f.has_attr("/", attr)) return;
+  const std::string theirs = f.attr_string("/", attr);
+  if (release_version(theirs) != release_version(version_string()))
+    throw InputError(path, "/" + attr, theirs,
+                     "written by another tomodem version; this is " + version_string() +
+                         ": a checkpoint continues only in the version that wrote it (restart with that "
+                         "version, or start the run again)");
+}
+}  // namespace
+
 std::vector<std::string> physics_changes(const std::string& before, const std::string& now) {
   std::vector<std::string> out;
   YAML::Node a, b;
@@ -193,6 +236,7 @@ RestartInfo read_checkpoint(const std::string& path, Scene& scene, bool allow_ch
       const h5::File f(path, h5::File::Mode::read);
       if (!f.has_attr("/", "tomodem_checkpoint_format"))
         throw InputError(path, "/tomodem_checkpoint_format", "", "not a tomodem-dem checkpoint");
+      check_checkpoint_version(path, f);
       if (f.has_attr("/", "scene")) info.physics_changes = physics_changes(f.attr_string("/", "scene"), scene.text);
       if (!info.physics_changes.empty() && !allow_changed_physics) {
         std::string list;

@@ -186,14 +186,7 @@ TEST(DemToolOnRanks, WhatIsNotDecomposedIsRefusedOnceWithNothingWritten) {
   EXPECT_EQ(t.code, 2) << t.err;
   EXPECT_NE(t.err.find("tiny.yaml: field 'mpirun -np': value '3 (3x1x1)'"), std::string::npos) << t.err;
   EXPECT_FALSE(fs::exists(root / "out"));
-  // A checkpoint output is refused on ranks (checkpoints are not decomposed yet).
-  std::string ck = scene(false);
-  ck.replace(ck.find("series: series.csv"), 18, "series: series.csv, checkpoint: ck.h5");
-  std::ofstream(root / "ck.yaml") << ck;
-  const Ran c = run(root, 2, "ck.yaml --output-dir out");
-  EXPECT_EQ(c.code, 2) << c.err;
-  EXPECT_NE(c.err.find("output.checkpoint"), std::string::npos) << c.err;
-  EXPECT_FALSE(fs::exists(root / "out"));
+  // Checkpoints on ranks are written and read (test_checkpoint_ranks.cpp).
   fs::remove_all(root);
 }
 
