@@ -206,7 +206,12 @@ def run_page(path, name, source, bindir, timeout, keep):
                     raise DocError(f"{b.where()}: the small variant's '{old}' is not in the block")
                 text = text.replace(old, new)
             if b.lang == "python":  # a Python snippet runs as a script after the set-up commands
-                before.append("python3 - <<'DOC_TEST_PYTHON'\n" + text + "DOC_TEST_PYTHON")
+                # ParaView's modules load only in its own interpreter (Debian's python3-paraview).
+                # Debian's python3-* packages (h5py) are for /usr/bin/python3, which a pyenv or venv
+                # python3 earlier on PATH lacks.
+                python = ("pvpython --force-offscreen-rendering" if "paraview" in text
+                          else "/usr/bin/python3" if os.path.exists("/usr/bin/python3") else "python3")
+                before.append(python + " - <<'DOC_TEST_PYTHON'\n" + text + "DOC_TEST_PYTHON")
                 text = ""
             elif not b.shell:
                 raise DocError(f"{b.where()}: a ```{b.lang} block cannot run (sh or python)")

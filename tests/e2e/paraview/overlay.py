@@ -1,8 +1,13 @@
 """Overlay check (issue 21): a scan's labels, its level set and the carved packing, loaded together,
 occupy the same place in metres.
 
-    pvpython overlay.py FOLDER        # ParaView, offscreen: reads the XDMF sidecars, saves overlay.png
-    python3  overlay.py FOLDER        # no ParaView: the same bounds from the HDF5 files (h5py, numpy)
+    pvpython overlay.py FOLDER [--picture overlay.png]   # ParaView: reads the XDMF sidecars
+    python3  overlay.py FOLDER --h5py # the same bounds from the HDF5 files (h5py, numpy)
+
+With ParaView the boxes come from its XDMF reader and threshold filter, as a user opening the
+files sees them; --picture also renders the three together (needs an OpenGL context: Debian 12's
+ParaView 5.11 renders only through GLX, so CI, headless, checks the boxes without a picture).
+Without ParaView, or with --h5py, the boxes come from the HDF5 files.
 
 FOLDER holds labels.h5 (+ labels.xdmf), pores.vdb and carved.h5 (+ carved.xdmf), as written by
 tomodem-segment and tomodem-carve (tests/e2e/paraview/overlay_run.sh makes them). The level set is
@@ -98,8 +103,8 @@ def from_hdf5(folder):
     return scan, macro, float(sp.max()), cell, centres
 
 
-def from_paraview(folder, out_png):
-    """The same boxes as ParaView sees them through the XDMF sidecars; an offscreen picture."""
+def from_paraview(folder, out_png=None):
+    """The same boxes as ParaView sees them through the XDMF sidecars; a picture when asked."""
     import paraview.simple as pv
     labels = pv.XDMFReader(FileNames=[os.path.join(folder, "labels.xdmf")])
     labels.UpdatePipeline()
@@ -116,6 +121,14 @@ def from_paraview(folder, out_png):
     packing = pv.XDMFReader(FileNames=[os.path.join(folder, "carved.xdmf")])
     packing.UpdatePipeline()
     centres = list(packing.GetDataInformation().GetBounds())
+    voxel = max((scan[2 * k + 1] - scan[2 * k]) for k in range(3)) / max(1.0, round(cells ** (1.0 / 3.0)))
+    if out_png:
+        save_picture(pv, labels, macro_f, packing, out_png)
+    return scan, macro, voxel, centres
+
+
+def save_picture(pv, labels, macro_f, packing, out_png):
+    """The macropores (translucent), the scan's outline and the particles in one view."""
     view = pv.CreateRenderView()
     view.ViewSize = [800, 600]
     d = pv.Show(macro_f, view)
@@ -134,17 +147,27 @@ def from_paraview(folder, out_png):
     g.GaussianRadius = 1.0
     pv.ResetCamera(view)
     pv.SaveScreenshot(out_png, view)
-    voxel = max((scan[2 * k + 1] - scan[2 * k]) for k in range(3)) / max(1.0, round(cells ** (1.0 / 3.0)))
-    return scan, macro, voxel, centres
 
 
 def main():
-    if len(sys.argv) != 2:
+    args = sys.argv[1:]
+    picture, force_h5py = None, "--h5py" in args
+    if "--picture" in args:
+        i = args.index("--picture")
+        if i + 1 >= len(args):
+            print(__doc__)
+            return 2
+        picture = args[i + 1]
+        del args[i:i + 2]
+    args = [a for a in args if a != "--h5py"]
+    if len(args) != 1:
         print(__doc__)
         return 2
-    folder = sys.argv[1]
+    folder = args[0]
     mode = None
     try:
+        if force_h5py:
+            raise ImportError("--h5py")
         import paraview.simple  # noqa: F401
         mode = "paraview"
     except ImportError:
@@ -157,7 +180,7 @@ def main():
             return SKIP
     scan, macro, voxel, cell, centres = from_hdf5(folder) if mode == "h5py" else (None,) * 5
     if mode == "paraview":
-        scan, macro, voxel_pv, centres = from_paraview(folder, os.path.join(folder, "overlay.png"))
+        scan, macro, voxel_pv, centres = from_paraview(folder, picture)
         cell = None
         try:  # the cell box is not in the XDMF; take it from the HDF5 when h5py is there
             _, _, voxel, cell, _ = from_hdf5(folder)
