@@ -15,8 +15,8 @@ WORK=${WORK:-$(mktemp -d)}
 export OMP_WAIT_POLICY=PASSIVE OMP_NUM_THREADS=2
 for s in $SIZES; do
   if [ ! -f "$WORK/labels$s.h5" ]; then
-    "$BIN/tomodem-phantom" --kind pores --size "$s" -o "$WORK/grey$s.mha" -q --json /dev/null
-    "$BIN/tomodem-segment" "$WORK/grey$s.mha" --method intermeans -o "$WORK/labels$s.h5" -q --json /dev/null
+    "$BIN/tomodem-phantom" --kind pores --size "$s" -o "$WORK/grey$s.mha" -q --json "$WORK/made$s.json"
+    "$BIN/tomodem-segment" "$WORK/grey$s.mha" --method intermeans -o "$WORK/labels$s.h5" -q --json "$WORK/made$s.json"
   fi
   echo "== $s^3  load: $(cut -d' ' -f1-3 /proc/loadavg)"
   /usr/bin/time -v "$BIN/tomodem-conduct" --image "$WORK/labels$s.h5" --phase 0 --axis x --threads 2 \
