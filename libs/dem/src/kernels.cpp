@@ -2,6 +2,7 @@
 // (law_list.hpp) that fits together, with and without tallies, selected once when a Simulation
 // is built. The product is generated from the type lists; nothing here names a law but the
 // one combination with a four-contact-wide loop.
+#include <cstdlib>
 #include <string_view>
 
 #include "kernel.hpp"
@@ -9,10 +10,43 @@
 #include "law_list.hpp"
 #include "tomodem/core/error.hpp"
 
+// A build for plain x86-64 (TOMODEM_NATIVE=OFF, what a distribution ships) also compiles the
+// four-wide loop for AVX2 + FMA and takes it where the processor has both (issue 19: the speed
+// must not depend on a compiler flag). Same formulas; FMA changes the rounding only.
+#if defined(__x86_64__) && !defined(__AVX2__) && defined(__GNUC__) && !defined(__clang__)
+#define TOMODEM_X4_AVX2_CLONE 1
+#pragma GCC push_options
+#pragma GCC target("avx2,fma")
+namespace tomodem::dem::detail::avx2 {
+#define TOMODEM_X4_AVX 1
+#include "kernel_simd_body.inc"
+#undef TOMODEM_X4_AVX
+}  // namespace tomodem::dem::detail::avx2
+#pragma GCC pop_options
+#else
+#define TOMODEM_X4_AVX2_CLONE 0
+#endif
+
 namespace tomodem::dem {
 
 namespace {
 using law::End;
+
+/// The four-wide loop for this processor: the AVX2 + FMA copy where the build has one and the
+/// processor runs it, unless TOMODEM_DEM_SIMD=baseline asks for the build's own target (used by
+/// tests/bench/peers/equal_terms.sh to time both).
+PairKernel four_wide_loop() {
+#if TOMODEM_X4_AVX2_CLONE
+  static const bool avx2 = [] {
+    const char* force = std::getenv("TOMODEM_DEM_SIMD");
+    if (force && std::string_view(force) == "baseline") return false;
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  }();
+  if (avx2) return &detail::avx2::pair_kernel_hertz_mindlin_x4;
+#endif
+  return &detail::pair_kernel_hertz_mindlin_x4;
+}
 using law::List;
 
 /// The compile-time form of ContactModel::incompatibility(): the same declarations decide both.
@@ -38,7 +72,7 @@ KernelSet make(bool vectorised) {
   if constexpr (std::is_same_v<N, law::NormalHertz> && std::is_same_v<T, law::TangentialMindlin> &&
                 std::is_same_v<R, law::RollingNone>) {
     if (vectorised) {
-      k.pair[0] = &detail::pair_kernel_hertz_mindlin_x4;  // the four-contact-wide loop
+      k.pair[0] = four_wide_loop();  // the four-contact-wide loop
       k.vectorised = true;
     }
   }

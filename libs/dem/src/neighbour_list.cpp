@@ -156,7 +156,7 @@ void NeighbourList::build(SimState& s) {
   const std::size_t n = s.p.size();
   const int stride = s.stride;
   const bool touch_flag = s.kern.touch_flag;
-  const KeptHistory kept = keep_history(s);
+  KeptHistory kept = keep_history(s);
   pair_capacity_hint = nj.size() + n;
   std::vector<int32_t>().swap(nj);
   std::vector<int32_t>().swap(owner);
@@ -185,6 +185,13 @@ void NeighbourList::build(SimState& s) {
             break;
           }
   }
+  kept = KeptHistory{};  // carried over: freed before the owners are allocated
+  // Memory (issue 19, the CLI's bytes per particle): the search reserves the last list's size
+  // plus N, so the arrays kept for the run are trimmed to what they hold; the wrap record is
+  // needed only during this build.
+  new_j.shrink_to_fit();
+  new_img.shrink_to_fit();
+  std::vector<spatial::Image>().swap(wrapped);
   start.swap(new_start);
   nj.swap(new_j);
   img.swap(new_img);

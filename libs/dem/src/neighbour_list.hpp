@@ -47,7 +47,8 @@ class NeighbourList {
 
  private:
   /// Cell vectors (integer, per particle) subtracted by the last wrap: a pair seen through image
-  /// n before the wrap is seen through n + w_j − w_i after it (its history must follow).
+  /// n before the wrap is seen through n + w_j − w_i after it (its history must follow). Held
+  /// during build() only.
   std::vector<spatial::Image> wrapped;
   std::size_t pair_capacity_hint = 0;  ///< pairs in the last list (+N), to reserve the next one
 

@@ -297,13 +297,28 @@ ContactTable Simulation::contacts() {
   std::vector<Vec3> force;
   s.measure_now(&force);  // per-pair forces of the current state (trajectory unchanged)
   ContactTable ct;
+  auto touching = [&s](std::size_t i, int k, Vec3& d, double& delta) {
+    const int j = s.nl.nj[k];
+    d = s.p.x[j] + s.nl.shift[s.nl.img[k]] - s.p.x[i];
+    delta = s.p.r[i] + s.p.r[j] - norm(d);
+    return s.kern.touch_flag ? s.nl.touch[k] != 0 : delta > 0;
+  };
+  // Counted first and reserved exactly: grown by doubling, the table's five arrays held up to
+  // twice their size at the tool's memory peak (issue 19: the CLI's memory per particle).
+  std::size_t count = 0;
+  Vec3 d;
+  double delta;
+  for (std::size_t i = 0; i < s.p.size(); ++i)
+    for (int k = s.nl.start[i]; k < s.nl.start[i + 1]; ++k) count += touching(i, k, d, delta);
+  ct.i.reserve(count);
+  ct.j.reserve(count);
+  ct.overlap.reserve(count);
+  ct.normal_force.reserve(count);
+  ct.tangential_force.reserve(count);
   for (std::size_t i = 0; i < s.p.size(); ++i)
     for (int k = s.nl.start[i]; k < s.nl.start[i + 1]; ++k) {
+      if (!touching(i, k, d, delta)) continue;
       const int j = s.nl.nj[k];
-      const Vec3 d = s.p.x[j] + s.nl.shift[s.nl.img[k]] - s.p.x[i];
-      const double delta = s.p.r[i] + s.p.r[j] - norm(d);
-      const bool touching = s.kern.touch_flag ? s.nl.touch[k] != 0 : delta > 0;
-      if (!touching) continue;
       ct.i.push_back(int32_t(i));
       ct.j.push_back(j);
       ct.overlap.push_back(delta);

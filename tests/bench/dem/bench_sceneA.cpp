@@ -5,7 +5,9 @@
 //   tomodem-bench-sceneA FILE|--lattice n|--fcc n [--threads N] [--law hertz-mindlin|linear-frictionless]
 //                        [--steps 2000] [--warm 500] [--check]
 //
-// FILE is a `<tag>_n<N>.txt` of tests/bench/peers/common/make_state.py (line 1 "L d rho", then "x y z vx vy vz" per sphere, SI).
+// FILE is a `<tag>_n<N>.txt` of tests/bench/peers/common/make_state.py (line 1 "L d rho", then
+// "x y z vx vy vz" per sphere, SI; the polydisperse state adds the diameter as a seventh column).
+// --dt (default 1.35e-6 s) and --skin (default 0.2 d) for scenes other than scene A.
 // --lattice n / --fcc n build an equivalent state in memory (same geometry and velocity
 // amplitudes as make_state.py scene / gas, but a different random stream), so the smoke
 // test needs neither Python nor the peers' folder.
@@ -42,11 +44,13 @@ using namespace tomodem::dem;
 
 namespace {
 
-constexpr double kE = 1e8, kNu = 0.25, kRestitution = 0.5, kMu = 0.5, kDt = 1.35e-6;
+constexpr double kE = 1e8, kNu = 0.25, kRestitution = 0.5, kMu = 0.5;
+double g_dt = 1.35e-6, g_skin = 0;  // --dt; --skin (0: 0.2 d)
 
 struct State {
   double L = 0, d = 0, rho = 0;
   std::vector<Vec3> x, v;
+  std::vector<double> diam;  ///< per sphere (poly states); empty: all d
 };
 
 State read_state(const std::string& path) {
@@ -54,10 +58,24 @@ State read_state(const std::string& path) {
   if (!in) throw std::runtime_error("cannot open " + path);
   State s;
   if (!(in >> s.L >> s.d >> s.rho)) throw std::runtime_error(path + ": line 1 must be 'L d rho'");
-  double a[6];
-  while (in >> a[0] >> a[1] >> a[2] >> a[3] >> a[4] >> a[5]) {
+  // "x y z vx vy vz" per sphere, with a seventh column d in the polydisperse state.
+  std::string line;
+  std::getline(in, line);
+  long lineno = 1;
+  while (std::getline(in, line)) {
+    ++lineno;
+    std::istringstream ls(line);
+    double a[7];
+    int k = 0;
+    while (k < 7 && ls >> a[k]) ++k;
+    if (k == 0) continue;
+    if (k != 6 && k != 7) throw std::runtime_error(path + ":" + std::to_string(lineno) + ": expected 6 or 7 numbers");
+    if (k == 7 && !(a[6] > 0)) throw std::runtime_error(path + ":" + std::to_string(lineno) + ": diameter must be > 0");
+    if ((k == 7) != (s.diam.size() == s.x.size()) && !s.x.empty())
+      throw std::runtime_error(path + ":" + std::to_string(lineno) + ": the diameter column is on some lines only");
     s.x.push_back({a[0], a[1], a[2]});
     s.v.push_back({a[3], a[4], a[5]});
+    if (k == 7) s.diam.push_back(a[6]);
   }
   if (s.x.empty()) throw std::runtime_error(path + ": no spheres");
   return s;
@@ -157,14 +175,14 @@ ContactModel make_model(Law law, const State& s) {
 Simulation make_sim(const State& s, Law law, int threads) {
   Particles p;
   for (std::size_t i = 0; i < s.x.size(); ++i) {
-    p.add(s.x[i], 0.5 * s.d, s.rho, 0);
+    p.add(s.x[i], 0.5 * (s.diam.empty() ? s.d : s.diam[i]), s.rho, 0);
     p.v[i] = s.v[i];
   }
   Settings set;
-  set.skin = 0.2 * s.d;
+  set.skin = g_skin > 0 ? g_skin : 0.2 * s.d;
   set.threads = threads;
   Simulation sim(std::move(p), Cell::box({0, 0, 0}, {s.L, s.L, s.L}, true), make_model(law, s), set);
-  sim.set_time_step(kDt);
+  sim.set_time_step(g_dt);
   return sim;
 }
 
@@ -185,7 +203,7 @@ double process_cpu_s() {
 struct Result {
   std::size_t n = 0;
   long steps = 0, rebuilds = 0;
-  double loop_s = 0, cpu_s = 0, pressure = 0, z = 0, ke = 0, pps = 0;
+  double loop_s = 0, cpu_s = 0, pressure = 0, z = 0, ke = 0, pps = 0, ke_trans = 0, ke_rot = 0;
   std::string describe;
   std::size_t history_doubles = 0;
 };
@@ -210,6 +228,12 @@ Result run(const State& s, Law law, int threads, long warm, long steps) {
   r.pressure = m.pressure;
   r.z = m.coordination;
   r.ke = m.kinetic_energy;
+  // Translational and rotational parts apart (the peers' `ke` is translational only).
+  const Particles& p = sim.particles();
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    r.ke_trans += 0.5 * p.m[i] * norm2(p.v[i]);
+    if (p.has_rotation()) r.ke_rot += 0.5 * p.inertia(i) * norm2(p.omega[i]);
+  }
   r.describe = sim.describe();
   r.history_doubles = sim.engine_state().history.size();
   return r;
@@ -219,8 +243,9 @@ void print(const Result& r, const std::string& law, int threads, long warm) {
   std::printf("law %s\nthreads %d\nN %zu\nwarm_steps %ld\ntimed_steps %ld\n", law.c_str(), threads, r.n, warm, r.steps);
   std::printf("loop_wall_s %.6f\ncpu_s %.6f\nparticle_steps_per_second %.6e\nneighbor_rebuilds %ld\n", r.loop_s,
               r.cpu_s, r.pps, r.rebuilds);
-  std::printf("pressure_Pa %.6e\ncoordination %.4f\nkinetic_energy_J %.6e\npeak_rss_MB %.2f\n", r.pressure, r.z, r.ke,
-              peak_rss_mb());
+  std::printf("pressure_Pa %.6e\ncoordination %.4f\nkinetic_energy_J %.6e\nke_translational_J %.6e\n"
+              "ke_rotational_J %.6e\npeak_rss_MB %.2f\n",
+              r.pressure, r.z, r.ke, r.ke_trans, r.ke_rot, peak_rss_mb());
   std::printf("engine %s\n", r.describe.c_str());
 }
 
@@ -298,7 +323,8 @@ int check(long steps) {
 [[noreturn]] void usage(const char* why) {
   std::fprintf(stderr,
                "error: %s\nusage: tomodem-bench-sceneA FILE|--lattice n|--fcc n [--threads N]\n"
-               "         [--law hertz-mindlin|linear-frictionless] [--steps 2000] [--warm 500] [--check]\n",
+               "         [--law hertz-mindlin|linear-frictionless] [--steps 2000] [--warm 500] [--dt 1.35e-6]\n"
+               "         [--skin 0.2d] [--check]\n",
                why);
   std::exit(2);
 }
@@ -322,6 +348,8 @@ int main(int argc, char** argv) {
     else if (k == "--warm") warm = std::stol(value());
     else if (k == "--lattice") lattice = std::stoi(value());
     else if (k == "--fcc") fcc = std::stoi(value());
+    else if (k == "--dt") g_dt = std::stod(value());
+    else if (k == "--skin") g_skin = std::stod(value());
     else if (k == "--check") self_check = true;
     else if (k == "-h" || k == "--help") usage("help requested");
     else if (!k.empty() && k[0] == '-') usage(("unknown option " + k).c_str());
@@ -334,6 +362,8 @@ int main(int argc, char** argv) {
     else if (law_name == "linear-frictionless") law = Law::linear_frictionless;
     else usage(("unknown law " + law_name).c_str());
     if (threads < 1) usage("--threads must be >= 1");
+    if (!(g_dt > 0)) usage("--dt must be > 0");
+    if (g_skin < 0) usage("--skin must be >= 0");
     State s;
     if (lattice > 0) s = make_lattice(lattice);
     else if (fcc > 0) s = make_fcc(fcc);
