@@ -50,6 +50,9 @@ int main(int argc, char** argv) {
     app.add_option("--gt-coefficient", c.law.g_t_coefficient, "g_t = 1 + c (a/R)^2")->capture_default_str();
     bool normal_only = false, no_elastic = false, no_energy = false;
     app.add_flag("--normal-bonds", normal_only, "bonds without shear force and twist (G* = 0)");
+    bool isolated_necks = false;
+    app.add_flag("--isolated-necks", isolated_necks,
+                 "every neck as if alone on its spheres: no cap at the Laguerre face (docs/bond.md#dense-networks)");
     app.add_flag("--no-elastic", no_elastic, "skip E and nu of the periodic network (no G = K^2 (1-nu^2)/E check)");
     app.add_option("--woodbury-bonds", c.sla.woodbury_bonds, "sla: breaks handled by low-rank updates between factorisations")
         ->capture_default_str();
@@ -84,6 +87,7 @@ int main(int argc, char** argv) {
     if (nu_opt->count()) c.poisson_ratio = poisson_ratio;
     if (rho_opt->count()) c.density = density;
     c.law.shear = !normal_only;
+    c.law.face_cap = !isolated_necks;
     c.elastic = !no_elastic;
     c.sla.contact = !no_contact;
     c.sla.solver = tomodem::parse_name(tomodem::mechanics::kSlaSolverNames, "", "--sla-solver", sla_solver);

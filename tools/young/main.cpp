@@ -31,6 +31,9 @@ int main(int argc, char** argv) {
     app.add_option("--gt-coefficient", c.law.g_t_coefficient, "g_t = 1 + c (a/R)^2")->capture_default_str();
     bool normal_only = false, normal_cases = false;
     app.add_flag("--normal-bonds", normal_only, "bonds without shear force and twist (G* = 0)");
+    bool isolated_necks = false;
+    app.add_flag("--isolated-necks", isolated_necks,
+                 "every neck as if alone on its spheres: no cap at the Laguerre face (docs/bond.md#dense-networks)");
     tomodem::cli::add_choice(app, "--solver", im.solver, tomodem::mechanics::kElasticSolverNames,
                              "implicit: auto | ldlt | amg | cg | cg-ic | petsc (MPI build)");
     app.add_option("--tolerance", im.tolerance, "implicit: relative residual of the iterative solve")->capture_default_str();
@@ -65,6 +68,7 @@ int main(int argc, char** argv) {
     if (nu_opt->count()) c.poisson_ratio = poisson_ratio;
     if (rho_opt->count()) c.density = density;
     c.law.shear = !normal_only;
+    c.law.face_cap = !isolated_necks;
     im.full_tensor = !normal_cases;
     if (common.threads > 0) omp_set_num_threads(common.threads);
     ex.threads = common.threads > 0 ? common.threads : tomodem::all_threads();

@@ -34,8 +34,12 @@ Vec3 to_vec(const P& p) { return {CGAL::to_double(p.x()), CGAL::to_double(p.y())
 
 /// One attempt with images within `margin` of the faces; false when an original cell is open
 /// (touches the convex hull) or the volumes do not add up.
+/// Vertex info: particle index × 27 + image code (the original sphere has kCentreImage). With
+/// `faces`, every face of an original cell is appended there; open cell directions (no images)
+/// then leave faces on the hull open instead of failing the attempt.
 bool attempt(const std::vector<Vec3>& xw, const std::vector<double>& r, const Cell& cell, double margin,
-             Tessellation& out) {
+             Tessellation& out, std::vector<LaguerreFace>* faces = nullptr) {
+  const bool closed = cell.periodic[0] && cell.periodic[1] && cell.periodic[2];
   const std::size_t n = r.size();
   const Mat3 hinv = cell.h.inverse();
   const double vol = cell.volume();
@@ -55,11 +59,11 @@ bool attempt(const std::vector<Vec3>& xw, const std::vector<double>& r, const Ce
       bool keep = true;
       for (int k = 0; k < 3 && keep; ++k) {
         const double t = s[k] + nv[k];
-        keep = t >= -mk[k] && t <= 1 + mk[k];
+        keep = cell.periodic[k] ? t >= -mk[k] && t <= 1 + mk[k] : nv[k] == 0;
       }
       if (!keep) continue;
       const Vec3 p = xw[i] + cell.h * nv;
-      pts.emplace_back(WP(P(p.x, p.y, p.z), r[i] * r[i]), c == spatial::kCentreImage ? int(i) : -1);
+      pts.emplace_back(WP(P(p.x, p.y, p.z), r[i] * r[i]), int(i) * spatial::kImageCodes + c);
     }
   }
   RT rt;
@@ -77,8 +81,8 @@ bool attempt(const std::vector<Vec3>& xw, const std::vector<double>& r, const Ce
   std::vector<Vec3> ring;
   for (auto vit = rt.finite_vertices_begin(); vit != rt.finite_vertices_end(); ++vit) {
     const RT::Vertex_handle v = vit;
-    const int i = v->info();
-    if (i < 0) continue;
+    if (v->info() % spatial::kImageCodes != spatial::kCentreImage) continue;  // an image
+    const int i = v->info() / spatial::kImageCodes;
     edges.clear();
     rt.incident_edges(v, std::back_inserter(edges));
     const Vec3 xv = to_vec(v->point().point());
@@ -86,19 +90,29 @@ bool attempt(const std::vector<Vec3>& xw, const std::vector<double>& r, const Ce
     for (const auto& e : edges) {
       const auto a = e.first->vertex(e.second), b = e.first->vertex(e.third);
       const auto w = a == v ? b : a;
-      if (rt.is_infinite(w)) return false;  // open cell: the margin is too small
+      if (rt.is_infinite(w)) {
+        if (closed) return false;  // open cell: the margin is too small
+        continue;                  // open direction: the hull, not a neighbour
+      }
       ring.clear();
+      bool open = false;
       auto cc = rt.incident_cells(e), done = cc;
       do {
-        if (rt.is_infinite(cc)) return false;
-        ring.push_back(centre[std::size_t(cc->info())]);
+        if (rt.is_infinite(cc)) {
+          if (closed) return false;
+          open = true;
+        } else {
+          ring.push_back(centre[std::size_t(cc->info())]);
+        }
       } while (++cc != done);
-      Vec3 ehat = to_vec(w->point().point()) - xv;
-      ehat *= 1 / norm(ehat);
+      const Vec3 d = to_vec(w->point().point()) - xv;
+      const Vec3 ehat = d * (1 / norm(d));
       Vec3 A;
       for (std::size_t k = 1; k + 1 < ring.size(); ++k) A += 0.5 * cross(ring[k] - ring[0], ring[k + 1] - ring[0]);
+      const double area = open ? HUGE_VAL : std::abs(dot(A, ehat));
+      if (faces) faces->push_back({i, w->info() / spatial::kImageCodes, d, area});
       // Pyramid on the face with apex at the centre of i: (1/3) area × signed height.
-      V += std::abs(dot(A, ehat)) * dot(ring[0] - xv, ehat) / 3;
+      if (!open) V += area * dot(ring[0] - xv, ehat) / 3;
     }
     out.cell_volume[std::size_t(i)] = V;
   }
@@ -106,9 +120,42 @@ bool attempt(const std::vector<Vec3>& xw, const std::vector<double>& r, const Ce
   for (double V : out.cell_volume) out.total_volume += V;
   out.box_volume = vol;
   out.margin = margin;
-  return std::abs(out.total_volume - vol) <= 1e-10 * vol;
+  return !closed || std::abs(out.total_volume - vol) <= 1e-10 * vol;
+}
+
+/// Centres wrapped into the cell along its periodic directions; the largest radius.
+std::vector<Vec3> wrapped(const std::vector<Vec3>& x, const std::vector<double>& r, const Cell& cell, double& rmax) {
+  const Mat3 hinv = cell.h.inverse();
+  std::vector<Vec3> xw(x.size());
+  rmax = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    Vec3 s = hinv * (x[i] - cell.origin);
+    for (int k = 0; k < 3; ++k)
+      if (cell.periodic[k]) s[k] -= std::floor(s[k]);
+    xw[i] = cell.origin + cell.h * s;
+    rmax = std::max(rmax, r[i]);
+  }
+  return xw;
 }
 }  // namespace
+
+std::vector<LaguerreFace> laguerre_faces(const std::vector<Vec3>& x, const std::vector<double>& r, const Cell& cell) {
+  std::vector<LaguerreFace> faces;
+  const std::size_t n = r.size();
+  if (n == 0) return faces;
+  double rmax = 0;
+  const std::vector<Vec3> xw = wrapped(x, r, cell, rmax);
+  Tessellation t;
+  double margin = 4 * rmax + 2 * std::cbrt(cell.volume() / double(n));
+  for (int tries = 0; tries < 8; ++tries, margin *= 1.5) {
+    faces.clear();
+    if (attempt(xw, r, cell, margin, t, &faces)) return faces;
+  }
+  std::ostringstream s;
+  s << "Laguerre faces: the power cells do not close (volumes " << t.total_volume << " vs " << t.box_volume
+    << " m^3) even with images " << margin << " m beyond the faces";
+  throw RuntimeFailure(s.str());
+}
 
 Tessellation laguerre(const std::vector<Vec3>& x, const std::vector<double>& r, const Cell& cell) {
   if (!(cell.periodic[0] && cell.periodic[1] && cell.periodic[2]))

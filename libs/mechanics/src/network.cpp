@@ -11,6 +11,7 @@
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/packing_io.hpp"
 #include "tomodem/dem/law_registry.hpp"
+#include "tomodem/geometry/laguerre.hpp"
 
 namespace tomodem::mechanics {
 
@@ -109,6 +110,8 @@ std::vector<dem::BondLaw> bond_laws(const Packing& p, const std::string& file, c
                       (1 - B.poisson_ratio * B.poisson_ratio) / B.youngs_modulus);
       l.G_star = o.shear ? 1 / ((2 - A.poisson_ratio) / Ga + (2 - B.poisson_ratio) / Gb) : 0;
       dem::apply_bond_settings(bond_law_entry(), law_settings(o), l);
+      l.face_cap = o.face_cap;
+      l.E_face = 2 / (1 / A.youngs_modulus + 1 / B.youngs_modulus);
     }
   return laws;
 }
@@ -141,6 +144,29 @@ void override_materials(Packing& p, const std::optional<double>& youngs_modulus,
   }
 }
 
+std::vector<double> bond_face_areas(const Packing& p) {
+  const std::size_t m = p.bonds.size(), n = p.particles.size();
+  std::vector<double> area(m, 0.0);
+  if (m == 0) return area;
+  const std::vector<geometry::LaguerreFace> faces =
+      geometry::laguerre_faces(p.particles.position, p.particles.radius, p.cell);
+  std::vector<std::vector<std::size_t>> of(n);  // faces of each particle's cell
+  for (std::size_t f = 0; f < faces.size(); ++f) of[std::size_t(faces[f].i)].push_back(f);
+  for (std::size_t b = 0; b < m; ++b) {
+    // The face between i and the image of j at the bond's length (several images of j can
+    // neighbour i in a small cell; an unloaded network has its bonds at their rest lengths).
+    double best = HUGE_VAL;
+    for (std::size_t f : of[std::size_t(p.bonds.i[b])]) {
+      if (faces[f].j != p.bonds.j[b]) continue;
+      const double miss = std::abs(norm(faces[f].offset) - p.bonds.rest_length[b]);
+      if (miss < best) best = miss, area[b] = faces[f].area;
+    }
+    // No face within 1e-6 of the length: the pair's radical disc lies inside other cells.
+    if (best > 1e-6 * p.bonds.rest_length[b]) area[b] = 0;
+  }
+  return area;
+}
+
 BondStiffnesses bond_stiffnesses(const Packing& p, const std::vector<dem::BondLaw>& laws) {
   const std::size_t m = p.bonds.size();
   const int n = int(std::lround(std::sqrt(double(laws.size()))));
@@ -149,10 +175,16 @@ BondStiffnesses bond_stiffnesses(const Packing& p, const std::vector<dem::BondLa
   k.kt.resize(m);
   k.ktwist.resize(m);
   k.kbend.resize(m);
+  const bool cap = m > 0 && std::any_of(laws.begin(), laws.end(), [](const dem::BondLaw& l) { return l.face_cap; });
+  const std::vector<double> area = cap ? bond_face_areas(p) : std::vector<double>();
   for (std::size_t b = 0; b < m; ++b) {
     const int i = p.bonds.i[b], j = p.bonds.j[b];
     const dem::BondLaw& law = laws[std::size_t(p.particles.phase[i] * n + p.particles.phase[j])];
-    const dem::BondStiffness s = dem::bond_stiffness(law, p.bonds.radius[b], p.particles.radius[i], p.particles.radius[j]);
+    dem::BondStiffness s = dem::bond_stiffness(law, p.bonds.radius[b], p.particles.radius[i], p.particles.radius[j]);
+    if (law.face_cap && p.bonds.state[b] == BondTable::intact) {
+      if (dem::face_cap_stiffness(s, law.E_face, area[b], p.bonds.rest_length[b])) ++k.face_capped;
+      if (area[b] == 0) ++k.no_face;
+    }
     k.kn[b] = s.kn;
     k.kt[b] = s.kt;
     k.ktwist[b] = s.ktwist;

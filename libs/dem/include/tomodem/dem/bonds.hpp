@@ -29,6 +29,11 @@ struct BondLaw {
   double shear_strength = 0;          ///< Pa, stress criterion
   double fracture_energy = 0;         ///< Γ = 2γ_s, J/m², LEFM criterion
   double friction = 0;                ///< Coulomb μ between the faces of a broken bond
+  /// Dense networks (face_cap_stiffness): cap k_n, k_t at E_face A_face/L, A_face the pair's face
+  /// in the radical tessellation. Applied where the packing's tessellation is at hand (the network
+  /// tools, mechanics::bond_stiffnesses); the DEM bond loop uses the isolated-neck law.
+  bool face_cap = false;
+  double E_face = 0;                  ///< Pa, 2/(1/E_i + 1/E_j): Young's modulus of the face column
 };
 
 /// Stiffnesses of one bond (docs/physics.md#bonded-particles); shared by the DEM bond loop and
@@ -51,6 +56,30 @@ inline BondStiffness bond_stiffness(const BondLaw& law, double a, double ri, dou
   k.ktwist = 0.5 * k.kt * a * a;
   k.kbend = 0.25 * k.kn * a * a;
   return k;
+}
+
+/// Dense-network neck law (docs/bond.md#dense-networks): a neck's load-bearing area cannot exceed
+/// the face the two particles share in the radical (Laguerre) tessellation, so k_n and k_t are
+/// capped at the rigid-body-spring value of that face, E_face A_face/L (Bolander & Saito 1998,
+/// k_t = k_n: the Voronoi/Laguerre spring network that reproduces a uniformly strained solid).
+/// k_twist and k_bend scale with their spring (same neck radius). Small necks far apart sit below
+/// the cap (their face is much larger than the neck) and are unchanged; at full density every
+/// bond is at the cap and the network is the spring network of the tessellation (E = E_s, ν = 0).
+/// Returns true when a spring was capped.
+inline bool face_cap_stiffness(BondStiffness& k, double E_face, double face_area, double length) {
+  const double cap = length > 0 ? E_face * face_area / length : HUGE_VAL;
+  bool capped = false;
+  if (k.kn > cap) {
+    k.kbend *= cap / k.kn;
+    k.kn = cap;
+    capped = true;
+  }
+  if (k.kt > cap) {
+    k.ktwist *= cap / k.kt;
+    k.kt = cap;
+    capped = true;
+  }
+  return capped;
 }
 
 /// Critical mean stresses of one bond (Pa): σ = F_n/(πa²) + 4|Γ_t|/(πa³) against `tension`,

@@ -20,4 +20,18 @@ struct Tessellation {
 /// Needs a cell periodic in all three directions. Throws InputError otherwise.
 Tessellation laguerre(const std::vector<Vec3>& x, const std::vector<double>& r, const Cell& cell);
 
+/// One face of the power cell of sphere i: the polygon of equal power to i and to the image of
+/// j at x_i + offset (offset = x_j + H·n − x_i for the periodic image n). For two overlapping
+/// spheres the face lies in the plane of their intersection circle.
+struct LaguerreFace {
+  int i = 0, j = 0;
+  Vec3 offset;                ///< m
+  double area = 0;            ///< m²; +inf for a face left open by an open cell direction
+};
+/// Every face of every sphere's power cell, listed from both sides (i's list holds j and j's
+/// holds i). Periodic directions use images within a margin grown until every cell closes; open
+/// directions use no images, and faces that reach the convex hull there are open (area +inf).
+/// Hidden spheres (whose power cell is empty) have no faces.
+std::vector<LaguerreFace> laguerre_faces(const std::vector<Vec3>& x, const std::vector<double>& r, const Cell& cell);
+
 }  // namespace tomodem::geometry

@@ -38,6 +38,9 @@ struct LawOptions {
   double g_t_coefficient = 1.2;
   bool shear = true;             ///< false: normal bonds (G* = 0: no shear force, no twist)
   double damping_ratio = 0;      ///< ζ of the bond dashpots (explicit runs)
+  /// Dense-network law: k_n, k_t capped at E A_face/L of the pair's Laguerre face
+  /// (dem::face_cap_stiffness, docs/bond.md#dense-networks); false: every neck as if alone.
+  bool face_cap = true;
 };
 /// One law per phase pair (n×n): 1/E* = Σ(1−ν²)/E, 1/G* = Σ(2−ν)/G (docs/physics.md#notation). Materials must
 /// be present with E > 0, −1 < ν < 0.5 and, when `need_density`, density > 0: InputError
@@ -59,11 +62,18 @@ void check_law_options(const LawOptions& o);
 /// Refuses a bond dashpot ratio ζ (--damping-ratio of the explicit tests) outside the bond law's range.
 void check_bond_damping_ratio(double zeta);
 
-/// Per-bond stiffnesses (dem::bond_stiffness, the formula of the DEM bond loop).
+/// Per-bond stiffnesses (dem::bond_stiffness, the formula of the DEM bond loop), capped by the
+/// pair's Laguerre face where the laws ask for it (dem::face_cap_stiffness).
 struct BondStiffnesses {
   std::vector<double> kn, kt, ktwist, kbend;  ///< N/m, N/m, N m, N m
+  long face_capped = 0;  ///< intact bonds whose k_n or k_t is at the face cap
+  long no_face = 0;      ///< intact bonds whose pair shares no face (capped at 0)
 };
 BondStiffnesses bond_stiffnesses(const Packing& p, const std::vector<dem::BondLaw>& laws);
+/// Per bond, the area of the face its two particles share in the radical (Laguerre) tessellation
+/// of the packing (geometry::laguerre_faces; m², 0 where they share none, +inf on the hull of an
+/// open cell direction).
+std::vector<double> bond_face_areas(const Packing& p);
 
 /// Connected components of the intact bonds (spatial::find_clusters).
 using Clusters = spatial::Clusters;
