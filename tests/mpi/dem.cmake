@@ -32,3 +32,14 @@ tomodem_mpi_test(dem_decomposition_bond_tests
   SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/dem/test_bonds_decomposed.cpp
   LIBS tomodem_dem
   RANKS 1 2 3 4)
+
+# Checkpoints written on 2 ranks (HDF5 MPI-IO), restarted on 1-3 ranks and without mpirun:
+# bitwise the uninterrupted run; another version refused (docs/dem.md, "Checkpoints").
+add_executable(dem_checkpoint_ranks_tests ${CMAKE_CURRENT_SOURCE_DIR}/dem/test_checkpoint_ranks.cpp)
+target_link_libraries(dem_checkpoint_ranks_tests PRIVATE tomodem_core nlohmann_json::nlohmann_json GTest::gtest_main)
+target_compile_definitions(dem_checkpoint_ranks_tests PRIVATE
+  TOMODEM_BIN_DIR="${CMAKE_BINARY_DIR}/bin" TOMODEM_MPIEXEC="${MPIEXEC_EXECUTABLE}")
+add_dependencies(tomodem_mpi_tests dem_checkpoint_ranks_tests tomodem-dem)
+add_test(NAME dem_checkpoint_ranks COMMAND dem_checkpoint_ranks_tests)
+set_tests_properties(dem_checkpoint_ranks PROPERTIES LABELS mpi PROCESSORS 3
+  ENVIRONMENT "OMP_NUM_THREADS=1;OMPI_ALLOW_RUN_AS_ROOT=1;OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1")
