@@ -1,0 +1,169 @@
+// End-to-end: tomodem-segment --chunk/--memory (the out-of-core path, docs/segment.md "Volumes
+// larger than memory") gives the in-memory path's labels exactly, and refuses bad block sizes
+// and budgets with exit 2 and the numbers (issue 19 item 5). The 512^3 comparison and the 2048^3
+// run are tests/bench/segment/chunked_bench.sh.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sys/wait.h>
+
+#include "tomodem/core/h5.hpp"
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+namespace {
+const std::string bin = TOMODEM_BIN_DIR;
+int run_err(const std::string& cmd, std::string* err) {
+  const std::string ef = (fs::temp_directory_path() / "tomodem_seg_chunked_stderr.txt").string();
+  const int r = std::system((cmd + " >/dev/null 2>" + ef).c_str());
+  std::ifstream in(ef);
+  err->assign(std::istreambuf_iterator<char>(in), {});
+  return WIFEXITED(r) ? WEXITSTATUS(r) : -1;
+}
+fs::path tmpdir(const std::string& name) {
+  const fs::path p = fs::temp_directory_path() / ("tomodem_seg_chunked_" + name);
+  fs::remove_all(p);
+  fs::create_directories(p);
+  return p;
+}
+json read_json(const fs::path& p) {
+  json j;
+  std::ifstream(p) >> j;
+  return j;
+}
+
+// A 96^3 pores phantom as a raw uint16 file (its macropores have radii 9-14 voxels: wider than a
+// 16-voxel block, so they cross block faces, edges and corners).
+const fs::path& phantom() {
+  static const fs::path d = [] {
+    const fs::path p = tmpdir("phantom");
+    std::string err;
+    const int rc = run_err(bin + "/tomodem-phantom --kind pores --size 96 --snr 3 --blur 1 --fine-porosity 0.05 -q -o " +
+                               (p / "g.raw").string(), &err);
+    EXPECT_EQ(rc, 0) << err;
+    return p;
+  }();
+  return d;
+}
+const std::string raw_args = " --raw-dims 96,96,96 --raw-type uint16 --threads 1 -q";
+const std::string iso = " --spacing 10um";
+}  // namespace
+
+// Every voxel of /labels and /macropores and every summary value the two paths share are equal:
+// the chunked stages are exact (halos cover the median box and the macropores' 2r + 2 reach;
+// histograms and statistics are sums of whole numbers), so no tolerance applies.
+TEST(SegmentChunked, LabelsIdenticalToInMemory) {
+  const fs::path d = tmpdir("same");
+  const std::string in = (phantom() / "g.raw").string();
+  struct Case { std::string name, options, chunk; };
+  const std::vector<Case> cases{
+      {"otsu_c16", iso, "--chunk 16"},
+      {"intermeans_aniso_c20", "--method intermeans --spacing 10um,10um,20um --macropore-radius 2vox --macropore-min-voxels 30", "--chunk 20"},
+      {"multiotsu3_r2_c24", iso + " --method multiotsu3 --filter-radius 2vox --macropore-radius 1.5vox", "--chunk 24"},
+      {"none_peaks_budget", iso + " --filter none --method peaks", "--memory 72MB"}  // 64 voxels per side from the budget,
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.name);
+    const std::string m = (d / (c.name + "_mem")).string(), k = (d / (c.name + "_chk")).string();
+    std::string err;
+    ASSERT_EQ(run_err(bin + "/tomodem-segment " + in + raw_args + " " + c.options + " -o " + m + ".h5 --json " + m + ".json", &err), 0) << err;
+    ASSERT_EQ(run_err(bin + "/tomodem-segment " + in + raw_args + " " + c.options + " " + c.chunk + " -o " + k + ".h5 --json " + k + ".json", &err), 0) << err;
+    tomodem::h5::File a(m + ".h5", tomodem::h5::File::Mode::read), b(k + ".h5", tomodem::h5::File::Mode::read);
+    std::vector<std::size_t> da, db;
+    const auto la = a.read_uint8("/labels", &da), lb = b.read_uint8("/labels", &db);
+    EXPECT_EQ(da, db);
+    EXPECT_TRUE(la == lb) << "phase labels differ";
+    const auto ma = a.read_int32("/macropores"), mb = b.read_int32("/macropores");
+    EXPECT_TRUE(ma == mb) << "macropore ids differ";
+    EXPECT_EQ(a.attr_doubles("/labels", "spacing"), b.attr_doubles("/labels", "spacing"));
+    EXPECT_EQ(a.attr_string("/labels", "legend"), b.attr_string("/labels", "legend"));
+    EXPECT_TRUE(fs::exists(k + ".xdmf"));
+    const json sa = read_json(m + ".json"), sb = read_json(k + ".json");
+    for (const char* key : {"porosity", "macroporosity", "fine_porosity", "n_macropores", "thresholds", "specific_surface_per_m",
+                            "n_macropores_touching_surface", "macropores", "pore_size_distribution", "filter", "input"})
+      EXPECT_EQ(sa[key], sb[key]) << key;
+    EXPECT_GT(sa["n_macropores"].get<int>(), 0);
+    ASSERT_TRUE(sb.contains("chunked"));
+    // The test is only a test of the joins if macropores cross blocks: some id spans blocks on
+    // all three axes (a corner), and some spans three blocks along an axis.
+    const std::size_t C = sb["chunked"]["chunk_vox"].get<std::size_t>();
+    ASSERT_LT(C, 96u);
+    std::map<int32_t, std::array<std::set<std::size_t>, 3>> blocks;
+    for (std::size_t i = 0; i < ma.size(); ++i)
+      if (ma[i]) {
+        auto& s = blocks[ma[i]];
+        s[0].insert(i % 96 / C);
+        s[1].insert(i / 96 % 96 / C);
+        s[2].insert(i / (96 * 96) / C);
+      }
+    bool corner = false, three = false;
+    for (const auto& [id, s] : blocks) {
+      corner = corner || (s[0].size() > 1 && s[1].size() > 1 && s[2].size() > 1);
+      three = three || s[0].size() > 2 || s[1].size() > 2 || s[2].size() > 2;
+    }
+    EXPECT_TRUE(corner) << "no macropore crosses a block corner at chunk " << C;
+    if (C <= 20) {
+      EXPECT_TRUE(three) << "no macropore spans three blocks at chunk " << C;
+    }
+  }
+}
+
+// A float32 scan takes the two-pass histogram (min/max, then bins): still identical.
+TEST(SegmentChunked, FloatVolumeTwoHistogramPasses) {
+  const fs::path d = tmpdir("float");
+  std::string err;
+  ASSERT_EQ(run_err(bin + "/tomodem-phantom --kind packing --size 64 --snr 4 --blur 1 --float -q -o " + (d / "p.raw").string(), &err), 0) << err;
+  const std::string args = " " + (d / "p.raw").string() + " --raw-dims 64,64,64 --raw-type float32 --spacing 5um --macropore-radius 2vox --threads 1 -q";
+  ASSERT_EQ(run_err(bin + "/tomodem-segment" + args + " -o " + (d / "m.h5").string() + " --json " + (d / "m.json").string(), &err), 0) << err;
+  ASSERT_EQ(run_err(bin + "/tomodem-segment" + args + " --chunk 24 -o " + (d / "c.h5").string() + " --json " + (d / "c.json").string(), &err), 0) << err;
+  tomodem::h5::File a((d / "m.h5").string(), tomodem::h5::File::Mode::read), b((d / "c.h5").string(), tomodem::h5::File::Mode::read);
+  EXPECT_TRUE(a.read_uint8("/labels") == b.read_uint8("/labels"));
+  EXPECT_TRUE(a.read_int32("/macropores") == b.read_int32("/macropores"));
+  const json sa = read_json(d / "m.json"), sb = read_json(d / "c.json");
+  EXPECT_EQ(sa["thresholds"], sb["thresholds"]);
+  EXPECT_EQ(sa["porosity"], sb["porosity"]);
+  EXPECT_EQ(sb["chunked"]["histogram_passes"], 2);
+}
+
+// Bad block sizes and budgets, and what the chunked path does not do: exit 2, the message names
+// the option and the numbers, and nothing is written.
+TEST(SegmentChunked, BadInputExit2WithNumbers) {
+  const fs::path d = tmpdir("bad");
+  const std::string in = (phantom() / "g.raw").string();
+  struct Row { std::string args, expect; };
+  const std::vector<Row> rows{
+      {raw_args + iso + " --chunk 4", "'--chunk': value '4': is below the halo of 8 voxels (median box radius 1, macropores 2r + 2 = 8 at r = 3"},
+      {raw_args + iso + " --memory 1MB", "'--memory': value '1MB': is below what one block needs"},
+      {raw_args + iso + " --memory 60MB --chunk 96", "'--memory': value '60MB': is below what --chunk 96 needs"},
+      {raw_args + iso + " --memory lots", "'--memory': value 'lots': expected a size"},
+      {raw_args + iso + " --chunk 16 --grains", "'--grains'"},
+      {raw_args + iso + " --chunk 16 --min-island 10", "'--min-island': value '10'"},
+      {raw_args + iso + " --chunk 16 --filter gaussian", "'--filter': value 'gaussian'"},
+      {raw_args + iso + " --chunk 16 --method hysteresis --levels 1,2", "'--method': value 'hysteresis'"},
+      {raw_args + iso + " --chunk 16 --mha " + (d / "x.mha").string(), "'--mha'"},
+  };
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    SCOPED_TRACE(rows[r].args);
+    std::string err;
+    EXPECT_EQ(run_err(bin + "/tomodem-segment " + in + rows[r].args + " -o " + (d / "l.h5").string() + " --json " +
+                          (d / "s.json").string(), &err), 2) << err;
+    EXPECT_NE(err.find(rows[r].expect), std::string::npos) << err;
+    EXPECT_TRUE(fs::is_empty(d)) << "partial output";
+  }
+  // The budget message gives what is needed: the smallest block, the bit masks and the block.
+  std::string err;
+  EXPECT_EQ(run_err(bin + "/tomodem-segment " + in + raw_args + iso + " --memory 1MB -o " + (d / "l.h5").string(), &err), 2);
+  EXPECT_NE(err.find("for the whole-volume bit masks of 96x96x96 plus"), std::string::npos) << err;
+  // A chunked run of a non-raw file: refused, naming the format.
+  const fs::path mha = d.parent_path() / "tomodem_seg_chunked_bad_mha";
+  fs::create_directories(mha);
+  ASSERT_EQ(run_err(bin + "/tomodem-phantom --kind pores --size 32 -q -o " + (mha / "g.mha").string(), &err), 0) << err;
+  EXPECT_EQ(run_err(bin + "/tomodem-segment " + (mha / "g.mha").string() + " --chunk 16 -q -o " + (d / "l.h5").string(), &err), 2);
+  EXPECT_NE(err.find("reads raw files only"), std::string::npos) << err;
+  EXPECT_TRUE(fs::is_empty(d));
+}
