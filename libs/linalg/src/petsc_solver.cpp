@@ -2,7 +2,8 @@
 // with -DTOMODEM_MPI=ON. Layout: the unknowns of node k go to rows k·bs + kind (bs = 1 scalar,
 // 3 translations, 6 translations and rotations); rows without an unknown are identity rows with
 // a zero right-hand side, so every node is a whole block and GAMG aggregates nodes. Rank r owns
-// the nodes [r·n/size, (r+1)·n/size).
+// the nodes [r·n/size, (r+1)·n/size) (owned_nodes); with the distributed constructor the caller
+// hands in only those rows, so no rank ever holds the whole matrix.
 #include <mpi.h>
 #include <petscksp.h>
 
@@ -62,10 +63,13 @@ struct PetscSolver::Impl {
   PetscStats stats;
   int rank = 0, size = 1;
   int bs = 1;
+  int32_t n_unknowns = 0;                // of the whole system
+  int32_t row_base = 0;                  // unknown u is row u − row_base of the caller's CSR and b
+  bool distributed = false;              // the caller's CSR holds this rank's rows only
   PetscInt n_rows = 0, lo = 0, hi = 0;   // global rows, owned rows [lo, hi)
   std::vector<int32_t> row_of;           // unknown -> PETSc row
   std::vector<int32_t> unknown_of;       // owned PETSc row - lo -> unknown (−1: identity row)
-  std::vector<int32_t> pattern_start, pattern_column;  // the pattern the matrix was built with
+  std::vector<int32_t> pattern_start, pattern_column;  // the caller's CSR pattern (start from 0)
   double pad_diagonal = 1;               // identity rows, scaled like the matrix's diagonal
   NearNullspace ns;
   Mat A = nullptr;
@@ -83,17 +87,21 @@ struct PetscSolver::Impl {
     if (x_all) VecDestroy(&x_all);
     if (to_all) VecScatterDestroy(&to_all);
   }
+  void init(const CsrView& view);
   void layout(const CsrView& view);
   void build_matrix(const CsrView& view);
   void set_values(const CsrView& view);
   void set_near_nullspace();
   void build_solver();
   void setup();
+  /// The caller's CSR row of unknown u.
+  int32_t csr_row(int32_t u) const { return u - row_base; }
 };
 
-/// Row numbering, block size and the owned rows.
+/// Row numbering, block size and the owned rows; checks that a distributed caller handed in
+/// exactly the unknowns of this rank's nodes.
 void PetscSolver::Impl::layout(const CsrView& view) {
-  const int32_t n = view.rows;
+  const int32_t n = n_unknowns;
   row_of.resize(std::size_t(n));
   int32_t nodes = n;
   if (ns.node.empty()) {
@@ -103,7 +111,7 @@ void PetscSolver::Impl::layout(const CsrView& view) {
     if (ns.node.size() != std::size_t(n) || ns.kind.size() != std::size_t(n))
       throw RuntimeFailure("PETSc solver: the near-null space does not match the matrix size");
     bool rotations = false;
-    nodes = 0;
+    nodes = int32_t(ns.position.size());
     for (int32_t u = 0; u < n; ++u) {
       rotations |= ns.kind[std::size_t(u)] >= NearNullspace::rx;
       nodes = std::max(nodes, ns.node[std::size_t(u)] + 1);
@@ -115,15 +123,39 @@ void PetscSolver::Impl::layout(const CsrView& view) {
   lo = PetscInt(int64_t(nodes) * rank / size) * bs;
   hi = PetscInt(int64_t(nodes) * (rank + 1) / size) * bs;
   unknown_of.assign(std::size_t(hi - lo), -1);
+  int32_t owned = 0, owned_first = n;
   for (int32_t u = 0; u < n; ++u) {
     const int32_t row = row_of[std::size_t(u)];
-    if (row >= lo && row < hi) unknown_of[std::size_t(row - lo)] = u;
+    if (row >= lo && row < hi) unknown_of[std::size_t(row - lo)] = u, ++owned, owned_first = std::min(owned_first, u);
   }
-  double diag_sum = 0;
-  for (int32_t u = 0; u < n; ++u)
-    for (int32_t k = view.start[u]; k < view.start[u + 1]; ++k)
-      if (view.column[k] == u) diag_sum += std::abs(view.value[k]);
-  pad_diagonal = n > 0 && diag_sum > 0 ? diag_sum / n : 1.0;
+  if (distributed) {
+    int ok = owned == view.rows && (owned == 0 || owned_first == row_base) && row_base >= 0 &&
+             int64_t(row_base) + view.rows <= n;
+    for (int32_t i = 0; ok && i < view.rows; ++i) {
+      const int32_t row = row_of[std::size_t(row_base + i)];
+      ok = row >= lo && row < hi;
+    }
+    int all_ok = ok;  // every rank throws, or none: the calls that follow are collective
+    MPI_Allreduce(MPI_IN_PLACE, &all_ok, 1, MPI_INT, MPI_LAND, PETSC_COMM_WORLD);
+    if (!all_ok && ok) throw RuntimeFailure("PETSc solver: another rank was given rows that are not its own");
+    if (!ok)
+      throw RuntimeFailure("PETSc solver: rank " + std::to_string(rank) + " was given the unknowns [" +
+                           std::to_string(row_base) + ", " + std::to_string(row_base + view.rows) +
+                           ") but owns the " + std::to_string(owned) + " unknowns of the nodes [" +
+                           std::to_string(lo / bs) + ", " + std::to_string(hi / bs) + ")");
+  }
+  // The mean |diagonal| over all unknowns: local sums, reduced over the ranks.
+  double sums[2] = {0, 0};
+  for (PetscInt i = 0; i < hi - lo; ++i) {
+    const int32_t u = unknown_of[std::size_t(i)];
+    if (u < 0) continue;
+    const int32_t cr = csr_row(u);
+    for (int32_t k = view.start[cr]; k < view.start[cr + 1]; ++k)
+      if (view.column[k] == u) sums[0] += std::abs(view.value[k]);
+    sums[1] += 1;
+  }
+  MPI_Allreduce(MPI_IN_PLACE, sums, 2, MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
+  pad_diagonal = sums[1] > 0 && sums[0] > 0 ? sums[0] / sums[1] : 1.0;
   stats.rows = long(n_rows);
   stats.block_size = bs;
   stats.ranks = size;
@@ -136,8 +168,9 @@ void PetscSolver::Impl::build_matrix(const CsrView& view) {
   for (PetscInt i = 0; i < local; ++i) {
     const int32_t u = unknown_of[std::size_t(i)];
     if (u < 0) continue;
+    const int32_t cr = csr_row(u);
     d_nnz[std::size_t(i)] = 0;
-    for (int32_t k = view.start[u]; k < view.start[u + 1]; ++k) {
+    for (int32_t k = view.start[cr]; k < view.start[cr + 1]; ++k) {
       const int32_t c = row_of[std::size_t(view.column[k])];
       ++(c >= lo && c < hi ? d_nnz : o_nnz)[std::size_t(i)];
     }
@@ -151,9 +184,13 @@ void PetscSolver::Impl::build_matrix(const CsrView& view) {
   // The systems are symmetric: GAMG then skips symmetrising its graph.
   TOMODEM_PETSC(MatSetOption(A, MAT_SYMMETRIC, PETSC_TRUE));
   TOMODEM_PETSC(MatSetOption(A, MAT_SYMMETRY_ETERNAL, PETSC_TRUE));
-  pattern_start.assign(view.start, view.start + view.rows + 1);
-  pattern_column.assign(view.column, view.column + view.start[view.rows]);
+  pattern_start.resize(std::size_t(view.rows) + 1);
+  for (int32_t i = 0; i <= view.rows; ++i) pattern_start[std::size_t(i)] = view.start[i] - view.start[0];
+  pattern_column.assign(view.column + view.start[0], view.column + view.start[view.rows]);
   set_values(view);
+  MatInfo mi;
+  TOMODEM_PETSC(MatGetInfo(A, MAT_GLOBAL_SUM, &mi));
+  stats.nonzeros = double(mi.nz_used);
   TOMODEM_PETSC(MatCreateVecs(A, &x, &b));
   TOMODEM_PETSC(VecDuplicate(b, &r));
   TOMODEM_PETSC(VecScatterCreateToAll(x, &to_all, &x_all));
@@ -168,7 +205,8 @@ void PetscSolver::Impl::set_values(const CsrView& view) {
       TOMODEM_PETSC(MatSetValue(A, row, row, pad_diagonal, INSERT_VALUES));
       continue;
     }
-    const int32_t k0 = view.start[u], nk = view.start[u + 1] - k0;
+    const int32_t cr = csr_row(u);
+    const int32_t k0 = view.start[cr], nk = view.start[cr + 1] - k0;
     cols.resize(std::size_t(nk));
     for (int32_t k = 0; k < nk; ++k) cols[std::size_t(k)] = row_of[std::size_t(view.column[k0 + k])];
     TOMODEM_PETSC(MatSetValues(A, 1, &row, nk, cols.data(), view.value + k0, INSERT_VALUES));
@@ -265,37 +303,69 @@ void PetscSolver::Impl::setup() {
   stats.setup_s = seconds_since(t0);
 }
 
+std::pair<int32_t, int32_t> PetscSolver::owned_nodes(int32_t nodes) {
+  ensure_petsc();
+  int rank = 0, size = 1;
+  MPI_Comm_rank(PETSC_COMM_WORLD, &rank);
+  MPI_Comm_size(PETSC_COMM_WORLD, &size);
+  return {int32_t(int64_t(nodes) * rank / size), int32_t(int64_t(nodes) * (rank + 1) / size)};
+}
+
+void PetscSolver::Impl::init(const CsrView& view) {
+  const auto t0 = Clock::now();
+  MPI_Comm_rank(PETSC_COMM_WORLD, &rank);
+  MPI_Comm_size(PETSC_COMM_WORLD, &size);
+  layout(view);
+  build_matrix(view);
+  set_near_nullspace();
+  build_solver();
+  const double assembly_s = seconds_since(t0);
+  setup();
+  stats.setup_s += assembly_s;
+}
+
 PetscSolver::PetscSolver(const CsrView& view, const NearNullspace& ns, const PetscSolveOptions& options)
     : impl_(std::make_unique<Impl>()) {
   ensure_petsc();
-  const auto t0 = Clock::now();
   Impl& m = *impl_;
   m.o = options;
   m.ns = ns;
-  MPI_Comm_rank(PETSC_COMM_WORLD, &m.rank);
-  MPI_Comm_size(PETSC_COMM_WORLD, &m.size);
-  m.layout(view);
-  m.build_matrix(view);
-  m.set_near_nullspace();
-  m.build_solver();
-  const double assembly_s = seconds_since(t0);
-  m.setup();
-  m.stats.setup_s += assembly_s;
+  m.n_unknowns = view.rows;
+  m.init(view);
+}
+
+PetscSolver::PetscSolver(const CsrView& local, const PetscRows& rows, const NearNullspace& ns,
+                         const PetscSolveOptions& options)
+    : impl_(std::make_unique<Impl>()) {
+  ensure_petsc();
+  Impl& m = *impl_;
+  m.o = options;
+  m.ns = ns;
+  m.n_unknowns = rows.unknowns;
+  m.row_base = rows.first;
+  m.distributed = true;
+  m.init(local);
 }
 
 PetscSolver::~PetscSolver() = default;
 
 void PetscSolver::replace_matrix(const CsrView& view) {
   Impl& m = *impl_;
-  const bool same = view.rows == int32_t(m.pattern_start.size()) - 1 &&
-                    std::equal(m.pattern_start.begin(), m.pattern_start.end(), view.start) &&
-                    std::equal(m.pattern_column.begin(), m.pattern_column.end(), view.column);
+  int same = view.rows == int32_t(m.pattern_start.size()) - 1 &&
+             std::equal(m.pattern_column.begin(), m.pattern_column.end(), view.column + view.start[0]);
+  for (int32_t i = 0; same && i <= view.rows; ++i) same = view.start[i] - view.start[0] == m.pattern_start[std::size_t(i)];
+  // Each rank sees its own rows: all rebuild if any pattern changed (the calls are collective).
+  MPI_Allreduce(MPI_IN_PLACE, &same, 1, MPI_INT, MPI_LAND, PETSC_COMM_WORLD);
   if (!same) {  // another pattern: a new matrix and a fresh hierarchy
-    const NearNullspace ns = m.ns;
-    const PetscSolveOptions o = m.o;
-    impl_.reset();
-    PetscSolver fresh(view, ns, o);
-    impl_ = std::move(fresh.impl_);
+    auto fresh = std::make_unique<Impl>();
+    fresh->o = m.o;
+    fresh->ns = std::move(m.ns);
+    fresh->n_unknowns = m.n_unknowns;
+    fresh->row_base = m.row_base;
+    fresh->distributed = m.distributed;
+    impl_.reset();  // the old PETSc objects go first, on every rank
+    impl_ = std::move(fresh);
+    impl_->init(view);
     return;
   }
   const auto t0 = Clock::now();
@@ -309,32 +379,37 @@ PcgReport PetscSolver::solve(const double* rhs, double* solution) const {
   const Impl& m = *impl_;
   const auto t0 = Clock::now();
   PcgReport rep;
-  auto fill = [&](Vec v, const double* from) {
+  // b: the caller's rows (whole, or this rank's); x: whole.
+  auto fill = [&](Vec v, const double* from, int32_t base) {
     PetscScalar* a = nullptr;
     TOMODEM_PETSC(VecGetArray(v, &a));
     for (PetscInt i = 0; i < m.hi - m.lo; ++i) {
       const int32_t u = m.unknown_of[std::size_t(i)];
-      a[i] = u >= 0 ? from[u] : 0.0;
+      a[i] = u >= 0 ? from[u - base] : 0.0;
     }
     TOMODEM_PETSC(VecRestoreArray(v, &a));
   };
-  fill(m.b, rhs);
-  fill(m.x, solution);
-  TOMODEM_PETSC(KSPSolve(m.ksp, m.b, m.x));
-  PetscInt its = 0;
-  KSPConvergedReason reason;
-  TOMODEM_PETSC(KSPGetIterationNumber(m.ksp, &its));
-  TOMODEM_PETSC(KSPGetConvergedReason(m.ksp, &reason));
-  rep.iterations = int(its);
-  rep.converged = reason > 0;
-  // |b − A x| / |b| recomputed, as pcg() reports it.
+  fill(m.b, rhs, m.row_base);
+  fill(m.x, solution, 0);
   PetscReal bnorm = 0, rnorm = 0;
-  TOMODEM_PETSC(MatMult(m.A, m.x, m.r));
-  TOMODEM_PETSC(VecAYPX(m.r, -1.0, m.b));
-  TOMODEM_PETSC(VecNorm(m.r, NORM_2, &rnorm));
-  TOMODEM_PETSC(VecNorm(m.b, NORM_2, &bnorm));
-  rep.residual = bnorm > 0 ? double(rnorm / bnorm) : 0.0;
-  if (bnorm == 0) rep.converged = true;
+  TOMODEM_PETSC(VecNorm(m.b, NORM_2, &bnorm));  // over all ranks: every rank takes the same branch
+  if (bnorm == 0) {  // no drive: the solution is zero (CG would chase an absolute tolerance of 1e-50)
+    TOMODEM_PETSC(VecSet(m.x, 0.0));
+    rep.converged = true;
+  } else {
+    TOMODEM_PETSC(KSPSolve(m.ksp, m.b, m.x));
+    PetscInt its = 0;
+    KSPConvergedReason reason;
+    TOMODEM_PETSC(KSPGetIterationNumber(m.ksp, &its));
+    TOMODEM_PETSC(KSPGetConvergedReason(m.ksp, &reason));
+    rep.iterations = int(its);
+    rep.converged = reason > 0;
+    // |b − A x| / |b| recomputed, as pcg() reports it.
+    TOMODEM_PETSC(MatMult(m.A, m.x, m.r));
+    TOMODEM_PETSC(VecAYPX(m.r, -1.0, m.b));
+    TOMODEM_PETSC(VecNorm(m.r, NORM_2, &rnorm));
+    rep.residual = double(rnorm / bnorm);
+  }
   TOMODEM_PETSC(VecScatterBegin(m.to_all, m.x, m.x_all, INSERT_VALUES, SCATTER_FORWARD));
   TOMODEM_PETSC(VecScatterEnd(m.to_all, m.x, m.x_all, INSERT_VALUES, SCATTER_FORWARD));
   const PetscScalar* all = nullptr;

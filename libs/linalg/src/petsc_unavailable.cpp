@@ -22,6 +22,10 @@ struct PetscSolver::Impl {
 PetscSolver::PetscSolver(const CsrView&, const NearNullspace&, const PetscSolveOptions&) {
   throw InputError("", "solver", "petsc", kNoPetsc);
 }
+PetscSolver::PetscSolver(const CsrView&, const PetscRows&, const NearNullspace&, const PetscSolveOptions&) {
+  throw InputError("", "solver", "petsc", kNoPetsc);
+}
+std::pair<int32_t, int32_t> PetscSolver::owned_nodes(int32_t nodes) { return {0, nodes}; }
 PetscSolver::~PetscSolver() = default;
 void PetscSolver::replace_matrix(const CsrView&) {}
 PcgReport PetscSolver::solve(const double*, double*) const { return {}; }

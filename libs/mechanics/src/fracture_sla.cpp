@@ -74,9 +74,12 @@ struct Sla {
   Eigen::MatrixXd Z;              ///< K0⁻¹ U, ndof × capacity
   Eigen::MatrixXd C;              ///< D⁻¹ − Uᵀ K0⁻¹ U
   bool stale = false;             ///< LDLT: the contact set changed, refactorise before the next solve
-  // PCG: K on a fixed pattern, right-hand side, multigrid, warm start.
+  // PCG: K on a fixed pattern, right-hand side, multigrid, warm start. K and f hold the rows of
+  // the unknowns [r0, r1): all of them, or with PETSc on several ranks those of the rank's own
+  // particles (PetscSolver::owned_nodes), so that no rank holds the whole matrix; x is whole.
   SpMatR K;
   Eigen::VectorXd f, x;
+  int64_t r0 = 0, r1 = 0;
   std::unique_ptr<Amg> amg;
   std::unique_ptr<PetscSolver> petsc;  ///< SlaSolver::petsc: PETSc CG + GAMG in place of amg and pcg()
   long cg_total = 0, cg_max = 0, cg_first = -1, cg_reference = -1, rebuilds = 0;
@@ -326,6 +329,21 @@ void Sla::pcg_build() {
   }
   number();
   const std::size_t n = p.particles.size(), m = p.bonds.size();
+  r0 = 0, r1 = ndof;
+  if (o.solver == SlaSolver::petsc) {
+    // PETSc's nodes are the particles with unknowns, in order (pcg_hierarchy); the unknowns are
+    // numbered particle by particle, so a rank's nodes hold a contiguous range of them.
+    std::vector<int64_t> first;  // first unknown of each node
+    for (std::size_t i = 0; i < n; ++i)
+      for (int y = 0; y < 6; ++y)
+        if (dof[i * 6 + y] >= 0) {
+          first.push_back(dof[i * 6 + y]);
+          break;
+        }
+    const auto [n0, n1] = PetscSolver::owned_nodes(int32_t(first.size()));
+    r0 = n0 < int32_t(first.size()) ? first[std::size_t(n0)] : ndof;
+    r1 = n1 < int32_t(first.size()) ? first[std::size_t(n1)] : ndof;
+  }
   std::vector<std::vector<int32_t>> nbr(n);
   for (std::size_t i = 0; i < n; ++i)
     if (active[i]) nbr[i].push_back(int32_t(i));
@@ -334,7 +352,8 @@ void Sla::pcg_build() {
       nbr[std::size_t(p.bonds.i[b])].push_back(p.bonds.j[b]);
       nbr[std::size_t(p.bonds.j[b])].push_back(p.bonds.i[b]);
     }
-  std::vector<int> per_row(std::size_t(ndof), 0);
+  auto mine = [&](int64_t r) { return r >= r0 && r < r1; };
+  std::vector<int> per_row(std::size_t(r1 - r0), 0);
   for (std::size_t i = 0; i < n; ++i) {
     std::sort(nbr[i].begin(), nbr[i].end());
     nbr[i].erase(std::unique(nbr[i].begin(), nbr[i].end()), nbr[i].end());
@@ -342,22 +361,22 @@ void Sla::pcg_build() {
     for (int32_t c : nbr[i])
       for (int y = 0; y < 6; ++y) cnt += dof[std::size_t(c) * 6 + y] >= 0;
     for (int y = 0; y < 6; ++y)
-      if (dof[i * 6 + y] >= 0) per_row[std::size_t(dof[i * 6 + y])] = cnt;
+      if (dof[i * 6 + y] >= 0 && mine(dof[i * 6 + y])) per_row[std::size_t(dof[i * 6 + y] - r0)] = cnt;
   }
-  K = SpMatR(ndof, ndof);
+  K = SpMatR(r1 - r0, ndof);
   K.reserve(per_row);
   for (std::size_t i = 0; i < n; ++i)
     for (int y = 0; y < 6; ++y) {
       const int64_t r = dof[i * 6 + y];
-      if (r < 0) continue;
+      if (r < 0 || !mine(r)) continue;
       for (int32_t c : nbr[i])
         for (int z = 0; z < 6; ++z) {
           const int64_t col = dof[std::size_t(c) * 6 + z];
-          if (col >= 0) K.insert(int(r), int(col)) = col == r ? shift : 0.0;
+          if (col >= 0) K.insert(int(r - r0), int(col)) = col == r ? shift : 0.0;
         }
     }
   K.makeCompressed();
-  f = Eigen::VectorXd::Zero(ndof);
+  f = Eigen::VectorXd::Zero(r1 - r0);
   for (std::size_t b = 0; b < m; ++b)
     if (intact[b] || touch[b]) scatter(b, 1.0, !intact[b]);
   x = Eigen::VectorXd::Zero(ndof);
@@ -389,13 +408,13 @@ void Sla::pcg_hierarchy() {
   ns.rotation_scale = rs;
   ns.cell = p.cell.h;
   ns.periodic[1] = true;  // the crack front; x and z are cut
-  const CsrView view{int32_t(ndof), K.outerIndexPtr(), K.innerIndexPtr(), K.valuePtr()};
+  const CsrView view{int32_t(K.rows()), K.outerIndexPtr(), K.innerIndexPtr(), K.valuePtr()};
   if (o.solver == SlaSolver::petsc) {
     PetscSolveOptions po;
     po.tolerance = o.cg_tolerance;
     po.max_iterations = int(std::max<double>(1000, 50 * std::cbrt(double(ndof))));
     petsc.reset();  // collective: the old one is destroyed on every rank before the new one
-    petsc = std::make_unique<PetscSolver>(view, ns, po);
+    petsc = std::make_unique<PetscSolver>(view, PetscRows{int32_t(ndof), int32_t(r0)}, ns, po);
   } else {
     AmgOptions ao;
     ao.strength = 0;          // as implicit.cpp: every bond couples
@@ -413,9 +432,9 @@ void Sla::scatter(std::size_t b, double sign, bool normal_only) {
   local(b, normal_only, Kl);
   for (int a = 0; a < 12; ++a) {
     const int64_t A = dof[std::size_t(entry(b, a))];
-    if (A < 0) continue;
+    if (A < r0 || A >= r1) continue;  // unknowns without stiffness (−1), or another rank's row
     const int32_t* col = K.innerIndexPtr();
-    const int32_t lo = K.outerIndexPtr()[A], hi = K.outerIndexPtr()[A + 1];
+    const int32_t lo = K.outerIndexPtr()[A - r0], hi = K.outerIndexPtr()[A - r0 + 1];
     for (int c = 0; c < 12; ++c) {
       if (Kl[a][c] == 0) continue;
       const int64_t ec = entry(b, c), Bc = dof[std::size_t(ec)];
@@ -424,7 +443,7 @@ void Sla::scatter(std::size_t b, double sign, bool normal_only) {
         if (at == col + hi || *at != Bc) throw RuntimeFailure("fracture SLA: a bond outside the matrix pattern");
         K.valuePtr()[at - col] += sign * Kl[a][c];
       } else if (qp[std::size_t(ec)] != 0) {
-        f[A] -= sign * Kl[a][c] * qp[std::size_t(ec)];
+        f[A - r0] -= sign * Kl[a][c] * qp[std::size_t(ec)];
       }
     }
   }
@@ -443,7 +462,7 @@ PcgReport Sla::iterate(const CsrView& view, int cap) {
 }
 
 Eigen::VectorXd Sla::pcg_solve() {
-  const CsrView view{int32_t(ndof), K.outerIndexPtr(), K.innerIndexPtr(), K.valuePtr()};
+  const CsrView view{int32_t(K.rows()), K.outerIndexPtr(), K.innerIndexPtr(), K.valuePtr()};
   const int cap = int(std::max<double>(1000, 50 * std::cbrt(double(ndof))));
   PcgReport r = iterate(view, cap);
   if (!r.converged) {  // a stale hierarchy: one retry with a fresh one

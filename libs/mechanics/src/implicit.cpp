@@ -14,6 +14,7 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <tuple>
 
 #include "tomodem/linalg/amg.hpp"
 #include "tomodem/linalg/petsc_solver.hpp"
@@ -60,8 +61,12 @@ struct StiffnessSystem::Impl {
   std::vector<int64_t> dof;               // (particle in cluster)·6 + component -> unknown (−1: pinned or dropped)
   int64_t ndof = 0;
   BondStiffnesses k;
-  SpMatR K;
-  Eigen::MatrixXd f;                      // right-hand side per unit strain (ndof × 6)
+  // The particles [a0, a1) and their unknowns [r0, r1) are the rows this process assembles: all of
+  // them, or with PETSc on several ranks the rank's own (PetscSolver::owned_nodes), so that no
+  // rank holds the whole matrix (bonds across two ranks are assembled by both, each its rows).
+  int64_t a0 = 0, a1 = 0, r0 = 0, r1 = 0;
+  SpMatR K;                               // rows [r0, r1), columns all unknowns
+  Eigen::MatrixXd f;                      // right-hand side per unit strain ((r1 − r0) × 6)
   double shift = 0;
   ElasticSolver kind = ElasticSolver::ldlt;  // never automatic
   long cap = 0;
@@ -83,6 +88,7 @@ struct StiffnessSystem::Impl {
                      k.ktwist[b], k.kbend[b], tension(b, d), rows);
   }
   CsrView view() const { return {int32_t(K.rows()), K.outerIndexPtr(), K.innerIndexPtr(), K.valuePtr()}; }
+  bool owned(int64_t a) const { return a >= a0 && a < a1; }
 
   /// Blocks and right-hand sides from the bond rows; on the first call also the DOF map.
   void assemble(bool first);
@@ -90,25 +96,66 @@ struct StiffnessSystem::Impl {
   void prepare(bool first);
   /// The unknowns' particles and kinds, positions and rotation scale: the rigid-body modes.
   NearNullspace near_nullspace() const;
+  /// auto: a Jacobi-CG trial on the first strain case before the chosen path's set-up (below).
+  void trial();
+  Eigen::VectorXd trial_q;                 // the trial's solution of the unit strain case xx (kept if cg wins)
+  int trial_iterations = 0;
 };
 
+/// The cost model is fitted on disordered networks; on a perfect lattice Jacobi CG converges in a
+/// fraction of the predicted iterations and is up to 4× faster than the path the model picks
+/// (docs/young.md). So before the chosen path's set-up, Jacobi CG runs the first strain case with
+/// the iterations that the chosen path's predicted time per case buys at CG's predicted rate:
+/// budget = (t_chosen / cases) / (t_cg / (cases · it_cg)) = it_cg · t_chosen / t_cg. Converged
+/// within it: CG is taken (its whole run then costs about what the chosen path was predicted to,
+/// or less) and the trial's solution serves the first case; otherwise the chosen path runs and
+/// the trial cost at most 1/cases of its predicted time (1/3 with --no-tensor, 1/6 for the tensor).
+void StiffnessSystem::Impl::trial() {
+  const SolverCosts& c = info.predicted;
+  const double chosen_s = kind == ElasticSolver::ldlt ? c.ldlt_s : c.amg_s;
+  if (!(c.cg_s > 0) || !(chosen_s > 0)) return;
+  const long budget = std::min<long>(cap, long(c.cg_iterations * chosen_s / c.cg_s));
+  if (budget < 10 || f.cols() == 0 || f.col(0).norm() == 0) return;  // too few iterations to converge
+  const auto t0 = Clock::now();
+  const Eigen::VectorXd rhs = f.col(0);
+  Eigen::VectorXd q = Eigen::VectorXd::Zero(ndof);
+  const PcgReport r = pcg(view(), nullptr, rhs.data(), q.data(), o.tolerance, int(budget));
+  info.setup_s += seconds_since(t0);
+  tomodem::info("  auto: Jacobi-CG trial on strain case 1: " + std::to_string(r.iterations) + " of " + std::to_string(budget) +
+       " iterations, " + (r.converged ? "converged: cg" : std::string("not converged: ") + to_string(kind)));
+  if (!r.converged) return;
+  kind = ElasticSolver::cg;
+  info.solver = kind;
+  trial_q = std::move(q);
+  trial_iterations = r.iterations;
+}
+
 void StiffnessSystem::Impl::assemble(bool first) {
-  std::vector<double> blocks(std::size_t(bstart[np]) * 36, 0.0);
+  // The 6×6 blocks of the owned particles' block rows only.
+  std::vector<double> blocks(std::size_t(bstart[a1] - bstart[a0]) * 36, 0.0);
   auto block = [&](int64_t a, int64_t c) -> double* {
     const auto it = std::lower_bound(nbr[a].begin(), nbr[a].end(), c);
-    return &blocks[std::size_t(bstart[a] + (it - nbr[a].begin())) * 36];
+    return &blocks[std::size_t(bstart[a] - bstart[a0] + (it - nbr[a].begin())) * 36];
   };
-  Eigen::MatrixXd F = Eigen::MatrixXd::Zero(np * 6, 6);
+  Eigen::MatrixXd F = Eigen::MatrixXd::Zero((a1 - a0) * 6, 6);
+  // On the first call the diagonal of every particle (cheap: 6 numbers each), for the DOF map,
+  // which every rank needs whole; summed in the order the blocks sum it, so it is the same.
+  std::vector<double> diag(first ? std::size_t(np) * 6 : 0, 0.0);
   Row rows[8];
   long prestressed = 0;
   for (std::size_t b : used) {
-    const int nr = rows_of(b, rows);
     const int64_t ends[2] = {pid[p.bonds.i[b]], pid[p.bonds.j[b]]};
+    const bool mine[2] = {owned(ends[0]), owned(ends[1])};
     prestressed += tension(b, bond_vector(p, image[b], b)) != 0;
+    if (!first && !mine[0] && !mine[1]) continue;
+    const int nr = rows_of(b, rows);
     for (int r = 0; r < nr; ++r) {
       const Row& w = rows[r];
       for (int ea = 0; ea < 2; ++ea)
         for (int eb = 0; eb < 2; ++eb) {
+          if (first && ends[ea] == ends[eb])
+            for (int x = 0; x < 6; ++x) diag[std::size_t(ends[ea] * 6 + x)] += w.k * w.g[6 * ea + x] * w.g[6 * eb + x];
+          if (!mine[ea]) continue;
           double* B = block(ends[ea], ends[eb]);
           for (int x = 0; x < 6; ++x) {
             const double gx = w.k * w.g[6 * ea + x];
@@ -117,8 +164,8 @@ void StiffnessSystem::Impl::assemble(bool first) {
           }
         }
       for (int ea = 0; ea < 2; ++ea)
-        for (int x = 0; x < 6; ++x)
-          for (int c = 0; c < 6; ++c) F(ends[ea] * 6 + x, c) -= w.k * w.g[6 * ea + x] * w.a[c];
+        for (int x = 0; x < 6 && mine[ea]; ++x)
+          for (int c = 0; c < 6; ++c) F((ends[ea] - a0) * 6 + x, c) -= w.k * w.g[6 * ea + x] * w.a[c];
     }
   }
   info.prestress_bonds = double(prestressed);
@@ -127,62 +174,65 @@ void StiffnessSystem::Impl::assemble(bool first) {
     // without stiffness (rotations of particles whose bonds carry no moments) are left out.
     double diag_sum = 0;
     long diag_n = 0;
-    for (int64_t a = 0; a < np; ++a) {
-      const double* B = block(a, a);
+    for (int64_t a = 0; a < np; ++a)
       for (int x = 0; x < 6; ++x)
-        if (B[7 * x] > 0) diag_sum += B[7 * x], ++diag_n;
-    }
+        if (diag[std::size_t(a * 6 + x)] > 0) diag_sum += diag[std::size_t(a * 6 + x)], ++diag_n;
     const double diag_mean = diag_sum / double(std::max(1L, diag_n));
     dof.assign(std::size_t(np) * 6, -1);
     ndof = 0;
     for (int64_t a = 0; a < np; ++a) {
-      const double* B = block(a, a);
+      if (a == a0) r0 = ndof;
+      if (a == a1) r1 = ndof;
       for (int x = 0; x < 6; ++x) {
         if (a == 0 && x < 3) continue;
-        if (B[7 * x] > 1e-13 * diag_mean) dof[a * 6 + x] = ndof++;
+        if (diag[std::size_t(a * 6 + x)] > 1e-13 * diag_mean) dof[a * 6 + x] = ndof++;
       }
     }
+    if (a0 == np) r0 = ndof;
+    if (a1 == np) r1 = ndof;
     // A tiny shift keeps the direct factorisation regular in mechanisms that the load does not
     // excite (e.g. the floppy shear of a lattice with normal bonds only); its relative effect on
-    // loaded modes is below 1e-12 times the condition number's share (docs/young.md).
-    shift = kind == ElasticSolver::ldlt ? 1e-12 * diag_mean : 0.0;
+    // loaded modes is below 1e-12 times the condition number's share (docs/young.md). Added to
+    // LDLT's copy of K only: K itself is the unshifted stiffness for every path.
+    shift = 1e-12 * diag_mean;
   }
-  K = SpMatR(ndof, ndof);
-  Eigen::VectorXi per_row(ndof);
-  for (int64_t a = 0; a < np; ++a)
+  K = SpMatR(r1 - r0, ndof);
+  Eigen::VectorXi per_row(r1 - r0);
+  for (int64_t a = a0; a < a1; ++a)
     for (int x = 0; x < 6; ++x) {
       const int64_t r = dof[a * 6 + x];
       if (r < 0) continue;
       int64_t cnt = 0;
       for (int64_t c : nbr[a])
         for (int y = 0; y < 6; ++y) cnt += dof[c * 6 + y] >= 0;
-      per_row[r] = int(cnt);
+      per_row[r - r0] = int(cnt);
     }
   K.reserve(per_row);
-  for (int64_t a = 0; a < np; ++a)
+  for (int64_t a = a0; a < a1; ++a)
     for (int x = 0; x < 6; ++x) {
       const int64_t r = dof[a * 6 + x];
       if (r < 0) continue;
       for (std::size_t e = 0; e < nbr[a].size(); ++e) {
         const int64_t c = nbr[a][e];
-        const double* B = &blocks[std::size_t(bstart[a] + int64_t(e)) * 36];
+        const double* B = &blocks[std::size_t(bstart[a] - bstart[a0] + int64_t(e)) * 36];
         for (int y = 0; y < 6; ++y) {
           const int64_t col = dof[c * 6 + y];
-          if (col >= 0) K.insert(int(r), int(col)) = B[6 * x + y] + (col == r ? shift : 0.0);
+          if (col >= 0) K.insert(int(r - r0), int(col)) = B[6 * x + y];
         }
       }
     }
   K.makeCompressed();
-  f.resize(ndof, 6);
-  for (int64_t a = 0; a < np * 6; ++a)
-    if (dof[a] >= 0) f.row(dof[a]) = F.row(a);
+  f.resize(r1 - r0, 6);
+  for (int64_t a = a0 * 6; a < a1 * 6; ++a)
+    if (dof[a] >= 0) f.row(dof[a] - r0) = F.row(a - a0 * 6);
 }
 
 void StiffnessSystem::Impl::prepare(bool first) {
   const auto t0 = Clock::now();
   if (kind == ElasticSolver::ldlt) {
-    ldlt = std::make_unique<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double, Eigen::ColMajor, int>, Eigen::Lower>>(
-        Eigen::SparseMatrix<double, Eigen::ColMajor, int>(K));
+    Eigen::SparseMatrix<double, Eigen::ColMajor, int> Ks(K);
+    for (int64_t r = 0; r < ndof; ++r) Ks.coeffRef(int(r), int(r)) += shift;
+    ldlt = std::make_unique<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double, Eigen::ColMajor, int>, Eigen::Lower>>(Ks);
     if (ldlt->info() != Eigen::Success) throw RuntimeFailure("stiffness matrix: LDLT factorisation failed");
     const auto& L = ldlt->matrixL().nestedExpression();  // the factor's columns: what the cost model predicts
     info.factor_nonzeros = info.factor_flops = 0;
@@ -196,7 +246,7 @@ void StiffnessSystem::Impl::prepare(bool first) {
       PetscSolveOptions po;
       po.tolerance = o.tolerance;
       po.max_iterations = int(cap);
-      petsc = std::make_unique<PetscSolver>(view(), near_nullspace(), po);
+      petsc = std::make_unique<PetscSolver>(view(), PetscRows{int32_t(ndof), int32_t(r0)}, near_nullspace(), po);
       info.levels = petsc->stats().levels;
     } else {
       petsc->replace_matrix(view());
@@ -301,11 +351,14 @@ StiffnessSystem::StiffnessSystem(const Packing& p, const std::vector<Image>& ima
                                           o.full_tensor ? 6 : 3, o.tolerance);
   m.kind = o.solver == ElasticSolver::automatic ? m.info.predicted.cheapest : o.solver;
   m.info.solver = m.kind;
+  m.a1 = m.np;
+  if (m.kind == ElasticSolver::petsc) std::tie(m.a0, m.a1) = PetscSolver::owned_nodes(int32_t(m.np));
   m.assemble(true);
   m.info.dofs = m.ndof;
   m.cap = o.max_iterations > 0 ? o.max_iterations
                                : int(std::max<long>(1000, long(20 * 100 * std::cbrt(double(m.ndof)))));
   m.info.assembly_s = seconds_since(t0);
+  if (o.solver == ElasticSolver::automatic && m.kind != ElasticSolver::cg) m.trial();
   m.prepare(true);
 }
 
@@ -319,6 +372,7 @@ void StiffnessSystem::update_stiffnesses(const BondStiffnesses& k) {
       k.kbend.size() != m.k.kbend.size())
     throw RuntimeFailure("stiffness system: the new stiffnesses are for another set of bonds");
   m.k = k;
+  m.trial_q.resize(0);  // the trial's solution was for the old stiffnesses
   m.assemble(false);
   m.prepare(false);
 }
@@ -330,14 +384,21 @@ LinearResponse StiffnessSystem::solve(const std::array<double, 6>& strain) const
   const Eigen::VectorXd rhs = m.f * eps;
   Eigen::VectorXd q = Eigen::VectorXd::Zero(m.ndof);
   const double fn = rhs.norm();
-  if (fn > 0) {
+  if (m.kind == ElasticSolver::petsc) {
+    // Collective on every rank (rhs holds the rank's rows; a rank's part may be zero): the whole
+    // solution comes back, and the residual over all ranks.
+    const PcgReport r = m.petsc->solve(rhs.data(), q.data());
+    out.iterations = r.iterations;
+    out.residual = r.residual;
+  } else if (fn > 0) {
     if (m.kind == ElasticSolver::ldlt) {
       q = m.ldlt->solve(rhs);
     } else if (m.kind == ElasticSolver::cg_ic) {
       q = m.ic->solve(rhs);
       out.iterations = m.ic->iterations();
-    } else if (m.kind == ElasticSolver::petsc) {
-      out.iterations = m.petsc->solve(rhs.data(), q.data()).iterations;
+    } else if (m.trial_q.size() > 0 && strain == std::array<double, 6>{1, 0, 0, 0, 0, 0}) {
+      q = m.trial_q;  // auto's Jacobi-CG trial solved this case already, to the same tolerance
+      out.iterations = m.trial_iterations;
     } else {
       const PcgReport r = pcg(m.view(), m.amg.get(), rhs.data(), q.data(), m.o.tolerance, int(m.cap));
       out.iterations = r.iterations;

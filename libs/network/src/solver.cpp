@@ -42,6 +42,78 @@ void run_cg(Solver& cg, const SpMat& A, const Eigen::VectorXd& b, Eigen::VectorX
 }
 }  // namespace
 
+namespace {
+/// PETSc's CG + GAMG (constant near-null space) with the rows split across the MPI ranks: each
+/// rank assembles only the rows of its own unknowns (PetscSolver::owned_nodes; an edge between
+/// two ranks' nodes is assembled by both, each its row), so no rank holds the whole Laplacian.
+/// The solution comes back whole on every rank, the residual and nonzeros summed over the ranks.
+SolverReport solve_petsc(const Graph& graph, const std::vector<uint8_t>& active, const std::vector<int32_t>& index,
+                         int32_t nf, const std::vector<double>& source, std::vector<double>& potential,
+                         const SolverOptions& opt, SolverReport rep, Clock::time_point t0) {
+  const std::size_t n = graph.n_nodes;
+  const auto [u0, u1] = PetscSolver::owned_nodes(nf);
+  const int32_t nl = u1 - u0;
+  auto own = [&](int32_t u) { return u >= u0 && u < u1; };
+  std::vector<int32_t> deg(std::size_t(nl), 1);
+  for (std::size_t e = 0; e < graph.n_edges(); ++e) {
+    const int32_t a = graph.i[e], b = graph.j[e];
+    if (!active[a] || !active[b]) continue;
+    const int32_t ia = index[a], ib = index[b];
+    if (ia >= 0 && ib >= 0) {
+      if (own(ia)) ++deg[std::size_t(ia - u0)];
+      if (own(ib)) ++deg[std::size_t(ib - u0)];
+    }
+  }
+  SpMat A(nl, nf);
+  A.reserve(deg);
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(nl), x(nf);
+  std::vector<double> diag(std::size_t(nl), 0.0);
+  for (std::size_t e = 0; e < graph.n_edges(); ++e) {
+    const int32_t a = graph.i[e], b = graph.j[e];
+    if (!active[a] || !active[b]) continue;
+    const double g = graph.g[e];
+    const int32_t ia = index[a], ib = index[b];
+    if (ia >= 0 && own(ia)) {
+      diag[std::size_t(ia - u0)] += g;
+      if (ib >= 0) A.coeffRef(ia - u0, ib) -= g;
+      else rhs[ia - u0] += g * potential[b];
+    }
+    if (ib >= 0 && own(ib)) {
+      diag[std::size_t(ib - u0)] += g;
+      if (ia >= 0) A.coeffRef(ib - u0, ia) -= g;
+      else rhs[ib - u0] += g * potential[a];
+    }
+  }
+  for (int32_t k = u0; k < u1; ++k) A.coeffRef(k - u0, k) = diag[std::size_t(k - u0)];
+  A.makeCompressed();
+  for (std::size_t v = 0; v < n; ++v)
+    if (index[v] >= 0) {
+      x[index[v]] = std::isfinite(potential[v]) ? potential[v] : 0.0;
+      if (!source.empty() && own(index[v])) rhs[index[v] - u0] += source[v];
+    }
+  rep.assemble_time_s = seconds_since(t0);
+  PetscSolveOptions po;
+  po.tolerance = opt.tolerance;
+  po.max_iterations = iteration_cap(opt, rep);
+  const PetscSolver solver(CsrView{nl, A.outerIndexPtr(), A.innerIndexPtr(), A.valuePtr()}, PetscRows{nf, u0},
+                           NearNullspace{}, po);
+  rep.setup_time_s = solver.stats().setup_s;  // without PETSc's (and MPI's) one-time initialisation
+  rep.nonzeros = static_cast<std::size_t>(solver.stats().nonzeros);
+  // A zero right-hand side gives x = 0 in PETSc's CG too (b = 0 is converged at once).
+  const PcgReport pr = solver.solve(rhs.data(), x.data());
+  rep.solve_time_s = pr.seconds;
+  rep.iterations = pr.iterations;
+  rep.converged = pr.converged && std::isfinite(pr.residual);
+  rep.residual = pr.residual;
+  rep.levels = solver.stats().levels;
+  // This rank's rows of A, its vectors and the whole solution; PETSc's own copy and hierarchy not counted.
+  rep.memory_bytes = 12 * std::size_t(A.nonZeros()) + 8 * 4 * std::size_t(nl) + 8 * std::size_t(nf);
+  for (std::size_t v = 0; v < n; ++v)
+    if (index[v] >= 0) potential[v] = x[index[v]];
+  return rep;
+}
+}  // namespace
+
 Preconditioner parse_preconditioner(const std::string& name) {
   if (name == "ic") return Preconditioner::incomplete_cholesky;
   if (name == "jacobi") return Preconditioner::jacobi;
@@ -69,6 +141,8 @@ SolverReport solve_kirchhoff(const Graph& graph, const std::vector<uint8_t>& act
     if (active[v] && !fixed[v]) index[v] = nf++;
   rep.unknowns = static_cast<std::size_t>(nf);
   if (nf == 0) return rep;
+
+  if (opt.preconditioner == Preconditioner::petsc) return solve_petsc(graph, active, index, nf, source, potential, opt, rep, t0);
 
   // Assemble row by row (CSR): diagonal first, then free neighbours; duplicates are summed.
   std::vector<int32_t> deg(nf, 1);
@@ -130,19 +204,6 @@ SolverReport solve_kirchhoff(const Graph& graph, const std::vector<uint8_t>& act
     rep.memory_bytes = 12 * rep.nonzeros + amg.stats().memory_bytes + 8 * 5 * (std::size_t)nf;
     rep.levels = static_cast<int>(amg.stats().rows.size());
     rep.operator_complexity = amg.stats().operator_complexity;
-  } else if (opt.preconditioner == Preconditioner::petsc) {
-    // PETSc's CG + GAMG (constant near-null space), rows split across the MPI ranks.
-    PetscSolveOptions po;
-    po.tolerance = opt.tolerance;
-    po.max_iterations = iteration_cap(opt, rep);
-    const PetscSolver solver(CsrView{nf, A.outerIndexPtr(), A.innerIndexPtr(), A.valuePtr()}, NearNullspace{}, po);
-    rep.setup_time_s = solver.stats().setup_s;  // without PETSc's (and MPI's) one-time initialisation
-    const PcgReport pr = solver.solve(rhs.data(), x.data());
-    rep.solve_time_s = pr.seconds;
-    rep.iterations = pr.iterations;
-    rep.converged = pr.converged;
-    rep.levels = solver.stats().levels;
-    rep.memory_bytes = 12 * rep.nonzeros + 8 * 5 * (std::size_t)nf;  // PETSc's own copy and hierarchy not counted
   } else if (opt.preconditioner == Preconditioner::jacobi) {
     Eigen::ConjugateGradient<SpMat, Eigen::Lower | Eigen::Upper, Eigen::DiagonalPreconditioner<double>> cg;
     run_cg(cg, A, rhs, x, opt, rep);

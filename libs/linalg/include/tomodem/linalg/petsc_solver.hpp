@@ -5,13 +5,16 @@
 // with -DTOMODEM_MPI=ON; PETSc and MPI headers stay inside petsc_solver.cpp, so callers compile
 // the same in both builds and a build without PETSc refuses the choice (require_petsc).
 //
-// Every rank holds the whole system (the callers assemble it on each rank, as in the serial run)
-// and the right-hand side; PETSc owns a contiguous slice of nodes per rank (MPIAIJ on several
-// ranks), and every rank gets the whole solution back. Elastic systems keep their nodes' unknowns
-// together (block size 3 or 6) and hand GAMG the rigid-body modes as its near-null space.
+// PETSc owns a contiguous slice of nodes per rank (MPIAIJ on several ranks; owned_nodes). The
+// tools assemble only their rank's rows (the distributed constructor, PetscRows) and every rank
+// gets the whole solution back, so what they compute from it is the same on every rank. A whole
+// system on every rank is still accepted (the first constructor: each rank takes its slice).
+// Elastic systems keep their nodes' unknowns together (block size 3 or 6) and hand GAMG the
+// rigid-body modes as its near-null space.
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 
 #include "tomodem/linalg/amg.hpp"
 
@@ -41,14 +44,32 @@ struct PetscStats {
   int ranks = 1;
   long rows = 0;              ///< of the PETSc matrix (unknowns plus padding to whole blocks)
   int block_size = 1;
+  double nonzeros = 0;        ///< of the PETSc matrix, all ranks (identity rows included)
   int levels = 0;             ///< multigrid levels (GAMG)
   double setup_s = 0;         ///< matrix, near-null space and the last preconditioner set-up
 };
 
-/// One system in PETSc: matrix, CG + multigrid. Collective: every rank constructs it with the
-/// same A and calls every method in the same order.
+/// This rank's rows of a distributed system: the unknowns [first, first + local rows) of
+/// `unknowns` in all; they must be exactly the unknowns of the nodes PetscSolver::owned_nodes
+/// gives this rank (unknowns numbered node by node, as every caller does).
+struct PetscRows {
+  int32_t unknowns = 0;
+  int32_t first = 0;
+};
+
+/// One system in PETSc: matrix, CG + multigrid. Collective: every rank constructs it and calls
+/// every method in the same order.
 class PetscSolver {
  public:
+  /// The nodes [first, last) whose rows this rank owns out of `nodes`: contiguous blocks of
+  /// nodes·rank/size (node numbering unchanged). Initialises PETSc (and MPI) on first use; one
+  /// rank, or the serial build: [0, nodes).
+  static std::pair<int32_t, int32_t> owned_nodes(int32_t nodes);
+  /// Distributed assembly: `local` holds this rank's rows only (row i is unknown rows.first + i,
+  /// columns are whole-system unknowns; `start` may begin at any offset into column/value), `ns`
+  /// describes the whole system (every unknown's node and kind, every node's position). solve()
+  /// then takes this rank's rows of b. Preallocation from the local rows' counts.
+  PetscSolver(const CsrView& local, const PetscRows& rows, const NearNullspace& ns, const PetscSolveOptions& options = {});
   /// `ns` as for Amg: empty node list = scalar (graph Laplacian, block size 1); otherwise the
   /// unknowns of a node are consecutive, their kinds translations (block 3) and rotations
   /// (block 6); a node's missing unknowns (pinned, or without stiffness) become identity rows.
@@ -56,11 +77,13 @@ class PetscSolver {
   ~PetscSolver();
   PetscSolver(const PetscSolver&) = delete;
   PetscSolver& operator=(const PetscSolver&) = delete;
-  /// New values of A. Same pattern: the values are replaced and GAMG keeps its interpolation (the
-  /// coarse operators are recomputed: what Amg::replace_finest does); another pattern: rebuilt.
+  /// New values of A (the whole matrix, or this rank's rows for the distributed constructor).
+  /// Same pattern: the values are replaced and GAMG keeps its interpolation (the coarse operators
+  /// are recomputed: what Amg::replace_finest does); another pattern: rebuilt.
   void replace_matrix(const CsrView& A);
+  /// b: the whole right-hand side (first constructor) or this rank's rows of it (distributed).
   /// x holds the initial guess (warm start) on entry and the solution on exit, whole, on every
-  /// rank. The report's residual is recomputed by PETSc after the solve.
+  /// rank. The report's residual |b − A x| / |b| is recomputed by PETSc over all ranks.
   PcgReport solve(const double* b, double* x) const;
   const PetscStats& stats() const;
 
