@@ -33,6 +33,12 @@ tomodem_mpi_test(dem_decomposition_bond_tests
   LIBS tomodem_dem
   RANKS 1 2 3 4)
 
+# Spheres falling onto a force-controlled floor, pressed by a moving lid: walls across ranks, 1-4 ranks, bitwise.
+tomodem_mpi_test(dem_decomposition_wall_tests
+  SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/dem/test_walls_decomposed.cpp
+  LIBS tomodem_dem
+  RANKS 1 2 3 4)
+
 # Checkpoints written on 2 ranks (HDF5 MPI-IO), restarted on 1-3 ranks and without mpirun:
 # bitwise the uninterrupted run; another version refused (docs/dem.md, "Checkpoints").
 add_executable(dem_checkpoint_ranks_tests ${CMAKE_CURRENT_SOURCE_DIR}/dem/test_checkpoint_ranks.cpp)

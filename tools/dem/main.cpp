@@ -139,7 +139,7 @@ int run(int argc, char** argv) {
     try {
       // Checkpoints: every rank restored the whole sample and keeps its own (docs/dem.md, "Checkpoints").
       if (!restart.empty()) dem::decompose_restored(*scene.sim);
-      else dem::decompose(*scene.sim);  // refuses walls, bonds, track_energy, too many ranks
+      else dem::decompose(*scene.sim);  // refuses too many ranks
     } catch (const InputError& e) {
       throw InputError(scene_path, e.field() == "ranks" ? "mpirun -np" : e.field(), e.value(), e.why());
     }

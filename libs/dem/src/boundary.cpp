@@ -84,22 +84,39 @@ void servo_cell(SimState& s, const Tally& last, const std::vector<double>& stiff
 
 namespace {
 /// Sum of the normal stiffness of a wall's contacts at their overlaps (the normal law's own).
-double wall_stiffness(const SimState& s, const Wall& wl, const WallData& wd) {
+/// Decomposed, the candidates are the rank's owned particles: the terms of every rank are added
+/// in particle order, the serial loop's, so every rank finds the same bits.
+double wall_stiffness(const SimState& s, std::size_t w, const WallData& wd) {
   const LawInfo& normal_law = law_info(s.model.normal);
   const Particles& p = s.p;
+  const Wall& wl = s.walls[w];
+#if TOMODEM_HAVE_MPI
+  std::vector<OrderedTerm> terms;
+#endif
   double k = 0;
   for (int i : wd.candidates) {
     const double delta = p.r[i] - dot(p.x[i] - wl.point, wl.normal);
     if (delta <= 0) continue;
-    k += normal_law.stiffness(s.model.pair(p.phase[i], wl.phase), p.r[i], delta);
+    const double ki = normal_law.stiffness(s.model.pair(p.phase[i], wl.phase), p.r[i], delta);
+#if TOMODEM_HAVE_MPI
+    if (s.domain) terms.push_back({0, p.id[std::size_t(i)], Vec3{ki, 0, 0}});
+#endif
+    k += ki;
   }
+#if TOMODEM_HAVE_MPI
+  if (s.domain) k = s.domain->ordered_sum(terms, 1)[0].x;
+#endif
   return k;
 }
 }  // namespace
 
 void servo_walls(SimState& s, const NeighbourList& nl) {
   const double dt = s.dt;
+  if (std::none_of(s.walls.begin(), s.walls.end(), [](const Wall& w) { return w.force_controlled; })) return;
   double rmin = *std::min_element(s.p.r.begin(), s.p.r.end());
+#if TOMODEM_HAVE_MPI
+  if (s.domain) rmin = s.domain->min(rmin);  // a rank need not hold the smallest particle
+#endif
   for (std::size_t w = 0; w < s.walls.size(); ++w) {
     Wall& wl = s.walls[w];
     if (!wl.force_controlled) continue;
@@ -108,7 +125,7 @@ void servo_walls(SimState& s, const NeighbourList& nl) {
     double gain = wl.servo_gain;
     if (gain <= 0) {
       // Move the wall by a fraction of the force error over the wall contacts' stiffness.
-      const double kw = wall_stiffness(s, wl, nl.wall_data[w]);
+      const double kw = wall_stiffness(s, w, nl.wall_data[w]);
       gain = kw > 0 ? 0.05 / (kw * dt) : 0;
     }
     double vn = gain > 0 ? gain * (wl.target_force - f_now) : (f_now < wl.target_force ? vmax : -vmax);

@@ -147,6 +147,10 @@ void ForceLoop::compute(SimState& s, NeighbourList& nl, bool tally, Vec3* pair_f
 
 /// Walls (few candidates each): serial, through the same law functions.
 void ForceLoop::wall_forces(SimState& s, NeighbourList& nl, const ForceJob& jb, bool tally, Tally& total) {
+#if TOMODEM_HAVE_MPI
+  // Decomposed: the owned particles' contacts, each wall's force summed over the ranks.
+  if (s.domain) return s.domain->walls(s, nl, jb, tally, total, tally ? stiffness.data() : nullptr);
+#endif
   Particles& p = s.p;
   for (std::size_t w = 0; w < s.walls.size(); ++w) {
     Wall& wall = s.walls[w];
@@ -170,23 +174,28 @@ void ForceLoop::body_forces(SimState& s, Tally* tally) const {
   const double dt = s.dt;
   const std::size_t n = p.size();
   const Vec3 g = body.gravity;
+  const uint8_t* ghost = nullptr;  // decomposed: a ghost's dissipation is tallied by its owner
+#if TOMODEM_HAVE_MPI
+  if (s.domain) ghost = s.domain->ghost.data();
+#endif
   if (g.x != 0 || g.y != 0 || g.z != 0)
     for (std::size_t i = 0; i < n; ++i) p.f[i] += p.m[i] * g;
   if (body.fluid_viscosity > 0) {
     const double c = 6 * M_PI * body.fluid_viscosity;
     for (std::size_t i = 0; i < n; ++i) {
       p.f[i] -= (c * p.r[i]) * p.v[i];
-      if (tally) tally->dissipated += c * p.r[i] * norm2(p.v[i]) * dt;
+      if (tally && !(ghost && ghost[i])) tally->dissipated += c * p.r[i] * norm2(p.v[i]) * dt;
     }
   }
   if (body.local_damping > 0) {
     const double lam = body.local_damping;
     for (std::size_t i = 0; i < n; ++i) {
+      Tally* const tally_i = (ghost && ghost[i]) ? nullptr : tally;
       Vec3& f = p.f[i];
       const Vec3& v = p.v[i];
       for (int k = 0; k < 3; ++k) {
         const double d = -lam * std::abs(f[k]) * (v[k] > 0 ? 1 : (v[k] < 0 ? -1 : 0));
-        if (tally) tally->dissipated -= d * v[k] * dt;
+        if (tally_i) tally_i->dissipated -= d * v[k] * dt;
         f[k] += d;
       }
       if (p.has_rotation()) {
@@ -194,7 +203,7 @@ void ForceLoop::body_forces(SimState& s, Tally* tally) const {
         const Vec3& w = p.omega[i];
         for (int k = 0; k < 3; ++k) {
           const double d = -lam * std::abs(tq[k]) * (w[k] > 0 ? 1 : (w[k] < 0 ? -1 : 0));
-          if (tally) tally->dissipated -= d * w[k] * dt;
+          if (tally_i) tally_i->dissipated -= d * w[k] * dt;
           tq[k] += d;
         }
       }

@@ -9,6 +9,30 @@ void EnergyAccount::add_external_work(const SimState& s, const Tally& last) {
   const Particles& p = s.p;
   const double dt = s.dt;
   const Vec3 g = s.body.gravity;
+#if TOMODEM_HAVE_MPI
+  if (s.domain) {
+    // Decomposed: the particles' terms over the owned ones, summed over the ranks; the walls'
+    // forces and the virial are global already (the same on every rank), so counted once.
+    double v[2] = {0, 0};  // gravity, grips
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      if (s.domain->ghost[i]) continue;
+      v[0] += p.m[i] * dot(g, p.v[i]) * dt;
+      if (p.motion[i] == Motion::prescribed) v[1] -= dot(p.f[i], p.v[i]) * dt;
+    }
+    s.domain->sum(v, 2);
+    ext_work += v[0];
+    for (const auto& w : s.walls) ext_work += -dot(w.force, w.velocity) * dt;
+    ext_work += v[1];
+    if (s.deforming()) {
+      const Mat3& L = s.control.velocity_gradient;
+      double pw = 0;
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) pw -= last.virial(a, b) * L(a, b);
+      ext_work += pw * dt;
+    }
+    return;
+  }
+#endif
   if (g.x != 0 || g.y != 0 || g.z != 0)
     for (std::size_t i = 0; i < p.size(); ++i) ext_work += p.m[i] * dot(g, p.v[i]) * dt;
   for (const auto& w : s.walls) ext_work += -dot(w.force, w.velocity) * dt;
@@ -36,10 +60,6 @@ double kinetic_energy(const SimState& s) {
   return e;
 }
 
-namespace {
-
-/// The periodic cell's volume; with walls, the box between opposite walls along their normals
-/// (falling back to the cell volume for open directions).
 double measurement_volume(const SimState& s) {
   if (s.walls.empty()) return s.cell.volume();
   const Mat3& h = s.cell.h;
@@ -58,6 +78,8 @@ double measurement_volume(const SimState& s) {
   }
   return ext.x * ext.y * ext.z;
 }
+
+namespace {
 
 /// Love–Weber stress: the contact virial plus the kinetic part of the free particles.
 void fill_stress(const SimState& s, const Tally& tl, Measurements& m) {

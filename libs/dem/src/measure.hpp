@@ -14,6 +14,9 @@ struct EnergyAccount {
   void add_external_work(const SimState& s, const Tally& last);
 };
 
+/// The periodic cell's volume; with walls, the box between opposite walls along their normals
+/// (falling back to the cell volume for open directions), m³.
+double measurement_volume(const SimState& s);
 /// Translational + rotational kinetic energy of the free particles, J.
 double kinetic_energy(const SimState& s);
 /// Everything Measurements holds that a tally pass `tl` on the current state gives (bonds and

@@ -16,6 +16,10 @@
 //    lattice vectors a particle has been wrapped by since the start.
 //  - Messages go straight to the (up to 26) neighbouring sub-domains, at most one per pair of
 //    ranks per exchange; the ghost margin must not exceed a sub-domain's width.
+//  - Walls: a rank computes the wall contacts of its owned particles only (a ghost's force is
+//    never used). A wall's force, which its servo and the outputs read, is gathered contact by
+//    contact and added in particle order on every rank: the serial sum's bits, so every rank
+//    moves the wall alike. A particle's wall history travels with it, keyed by its id.
 #include "tomodem/dem/decomposition.hpp"
 
 #include <mpi.h>
@@ -28,6 +32,7 @@
 #include <map>
 #include <unordered_map>
 
+#include "../kernel.hpp"
 #include "../measure.hpp"
 #include "../neighbour_list.hpp"
 #include "../sim_state.hpp"
@@ -127,6 +132,8 @@ class Domain final : public DomainHooks {
   void reduce(Tally& t) override;
   void sum(double* v, int n) override;
   double min(double v) override;
+  void walls(SimState& s, NeighbourList& nl, const ForceJob& jb, bool tally, Tally& total, double* stiffness) override;
+  std::vector<Vec3> ordered_sum(const std::vector<OrderedTerm>& terms, int groups) override;
   Measurements measure(const SimState& s, const Tally& tally, const EnergyAccount& energy) override;
 
   DomainLayout layout() const;
@@ -153,6 +160,9 @@ class Domain final : public DomainHooks {
   bool has_bonds_ = false;               // the sample has bonds (the same on every rank)
   int32_t n_bonds_ = 0;                  // in the whole sample
   std::map<int32_t, BondRec> bonds_;     // every bond with an owned end, by global index
+  // Wall history of owned particles across a build, by id: per wall the touch flag then the
+  // history doubles (a particle with none is not listed).
+  std::unordered_map<int64_t, std::vector<double>> kept_walls_;
 
   int rank_of(const int c[3]) const { return (c[0] * dims_[1] + c[1]) * dims_[2] + c[2]; }
   int box_of(double s, int k) const { return std::clamp(int(std::floor(s * dims_[k])), 0, dims_[k] - 1); }
@@ -168,6 +178,8 @@ class Domain final : public DomainHooks {
   static Entry entry_of(const SimState& s, std::size_t i, const Image& w, uint8_t ghost);
   void bonds_from_local(const SimState& s);
   void install_bonds(SimState& s);
+  bool wall_state(const SimState& s, const NeighbourList& nl, std::size_t i, std::vector<double>& out) const;
+  void install_walls(const SimState& s, NeighbourList& nl);
 
  public:
   /// Records of the bonds with an owned end, their state as `local` (the rank's set) has it now.
@@ -291,6 +303,47 @@ void Domain::sum(double* v, int n) {
     for (int r = 0; r < size_; ++r) t += all[std::size_t(r) * std::size_t(n) + std::size_t(k)];
     v[k] = t;
   }
+}
+
+std::vector<Vec3> Domain::ordered_sum(const std::vector<OrderedTerm>& terms, int groups) {
+  // Every rank's terms on every rank (a wall's contacts: few), sorted by (group, id), added from
+  // zero: the serial loop's order, so the serial bits on every rank.
+  const int len = int(terms.size() * sizeof(OrderedTerm));
+  std::vector<int> lens(static_cast<std::size_t>(size_)), offs(static_cast<std::size_t>(size_), 0);
+  MPI_Allgather(&len, 1, MPI_INT, lens.data(), 1, MPI_INT, comm_);
+  std::partial_sum(lens.begin(), lens.end() - 1, offs.begin() + 1);
+  std::vector<OrderedTerm> all(std::size_t(offs.back() + lens.back()) / sizeof(OrderedTerm));
+  MPI_Allgatherv(terms.data(), len, MPI_BYTE, all.data(), lens.data(), offs.data(), MPI_BYTE, comm_);
+  std::sort(all.begin(), all.end(), [](const OrderedTerm& a, const OrderedTerm& b) {
+    return a.group != b.group ? a.group < b.group : a.id < b.id;
+  });
+  std::vector<Vec3> out(static_cast<std::size_t>(groups));
+  for (const OrderedTerm& t : all) out.at(std::size_t(t.group)) += t.v;
+  return out;
+}
+
+void Domain::walls(SimState& s, NeighbourList& nl, const ForceJob& jb, bool tally, Tally& total, double* stiffness) {
+  // The serial wall pass (ForceLoop::wall_forces) one owned candidate at a time: a particle
+  // gets the same force bits (its walls in wall order after its pairs and bonds), and each
+  // contact's own tally gives its force on the wall, −f, exactly.
+  Particles& p = s.p;
+  std::vector<OrderedTerm> terms;
+  for (std::size_t w = 0; w < s.walls.size(); ++w) {
+    Wall& wall = s.walls[w];
+    WallData& wd = nl.wall_data[w];
+    for (const int32_t i : wd.candidates) {
+      const WallJob wj{wall.point, wall.normal, wall.velocity, wall.phase, &i, 1, wd.hist.data(),
+                       wd.touch.empty() ? nullptr : wd.touch.data()};
+      Tally wt;
+      s.kern.wall[tally](jb, wj, p.f.data(), p.has_rotation() ? p.torque.data() : nullptr, &wt, stiffness);
+      if (!tally) continue;
+      total.add(wt);  // a contact that just opened still tallies what it released
+      if (wt.wall_contacts > 0) terms.push_back({int32_t(w), p.id[std::size_t(i)], wt.wall_force});
+    }
+  }
+  // Without a tally the serial pass leaves the walls' force at zero (its tally holds it).
+  const std::vector<Vec3> f = tally ? ordered_sum(terms, int(s.walls.size())) : std::vector<Vec3>(s.walls.size());
+  for (std::size_t w = 0; w < s.walls.size(); ++w) s.walls[w].force = f[w];
 }
 
 void Domain::reduce(Tally& t) {
@@ -447,6 +500,8 @@ void Domain::before_build(SimState& s, NeighbourList& nl) {
   std::vector<Record> records;
   std::vector<double> pool;
   collect_history(s, nl, attached, records, pool);
+  kept_walls_.clear();
+  std::vector<double> ws;
   // Wrap the owned particles into the cell (the serial engine's wrap, particle by particle).
   {
     std::vector<Vec3> xo;
@@ -476,6 +531,7 @@ void Domain::before_build(SimState& s, NeighbourList& nl) {
     if (dest == rank_) {
       stays[i] = 1;
       mine.push_back(entry_of(s, i, w_[i], 0));
+      if (wall_state(s, nl, i, ws)) kept_walls_[s.p.id[i]] = ws;
       continue;
     }
     if (initial_) continue;
@@ -494,6 +550,9 @@ void Domain::before_build(SimState& s, NeighbourList& nl) {
     const auto range = bonds_of.equal_range(s.p.id[i]);
     w.put(uint32_t(std::distance(range.first, range.second)));
     for (auto it2 = range.first; it2 != range.second; ++it2) w.put(bonds_.at(it2->second));
+    const bool with_walls = wall_state(s, nl, i, ws);
+    w.put(uint8_t(with_walls));
+    if (with_walls) w.put(ws.data(), int(ws.size()));
     ++migrated_;
   }
   // History that stays: pairs with an owned particle that stays here.
@@ -528,6 +587,11 @@ void Domain::before_build(SimState& s, NeighbourList& nl) {
       for (uint32_t q = 0; q < nb; ++q) {
         const BondRec br = rd.get<BondRec>();
         bonds_.emplace(br.gid, br);  // already here (its other end is owned here): the same state
+      }
+      if (rd.get<uint8_t>()) {
+        std::vector<double>& v = kept_walls_[mine.back().id];
+        v.resize(s.walls.size() * std::size_t(stride + 1));
+        rd.get(v.data(), int(v.size()));
       }
     }
   }
@@ -644,9 +708,54 @@ std::vector<BondRec> Domain::bond_records(const BondSet& local) const {
   return out;
 }
 
+/// The wall state of local particle i (an owned one, before the build): per wall its touch flag
+/// and history doubles; false when it has none (nothing to carry).
+bool Domain::wall_state(const SimState& s, const NeighbourList& nl, std::size_t i, std::vector<double>& out) const {
+  const std::size_t nw = s.walls.size(), stride = std::size_t(s.stride);
+  if (nw == 0 || nl.wall_data.size() != nw) return false;
+  out.assign(nw * (stride + 1), 0.0);
+  bool carries = false;
+  for (std::size_t w = 0; w < nw; ++w) {
+    const WallData& wd = nl.wall_data[w];
+    double* o = &out[w * (stride + 1)];
+    if (i < wd.touch.size() && wd.touch[i]) o[0] = 1, carries = true;
+    if ((i + 1) * stride > wd.hist.size()) continue;
+    for (std::size_t k = 0; k < stride; ++k) {
+      o[1 + k] = wd.hist[i * stride + k];
+      carries = carries || o[1 + k] != 0;
+    }
+  }
+  return carries;
+}
+
+/// After a build: the wall candidates are the owned particles the list found (a ghost's wall
+/// contacts are its owner's), with the history each carried (find_wall_candidates kept the
+/// entries by local index, which the exchange reordered: they are rewritten here).
+void Domain::install_walls(const SimState& s, NeighbourList& nl) {
+  const std::size_t stride = std::size_t(s.stride);
+  for (std::size_t w = 0; w < nl.wall_data.size(); ++w) {
+    WallData& wd = nl.wall_data[w];
+    std::fill(wd.hist.begin(), wd.hist.end(), 0.0);
+    std::fill(wd.touch.begin(), wd.touch.end(), uint8_t(0));
+    std::size_t out = 0;
+    for (const int32_t i : wd.candidates) {
+      if (ghost[std::size_t(i)]) continue;
+      wd.candidates[out++] = i;
+      const auto it = kept_walls_.find(s.p.id[std::size_t(i)]);
+      if (it == kept_walls_.end()) continue;
+      const double* v = &it->second[w * (stride + 1)];
+      if (!wd.touch.empty()) wd.touch[std::size_t(i)] = v[0] != 0;
+      std::copy_n(v + 1, stride, wd.hist.begin() + std::ptrdiff_t(std::size_t(i) * stride));
+    }
+    wd.candidates.resize(out);
+  }
+  kept_walls_.clear();
+}
+
 void Domain::after_build(SimState& s, NeighbourList& nl) {
   const int stride = s.stride;
   const bool touch_flag = s.kern.touch_flag;
+  install_walls(s, nl);
   if (kept_.empty()) return;
   const std::size_t n = s.p.size();
   for (std::size_t a = 0; a < n; ++a)
@@ -668,7 +777,7 @@ Measurements Domain::measure(const SimState& s, const Tally& tl, const EnergyAcc
   Measurements m;
   m.step = s.nstep;
   m.time = s.t;
-  m.volume = s.cell.volume();
+  m.volume = measurement_volume(s);  // every rank holds the cell and the walls
   // Owned particles' sums: kinetic stress (9), kinetic energy, Σ|F|, free count, count, Σd, mass, volume.
   double v[17] = {};
   for (std::size_t i = 0; i < p.size(); ++i) {
@@ -696,6 +805,9 @@ Measurements Domain::measure(const SimState& s, const Tally& tl, const EnergyAcc
   m.elastic_energy = tl.elastic;
   m.dissipated_energy = energy.dissipated;
   m.external_work = energy.ext_work;
+  // The account's terms are global already (reduced tallies, summed work): as the serial run.
+  if (s.set.track_energy && !std::isnan(energy.e0))
+    m.energy_balance_error = m.kinetic_energy + m.elastic_energy + energy.dissipated - (energy.e0 + energy.ext_work);
   m.contacts = tl.contacts;
   m.wall_contacts = tl.wall_contacts;
   m.coordination = 2.0 * double(tl.contacts) / v[13];
@@ -707,6 +819,7 @@ Measurements Domain::measure(const SimState& s, const Tally& tl, const EnergyAcc
     m.inertial_number = rate * (v[14] / v[13]) * std::sqrt(v[15] / v[16] / m.pressure);
   }
   m.max_overlap_ratio = tl.max_overlap_ratio;
+  for (const auto& w : s.walls) m.wall_forces.push_back(w.force);  // the same on every rank (walls())
   return m;
 }
 
@@ -782,8 +895,6 @@ ContactTable contacts_on_rank0(Simulation& sim, const Domain& d, const std::vect
 // ------------------------------------------------------------------------------------ public
 void decompose(Simulation& sim, const DecompositionOptions& opt) {
   if (sim.domain()) throw InputError("", "decompose", "twice", "the simulation is already decomposed");
-  if (!sim.walls().empty()) throw InputError("", "walls", std::to_string(sim.walls().size()), "walls are not decomposed yet: run on one rank");
-  if (sim.settings().track_energy) throw InputError("", "track_energy", "true", "the energy budget is not decomposed yet: run on one rank");
   sim.attach_domain(std::make_unique<Domain>(opt));
 }
 

@@ -28,6 +28,14 @@ class NeighbourList;
 struct Tally;
 struct Measurements;
 struct EnergyAccount;
+struct ForceJob;
+
+/// One term of an ordered sum over the ranks (DomainHooks::ordered_sum).
+struct OrderedTerm {
+  int32_t group = 0;  ///< which sum (a wall)
+  int64_t id = 0;     ///< the particle: terms are added in id order, the serial engine's
+  Vec3 v;
+};
 
 /// What the engine asks of a decomposition at its few synchronisation points. Implemented in
 /// libs/dem/src/mpi/; the serial engine never sees it.
@@ -50,6 +58,14 @@ class DomainHooks {
   /// Sums of v[0..n) over the ranks, in rank order: the same doubles on every rank.
   virtual void sum(double* v, int n) = 0;
   virtual double min(double v) = 0;
+  /// The wall pass when decomposed (the engine's ForceLoop::wall_forces otherwise): the wall
+  /// contacts of the owned particles, and on tally passes each wall's force, summed over every
+  /// rank in the serial order of its contacts, so that every rank holds the same bits and moves
+  /// the walls alike.
+  virtual void walls(SimState& s, NeighbourList& nl, const ForceJob& jb, bool tally, Tally& total, double* stiffness) = 0;
+  /// Per group g < groups, Σ v of every rank's terms of that group, added in ascending id order
+  /// from zero: the bits of the serial loop over the particles. Collective.
+  virtual std::vector<Vec3> ordered_sum(const std::vector<OrderedTerm>& terms, int groups) = 0;
   /// The measurement of the whole cell from the rank's tally (already reduced) and owned particles.
   virtual Measurements measure(const SimState& s, const Tally& tally, const EnergyAccount& energy) = 0;
 };
@@ -72,7 +88,12 @@ struct DomainLayout {
 /// and settings), into sub-domains: each rank keeps its own particles and gets its ghost layer.
 /// Collective. Throws InputError (the same on every rank) when a sub-domain would be thinner
 /// than the interaction reach plus skin (too many ranks along a cell vector for this sample),
-/// and for what is not decomposed yet (walls, energy tracking).
+/// and for what is not decomposed yet.
+///
+/// Walls: each rank computes the wall contacts of the particles it owns; a wall's force is the
+/// sum of its contacts' forces over every rank in the serial order (ordered_sum), so the servo
+/// of a force-controlled wall moves it by the same bits on every rank. A particle's wall history
+/// travels with it when it migrates.
 ///
 /// Bonds: a rank holds every bond with an owned end whose other end it holds too (owned or
 /// ghost), in the order of the whole set; a bond between an owned particle and a ghost is
