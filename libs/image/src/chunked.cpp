@@ -433,9 +433,9 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
       throw InputError("", "--memory", cfg.as_written.count("--memory") ? cfg.as_written.at("--memory") : cfg.memory_text,
                        "is below what one block needs: " + bytes_text(m.total()) + " for the smallest block (" +
                            std::to_string(std::max<std::size_t>(halo, 32)) + " voxels per side with a halo of " +
-                           std::to_string(halo) + "): " + bytes_text(m.fixed) + " for the whole-volume bit masks of " +
-                           std::to_string(D.nx) + "x" + std::to_string(D.ny) + "x" + std::to_string(D.nz) + " plus " +
-                           bytes_text(m.per_block) + " for the block");
+                           std::to_string(halo) + "): " + bytes_text(m.fixed) + " held for the whole run (bit masks of the " +
+                           std::to_string(D.nx) + "x" + std::to_string(D.ny) + "x" + std::to_string(D.nz) +
+                           " volume, block faces, 64 MB for the process) plus " + bytes_text(m.per_block) + " for the block");
     }
   }
   if (chunk < halo)
@@ -448,7 +448,7 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
   if (budget > 0 && mem.total() > budget)
     throw InputError("", "--memory", cfg.as_written.count("--memory") ? cfg.as_written.at("--memory") : cfg.memory_text,
                      "is below what --chunk " + std::to_string(chunk) + " needs: " + bytes_text(mem.total()) + " (" +
-                         bytes_text(mem.fixed) + " whole-volume bit masks + " + bytes_text(mem.per_block) +
+                         bytes_text(mem.fixed) + " held for the whole run + " + bytes_text(mem.per_block) +
                          " for one block with its halo of " + std::to_string(halo) + "); give a smaller --chunk or more --memory");
   check_memory_request(mem.total(), cfg.input, "--chunk", std::to_string(chunk),
                        "a chunked run of a " + std::to_string(D.nx) + "x" + std::to_string(D.ny) + "x" + std::to_string(D.nz) + " volume");

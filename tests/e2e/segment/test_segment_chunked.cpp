@@ -158,7 +158,7 @@ TEST(SegmentChunked, BadInputExit2WithNumbers) {
   // The budget message gives what is needed: the smallest block, the bit masks and the block.
   std::string err;
   EXPECT_EQ(run_err(bin + "/tomodem-segment " + in + raw_args + iso + " --memory 1MB -o " + (d / "l.h5").string(), &err), 2);
-  EXPECT_NE(err.find("for the whole-volume bit masks of 96x96x96 plus"), std::string::npos) << err;
+  EXPECT_NE(err.find("held for the whole run (bit masks of the 96x96x96 volume, block faces, 64 MB for the process) plus"), std::string::npos) << err;
   // A chunked run of a non-raw file: refused, naming the format.
   const fs::path mha = d.parent_path() / "tomodem_seg_chunked_bad_mha";
   fs::create_directories(mha);
