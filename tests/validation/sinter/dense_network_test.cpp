@@ -122,6 +122,37 @@ TEST(dense_network, FullDensityLatticeIsTheLaguerreSpringNetwork) {
   }
 }
 
+// An open cell direction (a free surface, as fracture samples may have): faces between spheres
+// away from the surface are the periodic ones, faces that reach the hull are open (+inf: never
+// capped). FCC at full density, open along z.
+TEST(dense_network, OpenDirectionLeavesHullFacesOpen) {
+  const double c = 2e-6;
+  Network net = lattice_network(dem::LatticeKind::fcc, 3, c, c / 2);
+  Packing& p = net.packing;
+  p.cell.periodic[2] = false;
+  const std::vector<double> area = bond_face_areas(p);
+  const double a_fcc = std::sqrt(2.0) * c * c / 8;
+  long open = 0, interior = 0;
+  for (std::size_t b = 0; b < p.bonds.size(); ++b) {
+    if (p.bonds.rest_length[b] > 0.9 * c) continue;  // second shell: no face (see above)
+    const double zi = p.particles.position[std::size_t(p.bonds.i[b])].z, zj = p.particles.position[std::size_t(p.bonds.j[b])].z;
+    if (std::abs(zi - zj) > 1.5 * c) continue;  // bonded through the (no longer periodic) z faces
+    if (std::isinf(area[b])) {
+      ++open;
+    } else {
+      EXPECT_NEAR(area[b] / a_fcc, 1.0, 1e-10);
+    }
+    // Neither sphere in the outer layers (z = 0, 2.5c): closed cells, the periodic face.
+    if (std::min(zi, zj) > 0.4 * c && std::max(zi, zj) < 2.1 * c) {
+      ++interior;
+      EXPECT_FALSE(std::isinf(area[b]));
+    }
+  }
+  std::printf("open z: %ld hull faces open, %ld interior bonds closed\n", open, interior);
+  EXPECT_GT(open, 0);
+  EXPECT_GT(interior, 0);
+}
+
 // A 100-sphere green packing (random loose, 0.60, monodisperse alumina 2 µm, as
 // tests/bench/sinter/green.yaml) sintered freely in one run to 0.9, with snapshots at 0.6, 0.7,
 // 0.8 and 0.9: E/E_s (mean of the three axes, young's direct solve) under the HS upper bound of
