@@ -49,3 +49,17 @@ add_dependencies(tomodem_mpi_tests dem_checkpoint_ranks_tests tomodem-dem)
 add_test(NAME dem_checkpoint_ranks COMMAND dem_checkpoint_ranks_tests)
 set_tests_properties(dem_checkpoint_ranks PROPERTIES LABELS mpi PROCESSORS 3
   ENVIRONMENT "OMP_NUM_THREADS=1;OMPI_ALLOW_RUN_AS_ROOT=1;OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1")
+
+# The energy budget (track_energy) across ranks: the falling column with local damping and a
+# sheared periodic cell with Stokes drag, 1-4 ranks, terms to 1e-12 of the budget.
+tomodem_mpi_test(dem_decomposition_energy_tests
+  SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/dem/test_energy_decomposed.cpp
+  LIBS tomodem_dem
+  RANKS 1 2 3 4)
+
+# A bonded lattice checkpointed on N ranks after bonds began to break, restarted on N ranks:
+# bonds, failure events and particles bitwise the uninterrupted serial run.
+tomodem_mpi_test(dem_checkpoint_bond_tests
+  SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/dem/test_checkpoint_bonds_ranks.cpp
+  LIBS tomodem_dem
+  RANKS 1 2 3)
