@@ -1,8 +1,13 @@
 // --solver auto: the cost model's choice, and the operation counts of the paths on reference
-// networks ordered as the model predicts (issue 19). Counts and ratios only: no timings.
+// networks ordered as the model predicts (issue 19). Counts and ratios only, and CPU-time ratios
+// measured in this process: no wall times.
 #include <gtest/gtest.h>
 
+#include <time.h>
+
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 
 #include "../../validation/mechanics/networks.hpp"
 #include "tomodem/mechanics/elastic.hpp"
@@ -45,7 +50,8 @@ TEST(SolverChoice, AutoNeverPicksAPathPredictedTwiceAnother) {
     std::printf("N %d rho %.2f: predicted ldlt %.3g s (flops %.3g%s), amg %.3g s, cg %.3g s -> %s\n", n, rho, c.ldlt_s,
                 c.factor_flops, c.factor_truncated ? ", truncated" : "", c.amg_s, c.cg_s, to_string(r.solver));
     EXPECT_NE(r.solver, ElasticSolver::automatic);
-    EXPECT_EQ(r.solver, c.cheapest);
+    // The cheapest prediction, or cg where auto's Jacobi-CG trial converged within its budget.
+    EXPECT_TRUE(r.solver == c.cheapest || r.solver == ElasticSolver::cg) << to_string(r.solver);
     EXPECT_LE(seconds_of(c, r.solver), 2 * best);
     EXPECT_GT(best, 0);
   }
@@ -83,5 +89,62 @@ TEST(SolverChoice, MeasuredCountsOrderThePathsAsPredicted) {
       EXPECT_LT(std::max(l.factor_nonzeros / pred.factor_nonzeros, pred.factor_nonzeros / l.factor_nonzeros), 3.0);
     }
     EXPECT_NEAR(l.E / a.E, 1.0, 1e-8);  // same answer: the choice is about cost only
+  }
+}
+
+namespace {
+/// CPU seconds of this process (all threads) spent in f: the paths run one after another here, so
+/// their ratio does not depend on what else the machine runs, unlike wall time.
+template <class F>
+double cpu_seconds(F&& f) {
+  timespec a{}, b{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &a);
+  f();
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &b);
+  return double(b.tv_sec - a.tv_sec) + 1e-9 * double(b.tv_nsec - a.tv_nsec);
+}
+}  // namespace
+
+// The issue's demand: auto never takes a path 2× slower than another it offers (ldlt, amg, cg).
+// On a perfect SC lattice the model (fitted on disordered networks) predicts amg, but Jacobi CG
+// converges there in a fraction of the predicted iterations and was 4.1× faster (docs/young.md):
+// auto's Jacobi-CG trial on the first strain case finds it and keeps CG. On a random network the
+// trial does not converge within its budget (1/6 of the chosen path's predicted time) and auto
+// pays it on top. Measured as CPU time of each path in this process, six cases to 1e-10; auto
+// timed twice and the faster kept (CPU time is steady, but a shared cache still adds noise of
+// order 10 %, small against the factor 2 asserted). Same E from every path to 1e-8 (the CG error
+// bound ρ√κ of docs/solvers.md with ρ = 1e-10).
+TEST(SolverChoice, AutoIsWithinTwiceTheFastestPathByCpuTime) {
+  struct Case {
+    const char* name;
+    Net net;
+  };
+  std::vector<Case> cases;
+  {
+    Net sc;
+    sc.net.packing = test::lattice("simple_cubic", 10, 1e-3, 0.5e-3);
+    test::bond_ratio(sc.net, 0.1);
+    sc.laws = bond_laws(sc.net.packing, "", LawOptions{}, false);
+    cases.push_back({"SC lattice 10^3", std::move(sc)});
+  }
+  cases.push_back({"random N 1000 rho 0.75", random_net(1000, 0.75)});
+  for (const Case& c : cases) {
+    double best = HUGE_VAL, E_ref = 0;
+    const char* best_name = "";
+    for (ElasticSolver s : {ElasticSolver::ldlt, ElasticSolver::amg, ElasticSolver::cg}) {
+      ImplicitResult r;
+      const double t = cpu_seconds([&] { r = run(c.net, s, true); });
+      std::printf("%s: %s %.3f s CPU, E %.9g\n", c.name, to_string(s), t, r.E);
+      if (s == ElasticSolver::ldlt) E_ref = r.E;
+      EXPECT_NEAR(r.E / E_ref, 1.0, 1e-8) << to_string(s);
+      if (t < best) best = t, best_name = to_string(s);
+    }
+    ImplicitResult a;
+    double t_auto = HUGE_VAL;
+    for (int rep = 0; rep < 2; ++rep) t_auto = std::min(t_auto, cpu_seconds([&] { a = run(c.net, ElasticSolver::automatic, true); }));
+    std::printf("%s: auto -> %s (model: %s) %.3f s CPU, fastest %s %.3f s: ratio %.2f\n", c.name, to_string(a.solver),
+                to_string(a.predicted.cheapest), t_auto, best_name, best, t_auto / best);
+    EXPECT_LE(t_auto, 2 * best) << c.name;
+    EXPECT_NEAR(a.E / E_ref, 1.0, 1e-8);
   }
 }
