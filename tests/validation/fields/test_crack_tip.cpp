@@ -28,6 +28,7 @@
 #include <algorithm>
 #include <complex>
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <vector>
 
@@ -114,8 +115,13 @@ TEST(CrackTip, CoarseGrainedFieldGivesFractureK) {
   const double R = 1e-6, d = 2 * R;
   // Final sample W × B × H = 60 × 3 × 72 d: test::slab inserts at 0.30 (random sequential
   // insertion slows down near its jamming limit, 0.38) and densifies to 0.66, lengths × 0.769.
+  // TOMODEM_CRACK_TIP_SCALE = k (the bench run, k = 3) makes W and H k times larger, so the crack
+  // is k times longer in diameters and its K-dominated zone (r <= 0.15 a) lies outside the kernel.
+  const char* scale_text = std::getenv("TOMODEM_CRACK_TIP_SCALE");
+  const double scale = scale_text ? std::atof(scale_text) : 1.0;
+  ASSERT_GE(scale, 1.0) << "TOMODEM_CRACK_TIP_SCALE";
   const double shrink = std::cbrt(0.30 / 0.66);
-  Network net = test::slab(60 / shrink, 3 / shrink, 72 / shrink, 17, test::alumina(), R, 0.30, 0.66);
+  Network net = test::slab(60 * scale / shrink, 3 / shrink, 72 * scale / shrink, 17, test::alumina(), R, 0.30, 0.66);
   const double t_net = cpu_seconds();
   CrackOptions co;
   co.geometry = CrackGeometry::centre;
@@ -235,7 +241,21 @@ TEST(CrackTip, CoarseGrainedFieldGivesFractureK) {
                 range[1] / d, 100 * (fit(westergaard, range[0], range[1], 0).K / K_fracture - 1),
                 100 * (fit(singular, range[0], range[1], 0).K / K_fracture - 1),
                 100 * (fit(two_terms, range[0], range[1], 0).K / K_fracture - 1));
+  // The singular term alone over the K-dominated zone only: r ≤ 0.15 a, where the finite crack's
+  // next term (3r/4a on the crack line) adds at most 11 %, about 7 % over the annulus.
+  const double r_k = 0.15 * s.a;
+  const Fit k_zone = r_k > 1.5 * r_min ? fit(singular, r_min, r_k, 0) : Fit{};
+  if (k_zone.points > 0)
+    std::printf("  r in [%.2f, %.2f] d (K-dominated zone, %ld nodes): singular %+.2f%%, Westergaard %+.2f%%\n",
+                r_min / d, r_k / d, k_zone.points, 100 * (k_zone.K / K_fracture - 1),
+                100 * (fit(westergaard, r_min, r_k, 0).K / K_fracture - 1));
+  else
+    std::printf("  no K-dominated annulus: 0.15 a = %.2f d is within 1.5 r_min\n", r_k / d);
   std::printf("CPU: network %.1f s, solve %.1f s, CG %.1f s, fits %.1f s, total %.1f s\n", t_net - t0,
               t_solve - t_net, t_cg - t_solve, t_end - t_cg, t_end - t0);
   EXPECT_NEAR(main.K / K_fracture, 1.0, 0.10);
+  // The plain fit, K/sqrt(2 pi r) alone, moves toward fracture's K as the annulus shrinks into
+  // the K-dominated zone (bench run, scale 2, a = 23.4 d: +11.2 % there against +17.9 % over the
+  // whole annulus; docs/validation.md).
+  if (k_zone.points > 0) EXPECT_LT(std::abs(k_zone.K / K_fracture - 1), std::abs(single.K / K_fracture - 1));
 }
