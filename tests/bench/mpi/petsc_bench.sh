@@ -11,8 +11,9 @@
 #
 # usage: tests/bench/mpi/petsc_bench.sh [SIZES...]      (default: 16983 169742)
 # env:   BUILD_MPI=<repo>/build-mpi  OUT=<BUILD_MPI>/petsc-bench  MPIRUN=mpirun
-#        CASES="amg gamg0 gamg gamg2 boomeramg boomeramg2"  (which runs; 2: on two ranks; gamg0:
-#        tomodem's own GAMG settings without the tuning below)
+#        CASES="amg gamg0 gamg02 gamg gamg2 boomeramg boomeramg2"  (which runs; 2: on two ranks;
+#        gamg0, gamg02: tomodem's own GAMG settings without the tuning below, on one and two ranks:
+#        the peak RSS per rank of the distributed assembly, docs/solvers.md)
 # out:   OUT/<particles>/<case>.json (the tool's summary, rank 0), <case>.time (/usr/bin/time -v of
 #        every rank), results.csv: one line per run with the load average before and after.
 set -u
@@ -20,7 +21,7 @@ REPO=$(cd "$(dirname "$0")/../../.." && pwd)
 BUILD_MPI=${BUILD_MPI:-$REPO/build-mpi}
 OUT=${OUT:-$BUILD_MPI/petsc-bench}
 MPIRUN=${MPIRUN:-mpirun}
-CASES=${CASES:-amg gamg0 gamg gamg2 boomeramg boomeramg2}
+CASES=${CASES:-amg gamg0 gamg02 gamg gamg2 boomeramg boomeramg2}
 SIZES=${*:-16983 169742}
 BIN=$BUILD_MPI/bin
 [ "$(id -u)" = 0 ] && export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
@@ -62,6 +63,7 @@ for n in $SIZES; do
     case $c in
       amg)        env=""; cmd=(/usr/bin/time -v -o "$c.time" "${young[@]}" --solver amg --threads 1) ;;
       gamg0)      env=""; cmd=(/usr/bin/time -v -o "$c.time" "${young[@]}" --solver petsc) ;;  # tomodem's GAMG settings only
+      gamg02)     env=""; cmd=($MPIRUN --oversubscribe -np 2 sh -c '/usr/bin/time -v -o "$0.$OMPI_COMM_WORLD_RANK.time" "$@"' "$c" "${young[@]}" --solver petsc) ;;
       gamg)       env="$GAMG"; cmd=(/usr/bin/time -v -o "$c.time" "${young[@]}" --solver petsc) ;;
       boomeramg)  env="$BOOMER"; cmd=(/usr/bin/time -v -o "$c.time" "${young[@]}" --solver petsc) ;;
       gamg2)      env="$GAMG"; cmd=($MPIRUN --oversubscribe -np 2 sh -c '/usr/bin/time -v -o "$0.$OMPI_COMM_WORLD_RANK.time" "$@"' "$c" "${young[@]}" --solver petsc) ;;
