@@ -895,6 +895,10 @@ ContactTable contacts_on_rank0(Simulation& sim, const Domain& d, const std::vect
 // ------------------------------------------------------------------------------------ public
 void decompose(Simulation& sim, const DecompositionOptions& opt) {
   if (sim.domain()) throw InputError("", "decompose", "twice", "the simulation is already decomposed");
+  // The sintering driver (sinter.cpp: radius growth, mass scaling, densification) reads and
+  // changes the whole sample between steps; it has no decomposed path yet.
+  if (sim.model().normal == NormalLaw::sintering)
+    throw InputError("", "physics.normal", "sintering", "the sintering law is not decomposed yet: run on one rank");
   sim.attach_domain(std::make_unique<Domain>(opt));
 }
 

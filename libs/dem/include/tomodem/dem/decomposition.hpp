@@ -88,7 +88,7 @@ struct DomainLayout {
 /// and settings), into sub-domains: each rank keeps its own particles and gets its ghost layer.
 /// Collective. Throws InputError (the same on every rank) when a sub-domain would be thinner
 /// than the interaction reach plus skin (too many ranks along a cell vector for this sample),
-/// and for what is not decomposed yet.
+/// and for what is not decomposed yet (the sintering law).
 ///
 /// Walls: each rank computes the wall contacts of the particles it owns; a wall's force is the
 /// sum of its contacts' forces over every rank in the serial order (ordered_sum), so the servo
