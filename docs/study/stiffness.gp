@@ -1,4 +1,4 @@
-# stiffness: a study report plot (tomodem run report). Re-make: gnuplot stiffness.gp, or gnuplot -e "output_file='stiffness.svg'" stiffness.gp
+# stiffness: made by tomodem (core/plot.hpp). Re-make: gnuplot stiffness.gp, or gnuplot -e "output_file='stiffness.svg'" stiffness.gp
 # tomodem's one plot style (issue 21). write_plot (libs/core/src/plot.cpp) compiles this file in
 # and puts it at the top of every script it writes; scripts that call gnuplot themselves
 # (tests/bench/mpi/scaling_model.py) `load` it. Change the look of every figure here, nowhere else.
@@ -26,12 +26,16 @@ set linetype 8 linecolor rgb '#F0E442' linewidth 1.5 pointtype 2 dashtype 1
 set linetype cycle 8
 
 if (!exists('output_file')) output_file = 'stiffness.png'
-eval('set terminal ' . (output_file[strlen(output_file)-2:] eq 'svg' ? plot_terminal_svg : plot_terminal_png))
+if (!exists('output_format')) output_format = output_file[strlen(output_file)-2:] eq 'svg' ? 'svg' : 'png'
+eval('set terminal ' . (output_format eq 'svg' ? plot_terminal_svg : plot_terminal_png))
 set output output_file
 set title 'Relative Young''s modulus against relative density' noenhanced
 set xlabel 'relative density (-)' noenhanced
 set ylabel 'E/E_s (-)' noenhanced
-set logscale y
-plot 'stiffness.dat' index 0 using 1:2 with linespoints title 'homogeneous' noenhanced, \
-     'stiffness.dat' index 1 using 1:2 with linespoints title 'pore-former' noenhanced, \
-     'stiffness.dat' index 2 using 1:2 with linespoints title 'aggregated' noenhanced
+set logscale y 10
+set format y '10^{%L}'
+set mytics 10
+plot 'stiffness.dat' index 0 using 1:2:3 with yerrorlines linetype 1 title 'homogeneous' noenhanced, \
+     'stiffness.dat' index 1 using 1:2:3 with yerrorlines linetype 2 title 'pore-former' noenhanced, \
+     'stiffness.dat' index 2 using 1:2:3 with yerrorlines linetype 3 title 'aggregated' noenhanced, \
+     'stiffness.dat' index 3 using 1:2:3 with yerrorlines linetype 4 title 'homogeneous-homothetic' noenhanced

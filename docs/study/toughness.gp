@@ -1,4 +1,4 @@
-# toughness: a study report plot (tomodem run report). Re-make: gnuplot toughness.gp, or gnuplot -e "output_file='toughness.svg'" toughness.gp
+# toughness: made by tomodem (core/plot.hpp). Re-make: gnuplot toughness.gp, or gnuplot -e "output_file='toughness.svg'" toughness.gp
 # tomodem's one plot style (issue 21). write_plot (libs/core/src/plot.cpp) compiles this file in
 # and puts it at the top of every script it writes; scripts that call gnuplot themselves
 # (tests/bench/mpi/scaling_model.py) `load` it. Change the look of every figure here, nowhere else.
@@ -26,12 +26,16 @@ set linetype 8 linecolor rgb '#F0E442' linewidth 1.5 pointtype 2 dashtype 1
 set linetype cycle 8
 
 if (!exists('output_file')) output_file = 'toughness.png'
-eval('set terminal ' . (output_file[strlen(output_file)-2:] eq 'svg' ? plot_terminal_svg : plot_terminal_png))
+if (!exists('output_format')) output_format = output_file[strlen(output_file)-2:] eq 'svg' ? 'svg' : 'png'
+eval('set terminal ' . (output_format eq 'svg' ? plot_terminal_svg : plot_terminal_png))
 set output output_file
 set title 'Fracture toughness against relative density' noenhanced
 set xlabel 'relative density (-)' noenhanced
 set ylabel 'K_IC (Pa m^0.5)' noenhanced
-set logscale y
-plot 'toughness.dat' index 0 using 1:2 with linespoints title 'homogeneous' noenhanced, \
-     'toughness.dat' index 1 using 1:2 with linespoints title 'pore-former' noenhanced, \
-     'toughness.dat' index 2 using 1:2 with linespoints title 'aggregated' noenhanced
+set logscale y 10
+set format y '10^{%L}'
+set mytics 10
+plot 'toughness.dat' index 0 using 1:2:3 with yerrorlines linetype 1 title 'homogeneous' noenhanced, \
+     'toughness.dat' index 1 using 1:2:3 with yerrorlines linetype 2 title 'pore-former' noenhanced, \
+     'toughness.dat' index 2 using 1:2:3 with yerrorlines linetype 3 title 'aggregated' noenhanced, \
+     'toughness.dat' index 3 using 1:2:3 with yerrorlines linetype 4 title 'homogeneous-homothetic' noenhanced
