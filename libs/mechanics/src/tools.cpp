@@ -318,11 +318,17 @@ std::string run_young(const YoungConfig& c) {
   out["n_bonds"] = p.bonds.size();
   ImplicitResult ir;
   ExplicitResult er;
+  // One set of bond stiffnesses for the solve, the fields and the summary's neck-law counts.
+  const BondStiffnesses stiffness = bond_stiffnesses(p, laws);
+  const bool face_cap = std::any_of(laws.begin(), laws.end(), [](const dem::BondLaw& l) { return l.face_cap; });
+  out["neck_law"] = {{"law", face_cap ? "face_capped" : "isolated_necks"},
+                     {"face_capped_bonds", stiffness.face_capped},
+                     {"bonds_without_face", stiffness.no_face}};
   if (want_implicit) {
     ImplicitOptions io = c.implicit;
     io.axis = axis;
     info("implicit: assembling and solving (" + std::string(to_string(io.solver)) + ")");
-    ir = solve_implicit(p, net.image, bond_stiffnesses(p, laws), io, c.input);
+    ir = solve_implicit(p, net.image, stiffness, io, c.input);
     out["implicit"] = implicit_json(ir, c.implicit.tolerance);
   }
   if (want_explicit) {
@@ -339,7 +345,7 @@ std::string run_young(const YoungConfig& c) {
     }
   }
   if (c.fields.requested()) {
-    out["fields"] = json::parse(young_fields(c.fields, p, net.image, bond_stiffnesses(p, laws), c.implicit, axis,
+    out["fields"] = json::parse(young_fields(c.fields, p, net.image, stiffness, c.implicit, axis,
                                              c.explicit_.strain, c.input));
     out.output("fields", c.fields.output);
   }

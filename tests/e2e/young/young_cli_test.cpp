@@ -72,6 +72,31 @@ TEST_F(YoungCli, BondThenYoungImplicitGivesKnOver2R) {
   EXPECT_TRUE(y.contains("E_error") && y.contains("wall_time_s"));
 }
 
+// Necks wider than the face cap (docs/bond.md#dense-networks): SC lattice, a/R = 0.9, ν = 0.45.
+// Isolated: g_n held at a/R = 0.5, k_n = 2E* a (1 + 4·0.25), E* = E/(2(1 − ν²)): 1.128e6 N/m.
+// The pair's Laguerre face is the cube face (2R)², so the cap E (2R)²/(2R) = 1e6 N/m is lower and
+// every bond takes it: E_net = k/(2R) = E, the rigid-body-spring network's modulus.
+TEST_F(YoungCli, FaceCapGivesTheSolidModulusOnFullFaces) {
+  auto [code, err] = run("tomodem-bond", lattice(1e9, 0.45) + " -o " + path("bonded.h5") +
+                                             " --rule ratio --neck-ratio 0.9 --gap-tolerance 1e-6 -q");
+  ASSERT_EQ(code, 0) << err;
+  std::tie(code, err) = run("tomodem-young", path("bonded.h5") + " --method implicit --json " + path("y.json"));
+  ASSERT_EQ(code, 0) << err;
+  const auto y = read_json(path("y.json"));
+  EXPECT_NEAR(y["E"].get<double>() / 1e9, 1.0, 1e-6);
+  EXPECT_EQ(y["neck_law"]["law"], "face_capped");
+  EXPECT_EQ(y["neck_law"]["face_capped_bonds"], 3 * 216);
+  EXPECT_EQ(y["neck_law"]["bonds_without_face"], 0);
+  std::tie(code, err) =
+      run("tomodem-young", path("bonded.h5") + " --method implicit --isolated-necks --json " + path("y.json"));
+  ASSERT_EQ(code, 0) << err;
+  const auto yi = read_json(path("y.json"));
+  const double Es = 1e9 / (2 * (1 - 0.45 * 0.45)), kn = 2 * Es * 0.45e-3 * (1 + 4 * 0.25);
+  EXPECT_NEAR(yi["E"].get<double>() / (kn / 1e-3), 1.0, 1e-6);
+  EXPECT_EQ(yi["neck_law"]["law"], "isolated_necks");
+  EXPECT_EQ(yi["neck_law"]["face_capped_bonds"], 0);
+}
+
 TEST_F(YoungCli, PackingWithoutBondsExits2WithoutOutput) {
   auto [code, err] = run("tomodem-young", lattice() + " --json " + path("y.json"));
   EXPECT_EQ(code, 2);
