@@ -693,7 +693,8 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
   std::unique_ptr<LabelsWriter> out;
   if (!cfg.output.empty()) {
     tmp = temporary_path(cfg.output);
-    out = std::make_unique<LabelsWriter>(tmp, D, chunk, std::vector<std::string>{cfg.input});
+    // No input hashes, as the in-memory writer (hashing a 16 GiB scan would read it once more).
+    out = std::make_unique<LabelsWriter>(tmp, D, chunk, std::vector<std::string>{});
   }
   try {
     std::vector<uint8_t> phases;
