@@ -459,7 +459,7 @@ std::vector<Ranking> rankings_of(const std::vector<Cell>& cells, const std::vect
         r.property = prop;
         r.at = at;
         r.text = (resolved ? lo + " < " + hi : lo + " vs " + hi) + " in " + prop + (at.empty() ? "" : " at " + at) + ": " +
-                 (resolved ? "" : "not resolved, ") + "Welch p = " + stats::p_text(w.p);
+                 (resolved ? "" : "not resolved, ") + "Welch " + stats::p_phrase(w.p);
         r.j = {{"property", prop}, {"at", at},      {"lower", lo},       {"higher", hi}, {"mean_lower", a_low ? ma : mb},
                {"mean_higher", a_low ? mb : ma},    {"t", std::fabs(w.t)}, {"dof", w.dof}, {"p", w.p},
                {"resolved", resolved},              {"text", r.text}};

@@ -151,4 +151,6 @@ std::string p_text(double p) {
   return buf;
 }
 
+std::string p_phrase(double p) { return p < 1e-4 ? "p " + p_text(p) : "p = " + p_text(p); }
+
 }  // namespace tomodem::pipeline::stats

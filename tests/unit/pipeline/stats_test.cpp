@@ -75,6 +75,8 @@ TEST(Stats, WelchTestByHand) {
   EXPECT_EQ(st::p_text(0.0454646), "0.045");
   EXPECT_EQ(st::p_text(0.002), "0.002");
   EXPECT_EQ(st::p_text(1e-6), "< 0.0001");
+  EXPECT_EQ(st::p_phrase(1e-6), "p < 0.0001");
+  EXPECT_EQ(st::p_phrase(0.002), "p = 0.002");
 }
 
 namespace {

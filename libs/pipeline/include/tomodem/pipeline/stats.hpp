@@ -49,5 +49,7 @@ std::string stop_decision(std::size_t n, std::size_t min, std::size_t max, bool 
 
 /// "0.002", "0.04", "< 0.0001": a p-value with two significant digits.
 std::string p_text(double p);
+/// "p = 0.045", "p < 0.0001": p_text with its relation, for sentences.
+std::string p_phrase(double p);
 
 }  // namespace tomodem::pipeline::stats
