@@ -188,6 +188,7 @@ std::string run_image_conduct(const ConductConfig& c) {
   out.input(c.image, {{"dataset", "/labels"}, {"grid", {im.nx, im.ny, im.nz}}, {"spacing_m", im.spacing}});
   out["sides"] = c.sides;
   out.unit("sigma_eff", "relative to sigma0 (the largest conductivity given)");
+  out.unit("sigma_eff_error", "relative");
   if (c.phase >= 0) out["phase"] = c.phase;
   json tab = json::object();
   for (int l = 0; l < 256; ++l)
@@ -493,6 +494,7 @@ std::string run_conduct(const ConductConfig& c) {
   out.n_particles(pk.particles.size());
   out["boundary"] = c.bc;
   out.unit("sigma_eff", "S/m");
+  out.unit("sigma_eff_error", "S/m");
   out.unit("resistance_ohm", "ohm");
   out["network"] = {{"nodes", net.n_nodes()},
                     {"edges", net.n_edges()},

@@ -94,13 +94,22 @@ double number_in(const Row& r, const std::string& c) {
 
 // A tool's own 1-sigma error of column `c` as an absolute number: `<c>_error` is relative
 // (issue 18's convention) unless the summary's units name another unit for it
-// (`<prefix>.units.<key>_error`: "Pa" makes it absolute); NaN when the row has none.
+// (`<prefix>.units.<key>_error`: "Pa" makes it absolute); NaN when the row has none. A per-axis
+// value `a.sigma_eff.x` finds its error as `a.sigma_eff.x_error` or, as tomodem-conduct writes
+// it, `a.sigma_eff_error.x` (unit `a.units.sigma_eff_error`).
 double tool_error(const Row& r, const std::string& c, double value) {
-  const double e = number_in(r, c + "_error");
-  if (!std::isfinite(e)) return NAN;
+  const auto units_of = [](const std::string& key) {
+    const auto d = key.rfind('.');
+    return d == std::string::npos ? "units." + key : key.substr(0, d) + ".units." + key.substr(d + 1);
+  };
+  double e = number_in(r, c + "_error");
+  std::string unit_col = units_of(c + "_error");
   const auto dot = c.rfind('.');
-  const std::string unit_col = dot == std::string::npos ? "units." + c + "_error"
-                                                        : c.substr(0, dot) + ".units." + c.substr(dot + 1) + "_error";
+  if (!std::isfinite(e) && dot != std::string::npos) {
+    e = number_in(r, c.substr(0, dot) + "_error" + c.substr(dot));
+    unit_col = units_of(c.substr(0, dot) + "_error");
+  }
+  if (!std::isfinite(e)) return NAN;
   const Value* unit = find(r, unit_col);
   const bool relative = !unit || unit->text.empty() || unit->text == "relative" || unit->text == "1";
   return relative ? std::fabs(e * value) : std::fabs(e);

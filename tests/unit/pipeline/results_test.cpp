@@ -1,5 +1,6 @@
 // Results: rows from JSON summaries, the table, the plots' data (replica means) and the report.
 // Expected numbers are written out by hand from the inputs, not taken from an earlier run.
+#include <cmath>
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -193,4 +194,17 @@ TEST(Results, WorkedExampleOfTheDocs) {
   EXPECT_NE(j.find("\"stopped_because\": \"fixed replicas\""), std::string::npos);
   EXPECT_NE(j.find("a < b in E: Welch p = 0.045"), std::string::npos) << j;
   EXPECT_NEAR(number_after(j.find("\"rankings\""), "dof"), 5.8824, 1e-4);
+}
+
+// A per-axis value finds its tool error in both layouts, with its unit: `E.x_error` relative by
+// default; tomodem-conduct's `sigma_eff_error.x` under `units.sigma_eff_error` ("S/m": absolute,
+// "relative": times the value).
+TEST(Results, PerAxisToolErrorsInBothLayouts) {
+  const auto row = [](const std::string& json) { return tp::flatten_json(json, "c", "summary.json"); };
+  EXPECT_NEAR(tp::own_error(row(R"({"E": {"x": 10, "x_error": 0.02}})"), "c.E.x", 10), 0.2, 1e-12);
+  EXPECT_NEAR(tp::own_error(row(R"({"sigma_eff": {"x": 10}, "sigma_eff_error": {"x": 0.5},
+                                   "units": {"sigma_eff_error": "S/m"}})"), "c.sigma_eff.x", 10), 0.5, 1e-12);
+  EXPECT_NEAR(tp::own_error(row(R"({"sigma_eff": {"x": 10}, "sigma_eff_error": {"x": 0.5},
+                                   "units": {"sigma_eff_error": "relative"}})"), "c.sigma_eff.x", 10), 5.0, 1e-12);
+  EXPECT_TRUE(std::isnan(tp::own_error(row(R"({"sigma_eff": {"x": 10}})"), "c.sigma_eff.x", 10)));
 }
