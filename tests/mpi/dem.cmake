@@ -56,10 +56,3 @@ tomodem_mpi_test(dem_decomposition_energy_tests
   SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/dem/test_energy_decomposed.cpp
   LIBS tomodem_dem
   RANKS 1 2 3 4)
-
-# A bonded lattice checkpointed on N ranks after bonds began to break, restarted on N ranks:
-# bonds, failure events and particles bitwise the uninterrupted serial run.
-tomodem_mpi_test(dem_checkpoint_bond_tests
-  SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/dem/test_checkpoint_bonds_ranks.cpp
-  LIBS tomodem_dem
-  RANKS 1 2 3)
