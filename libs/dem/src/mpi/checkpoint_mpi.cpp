@@ -86,7 +86,7 @@ int block_owner(int64_t id, int64_t n, int ranks) {
 /// same datasets and attributes, in the same order, on every rank; each rank gives its rows.
 class ParallelFile {
  public:
-  ParallelFile(const std::string& path, MPI_Comm comm) : path_(path) {
+  ParallelFile(const std::string& path, MPI_Comm comm) : path_(path), comm_(comm) {
     H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
     MPI_Comm_rank(comm, &rank_);
     const hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
@@ -138,11 +138,13 @@ class ParallelFile {
     H5Dclose(dset);
     check(e, "write " + name);
   }
-  /// A small dataset of the whole sample, written by rank 0 (every rank calls it, with the same shape).
+  /// A small dataset of the whole sample, written by rank 0 (every rank calls it).
   template <class T>
   void write_root(const std::string& name, hid_t type, const std::vector<T>& data, hsize_t cols,
                   const std::string& units = "") {
-    const hsize_t rows = cols > 0 ? data.size() / cols : data.size();
+    // The shape is rank 0's (the gathered bond set is on rank 0 only).
+    unsigned long long rows = cols > 0 ? data.size() / cols : data.size();
+    MPI_Bcast(&rows, 1, MPI_UNSIGNED_LONG_LONG, 0, comm_);
     write(name, type, data.data(), rows, cols, 0, rank_ == 0 ? rows : 0, units);
   }
   void string_attr(hid_t on, const std::string& name, const std::string& value) {
@@ -173,6 +175,7 @@ class ParallelFile {
     if (status < 0) throw RuntimeFailure("cannot " + what + " in the checkpoint " + path_ + " (parallel HDF5)");
   }
   std::string path_;
+  MPI_Comm comm_;
   int rank_ = 0;
   hid_t file_ = -1, xfer_ = -1, lcpl_ = -1;
 };
