@@ -81,6 +81,10 @@ TEST(PackCli, BadInputExits2NamingFieldAndLeavesNoOutput) {
        "target: {solid_fraction: 0.97}\n", "not reachable"},
       {kOne, "target: {solid_fraction: 1.2}\n", "1.2"},
       {kOne, "target: {pressure: 100}\nprotocol: {method: fast}\n", "fast"},
+      // pressure targets the material cannot reach (issue 19): negative, and above the 0.48 MPa at
+      // which this Hertz material's mean overlap reaches 10 % of a radius (the message gives both)
+      {kOne, "target: {pressure: -5}\n", "-5"},
+      {kOne, "target: {pressure: 1.0e7}\n", "above"},
   };
   int k = 0;
   for (const auto& c : cases) {
