@@ -43,9 +43,13 @@ inline Network slab(double nx, double ny, double nz, unsigned seed, Material m =
 }
 
 /// Laws with the LEFM criterion from the materials (Γ = γ_i + γ_j).
-inline std::vector<dem::BondLaw> lefm_laws(const Packing& p, FailureOptions& f) {
+/// `isolated_necks`: every neck as if alone (no Laguerre-face cap), for hand-made bond sets whose
+/// bonded pairs need not be tessellation neighbours.
+inline std::vector<dem::BondLaw> lefm_laws(const Packing& p, FailureOptions& f, bool isolated_necks = false) {
   f.criterion = dem::BondFailure::lefm;
-  std::vector<dem::BondLaw> laws = bond_laws(p, "", LawOptions{}, true);
+  LawOptions o;
+  o.face_cap = !isolated_necks;
+  std::vector<dem::BondLaw> laws = bond_laws(p, "", o, true);
   set_failure(laws, p, f, "");
   return laws;
 }

@@ -61,7 +61,9 @@ FractureSample chain(bool q_above_p) {
   return make_sample(net, c);
 }
 
-std::vector<dem::BondLaw> laws_of(const FractureSample& s, FailureOptions& f) { return lefm_laws(s.packing, f); }
+// Isolated necks: B–Q and P–T bond across a sphere, so they share no Laguerre face and the dense-
+// network cap (docs/bond.md#dense-networks) would set them to zero; the chain tests the contact.
+std::vector<dem::BondLaw> laws_of(const FractureSample& s, FailureOptions& f) { return lefm_laws(s.packing, f, true); }
 
 }  // namespace
 
