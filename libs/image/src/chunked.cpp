@@ -759,9 +759,6 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
                          {"solid_islands_removed", 0}, {"pore_islands_removed", 0}, {"connectivity", cfg.connectivity}};
   {
     const double vox = sp[0] * sp[1] * sp[2];
-    json mp = json::array();
-    std::vector<double> diam;
-    int touching = 0;
     for (std::size_t k = 0; k < regs.size(); ++k) {
       auto& R = regs[k];
       R.label = int(k + 1);
@@ -769,18 +766,8 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
       R.centroid = {sum[k][0] / c * sp[0], sum[k][1] / c * sp[1], sum[k][2] / c * sp[2]};
       R.volume_m3 = c * vox;
       R.equivalent_diameter_m = std::cbrt(6.0 * R.volume_m3 / M_PI);
-      mp.push_back({{"id", R.label}, {"voxels", R.voxels}, {"volume_m3", R.volume_m3},
-                    {"equivalent_diameter_m", R.equivalent_diameter_m}, {"centroid_m", {R.centroid.x, R.centroid.y, R.centroid.z}},
-                    {"touches_surface", R.touches_surface}});
-      diam.push_back(R.equivalent_diameter_m);
-      touching += R.touches_surface;
     }
-    std::sort(diam.begin(), diam.end());
-    summary["macropores"] = mp;
-    summary["n_macropores_touching_surface"] = touching;
-    summary["pore_size_distribution"] = {{"kind", "macropore equivalent diameters (6V/pi)^(1/3), ascending"},
-                                         {"equivalent_diameters_m", diam},
-                                         {"median_m", diam.empty() ? 0.0 : diam[diam.size() / 2]}};
+    macropore_summary(regs, summary);
   }
   summary["chunked"] = {{"chunk_vox", chunk}, {"halo_vox", halo}, {"blocks", G.count()},
                         {"memory_budget_bytes", budget > 0 ? json(budget) : json(nullptr)},

@@ -357,23 +357,7 @@ Mask phase_labels(const Mask& pores, const Labels& macro, const Mask& phase2, Su
 
 // Each macropore's size and place, and their size distribution.
 void macropore_keys(const Labels& macro, int n_macro, Summary& summary) {
-  const auto regs = regions(macro, n_macro);
-  json mp = json::array();
-  std::vector<double> diam;
-  int touching = 0;
-  for (const auto& r : regs) {
-    mp.push_back({{"id", r.label}, {"voxels", r.voxels}, {"volume_m3", r.volume_m3},
-                  {"equivalent_diameter_m", r.equivalent_diameter_m}, {"centroid_m", {r.centroid.x, r.centroid.y, r.centroid.z}},
-                  {"touches_surface", r.touches_surface}});
-    diam.push_back(r.equivalent_diameter_m);
-    touching += r.touches_surface;
-  }
-  std::sort(diam.begin(), diam.end());
-  summary["macropores"] = mp;
-  summary["n_macropores_touching_surface"] = touching;
-  summary["pore_size_distribution"] = {{"kind", "macropore equivalent diameters (6V/pi)^(1/3), ascending"},
-                                       {"equivalent_diameters_m", diam},
-                                       {"median_m", diam.empty() ? 0.0 : diam[diam.size() / 2]}};
+  macropore_summary(regions(macro, n_macro), summary);
 }
 
 // Grain separation (distance map, h-maxima, watershed) and the grains as a packing: one sphere
@@ -594,6 +578,26 @@ std::string run_phantom(const PhantomConfig& c) {
     }
   }
   return s.text();
+}
+
+// Each macropore's size and place, and their size distribution (the in-memory and the chunked path).
+void macropore_summary(const std::vector<Region>& regs, Summary& summary) {
+  json mp = json::array();
+  std::vector<double> diam;
+  int touching = 0;
+  for (const auto& r : regs) {
+    mp.push_back({{"id", r.label}, {"voxels", r.voxels}, {"volume_m3", r.volume_m3},
+                  {"equivalent_diameter_m", r.equivalent_diameter_m}, {"centroid_m", {r.centroid.x, r.centroid.y, r.centroid.z}},
+                  {"touches_surface", r.touches_surface}});
+    diam.push_back(r.equivalent_diameter_m);
+    touching += r.touches_surface;
+  }
+  std::sort(diam.begin(), diam.end());
+  summary["macropores"] = mp;
+  summary["n_macropores_touching_surface"] = touching;
+  summary["pore_size_distribution"] = {{"kind", "macropore equivalent diameters (6V/pi)^(1/3), ascending"},
+                                       {"equivalent_diameters_m", diam},
+                                       {"median_m", diam.empty() ? 0.0 : diam[diam.size() / 2]}};
 }
 
 }  // namespace tomodem::image

@@ -11,6 +11,10 @@
 #include "tomodem/core/vec3.hpp"
 #include "tomodem/image/volume.hpp"
 
+namespace tomodem {
+class Summary;
+}
+
 namespace tomodem::image {
 
 // ---- filtering (filters_itk.cpp, binary.cpp) ----
@@ -97,6 +101,9 @@ struct Region {
 };
 /// Statistics of labels 1..n.
 std::vector<Region> regions(const Labels& l, int n);
+/// The summary keys of the macropores: `macropores` (id, voxels, volume_m3, equivalent_diameter_m,
+/// centroid_m, touches_surface), `n_macropores_touching_surface`, `pore_size_distribution`.
+void macropore_summary(const std::vector<Region>& regs, Summary& summary);
 
 /// Interface area between m != 0 and m == 0 per unit total volume (1/m): face count × 2/3,
 /// the mean-projection correction of voxel faces for isotropic surfaces (Lang et al. 2001).
