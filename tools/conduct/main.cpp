@@ -34,6 +34,8 @@ int main(int argc, char** argv) {
     bool no_bonds = false, no_contacts = false;
     app.add_flag("--no-bonds", no_bonds, "ignore /bonds");
     app.add_flag("--no-contacts", no_contacts, "ignore contacts (bonds only)");
+    app.add_flag("--isolated-necks", c.isolated_necks,
+                 "every neck as if alone (Holm): no cap at the Laguerre face (docs/conduct.md#neck-conductance)");
     app.add_option("--tolerance", c.tolerance, "relative residual of the CG solve")->capture_default_str();
     app.add_option("--max-iterations", c.max_iterations, "CG iteration cap (0: automatic)")->capture_default_str();
     app.add_option("--preconditioner", c.preconditioner, "ic | jacobi | amg | petsc (PETSc CG + GAMG, MPI build)")->capture_default_str();
@@ -44,6 +46,10 @@ int main(int argc, char** argv) {
     std::vector<std::string> voxel;
     app.add_option("--voxel-check", voxel,
                    "voxel cross-check at these resolutions: voxels along the longest edge (16,32,64) or per mean diameter (16d,32d,64d)")
+        ->delimiter(',');
+    app.add_option("--voxel-box", c.voxel_box,
+                   "cross-check (network and image) on a cube cut from the packing: edge in mean diameters (3d) or m");
+    app.add_option("--voxel-box-corner", c.voxel_box_corner, "--voxel-box lower corner, fractions of the cell (x,y,z; default centred)")
         ->delimiter(',');
     tomodem::cli::Common common;
     tomodem::cli::add_common(app, "tomodem-conduct", common);

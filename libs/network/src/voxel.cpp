@@ -17,8 +17,18 @@ namespace {
 // Bytes per voxel of the cross-check: the label (1) and the image solver's working set.
 double bytes_per_voxel() { return 1 + image_transport_bytes_per_voxel(false); }
 
-// Mean diameter of the conducting particles (all particles when none conducts).
-double conducting_mean_diameter(const Packing& pk, const std::vector<double>& sigma_of) {
+// Conductivity of each material in the cross-check (0: does not conduct).
+std::vector<double> material_sigma(const Packing& pk, const std::vector<std::string>& phases) {
+  const std::size_t nm = pk.materials.size();
+  std::vector<double> sigma_of(nm, phases.empty() ? 1.0 : 0.0);
+  for (std::size_t m = 0; m < nm; ++m) sigma_of[m] *= pk.materials[m].conductivity;
+  for (const auto& name : phases)
+    for (std::size_t m = 0; m < nm; ++m)
+      if (pk.materials[m].name == name) sigma_of[m] = pk.materials[m].conductivity;
+  return sigma_of;
+}
+
+double mean_diameter_of(const Packing& pk, const std::vector<double>& sigma_of) {
   double sum = 0, all = 0;
   std::size_t n = 0;
   for (std::size_t p = 0; p < pk.particles.size(); ++p) {
@@ -33,22 +43,17 @@ double conducting_mean_diameter(const Packing& pk, const std::vector<double>& si
   return pk.particles.size() ? all / pk.particles.size() : 0.0;
 }
 
-// Conductivity of each material in the cross-check (0: does not conduct).
-std::vector<double> material_sigma(const Packing& pk, const std::vector<std::string>& phases) {
-  const std::size_t nm = pk.materials.size();
-  std::vector<double> sigma_of(nm, phases.empty() ? 1.0 : 0.0);
-  for (std::size_t m = 0; m < nm; ++m) sigma_of[m] *= pk.materials[m].conductivity;
-  for (const auto& name : phases)
-    for (std::size_t m = 0; m < nm; ++m)
-      if (pk.materials[m].name == name) sigma_of[m] = pk.materials[m].conductivity;
-  return sigma_of;
+// The unit of a per-diameter resolution: the given diameter (a box cut from a packing keeps the
+// whole packing's) or the conducting mean diameter.
+double unit_diameter(const Packing& pk, const VoxelOptions& opt) {
+  return opt.diameter > 0 ? opt.diameter : mean_diameter_of(pk, material_sigma(pk, opt.phases));
 }
 
 // The voxel size: the longest edge over the resolution, or the conducting particles' mean
 // diameter over it (--voxel-check 16d).
 double voxel_size_of(const Packing& pk, const VoxelOptions& opt) {
   const Mat3& h = pk.cell.h;
-  if (opt.per_diameter) return conducting_mean_diameter(pk, material_sigma(pk, opt.phases)) / opt.resolution;
+  if (opt.per_diameter) return unit_diameter(pk, opt) / opt.resolution;
   return std::max({h(0, 0), h(1, 1), h(2, 2)}) / opt.resolution;
 }
 
@@ -196,6 +201,50 @@ double rasterise(const std::vector<Solid>& solids, const Cell& cell, const int n
 }
 }  // namespace
 
+double conducting_mean_diameter(const Packing& pk, const std::vector<std::string>& phases) {
+  return mean_diameter_of(pk, material_sigma(pk, phases));
+}
+
+Packing packing_box(const Packing& pk, const Vec3& lower, const Vec3& edge, const std::string& option) {
+  const Mat3& h = pk.cell.h;
+  char box[160];
+  std::snprintf(box, sizeof box, "lower corner %.4g %.4g %.4g m, edge %.4g %.4g %.4g m", lower[0], lower[1], lower[2],
+                edge[0], edge[1], edge[2]);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      if (r != c && h(r, c) != 0) throw InputError("", option, box, "needs a rectangular cell");
+  const Vec3 lo = lower - pk.cell.origin;
+  for (int k = 0; k < 3; ++k) {
+    const double L = h(k, k);
+    if (!(edge[k] > 0) || !std::isfinite(edge[k]) || !std::isfinite(lo[k]))
+      throw InputError("", option, box, "the box needs finite positive edges");
+    if (pk.cell.periodic[k] && edge[k] > 0.5 * L)
+      throw InputError("", option, box,
+                       std::string("the box is longer than half the periodic cell along ") + char('x' + k) +
+                           " (" + value_text(L) + " m): its pairs would not be minimum images");
+    if (!pk.cell.periodic[k] && (lo[k] < 0 || lo[k] + edge[k] > L * (1 + 1e-12)))
+      throw InputError("", option, box, std::string("the box leaves the (not periodic) cell along ") + char('x' + k));
+  }
+  std::vector<uint8_t> keep(pk.particles.size(), 0);
+  std::vector<Vec3> inside(pk.particles.size());
+  for (std::size_t p = 0; p < pk.particles.size(); ++p) {
+    Vec3 s = pk.particles.position[p] - lower;
+    bool in = true;
+    for (int k = 0; k < 3; ++k) {
+      if (pk.cell.periodic[k]) s[k] -= h(k, k) * std::floor(s[k] / h(k, k));
+      in = in && s[k] >= 0 && s[k] < edge[k];
+    }
+    keep[p] = in;
+    inside[p] = lower + s;
+  }
+  Packing out = select_particles(pk, keep);
+  std::size_t q = 0;
+  for (std::size_t p = 0; p < pk.particles.size(); ++p)
+    if (keep[p]) out.particles.position[q++] = inside[p];
+  out.cell = Cell::box(lower, lower + edge, false);
+  return out;
+}
+
 void check_voxel_grid(const Packing& pk, const VoxelOptions& opt) {
   const Mat3& h = pk.cell.h;
   for (int r = 0; r < 3; ++r)
@@ -256,7 +305,7 @@ VoxelResult voxel_conductivity(const Packing& pk, const VoxelOptions& opt) {
     const std::vector<Solid> solids = conducting_solids(pk, sigma_of, opt.bonds);
     res.solid_fraction = rasterise(solids, pk.cell, n, d, std::max(1, opt.subsamples), sigma_of, im, io.conductivity);
   }
-  res.voxels_per_diameter = conducting_mean_diameter(pk, sigma_of) / vs;
+  res.voxels_per_diameter = unit_diameter(pk, opt) / vs;
   // Neck resolution q = a²/(R* h) (voxel.hpp): the imaged neck is wider by a relative O(1/q).
   if (!opt.neck_radii.empty() && opt.neck_reduced_radii.size() == opt.neck_radii.size()) {
     std::vector<double> a = opt.neck_radii, q(a.size());
@@ -267,7 +316,7 @@ VoxelResult voxel_conductivity(const Packing& pk, const VoxelOptions& opt) {
     res.neck_median_voxels = a[a.size() / 2] / vs;
     res.neck_resolution_min = q.front() / vs;
     res.neck_resolution_median = q[q.size() / 2] / vs;
-    const double unit = opt.per_diameter ? conducting_mean_diameter(pk, sigma_of) : std::max({Lx, Ly, Lz});
+    const double unit = opt.per_diameter ? unit_diameter(pk, opt) : std::max({Lx, Ly, Lz});
     res.required_resolution_min = static_cast<long>(std::ceil(kNeckResolution * unit / std::max(q.front(), 1e-300)));
     res.required_resolution_median = static_cast<long>(std::ceil(kNeckResolution * unit / q[q.size() / 2]));
     res.necks_resolved = res.neck_resolution_median >= kNeckResolution;

@@ -15,6 +15,7 @@ struct ConductConfig {
   std::string contact_radius = "geometric";
   double gap_tolerance = 1e-3, min_contact_ratio = 0.01, electrode_tolerance = 0.05, voltage = 1.0;
   bool bonds = true, contacts = true;
+  bool isolated_necks = false;       ///< --isolated-necks: no cap at the Laguerre face (NetworkOptions::face_cap)
   double tolerance = 1e-10;
   int max_iterations = 0;
   std::string preconditioner = "ic";
@@ -25,6 +26,10 @@ struct ConductConfig {
   // per mean diameter of the conducting particles when voxel_per_diameter (--voxel-check 16d,32d).
   std::vector<int> voxel;
   bool voxel_per_diameter = false;
+  // --voxel-box: network and image of a cube cut from the packing ("3d": mean diameters, or m),
+  // lower corner at these fractions of the cell (empty: centred).
+  std::string voxel_box;
+  std::vector<double> voxel_box_corner;
   // Transport in a segmented image (--image): a label volume instead of a packing.
   std::string image;                 ///< labels (.h5, dataset /labels) from tomodem-segment
   int phase = -1;                    ///< the conducting label (σ = 1); -1: not given

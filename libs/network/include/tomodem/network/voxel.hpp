@@ -23,6 +23,7 @@ struct VoxelOptions {
   bool per_diameter = false;        ///< resolution counts voxels per mean diameter of the conducting particles
   bool bonds = true;                ///< rasterise intact bonds as cylinders of radius a_b
   int subsamples = 4;               ///< samples per axis in a voxel cut by a surface
+  double diameter = 0;              ///< m, the diameter of per_diameter; 0: the conducting mean diameter of the packing
   std::vector<std::string> phases;  ///< conducting phases; empty = all
   SolverOptions solver;
   std::string source;               ///< file name for error messages
@@ -62,6 +63,21 @@ void check_voxel_grid(const Packing& packing, const VoxelOptions& options);
 
 /// Needs a rectangular (diagonal h) cell. Periodic directions other than `axis` wrap.
 VoxelResult voxel_conductivity(const Packing& packing, const VoxelOptions& options);
+
+/// Mean diameter of the particles of the conducting phases (all phases when `phases` is empty; all
+/// particles when none conducts), m: the unit of --voxel-check 16d.
+double conducting_mean_diameter(const Packing& packing, const std::vector<std::string>& phases);
+
+/// The part of a packing in the box [lower, lower + edge) (m, absolute): the particles whose
+/// centres lie in it (the periodic image in the box where the cell is periodic), with the bonds and
+/// contacts between them; the cell is the box, not periodic. The voxel image clips the spheres at
+/// the box faces; the network of the box takes the particles touching the faces normal to the axis
+/// as electrodes, as for a whole cell. Every neck between two kept particles lies in the box (it
+/// is centred on the segment between their centres), so network and image hold the same necks.
+/// Needs a rectangular cell; along a periodic direction the box is at most half the cell edge (the
+/// pairs in it are then minimum images), along another it lies inside the cell. InputError naming
+/// `option` and the box otherwise.
+Packing packing_box(const Packing& packing, const Vec3& lower, const Vec3& edge, const std::string& option);
 
 /// Richardson extrapolation of three results on grids refined by the same factor:
 /// returns the extrapolated value, the observed order in *order and the error estimate of the
