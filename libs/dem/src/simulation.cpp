@@ -415,7 +415,11 @@ void check_engine_state(const SimState& s, const Simulation::EngineState& e) {
     size_is("/bonds/bend", B.bend.size(), nb);
     // Decomposed, an event names its bond in the whole set (DomainHooks::bond_id), which
     // read_checkpoint checked: against a rank's part it would fail on some ranks only.
+#if TOMODEM_HAVE_MPI
     const bool whole_set_ids = s.domain != nullptr;
+#else
+    const bool whole_set_ids = false;
+#endif
     for (const auto& ev : e.bond_events)
       if (ev.bond < 0 || (!whole_set_ids && std::size_t(ev.bond) >= nb))
         throw InputError("", "/bonds/events/bond", std::to_string(ev.bond), "not a bond index" + mismatch);
