@@ -7,6 +7,7 @@
 #include <unordered_set>
 
 #include "tomodem/core/error.hpp"
+#include "tomodem/geometry/laguerre.hpp"
 #include "tomodem/spatial/grid.hpp"
 #include "tomodem/spatial/overlap.hpp"
 
@@ -186,7 +187,64 @@ void add_contact_edges(const Packing& pk, const NetworkOptions& opt, const std::
   }
 }
 
+/// The dense-network cap: each edge's conductance is at most face_conductance() of the face its
+/// pair shares in the radical tessellation of the whole packing (every phase: a face shrinks
+/// where any neighbour's cell takes space); edges whose pair shares no face (their neck disc lies
+/// inside other particles' cells) are left out.
+void cap_at_faces(const Packing& pk, Network& net) {
+  const std::size_t m = net.n_edges();
+  if (m == 0) return;
+  const std::vector<geometry::LaguerreFace> faces =
+      geometry::laguerre_faces(pk.particles.position, pk.particles.radius, pk.cell);
+  std::vector<std::vector<std::size_t>> of(pk.particles.size());  // faces of each particle's cell
+  for (std::size_t f = 0; f < faces.size(); ++f) of[std::size_t(faces[f].i)].push_back(f);
+  Network out;  // the kept edges
+  out.graph.n_nodes = net.graph.n_nodes;
+  for (std::size_t e = 0; e < m; ++e) {
+    const int32_t a = net.graph.i[e], b = net.graph.j[e];
+    const Vec3 d = net.branch(e);
+    const double L = norm(d);
+    // The face between i and the image of j this edge joins (several images of j can neighbour
+    // i in a small cell): its offset is the branch vector, to round-off.
+    double area = 0;
+    for (std::size_t f : of[std::size_t(net.particle[a])])
+      if (faces[f].j == net.particle[b] && norm(faces[f].offset - d) <= 1e-9 * L) {
+        area = faces[f].area;
+        break;
+      }
+    // Cells that meet in an edge or a corner only (e.g. FCC's second shell at contact) come out of
+    // CGAL as degenerate faces of ~1e-43 m²: no face.
+    if (!(area > 1e-12 * L * L)) {
+      ++net.no_face;
+      continue;
+    }
+    double g = net.graph.g[e];
+    const double cap = face_conductance(area, L, net.radius[a], net.radius[b], net.node_conductivity[a],
+                                        net.node_conductivity[b]);
+    if (cap < g) {
+      g = cap;
+      ++net.face_capped;
+    }
+    out.graph.add_edge(a, b, g);
+    out.contact_radius.push_back(net.contact_radius[e]);
+    out.image.push_back(net.image[e]);
+    out.kind.push_back(net.kind[e]);
+    out.face_area.push_back(area);
+  }
+  net.graph = std::move(out.graph);
+  net.contact_radius = std::move(out.contact_radius);
+  net.image = std::move(out.image);
+  net.kind = std::move(out.kind);
+  net.face_area = std::move(out.face_area);
+}
+
 }  // namespace
+
+double face_conductance(double area, double L, double ri, double rj, double si, double sj) {
+  if (std::isinf(area)) return HUGE_VAL;
+  const double di = std::clamp((L * L + ri * ri - rj * rj) / (2 * L), 0.0, L);
+  return area / (di / si + (L - di) / sj);
+}
 
 Network build_network(const Packing& pk, const NetworkOptions& opt) {
   const std::string& src = opt.source;
@@ -204,6 +262,7 @@ Network build_network(const Packing& pk, const NetworkOptions& opt) {
   std::unordered_set<int64_t> bonded;
   if (opt.use_bonds) bonded = add_bond_edges(pk, src, add);
   if (opt.use_contacts) add_contact_edges(pk, opt, bonded, net, add);
+  if (opt.face_cap) cap_at_faces(pk, net);
   return net;
 }
 

@@ -3,6 +3,8 @@
 // intact bonds (radius a_b) and contacts (contact radius a) with the Holm constriction
 // conductance (docs/physics.md#resistor-networks):
 //   R_ij = 1/(4 σ_i a) + 1/(4 σ_j a)      (one half-space constriction per side, in series)
+// capped, in dense networks, at the two-point flux of the face the pair shares in the radical
+// (Laguerre) tessellation, A_face / (d_i/σ_i + d_j/σ_j) (docs/conduct.md#neck-conductance).
 #include <array>
 #include <cstdint>
 #include <string>
@@ -30,6 +32,10 @@ struct NetworkOptions {
   /// Floor of the contact radius, as a fraction of R*: touching pairs (overlap ≤ 0 within the
   /// gap tolerance) would otherwise have a = 0 and no conductance.
   double min_contact_ratio = 0.01;
+  /// Dense-network law: each edge's conductance capped at face_conductance() of the pair's
+  /// Laguerre face, edges whose pair shares no face left out; false: every neck as if alone
+  /// (--isolated-necks).
+  bool face_cap = true;
   std::string source = "";          ///< file name for error messages
 };
 
@@ -47,6 +53,11 @@ struct Network {
   std::vector<double> contact_radius;       ///< a, m
   std::vector<spatial::Image> image;  ///< j is taken in the periodic image x_j + h·image
   std::vector<EdgeKind> kind;
+  /// Area of the pair's Laguerre face, m² (+inf on the hull of an open cell direction); empty
+  /// without the face cap.
+  std::vector<double> face_area;
+  std::size_t face_capped = 0;  ///< edges whose conductance is the face's (below Holm's)
+  std::size_t no_face = 0;      ///< contacts and bonds left out: their pair shares no face
   // Geometry
   Cell cell;
   std::vector<std::string> phase_names;  ///< all materials, by index
@@ -69,6 +80,12 @@ ContactPairs find_contacts(const std::vector<Vec3>& position, const std::vector<
 
 /// Holm conductance of a contact of radius a between phases of conductivity s1 and s2, S.
 inline double holm_conductance(double a, double s1, double s2) { return 4.0 * a * s1 * s2 / (s1 + s2); }
+
+/// Two-point flux conductance of a Laguerre face of area A between spheres i and j at distance L,
+/// S: the face lies on the radical plane at d_i = (L² + r_i² − r_j²)/(2L) from i (clamped to
+/// [0, L]), the two half-cells in series. Equal phases: σ A/L, exact for a uniform field because
+/// the face is normal to the branch (docs/conduct.md#neck-conductance).
+double face_conductance(double area, double L, double r_i, double r_j, double s_i, double s_j);
 
 /// Builds the network; bad input (unknown phase names, a conducting phase with a non-positive
 /// or non-finite conductivity, no particles, a bond index out of range) is an InputError naming
