@@ -40,6 +40,8 @@ int main(int argc, char** argv) {
   app.add_flag("-B,--force-all", ro.force_all, "run every step");
   app.add_flag("-n,--dry-run", ro.dry_run, "say what would run and why; run nothing");
   app.add_flag("-k,--keep-going", ro.keep_going, "after a failure, run the steps that do not depend on it");
+  app.add_flag("--rerun-on-rebuild", ro.rerun_on_rebuild,
+               "re-run tool steps made by another build (git commit) of the same release");
   app.add_option("--shard", shard, "run slice K of N of the sweep (0/N: the shared upstream steps)");
   app.add_option("--set", lo.overrides, "override a variable (NAME=VALUE) or steps.S.params.K=VALUE")
       ->allow_extra_args(false);
@@ -124,7 +126,7 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (ex->parsed()) {
-      std::cout << tp::explain(p, step);
+      std::cout << tp::explain(p, step, ro);
       return 0;
     }
     const tp::RunSummary s = st->parsed() ? tp::status(p, ro) : tp::run(p, ro, std::cerr);

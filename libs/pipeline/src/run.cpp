@@ -372,7 +372,7 @@ class Scheduler {
         verdicts_[i] = Verdict{true, {"upstream " + upstream_runs + " would run (its new outputs decide)"}};
       else {
         const auto it = lock_.steps.find(in.id);
-        verdicts_[i] = check(in, it == lock_.steps.end() ? nullptr : &it->second, cache_, false);
+        verdicts_[i] = check(in, it == lock_.steps.end() ? nullptr : &it->second, cache_, false, o_.rerun_on_rebuild);
       }
     }
     const Verdict& v = *verdicts_[i];
@@ -558,9 +558,9 @@ RunSummary status(const Pipeline& p, const RunOptions& options) {
   return execute(p, o, nullptr);
 }
 
-std::string explain(const Pipeline& p, const std::string& name) {
+std::string explain(const Pipeline& p, const std::string& name, const RunOptions& options) {
   const auto idx = select(p, name);
-  const RunSummary s = status(p, {});
+  const RunSummary s = status(p, options);
   LockFile lock;
   HashCache cache;
   load_all_locks(p, lock, cache);
@@ -569,10 +569,11 @@ std::string explain(const Pipeline& p, const std::string& name) {
     const Instance& in = p.instances[i];
     const auto e = lock.steps.find(in.id);
     const LockEntry* rec = e == lock.steps.end() ? nullptr : &e->second;
-    const Verdict v = check(in, rec, cache, true);
+    const Verdict v = check(in, rec, cache, true, options.rerun_on_rebuild);
     out << in.id << ": " << (s.steps[i].state == "would-run" ? "would run" : "up to date") << " ("
         << in.where.str() << ")\n";
     for (const auto& r : v.reasons) out << "  because " << r << '\n';
+    for (const auto& n : v.notes) out << "  note: " << n << '\n';
     for (const auto u : in.upstream)
       if (s.steps[u].state == "would-run")
         out << "  because upstream " << p.instances[u].id << " would run (then its new outputs decide)\n";

@@ -151,7 +151,12 @@ void load_all_locks(const Pipeline& p, LockFile& lock, HashCache& cache) {
   for (const auto& f : shard_lock_files(p)) merge_lock(f, lock, cache);
 }
 
-Verdict check(const Instance& in, const LockEntry* e, HashCache& cache, bool all) {
+std::string release_of(const std::string& version) {
+  const auto b = version.rfind(" (git ");
+  return b != std::string::npos && version.back() == ')' ? version.substr(0, b) : version;
+}
+
+Verdict check(const Instance& in, const LockEntry* e, HashCache& cache, bool all, bool rerun_on_rebuild) {
   Verdict v;
   const auto add = [&](std::string r) {
     v.stale = true;
@@ -178,7 +183,15 @@ Verdict check(const Instance& in, const LockEntry* e, HashCache& cache, bool all
     }
   }
   // After params: a param change usually changes the command too, and names the cause better.
-  if (e->version != in.version && add("version changed: '" + e->version + "' -> '" + in.version + "'")) return v;
+  // A tool's release names its physics; its build (git hash) changes with every commit, so by
+  // default a rebuild alone does not re-run a study of hours (as Make ignores a new compiler).
+  // A `version:` of a cmd step is the user's own string and is compared whole.
+  const bool same_build = e->version == in.version;
+  const bool ignore_build = !in.tool.empty() && !rerun_on_rebuild && release_of(e->version) == release_of(in.version);
+  if (!same_build && ignore_build)
+    v.notes.push_back("made by another build of the same release ('" + e->version + "', now '" + in.version +
+                      "'): not re-run without --rerun-on-rebuild");
+  if (!same_build && !ignore_build && add("version changed: '" + e->version + "' -> '" + in.version + "'")) return v;
   if (e->command != in.command && add("command changed (was: " + e->command + ")")) return v;
   std::set<std::string> now;
   for (const auto& [name, path] : in.deps) {

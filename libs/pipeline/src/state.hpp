@@ -45,11 +45,16 @@ void load_all_locks(const Pipeline& p, LockFile& lock, HashCache& cache);
 struct Verdict {
   bool stale = false;
   std::vector<std::string> reasons;
+  std::vector<std::string> notes;  // what differs without making the step stale (explain prints them)
 };
 
 /// Why `in` must run given its record `e` (nullptr: none). With `all`, every reason; otherwise
-/// it stops at the first (and skips hashing when a cheaper rule already says "run").
-Verdict check(const Instance& in, const LockEntry* e, HashCache& cache, bool all);
+/// it stops at the first (and skips hashing when a cheaper rule already says "run"). A tool step
+/// made by another build of the same release is up to date unless `rerun_on_rebuild`.
+Verdict check(const Instance& in, const LockEntry* e, HashCache& cache, bool all, bool rerun_on_rebuild = false);
+
+/// A tool's `--version` line without its build part: "tomodem 0.9.0 (git 1a2b3c)" -> "tomodem 0.9.0".
+std::string release_of(const std::string& version);
 
 /// A record of a successful run: hashes of the inputs and outputs as they are now.
 LockEntry record(const Instance& in, HashCache& cache, const std::string& started, double seconds);

@@ -4,6 +4,8 @@
 #include <sys/stat.h>
 
 #include <ctime>
+#include <filesystem>
+#include <sstream>
 
 #include "scratch.hpp"
 #include "tomodem/core/output.hpp"
@@ -78,4 +80,40 @@ TEST(HashCache, FolderHashFollowsItsFiles) {
   EXPECT_EQ(tp::HashCache{}.hash(s.dir + "/d"), h1);  // absolute paths work too
   s.write("d/sub/y.txt", "3");
   EXPECT_NE(c.hash("d"), h1);
+}
+
+namespace {
+// A stand-in tool whose --version names a release and a build, as every tomodem tool's does.
+std::string fake_tool(const Scratch& s, const std::string& dir, const std::string& version) {
+  const std::string exe = s.write(dir + "/tomodem-fake", "#!/bin/sh\nif [ \"$1\" = --version ]; then echo '" + version +
+                                                            "'; echo 'features: openmp'; exit 0; fi\necho made > \"$1\"\n");
+  std::filesystem::permissions(exe, std::filesystem::perms::owner_all);
+  return s.path(dir);
+}
+
+tp::RunSummary run_with(const std::string& pipeline, const std::string& tool_dir, bool rerun_on_rebuild = false) {
+  tp::LoadOptions lo;
+  lo.tool_dir = tool_dir;
+  tp::RunOptions ro;
+  ro.quiet = true;
+  ro.rerun_on_rebuild = rerun_on_rebuild;
+  std::ostringstream progress;
+  return tp::run(tp::load(pipeline, lo), ro, progress);
+}
+}  // namespace
+
+TEST(Staleness, AnotherBuildOfTheSameReleaseIsUpToDateUnlessAsked) {
+  Scratch s;
+  const std::string pipe = s.write("p.yaml", "steps:\n  make:\n    tool: fake\n    args: ['${outs.0}']\n    outs: [out.txt]\n");
+  EXPECT_EQ(run_with(pipe, fake_tool(s, "build-a", "tomodem 0.9.0 (git aaaaaaa)")).ran, 1);
+  // The same release from another commit: up to date, and explain says why it was not re-run.
+  const std::string build_b = fake_tool(s, "build-b", "tomodem 0.9.0 (git bbbbbbb)");
+  EXPECT_EQ(run_with(pipe, build_b).up_to_date, 1);
+  tp::LoadOptions lo;
+  lo.tool_dir = build_b;
+  EXPECT_NE(tp::explain(tp::load(pipe, lo), "make").find("note: made by another build"), std::string::npos);
+  // Asked for: the rebuild makes it stale.
+  EXPECT_EQ(run_with(pipe, build_b, true).ran, 1);
+  // A new release always re-runs it.
+  EXPECT_EQ(run_with(pipe, fake_tool(s, "build-c", "tomodem 0.9.1 (git bbbbbbb)")).ran, 1);
 }

@@ -53,6 +53,7 @@ struct RunOptions {
   bool keep_going = false;          // after a failure, go on with steps that do not depend on it
   int shard = -1, shards = 0;       // --shard K/N (shard < 0: everything)
   bool quiet = false;
+  bool rerun_on_rebuild = false;    // a tool built from another commit of the same release is stale too
 };
 
 struct StepResult {
@@ -81,8 +82,9 @@ RunSummary run(const Pipeline& p, const RunOptions& options, std::ostream& progr
 RunSummary status(const Pipeline& p, const RunOptions& options);
 
 /// Every reason each instance of `name` is stale (changed input, param old -> new, command,
-/// version, missing/modified output), with its command and files.
-std::string explain(const Pipeline& p, const std::string& name);
+/// version, missing/modified output), with its command and files; notes on what differs without
+/// making it stale (a tool of another build).
+std::string explain(const Pipeline& p, const std::string& name, const RunOptions& options = {});
 
 /// Graphviz DOT of the instances; stale ones are filled.
 std::string dot(const Pipeline& p);
