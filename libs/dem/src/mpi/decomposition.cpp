@@ -134,6 +134,7 @@ class Domain final : public DomainHooks {
   double min(double v) override;
   void walls(SimState& s, NeighbourList& nl, const ForceJob& jb, bool tally, Tally& total, double* stiffness) override;
   std::vector<Vec3> ordered_sum(const std::vector<OrderedTerm>& terms, int groups) override;
+  std::vector<char> all_bytes(const std::vector<char>& mine) override;
   Measurements measure(const SimState& s, const Tally& tally, const EnergyAccount& energy) override;
 
   DomainLayout layout() const;
@@ -320,6 +321,16 @@ std::vector<Vec3> Domain::ordered_sum(const std::vector<OrderedTerm>& terms, int
   std::vector<Vec3> out(static_cast<std::size_t>(groups));
   for (const OrderedTerm& t : all) out.at(std::size_t(t.group)) += t.v;
   return out;
+}
+
+std::vector<char> Domain::all_bytes(const std::vector<char>& mine) {
+  const int len = int(mine.size());
+  std::vector<int> lens(static_cast<std::size_t>(size_)), offs(static_cast<std::size_t>(size_), 0);
+  MPI_Allgather(&len, 1, MPI_INT, lens.data(), 1, MPI_INT, comm_);
+  std::partial_sum(lens.begin(), lens.end() - 1, offs.begin() + 1);
+  std::vector<char> all(std::size_t(offs.back() + lens.back()));
+  MPI_Allgatherv(mine.data(), len, MPI_BYTE, all.data(), lens.data(), offs.data(), MPI_BYTE, comm_);
+  return all;
 }
 
 void Domain::walls(SimState& s, NeighbourList& nl, const ForceJob& jb, bool tally, Tally& total, double* stiffness) {

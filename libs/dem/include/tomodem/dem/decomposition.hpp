@@ -66,6 +66,8 @@ class DomainHooks {
   /// Per group g < groups, Σ v of every rank's terms of that group, added in ascending id order
   /// from zero: the bits of the serial loop over the particles. Collective.
   virtual std::vector<Vec3> ordered_sum(const std::vector<OrderedTerm>& terms, int groups) = 0;
+  /// Every rank's bytes, concatenated in rank order, on every rank (FIRE's sums). Collective.
+  virtual std::vector<char> all_bytes(const std::vector<char>& mine) = 0;
   /// The measurement of the whole cell from the rank's tally (already reduced) and owned particles.
   virtual Measurements measure(const SimState& s, const Tally& tally, const EnergyAccount& energy) = 0;
 };
