@@ -5,22 +5,32 @@
 // two tips fitted to the mode-I field. Its K is compared with fracture's own K = Y σ sqrt(π a),
 // σ = F/(W B), Y = sqrt(sec(π a/W)) (Feddersen; libs/mechanics fracture.cpp finish_result).
 //
-// The fit (docs/validation.md#coarse-grained-fields-against-elasticity): least squares over the
-// annulus r_min ≤ r ≤ r_max, |θ| ≤ 135° (away from the crack faces) around both tips, every model
-// convolved with the CG kernel by quadrature (the field is uniform along y). Asserted: Westergaard's
-// whole field of the centre crack, Z = σ z/sqrt(z² − a²), with K = σ sqrt(π a) its one parameter.
-// Printed for comparison: the singular term alone, σ_zz = K/sqrt(2πr) cos(θ/2)[1 + sin(θ/2)
-// sin(3θ/2)], and with the next term B r^{1/2}[cos(θ/2) − ½ sin θ sin(θ/2)]. On the crack line the
-// finite crack gives K/sqrt(2πr)(1 + 3r/4a − …): over any annulus wider than a particle at this
-// crack size the singular term alone reads ~15 % high (the K-dominated zone, r ≲ 0.05 a, is below
-// one diameter), and the two-term fit trades K against B in the noise.
+// The fits (docs/validation.md#crack-tip-field): least squares over the annulus r_min ≤ r ≤ r_max,
+// |θ| ≤ 135° (away from the crack faces) around both tips, every model convolved with the CG kernel
+// by quadrature (the field is uniform along y). Asserted, each within 10 %:
+// - Westergaard's whole field of the centre crack, Z = σ z/sqrt(z² − a²), K = σ sqrt(π a) its one
+//   parameter;
+// - the singular term σ_zz = K/sqrt(2πr) f(θ), f = cos(θ/2)[1 + sin(θ/2) sin(3θ/2)], taken to r → 0
+//   (Irwin: K = lim sqrt(2πr) σ_zz) by stress extrapolation: the apparent K_app = σ_zz sqrt(2πr)/f(θ)
+//   follows K (1 + c r/a) on the crack line, the finite crack's first correction (Williams' r^{1/2}
+//   term, angular form g(θ) = cos(θ/2) − ½ sin θ sin(θ/2) off the line), and c is fixed by the
+//   crack's expansion (3/4 in an infinite plate, 0.762 for Irwin's periodic array at 2a/W = 0.4),
+//   so K stays the only amplitude.
+// Printed for comparison: the singular term alone (on the crack line the finite crack gives
+// K/sqrt(2πr)(1 + 3r/4a − …): over any annulus wider than a particle at this crack size it reads
+// ~15 % high, the K-dominated zone r ≲ 0.05 a being below one diameter); the two Williams terms with
+// B free (K and B trade in the noise); the FE practice's crack-line extrapolation with a free slope
+// (the intercept of a straight line through a few dozen noisy K_app: not robust).
 // - r_min = 2w: inside, the smoothed field depends on the network at r < w, where the tip is a
 //   discrete bond and its position is known to ± half a bond length only;
 // - r_max = 0.5 a: the free faces and grips are more than 2a away; the finite width changes the
-//   shape little (Irwin's periodic crack array fitted with the single crack's field: K within 0.4 %).
+//   shape little (Irwin's periodic crack array fitted with the single crack's field: K within 0.4 %);
+//   the expansion truncated after its first correction loses 0.8 % here (fitted to Westergaard's
+//   own field).
 // Tolerance 10 % (issue 20). Budget: noise (rms residual ~10 % per node, ~100 independent kernel
-// areas: ~1 %), tip position (± 0.5 R: ± 0.4 %), annulus (r_min, r_max varied: ± 3 %), the clamped
-// grips at H = 1.2 W against the handbook's remote stress behind Y.
+// areas: ~1 %), tip position (± 0.5 R: ± 0.4 %), annulus (r_min, r_max varied: −1.5 to +3.6 %),
+// truncation (−0.8 %), c (3/4 against 0.762: 0.2 %), the clamped grips at H = 1.2 W against the
+// handbook's remote stress behind Y.
 #include <gtest/gtest.h>
 
 #include <sys/resource.h>
@@ -116,7 +126,7 @@ TEST(CrackTip, CoarseGrainedFieldGivesFractureK) {
   const double R = 1e-6, d = 2 * R;
   // Final sample W × B × H = 60 × 3 × 72 d: test::slab inserts at 0.30 (random sequential
   // insertion slows down near its jamming limit, 0.38) and densifies to 0.66, lengths × 0.769.
-  // TOMODEM_CRACK_TIP_SCALE = k (the bench run, k = 3) makes W and H k times larger, so the crack
+  // TOMODEM_CRACK_TIP_SCALE = k (the bench run, k = 2) makes W and H k times larger, so the crack
   // is k times longer in diameters and its K-dominated zone (r <= 0.15 a) lies outside the kernel.
   const char* scale_text = std::getenv("TOMODEM_CRACK_TIP_SCALE");
   const double scale = scale_text ? std::atof(scale_text) : 1.0;
@@ -222,12 +232,14 @@ TEST(CrackTip, CoarseGrainedFieldGivesFractureK) {
     const double al = M_PI * a / s.W;
     return al * (1 / std::tan(al) - 0.5 / std::tan(2 * al));
   };
-  enum Model { singular, corrected, westergaard, two_terms, line_extrapolated };
+  enum Model { singular, corrected, line_corrected, westergaard, two_terms, line_extrapolated };
   // Least squares over the nodes with r_min ≤ r ≤ r_max. The one-amplitude models minimise
   // Σ (σ − K φ)²; two_terms frees B; line_extrapolated is the stress-extrapolation method of FE
   // fracture practice on the crack line: K_app = σ/g1 at each node, a straight line in h fitted
-  // by plain regression, K its intercept (slope free).
-  auto fit = [&](Model model, double r_min, double r_max, int shift_index = 0, double c = -1, bool to_westergaard = false) {
+  // by plain regression, K its intercept (slope free); line_corrected is `corrected` on those
+  // crack-line nodes only (slope fixed).
+  auto fit = [&](Model model, double r_min, double r_max, int shift_index = 0, double c = -1,
+                 bool to_westergaard = false) {
     const double a = s.a + shifts[shift_index];
     if (c < 0) c = first_correction(a);
     double A11 = 0, A12 = 0, A22 = 0, b1 = 0, b2 = 0, ss = 0, n = 0, sh = 0, shh = 0, sk = 0, shk = 0;
@@ -240,9 +252,10 @@ TEST(CrackTip, CoarseGrainedFieldGivesFractureK) {
         n += 1, sh += q.h, shh += q.h * q.h, sk += k_app, shk += q.h * k_app;
         continue;
       }
+      if (model == line_corrected && !q.on_line) continue;
       double g1 = q.g1, g3 = 0;
       if (model == westergaard) g1 = q.gw;
-      if (model == corrected) g1 = q.g1 + c / (a * std::sqrt(2 * M_PI)) * q.g3;
+      if (model == corrected || model == line_corrected) g1 = q.g1 + c / (a * std::sqrt(2 * M_PI)) * q.g3;
       if (model == two_terms) g3 = q.g3;
       n += 1;
       A11 += g1 * g1, A12 += g1 * g3, A22 += g3 * g3, b1 += g1 * sigma, b2 += g3 * sigma, ss += sigma * sigma;
@@ -276,26 +289,27 @@ TEST(CrackTip, CoarseGrainedFieldGivesFractureK) {
               s.mean_bond_length / d);
   std::printf("K_fracture %.5g (Y %.4f, sigma %.5g per m opening), stiffness %.5g N/m, %ld CG iterations\n", K_fracture,
               geometry_factor(s.geometry, s.a / s.W), sigma, resp.stiffness, resp.cg_iterations);
-  std::printf("r in [%.2f, %.2f] d, %ld nodes: Westergaard K %.5g (%+.2f%%, rms residual %.3f); singular term alone %+.2f%%; singular "
-              "extrapolated with its first correction (c = %.3f) %+.2f%%; singular + free r^1/2 %+.2f%%; crack line "
-              "K_app(h) extrapolated, free slope (%ld nodes) %+.2f%%\n",
+  std::printf("r in [%.2f, %.2f] d, %ld nodes: Westergaard K %.5g (%+.2f%%, rms residual %.3f); singular term "
+              "alone %+.2f%%; singular extrapolated with its first correction (c = %.3f) %+.2f%%; singular + free "
+              "r^1/2 %+.2f%%; crack line K_app(h) extrapolated (%ld nodes), slope fixed %+.2f%%, free %+.2f%%\n",
               r_min / d, r_max / d, main.points, main.K, pct(main), main.rms, pct(single), first_correction(s.a),
               pct(extrapolated), pct(pair), fit(line_extrapolated, r_min, r_max).points,
-              pct(fit(line_extrapolated, r_min, r_max)));
+              pct(fit(line_corrected, r_min, r_max)), pct(fit(line_extrapolated, r_min, r_max)));
   // The truncation of the expansion after the first correction, measured on the smoothed
   // Westergaard field itself (K exact, c = 3/4): what the corrected fit loses to the O((r/a)²)
   // terms. Then the data fitted with c = 3/4 instead of the periodic array's 0.762.
-  std::printf("  on Westergaard's own field (infinite plate, c = 3/4): singular %+.2f%%, first correction %+.2f%%, crack line free slope %+.2f%%; "
-              "first correction with c = 3/4 (infinite plate) %+.2f%%\n",
+  std::printf("  on Westergaard's own field (infinite plate, c = 3/4): singular %+.2f%%, first correction %+.2f%%, "
+              "crack line free slope %+.2f%%; first correction with c = 3/4 (infinite plate) %+.2f%%\n",
               100 * (fit(singular, r_min, r_max, 0, -1, true).K - 1),
               100 * (fit(corrected, r_min, r_max, 0, 0.75, true).K - 1),
-              100 * (fit(line_extrapolated, r_min, r_max, 0, -1, true).K - 1), pct(fit(corrected, r_min, r_max, 0, 0.75)));
+              100 * (fit(line_extrapolated, r_min, r_max, 0, -1, true).K - 1),
+              pct(fit(corrected, r_min, r_max, 0, 0.75)));
   auto variants = [&](const char* what, double lo, double hi, int shift_index) {
     std::printf("  %s: Westergaard %+.2f%%, singular %+.2f%%, first correction %+.2f%%, two terms %+.2f%%, crack line "
-                "free slope %+.2f%%\n",
+                "slope fixed %+.2f%%, free %+.2f%%\n",
                 what, pct(fit(westergaard, lo, hi, shift_index)), pct(fit(singular, lo, hi, shift_index)),
                 pct(fit(corrected, lo, hi, shift_index)), pct(fit(two_terms, lo, hi, shift_index)),
-                pct(fit(line_extrapolated, lo, hi, shift_index)));
+                pct(fit(line_corrected, lo, hi, shift_index)), pct(fit(line_extrapolated, lo, hi, shift_index)));
   };
   char label[96];
   for (int i = 1; i < 3; ++i) {
