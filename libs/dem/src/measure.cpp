@@ -9,36 +9,24 @@ void EnergyAccount::add_external_work(const SimState& s, const Tally& last) {
   const Particles& p = s.p;
   const double dt = s.dt;
   const Vec3 g = s.body.gravity;
+  const bool gravity = g.x != 0 || g.y != 0 || g.z != 0;
+  // The particles' terms (gravity; grips moved at a prescribed velocity work against the forces
+  // they receive) over the owned particles, summed over the ranks when decomposed. The walls'
+  // forces and the virial are the same on every rank already, so they are counted once.
+  double v[2] = {0, 0};  // gravity, grips
+  for (std::size_t i = 0; i < p.size(); ++i) {
 #if TOMODEM_HAVE_MPI
-  if (s.domain) {
-    // Decomposed: the particles' terms over the owned ones, summed over the ranks; the walls'
-    // forces and the virial are global already (the same on every rank), so counted once.
-    double v[2] = {0, 0};  // gravity, grips
-    for (std::size_t i = 0; i < p.size(); ++i) {
-      if (s.domain->ghost[i]) continue;
-      v[0] += p.m[i] * dot(g, p.v[i]) * dt;
-      if (p.motion[i] == Motion::prescribed) v[1] -= dot(p.f[i], p.v[i]) * dt;
-    }
-    s.domain->sum(v, 2);
-    ext_work += v[0];
-    for (const auto& w : s.walls) ext_work += -dot(w.force, w.velocity) * dt;
-    ext_work += v[1];
-    if (s.deforming()) {
-      const Mat3& L = s.control.velocity_gradient;
-      double pw = 0;
-      for (int a = 0; a < 3; ++a)
-        for (int b = 0; b < 3; ++b) pw -= last.virial(a, b) * L(a, b);
-      ext_work += pw * dt;
-    }
-    return;
-  }
+    if (s.domain && s.domain->ghost[i]) continue;
 #endif
-  if (g.x != 0 || g.y != 0 || g.z != 0)
-    for (std::size_t i = 0; i < p.size(); ++i) ext_work += p.m[i] * dot(g, p.v[i]) * dt;
+    if (gravity) v[0] += p.m[i] * dot(g, p.v[i]) * dt;
+    if (p.motion[i] == Motion::prescribed) v[1] -= dot(p.f[i], p.v[i]) * dt;
+  }
+#if TOMODEM_HAVE_MPI
+  if (s.domain) s.domain->sum(v, 2);
+#endif
+  ext_work += v[0];
   for (const auto& w : s.walls) ext_work += -dot(w.force, w.velocity) * dt;
-  // Particles moved at a prescribed velocity (grips) work against the forces they receive.
-  for (std::size_t i = 0; i < p.size(); ++i)
-    if (p.motion[i] == Motion::prescribed) ext_work -= dot(p.f[i], p.v[i]) * dt;
+  ext_work += v[1];
   if (s.deforming()) {
     const Mat3& L = s.control.velocity_gradient;
     // Power of the boundary on the contact network: -Σ F_ij ⊗ l_ij : L = V σ_c : L.
