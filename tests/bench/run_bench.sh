@@ -33,6 +33,9 @@ PEERS=${PEERS:-$REPO/tests/bench/peers}
 DOC=${DOC:-$REPO/docs/benchmarks.md}
 PIN=${PIN:-}
 export OMP_NUM_THREADS=1
+# Passive waiting: an OpenMP thread that spins at a barrier takes a core from the other thread
+# (or another job) on a shared machine, and the two-thread rows collapse 2-10x (issue 19).
+export OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-PASSIVE}
 BENCH=$BUILD/bin/tomodem-bench-sceneA
 
 # ---- peers: install when missing (Debian packages; Yade deliberately not installed) ----
