@@ -457,6 +457,17 @@ json voxel_check(const ConductConfig& c, const Packing& pk, const Network& net, 
     out["discretisation_error"] = e;
     out["converging"] = converging;
     out["asymptotic"] = asymptotic;
+    // With four grids or more, the order of the previous triple too: an order that moves by more
+    // than 0.5 from one triple to the next is not settled (necks crossing q ~ 1 at different
+    // grids, gap bridges vanishing), and the extrapolation is not trusted.
+    bool settled = true;
+    if (k >= 4 && std::abs(static_cast<double>(c.voxel[k - 3]) / c.voxel[k - 4] - ratio) <= 1e-9 * ratio) {
+      double order_previous = 0, e_previous = 0;
+      richardson(s[k - 4], s[k - 3], s[k - 2], ratio, &order_previous, &e_previous);
+      out["observed_order_previous"] = order_previous;
+      settled = std::abs(order - order_previous) <= 0.5;
+      out["order_settled"] = settled;
+    }
     if (!same_ratio) problems.push_back("the last three --voxel-check resolutions are not refined by one factor: no Richardson extrapolation");
     else if (!converging) {
       char msg[200];
@@ -464,7 +475,12 @@ json voxel_check(const ConductConfig& c, const Packing& pk, const Network& net, 
                     "the extrapolated value is the finest result, not a converged one", s[k - 3], s[k - 2], s[k - 1], order);
       problems.push_back(msg);
     }
-    else if (last.necks_resolved && !asymptotic) {
+    else if (!settled) {
+      char msg[300];
+      std::snprintf(msg, sizeof msg, "the observed order is not settled: %.2f on the last three grids, %.2f on the three "
+                    "before; the extrapolation is not a converged value", order, out["observed_order_previous"].get<double>());
+      problems.push_back(msg);
+    } else if (last.necks_resolved && !asymptotic) {
       char msg[320];
       std::snprintf(msg, sizeof msg, "the coarsest grid of the extrapolation (%d) has a median neck a^2/(R* h) = %.2g < %.0f: "
                     "the observed order %.2f is not the asymptotic one; the error estimate is the last difference",
