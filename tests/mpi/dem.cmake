@@ -56,3 +56,17 @@ tomodem_mpi_test(dem_decomposition_energy_tests
   SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/dem/test_energy_decomposed.cpp
   LIBS tomodem_dem
   RANKS 1 2 3 4)
+
+# Checkpoints and restarts on ranks with bonds (breaking), walls and the energy budget, 1-4 ranks:
+# the file equals the serial one and every restart ends bitwise on the uninterrupted serial run.
+tomodem_mpi_test(dem_checkpoint_state_ranks_tests
+  SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/dem/test_checkpoint_state_ranks.cpp
+  LIBS tomodem_dem
+  RANKS 1 2 3 4)
+
+# FIRE at a fixed cell on ranks: a disordered packing above jamming (frictionless and
+# frictional) relaxes in the serial steps to the serial positions bitwise; enthalpy FIRE refused.
+tomodem_mpi_test(dem_decomposition_fire_tests
+  SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/dem/test_fire_decomposed.cpp
+  LIBS tomodem_dem
+  RANKS 1 2 3 4)

@@ -131,11 +131,6 @@ int run(int argc, char** argv) {
     for (const auto& c : ri.physics_changes) warn("--restart-changed-physics: continuing with changed physics: " + c);
   }
   if (ranks > 1) {
-    if ((!scene.sim->walls().empty() || scene.sim->bonds().size() > 0 || scene.sim->settings().track_energy) &&
-        (!restart.empty() || !scene.outputs.checkpoint.empty()))
-      throw InputError(scene_path, restart.empty() ? "output.checkpoint" : "--restart",
-                       restart.empty() ? scene.outputs.checkpoint : restart,
-                       "checkpoints of a scene with walls, bonds or track_energy are not decomposed yet: run on one rank");
 #if TOMODEM_HAVE_MPI
     try {
       // Checkpoints: every rank restored the whole sample and keeps its own (docs/dem.md, "Checkpoints").

@@ -196,21 +196,24 @@ void write_checkpoint_ranks(const std::string& path, const Simulation& sim, cons
   int rank = 0, ranks = 1;
   MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &ranks);
-  // Walls are not decomposed yet (decompose refuses them); their per-particle history would need
-  // the same treatment as the pair history below.
-  if (!sim.walls().empty())
-    throw InputError("", "output.checkpoint", path, "a decomposed run with walls cannot write checkpoints yet: run on one rank");
   const DomainHooks& d = *sim.domain();
   const Particles& p = sim.particles();
   const Simulation::EngineState e = sim.engine_state();
   const bool rot = p.has_rotation();
+  const std::size_t nw = sim.walls().size();  // the same on every rank
 
-  // The pair history's width and contact flag are the engine's (the same on every rank); a rank
-  // without pairs learns them from the others.
-  long shape[2] = {e.j.empty() ? 0L : long(e.history.size() / e.j.size()), e.touching.empty() ? 0L : 1L};
-  MPI_Allreduce(MPI_IN_PLACE, shape, 2, MPI_LONG, MPI_MAX, comm);
-  const std::size_t stride = std::size_t(shape[0]);
+  // The history's width and contact flag are the engine's (the same on every rank, pairs and
+  // walls alike); a rank without pairs or particles learns them from the others.
+  long shape[3] = {e.j.empty() ? 0L : long(e.history.size() / e.j.size()), e.touching.empty() ? 0L : 1L,
+                   nw == 0 || p.size() == 0 ? 0L : long(e.wall_history[0].size() / p.size())};
+  if (nw > 0 && !e.wall_touching[0].empty()) shape[1] = 1;
+  MPI_Allreduce(MPI_IN_PLACE, shape, 3, MPI_LONG, MPI_MAX, comm);
+  const std::size_t stride = std::size_t(std::max(shape[0], shape[2]));
   const bool touch = shape[1] != 0;
+  // Per wall, whether each local particle is one of its candidates (the list holds owned ones).
+  std::vector<std::vector<uint8_t>> candidate(nw, std::vector<uint8_t>(p.size(), 0));
+  for (std::size_t w = 0; w < nw; ++w)
+    for (const int32_t i : e.wall_candidates[w]) candidate[w][std::size_t(i)] = 1;
   long owned = 0;
   for (std::size_t i = 0; i < p.size(); ++i) owned += !d.ghost[i];
   int64_t n = owned;
@@ -237,6 +240,12 @@ void write_checkpoint_ranks(const std::string& path, const Simulation& sim, cons
       w.put(touch ? e.touching[std::size_t(q)] : uint8_t(0));
       w.put(&e.history[std::size_t(q) * stride], stride);
     }
+    // Its wall state: per wall, candidate and contact flags and the history.
+    for (std::size_t wl = 0; wl < nw; ++wl) {
+      w.put(candidate[wl][i]);
+      w.put(touch ? e.wall_touching[wl][i] : uint8_t(0));
+      w.put(&e.wall_history[wl][i * stride], stride);
+    }
   }
   std::vector<int> scount(nr), rcount(nr), sdis(nr, 0), rdis(nr, 0);
   for (int r = 0; r < ranks; ++r) scount[std::size_t(r)] = int(out[std::size_t(r)].size());
@@ -262,7 +271,7 @@ void write_checkpoint_ranks(const std::string& path, const Simulation& sim, cons
       if (r.id < lo || r.id >= hi || at[std::size_t(r.id - lo)])
         throw RuntimeFailure("checkpoint: particle " + std::to_string(r.id) + " owned twice or sent to the wrong rank");
       at[std::size_t(r.id - lo)] = here;
-      c.p += std::size_t(r.pairs) * (sizeof(int64_t) + 2 + sizeof(double) * stride);
+      c.p += (std::size_t(r.pairs) + nw) * (2 + sizeof(double) * stride) + std::size_t(r.pairs) * sizeof(int64_t);
     }
   }
   for (std::size_t k = 0; k < nb; ++k)
@@ -272,6 +281,9 @@ void write_checkpoint_ranks(const std::string& path, const Simulation& sim, cons
   std::vector<int32_t> phase(nb), start(nb + (rank == ranks - 1 ? 1 : 0)), pj;
   std::vector<int64_t> id(nb);
   std::vector<uint8_t> motion(nb), image, touching;
+  std::vector<std::vector<int32_t>> wall_cand(nw);
+  std::vector<std::vector<double>> wall_hist(nw, std::vector<double>(nb * stride));
+  std::vector<std::vector<uint8_t>> wall_touch(nw, std::vector<uint8_t>(touch ? nb : 0));
   for (std::size_t k = 0; k < nb; ++k) {
     Cursor c{at[k], recvbuf.data() + recvbuf.size()};
     const Row r = c.get<Row>();
@@ -287,6 +299,12 @@ void write_checkpoint_ranks(const std::string& path, const Simulation& sim, cons
       hist.resize(hist.size() + stride);
       c.get(hist.data() + hist.size() - stride, stride);
     }
+    for (std::size_t wl = 0; wl < nw; ++wl) {
+      if (c.get<uint8_t>()) wall_cand[wl].push_back(int32_t(r.id));  // in id order: the serial list's
+      const uint8_t t = c.get<uint8_t>();
+      if (touch) wall_touch[wl][k] = t;
+      c.get(wall_hist[wl].data() + k * stride, stride);
+    }
   }
   std::vector<char>().swap(recvbuf);
   // Where this block's rows start in the whole list: an exclusive prefix sum over the ranks.
@@ -297,6 +315,14 @@ void write_checkpoint_ranks(const std::string& path, const Simulation& sim, cons
   if (total > int64_t(INT32_MAX)) throw RuntimeFailure("checkpoint: " + std::to_string(total) + " listed pairs do not fit the format's 32-bit offsets");
   for (auto& s : start) s += int32_t(offset);
   if (rank == ranks - 1) start.back() = int32_t(total);
+  // The same for each wall's candidate list.
+  std::vector<int64_t> wall_count(nw), wall_offset(nw, 0), wall_total(nw, 0);
+  for (std::size_t wl = 0; wl < nw; ++wl) wall_count[wl] = int64_t(wall_cand[wl].size());
+  if (nw > 0) {
+    MPI_Exscan(wall_count.data(), wall_offset.data(), int(nw), MPI_INT64_T, MPI_SUM, comm);
+    if (rank == 0) std::fill(wall_offset.begin(), wall_offset.end(), 0);
+    MPI_Allreduce(wall_count.data(), wall_total.data(), int(nw), MPI_INT64_T, MPI_SUM, comm);
+  }
 
   // The bond set and its failure events, whole, on rank 0 (collective).
   long has_bonds = sim.bonds().size() > 0 || !sim.bond_events().empty();
@@ -337,10 +363,11 @@ void write_checkpoint_ranks(const std::string& path, const Simulation& sim, cons
     pf.write_root("/cell/h", H5T_NATIVE_DOUBLE, mat(cell.h), 3, "m");
     pf.write_root("/cell/origin", H5T_NATIVE_DOUBLE, std::vector<double>{cell.origin.x, cell.origin.y, cell.origin.z}, 0, "m");
     pf.write_root("/cell/velocity_gradient", H5T_NATIVE_DOUBLE, mat(sim.cell_control().velocity_gradient), 3, "1/s");
-    const std::vector<double> none;
-    pf.write_root("/walls/point", H5T_NATIVE_DOUBLE, none, 3, "m");
-    pf.write_root("/walls/velocity", H5T_NATIVE_DOUBLE, none, 3, "m/s");
-    pf.write_root("/walls/force", H5T_NATIVE_DOUBLE, none, 3, "N");
+    std::vector<Vec3> wp, wv, wf;
+    for (const Wall& wl : sim.walls()) wp.push_back(wl.point), wv.push_back(wl.velocity), wf.push_back(wl.force);
+    pf.write_root("/walls/point", H5T_NATIVE_DOUBLE, flat(wp), 3, "m");
+    pf.write_root("/walls/velocity", H5T_NATIVE_DOUBLE, flat(wv), 3, "m/s");
+    pf.write_root("/walls/force", H5T_NATIVE_DOUBLE, flat(wf), 3, "N");
     pf.write("/engine/start", H5T_NATIVE_INT32, start.data(), N + 1, 0, first, hsize_t(start.size()));
     pf.write("/engine/j", H5T_NATIVE_INT32, pj.data(), M, 0, off, hsize_t(pj.size()));
     pf.write("/engine/image", H5T_NATIVE_UINT8, image.data(), M, 0, off, hsize_t(image.size()));
@@ -348,7 +375,14 @@ void write_checkpoint_ranks(const std::string& path, const Simulation& sim, cons
     pf.write("/engine/history", H5T_NATIVE_DOUBLE, hist.data(), M * stride, 0, off * stride, hsize_t(hist.size()));
     pf.write("/engine/x_at_build", H5T_NATIVE_DOUBLE, fxb.data(), N, 3, first, cnt, "m");
     pf.write_root("/engine/h_at_build", H5T_NATIVE_DOUBLE, mat(e.h_at_build), 3, "m");
-    pf.write_root("/engine/wall_point_at_build", H5T_NATIVE_DOUBLE, none, 3, "m");
+    for (std::size_t wl = 0; wl < nw; ++wl) {
+      const std::string g = "/engine/wall" + std::to_string(wl);
+      pf.write(g + "/candidates", H5T_NATIVE_INT32, wall_cand[wl].data(), hsize_t(wall_total[wl]), 0,
+               hsize_t(wall_offset[wl]), hsize_t(wall_cand[wl].size()));
+      pf.write(g + "/history", H5T_NATIVE_DOUBLE, wall_hist[wl].data(), N * stride, 0, first * stride, cnt * stride);
+      pf.write(g + "/touching", H5T_NATIVE_UINT8, wall_touch[wl].data(), touch ? N : 0, 0, first, touch ? cnt : 0);
+    }
+    pf.write_root("/engine/wall_point_at_build", H5T_NATIVE_DOUBLE, flat(e.wall_point_at_build), 3, "m");
     pf.write("/engine/force", H5T_NATIVE_DOUBLE, ff.data(), N, 3, first, cnt, "N");
     const auto ft = flat(torque);
     pf.write("/engine/torque", H5T_NATIVE_DOUBLE, ft.data(), rot ? N : 0, 3, first, rot ? cnt : 0, "N m");
@@ -408,15 +442,24 @@ void decompose_restored(Simulation& sim, const DecompositionOptions& opt) {
   }
   int all_exact = exact ? 1 : 0;
   MPI_Allreduce(MPI_IN_PLACE, &all_exact, 1, MPI_INT, MPI_LAND, MPI_COMM_WORLD);
+  // The walls too stand where the last build found their candidates.
+  std::vector<Vec3> walls_now;
+  for (const Wall& w : sim.walls()) walls_now.push_back(w.point);
+  const auto back_to_now = [&] {
+    p.x = x_now;
+    sim.cell().h = h_now;
+    for (std::size_t w = 0; w < walls_now.size(); ++w) sim.walls()[w].point = walls_now[w];
+  };
   if (all_exact) {
     p.x = whole.x_at_build;
     sim.cell().h = whole.h_at_build;
+    for (std::size_t w = 0; w < walls_now.size() && w < whole.wall_point_at_build.size(); ++w)
+      sim.walls()[w].point = whole.wall_point_at_build[w];
   }
   try {
     decompose(sim, opt);
   } catch (...) {
-    p.x = x_now;
-    sim.cell().h = h_now;
+    back_to_now();
     throw;
   }
   const DomainHooks& d = *sim.domain();
@@ -430,6 +473,7 @@ void decompose_restored(Simulation& sim, const DecompositionOptions& opt) {
       if (p.has_rotation()) local.torque[i] = whole.torque[g];
     }
     sim.cell().h = h_now;
+    for (std::size_t w = 0; w < walls_now.size(); ++w) sim.walls()[w].point = walls_now[w];
   }
   // Otherwise the list was rebuilt at the checkpoint's positions (the history carried by particle
   // id): the same physics, but the wrap and the next rebuild fall on other steps (round-off).
