@@ -5,10 +5,44 @@
 
 #include "tomodem/core/error.hpp"
 #include "tomodem/dem/law_registry.hpp"
+#if TOMODEM_HAVE_MPI
+#include <cstring>
+#include <unordered_map>
+
+#include "tomodem/dem/decomposition.hpp"
+#endif
 
 namespace tomodem::dem {
 
 namespace {
+#if TOMODEM_HAVE_MPI
+/// FIRE on ranks (docs/dem.md, "Running on several ranks"): what a rank needs of the other
+/// ranks' particles, gathered on every rank in id order (the serial order). O(N) bytes per rank.
+struct GatheredBody {
+  int64_t id;
+  Vec3 f, v, torque, omega;
+  double m, inv_m, inv_I;
+};
+/// The owned particles that `keep` selects, every rank's, sorted by id, on every rank. Collective.
+template <class Keep>
+std::vector<GatheredBody> gather_bodies(DomainHooks& d, const Particles& p, Keep keep) {
+  const bool rot = p.has_rotation();
+  std::vector<char> mine;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (d.ghost[i] || !keep(i)) continue;
+    const GatheredBody b{p.id[i], p.f[i], p.v[i], rot ? p.torque[i] : Vec3{}, rot ? p.omega[i] : Vec3{},
+                         p.m[i], p.inv_m[i], rot ? p.inv_I[i] : 0.0};
+    const std::size_t o = mine.size();
+    mine.resize(o + sizeof b);
+    std::memcpy(mine.data() + o, &b, sizeof b);
+  }
+  const std::vector<char> all = d.all_bytes(mine);
+  std::vector<GatheredBody> out(all.size() / sizeof(GatheredBody));
+  if (!out.empty()) std::memcpy(out.data(), all.data(), out.size() * sizeof(GatheredBody));
+  std::sort(out.begin(), out.end(), [](const GatheredBody& a, const GatheredBody& b) { return a.id < b.id; });
+  return out;
+}
+#endif
 /// Stiffness-scaled masses for the minimisation; the physical ones come back on destruction.
 /// m_i = 2 f max(S_i, F_i) (Δt_max / c)², S_i = Σ_c S_c over the particle's contacts and bonds.
 /// Gershgorin on M⁻¹K: ω_i² ≤ 2 f S_i / m_i ≤ (c/Δt_max)², c = 1.4 against the Verlet limit 2
@@ -26,22 +60,29 @@ class ScaledMasses {
  public:
   static constexpr double kMargin = 1.4;  // c
   ScaledMasses(Simulation& sim, double dt_max, double max_move, double rmin)
-      : p_(sim.particles()), sim_(sim), dt_max_(dt_max) {
+      : p_(sim.particles()), sim_(sim), dt_max_(dt_max), delta_(std::sqrt(90.0 / 8.0) * max_move * rmin / kMargin) {
     m_ = p_.m;
     inv_m_ = p_.inv_m;
     if (p_.has_rotation()) inv_I_ = p_.inv_I;
-    const ContactModel& model = sim.model();
-    const LawInfo& normal_law = law_info(model.normal);
-    const double delta = std::sqrt(90.0 / 8.0) * max_move * rmin / kMargin;
-    floor_.resize(p_.size());
-    for (std::size_t i = 0; i < p_.size(); ++i) {
-      double k = 0;  // the stiffest pair of the normal law at that overlap
-      for (const auto& pp : model.pairs) k = std::max(k, normal_law.stiffness(pp, p_.r[i], delta));
-      floor_[i] = 3 * k;
-    }
+    set_floor();
+#if TOMODEM_HAVE_MPI
+    // Decomposed, particles migrate and ghosts come and go: the physical masses are kept by id.
+    if (sim.domain())
+      for (const GatheredBody& b : gather_bodies(*sim.domain(), p_, [](std::size_t) { return true; })) physical_[b.id] = b;
+#endif
   }
   ~ScaledMasses() { restore(); }
   void restore() {
+#if TOMODEM_HAVE_MPI
+    if (sim_.domain()) {
+      for (std::size_t i = 0; i < p_.size(); ++i) {
+        const GatheredBody& b = physical_.at(p_.id[i]);
+        p_.m[i] = b.m, p_.inv_m[i] = b.inv_m;
+        if (p_.has_rotation()) p_.inv_I[i] = b.inv_I;
+      }
+      return;
+    }
+#endif
     p_.m = m_;
     p_.inv_m = inv_m_;
     if (p_.has_rotation()) p_.inv_I = inv_I_;
@@ -54,9 +95,39 @@ class ScaledMasses {
   bool update(const Measurements& m) {
     const std::vector<double>& s = sim_.stiffness_sums();
     const std::size_t n = p_.size();
-    if (s.size() != n || m.contacts + m.bonds == 0) return false;
+    bool no_sums = s.size() != n;
+#if TOMODEM_HAVE_MPI
+    DomainHooks* const d = sim_.domain();
+    if (d) no_sums = d->any(no_sums);  // one decision on every rank (m is global already)
+#endif
+    if (no_sums || m.contacts + m.bonds == 0) return false;
     const double f = p_.has_rotation() ? 6.0 : 1.0, scale = 2 * f * dt_max_ * dt_max_ / (kMargin * kMargin);
     const bool rot = p_.has_rotation();
+#if TOMODEM_HAVE_MPI
+    if (d) {
+      // A ghost's stiffness sum lacks the contacts its rank does not hold: the owners' masses
+      // are gathered for the ghosts (the floor is per particle here, the list of them changes).
+      set_floor();
+      for (std::size_t i = 0; i < n; ++i) {
+        const GatheredBody& b = physical_.at(p_.id[i]);
+        if (d->ghost[i] || !(b.inv_m > 0)) continue;
+        const double mi = scale * std::max(s[i], floor_[i]);
+        p_.m[i] = mi;
+        p_.inv_m[i] = 1 / mi;
+        if (rot && b.inv_I > 0) p_.inv_I[i] = 1 / (0.4 * mi * p_.r[i] * p_.r[i]);
+      }
+      std::unordered_map<int64_t, const GatheredBody*> owner;
+      const std::vector<GatheredBody> all = gather_bodies(*d, p_, [&](std::size_t i) { return physical_.at(p_.id[i]).inv_m > 0; });
+      for (const GatheredBody& b : all) owner[b.id] = &b;
+      for (std::size_t i = 0; i < n; ++i) {
+        const auto it = d->ghost[i] ? owner.find(p_.id[i]) : owner.end();
+        if (it == owner.end()) continue;
+        p_.m[i] = it->second->m, p_.inv_m[i] = it->second->inv_m;
+        if (rot) p_.inv_I[i] = it->second->inv_I;
+      }
+      return true;
+    }
+#endif
     for (std::size_t i = 0; i < n; ++i) {
       if (!(inv_m_[i] > 0)) continue;  // fixed particles stay fixed
       const double mi = scale * std::max(s[i], floor_[i]);
@@ -72,10 +143,26 @@ class ScaledMasses {
   }
 
  private:
+  /// F_i of every local particle: three contacts of the stiffest pair of the normal law at the
+  /// overlap δ of a collision.
+  void set_floor() {
+    const ContactModel& model = sim_.model();
+    const LawInfo& normal_law = law_info(model.normal);
+    floor_.resize(p_.size());
+    for (std::size_t i = 0; i < p_.size(); ++i) {
+      double k = 0;
+      for (const auto& pp : model.pairs) k = std::max(k, normal_law.stiffness(pp, p_.r[i], delta_));
+      floor_[i] = 3 * k;
+    }
+  }
+
   Particles& p_;
   Simulation& sim_;
-  double dt_max_;
+  double dt_max_, delta_;
   std::vector<double> m_, inv_m_, inv_I_, floor_;
+#if TOMODEM_HAVE_MPI
+  std::unordered_map<int64_t, GatheredBody> physical_;  // decomposed: the physical masses by id
+#endif
 };
 /// Power and norms over the free particles (fixed or prescribed ones keep their velocity), in
 /// mass-weighted coordinates (u = √m v, g = F/√m): the mixing turns v towards M⁻¹F, the
@@ -104,6 +191,24 @@ FireSums particle_sums(const Particles& p, bool rot, int threads, bool parallel)
   }
   return {power, vv, ff, ww, tt, f2, nfree};
 }
+/// particle_sums of the whole sample. Decomposed: the serial loop over every rank's free
+/// particles gathered in id order (one thread), so every rank holds the serial bits and takes the
+/// serial run's decisions (mixing, time step, restarts, convergence) in the same steps.
+FireSums fire_sums(Simulation& sim, bool rot, int threads, bool parallel) {
+  const Particles& p = sim.particles();
+#if TOMODEM_HAVE_MPI
+  if (DomainHooks* const d = sim.domain()) {
+    Particles q;  // what particle_sums reads
+    for (const GatheredBody& b : gather_bodies(*d, p, [&](std::size_t i) { return p.motion[i] == Motion::free; })) {
+      q.r.push_back(0), q.motion.push_back(Motion::free), q.f.push_back(b.f), q.v.push_back(b.v);
+      q.m.push_back(b.m), q.inv_m.push_back(b.inv_m);
+      q.torque.push_back(b.torque), q.omega.push_back(b.omega), q.inv_I.push_back(b.inv_I);
+    }
+    return particle_sums(q, rot, 1, false);
+  }
+#endif
+  return particle_sums(p, rot, threads, parallel);
+}
 /// FIRE's mixing of the free particles' velocities towards M⁻¹F (cv, cw: the translation and
 /// rotation weights), no particle faster than vmax.
 void mix_particles(Particles& p, bool rot, double alpha, double cv, double cw, double vmax, int threads, bool parallel) {
@@ -131,7 +236,10 @@ FireResult minimise_fire(Simulation& sim, const FireOptions& o) {
   const std::size_t n = p.size();
   const bool rot = p.has_rotation();
   const int threads = std::max(1, sim.settings().threads);
-  const double rmin = *std::min_element(p.r.begin(), p.r.end());
+  double rmin = p.r.empty() ? HUGE_VAL : *std::min_element(p.r.begin(), p.r.end());
+#if TOMODEM_HAVE_MPI
+  if (sim.domain()) rmin = sim.domain()->min(rmin);  // a rank need not hold the smallest particle
+#endif
   // Scaled masses: the step's limit is the network's (kept by the masses), not the Rayleigh time.
   ScaledMasses masses(sim, dt_max, o.max_move, rmin);
   const bool scaled = o.scale_masses && masses.update(sim.measure());  // stiffness of the start state
@@ -149,7 +257,7 @@ FireResult minimise_fire(Simulation& sim, const FireOptions& o) {
   while (r.steps < o.max_steps) {
     sim.step();
     ++r.steps;
-    const FireSums sums = particle_sums(p, rot, threads, parallel);
+    const FireSums sums = fire_sums(sim, rot, threads, parallel);
     const double power = sums.power, vv = sums.vv, ff = sums.ff, ww = sums.ww, tt = sums.tt, f2 = sums.f2;
     const long nfree = sums.nfree;
     const double dt_old = dt;
@@ -233,6 +341,10 @@ FireResult minimise_enthalpy(Simulation& sim, const FireOptions& o, const Enthal
   if (!(e.pressure > 0)) throw InputError("", "pressure", std::to_string(e.pressure), "the enthalpy minimiser needs a target pressure > 0");
   if (sim.cell_control().active())
     throw InputError("", "minimise", "", "the enthalpy minimiser drives the cell itself: stop the cell's deformation and servo first");
+#if TOMODEM_HAVE_MPI
+  if (sim.domain())
+    throw InputError("", "minimise", "enthalpy", "the enthalpy minimiser (the cell as a degree of freedom) is not decomposed yet: run it on one rank (FIRE at a fixed cell is)");
+#endif
   CellControl& ctl = sim.cell_control();
   BodyForces& body = sim.body_forces();
   const double damping = body.local_damping, dt_caller = sim.time_step();
