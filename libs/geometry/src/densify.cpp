@@ -163,35 +163,73 @@ double affine_q_slope(const dem::Simulation& sim, double p, double alpha, double
   return p > 0 ? std::pow(p, 1 / (alpha - 1)) / ((alpha - 1) * p) * dpdphi : 0;
 }
 
+/// Pressure factor between two stages of the enthalpy minimisation.
+constexpr double kStageFactor = 10;
+/// An enthalpy stage ends at this multiple of the unbalanced-force criterion and within
+/// kStagePressureTolerance of its pressure (the last stage: kPressureTolerance of the target).
+/// Closer to equilibrium the joint minimisation stalls (docs/pack.md): the fixed-cell polish
+/// finishes from there.
+constexpr double kStageForceFactor = 10, kStagePressureTolerance = 0.05;
+
+/// Step cap of one enthalpy stage: FIRE's relaxation time grows with the slowest (longest) mode,
+/// about the cell's size in diameters, N^(1/3).
+long enthalpy_stage_cap(const dem::Simulation& sim) {
+  return 20000 + long(2000 * std::cbrt(double(sim.particles().size())));
+}
+
 /// Pressure target: the enthalpy H = U + P V minimised over the positions and the cell
-/// (dem::minimise_enthalpy; LAMMPS fix box/relax with FIRE) from the loose insertion until the
-/// contact pressure first reaches the target: one compression that jams the packing at the
-/// target. The jammed structure is then polished at fixed cell (FIRE) with Newton/secant
-/// corrections of the volume on q = p^(1/(α−1)) (linear in φ above jamming), until the
-/// unbalanced-force ratio is below the criterion and |p − P|/P < kPressureTolerance.
+/// (dem::minimise_enthalpy; LAMMPS fix box/relax with FIRE) from the loose insertion.
+/// Staged (frictionless, non-adhesive, unbonded packings; spec.enthalpy_stages = K > 0): the
+/// packing is jammed at 10^K P, further from jamming, where FIRE converges in fewer steps (the
+/// softest modes of a jammed packing stiffen with the distance to jamming), then each stage
+/// releases the cell to the next pressure 10^(K−1) P, ..., P: a decompression along the jammed
+/// branch, always from a jammed state. Each stage ends at kStageForceFactor × the criterion or at
+/// its step cap (near jamming the joint minimisation stalls at ratios ~1e-2: harmonic spheres at
+/// p d/k ≤ 1e-4). Unstaged (or frictional/adhesive packings, whose structure depends on the load
+/// history, so that an overshoot would change them), the minimisation stops when the contact
+/// pressure first reaches the target.
+/// The state is then polished at fixed cell (FIRE) with Newton/secant corrections of the volume
+/// on q = p^(1/(α−1)) (linear in φ above jamming), until the unbalanced-force ratio is below the
+/// criterion and |p − P|/P < kPressureTolerance, or spec.max_steps are spent (the tool then
+/// reports target_reached: false and exits 4).
 /// Tangential springs are kept throughout (an isotropic affine strain gives them no increment).
 QuasiStaticResult enthalpy(dem::Simulation& sim, const PackSpec& spec, double vsolid,
                            const std::vector<std::vector<int>>& clusters, RelaxSettings& rs, PackReport& rep,
                            const std::function<void(const std::string&)>& say) {
   QuasiStaticResult out;
   const double pt = spec.target_pressure, alpha = spec.normal == dem::NormalLaw::linear ? 2.0 : 2.5;
-  say("enthalpy minimisation (FIRE, cell as a degree of freedom) to pressure " + num(pt) + " Pa");
+  const bool stageable = spec.friction == 0 && spec.rolling_friction == 0 && !rs.adhesive && clusters.empty();
+  int stages = stageable ? std::max(0, spec.enthalpy_stages) : 0;
+  // The top stage stays below a tenth of the admissible pressure (overlaps of about 1 % of d).
+  const double pmax = max_admissible_pressure(spec);
+  while (stages > 0 && pt * std::pow(kStageFactor, stages) > 0.1 * pmax) --stages;
+  say("enthalpy minimisation (FIRE, cell as a degree of freedom) to pressure " + num(pt) + " Pa" +
+      (stages > 0 ? " from " + num(pt * std::pow(kStageFactor, stages)) + " Pa in " + std::to_string(stages + 1) + " stages" : ""));
   Progress bar("pressure target " + num(pt) + " Pa", 1.0);
   double log_start = 0;
   dem::EnthalpyOptions eo;
-  eo.pressure = pt;
   eo.diagonal = spec.cell_relax == CellRelax::diagonal;
-  eo.pressure_tolerance = kPressureTolerance;
-  eo.stop_on_arrival = true;
   eo.report = [&](long steps, double p) {
     bar.update(pressure_progress(p, pt, log_start), "step " + std::to_string(steps) + ", p " + num(p) + " Pa");
   };
-  rs.fo.max_steps = spec.max_steps;
-  const dem::FireResult r = dem::minimise_enthalpy(sim, rs.fo, eo);
-  out.steps = r.steps;
-  ++rep.minimisations;
+  dem::FireOptions fo = rs.fo;
   double phi = vsolid / sim.cell().volume();
-  say("enthalpy FIRE: target pressure reached after " + std::to_string(r.steps) + " steps at phi " + num(phi));
+  for (int k = stages; k >= 0 && out.steps < spec.max_steps; --k) {
+    const bool last_stage = k == 0;
+    eo.pressure = pt * std::pow(kStageFactor, k);
+    eo.stop_on_arrival = stages == 0;
+    eo.pressure_tolerance = last_stage ? kPressureTolerance : kStagePressureTolerance;
+    fo.unbalanced_force_ratio = kStageForceFactor * rs.fo.unbalanced_force_ratio;
+    fo.max_steps = std::min(spec.max_steps - out.steps, stages == 0 ? spec.max_steps : enthalpy_stage_cap(sim));
+    const dem::FireResult r = dem::minimise_enthalpy(sim, fo, eo);
+    out.steps += r.steps;
+    out.last = r.last;
+    ++rep.minimisations;
+    phi = vsolid / sim.cell().volume();
+    say("enthalpy FIRE at " + num(eo.pressure) + " Pa: " + (r.converged ? "converged" : "stopped") + " after " +
+        std::to_string(r.steps) + " steps, phi " + num(phi) + ", p " + num(-r.last.stress_contact.trace() / 3) +
+        " Pa, unbalanced " + num(r.last.unbalanced_force_ratio));
+  }
   const auto q_of = [&](double p) { return p > 0 ? std::pow(p, 1 / (alpha - 1)) : 0.0; };
   const double qt = q_of(pt);
   struct Point { double phi = 0, q = 0; bool set = false; };

@@ -77,6 +77,10 @@ struct PackSpec {
   PackMethod method = PackMethod::quasistatic;
   Target target = Target::pressure;
   CellRelax cell_relax = CellRelax::isotropic;  ///< quasistatic pressure target
+  /// Quasistatic pressure target, frictionless non-adhesive packings: the enthalpy minimisation
+  /// first jams the packing at 10^k × the target for k = enthalpy_stages, ..., 1 and then
+  /// decompresses it to the target (0: one minimisation straight to the target). docs/pack.md.
+  int enthalpy_stages = 2;
   double target_pressure = 0;          ///< Pa
   double target_solid_fraction = 0;
   double strain_rate = 0;              ///< 1/s, compression cap (0: 2e-5 per critical time step)
