@@ -50,7 +50,7 @@ bool shared(bool ok_here) {  // true when true on every rank
 bool same(const Vec3& a, const Vec3& b) { return std::memcmp(&a, &b, sizeof(Vec3)) == 0; }
 
 /// A disordered packing above jamming: an FCC crystal of 5³ cells (500 spheres) of mean diameter d
-/// at nearest-neighbour distance d (packing fraction 0.77 with the radii ±15 %), positions
+/// at nearest-neighbour distance d (packing fraction 0.76 with the radii ±15 %), positions
 /// jittered by ±0.25 d, periodic. Hertz contacts, frictionless, or with Mindlin
 /// friction 0.3 (spins and torques in FIRE's sums).
 Simulation jammed(bool friction) {
