@@ -187,6 +187,32 @@ void add_contact_edges(const Packing& pk, const NetworkOptions& opt, const std::
   }
 }
 
+/// Whether the centres, with the periodic cell vectors, span three dimensions. A chain or a layer
+/// in an open cell has unbounded power cells (every face reaches the hull: nothing to cap), and
+/// CGAL's triangulation of it is not three-dimensional.
+bool spans_space(const Packing& pk) {
+  const Vec3 x0 = pk.particles.position[0];
+  std::vector<Vec3> d;
+  for (const Vec3& x : pk.particles.position) d.push_back(x - x0);
+  for (int k = 0; k < 3; ++k)
+    if (pk.cell.periodic[k]) d.push_back(pk.cell.h.col(k));
+  const auto farthest = [&](const auto& dist) {
+    double best = 0;
+    Vec3 arg;
+    for (const Vec3& v : d)
+      if (dist(v) > best) best = dist(v), arg = v;
+    return std::make_pair(best, arg);
+  };
+  const auto [l1, v1] = farthest([](const Vec3& v) { return norm(v); });
+  if (!(l1 > 0)) return false;
+  const Vec3 u1 = v1 * (1 / l1);
+  const auto [l2, v2] = farthest([&](const Vec3& v) { return norm(v - dot(v, u1) * u1); });
+  if (!(l2 > 1e-12 * l1)) return false;
+  Vec3 n = cross(u1, v2);
+  n *= 1 / norm(n);
+  return farthest([&](const Vec3& v) { return std::abs(dot(v, n)); }).first > 1e-12 * l1;
+}
+
 /// The dense-network cap: each edge's conductance is at most face_conductance() of the face its
 /// pair shares in the radical tessellation of the whole packing (every phase: a face shrinks
 /// where any neighbour's cell takes space); edges whose pair shares no face (their neck disc lies
@@ -194,6 +220,10 @@ void add_contact_edges(const Packing& pk, const NetworkOptions& opt, const std::
 void cap_at_faces(const Packing& pk, Network& net) {
   const std::size_t m = net.n_edges();
   if (m == 0) return;
+  if (!spans_space(pk)) {
+    net.face_area.assign(m, HUGE_VAL);
+    return;
+  }
   const std::vector<geometry::LaguerreFace> faces =
       geometry::laguerre_faces(pk.particles.position, pk.particles.radius, pk.cell);
   std::vector<std::vector<std::size_t>> of(pk.particles.size());  // faces of each particle's cell
