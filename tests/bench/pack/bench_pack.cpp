@@ -133,8 +133,8 @@ TEST(PackBench, Million) {
 }
 
 // Pressure target 1 MPa (issue 19: a jammed packing in equilibrium), lognormal σ = 0.3 Hertz
-// alumina, at N = 10^4 and TOMODEM_PACK_BENCH_PRESSURE_BIG (default 10^5; 0 skips): enthalpy
-// FIRE with the cell as a degree of freedom, then the fixed-cell polish (docs/pack.md). Timings
+// alumina, at N = 10^4 and TOMODEM_PACK_BENCH_PRESSURE_BIG (default 10^5; 0 skips): staged
+// enthalpy FIRE with the cell as a degree of freedom, then the fixed-cell polish (docs/pack.md). Timings
 // printed, not asserted; the run must end at its target.
 TEST(PackBench, PressureTarget) {
   for (long n : {10000L, env("TOMODEM_PACK_BENCH_PRESSURE_BIG", 100000)}) {
