@@ -70,3 +70,10 @@ tomodem_mpi_test(dem_decomposition_fire_tests
   SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/dem/test_fire_decomposed.cpp
   LIBS tomodem_dem
   RANKS 1 2 3 4)
+
+# Free sintering of 256 spheres (the sintering driver's radius growth, mass scaling, densification
+# and necks across ranks): 1-4 ranks against the serial driver, bit-identical on a fixed rank count.
+tomodem_mpi_test(dem_decomposition_sinter_tests
+  SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/dem/test_sinter_decomposed.cpp
+  LIBS tomodem_dem
+  RANKS 1 2 3 4)

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <sstream>
 
@@ -20,6 +21,9 @@
 #include "tomodem/core/summary.hpp"
 #include "tomodem/core/tool.hpp"
 #include "tomodem/dem/sinter.hpp"
+#if TOMODEM_HAVE_MPI
+#include "tomodem/dem/decomposition.hpp"
+#endif
 #include "tomodem/mechanics/network.hpp"
 
 using namespace tomodem;
@@ -109,11 +113,17 @@ void check_sinter_outputs(const std::string& scene_path, const dem::Scene& scene
   if (!json_path.empty()) refuse_output_over_input(json_path, "--json", written);
 }
 
-// The sintered packing: particles, necks as /bonds, the curve as a series, provenance.
-Packing sintered_packing(const std::string& scene_path, const dem::Scene& scene, const dem::SinterReport& rep,
+// The sintered packing: particles (with their contacts, gathered in the serial order on ranks),
+// necks as /bonds, the curve as a series, provenance.
+Packing sintered_packing(const std::string& scene_path, const dem::Scene& scene, Packing packing,
+                         const dem::BondSet& necks, const dem::SinterReport& rep,
                          const std::vector<std::vector<double>>& rows) {
-  Packing packing = dem::to_packing(*scene.sim, scene.materials);
-  packing.bonds = dem::necks_to_bond_table(*scene.sim);
+  packing.bonds.i = necks.i;
+  packing.bonds.j = necks.j;
+  packing.bonds.radius = necks.radius;
+  packing.bonds.rest_length = necks.rest_length;
+  packing.bonds.state.assign(necks.size(), BondTable::intact);
+  packing.bonds.broken_at.assign(necks.size(), std::numeric_limits<double>::quiet_NaN());
   packing.provenance.tool = "tomodem-sinter";
   packing.provenance.version = version_string();
   packing.provenance.parameters = scene.text;
@@ -301,6 +311,17 @@ int run(int argc, char** argv) {
   cli::check_o_as_folder(o_value, "tomodem-sinter");
   const std::string& json_path = common.json;
   if (scene_path.empty()) throw InputError("", "scene", "", "no scene file given (see --help)");
+  // Started on several ranks (MPI build only: run_tool refuses it elsewhere): one run, the sample
+  // decomposed into sub-domains (docs/sintering.md, "On several ranks"); rank 0 reports and writes.
+  const int ranks = launched_ranks();
+  const bool rank0 = launched_rank() == 0;
+  if (!rank0) set_quiet(true);
+  if (ranks > 1 && app.count("--snapshots-at"))
+    throw InputError("", "--snapshots-at", snapshots_at, "snapshots are not taken on several ranks yet: run on one rank");
+  if (ranks > 1 && !settings_path.empty())
+    throw InputError("", "--sinter-config", settings_path,
+                     "a packing with a settings file is not sintered on several ranks yet: run on one rank, or "
+                     "write a scene (docs/sintering.md)");
   if (out_dir.empty()) throw InputError("", "--output-dir", "", "the output folder must not be empty");
   // --threads given: it wins (0: every core); not given: the scene's settings.threads if it writes one, else
   // every core (the scene reader's default, as for every tool: docs/cli.md).
@@ -363,8 +384,19 @@ int run(int argc, char** argv) {
       if (!json_path.empty()) refuse_output_over_input(json_path, "--json", {f});
     }
   }
-  std::filesystem::create_directories(out_dir);
-  info(scene.sim->describe() + "; " + std::to_string(scene.sim->particles().size()) + " particles");
+  const std::size_t n_particles = scene.sim->particles().size();
+#if TOMODEM_HAVE_MPI
+  if (ranks > 1) {
+    try {
+      dem::decompose(*scene.sim);  // refuses too many ranks
+    } catch (const InputError& e) {
+      throw InputError(scene_path, e.field() == "ranks" ? "mpirun -np" : e.field(), e.value(), e.why());
+    }
+  }
+#endif
+  if (rank0) std::filesystem::create_directories(out_dir);
+  info(scene.sim->describe() + "; " + std::to_string(n_particles) + " particles" +
+       (ranks > 1 ? ", " + std::to_string(ranks) + " ranks" : ""));
 
   std::vector<Snapshot> snaps;
   dem::SinterSnapshots hook;
@@ -373,7 +405,7 @@ int run(int argc, char** argv) {
   hook.take = [&](dem::Simulation& sim, const dem::SinterRow& r, std::size_t k) {
     snaps.push_back(take_snapshot(sim, scene.materials, r, targets[k], source));
   };
-  const dem::SinterReport rep = dem::run_sintering(*scene.sim, settings, !common.quiet, hook);
+  const dem::SinterReport rep = dem::run_sintering(*scene.sim, settings, !common.quiet && rank0, hook);
   if (snaps.size() < targets.size()) {
     // Nothing is written: the run ended below a snapshot (the estimate let it through).
     std::ostringstream v;
@@ -383,13 +415,21 @@ int run(int argc, char** argv) {
                          ": lengthen the hold or raise the temperature");
   }
 
+  // The whole sample on rank 0 (collective on ranks; the particles in id order, the serial one).
+#if TOMODEM_HAVE_MPI
+  Packing gathered = dem::gather_packing(*scene.sim, scene.materials);  // to_packing when not decomposed
+#else
+  Packing gathered = dem::to_packing(*scene.sim, scene.materials);
+#endif
+  const dem::BondSet neck_set = dem::necks_to_bonds(*scene.sim);  // collective on ranks
+  if (!rank0) return 0;  // the gathered state and the reduced curve are rank 0's to write
   std::vector<std::vector<double>> rows;
   for (const auto& r : rep.rows) rows.push_back(row(r));
   write_text_atomic(out(settings.curve), csv_table(kColumns, rows));
-  const std::vector<double> ratio = dem::neck_ratios(dem::necks_to_bonds(*scene.sim), scene.sim->particles().r);
+  const std::vector<double> ratio = dem::neck_ratios(neck_set, gathered.particles.radius);
   const std::vector<std::vector<double>> necks = neck_histogram(ratio);
   write_text_atomic(out(settings.necks), csv_table({"neck_ratio_lower", "neck_ratio_upper", "count", "fraction"}, necks));
-  const Packing packing = sintered_packing(scene_path, scene, rep, rows);
+  const Packing packing = sintered_packing(scene_path, scene, std::move(gathered), neck_set, rep, rows);
   write_packing(out(settings.packing), packing);
   json snap_keys = json::array();
   for (std::size_t k = 0; k < snaps.size(); ++k) {
@@ -413,8 +453,9 @@ int run(int argc, char** argv) {
 
   Summary j("tomodem-sinter");
   j.input(scene_path, {{"reads", scene.inputs}});
-  j.n_particles(scene.sim->particles().size());
+  j.n_particles(n_particles);
   j["physics"] = scene.sim->describe();
+  if (ranks > 1) j["ranks"] = ranks;
   result_keys(j, rep, ratio);
   j["bonds"] = packing.bonds.size();
   if (!packing_path.empty()) j["presintered_necks"] = seeded;
@@ -441,5 +482,5 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return run_tool("tomodem-sinter", [&] { return run(argc, argv); });
+  return run_tool("tomodem-sinter", [&] { return run(argc, argv); }, RankUse::shared);
 }

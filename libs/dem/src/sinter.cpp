@@ -6,6 +6,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <array>
 #include <climits>
 #include <chrono>
 #include <cmath>
@@ -20,6 +21,7 @@
 #include "tomodem/core/progress.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
+#include "tomodem/dem/decomposition.hpp"
 #include "tomodem/dem/law_registry.hpp"
 #include "tomodem/dem/yaml_fields.hpp"
 #include "tomodem/spatial/image.hpp"
@@ -306,6 +308,60 @@ namespace {
 
 Vec3 image_of(int code) { return spatial::image_vector(code); }
 
+// ---------------------------------------------------------------- on several ranks
+// Decomposed (decomposition.hpp), a rank holds its own particles and ghost copies of its
+// neighbours'. The driver's whole-sample quantities are per-particle terms of the owned particles,
+// added over every rank in particle-id order from zero: the serial loop's order, so the serial bits
+// on any number of ranks. What must follow a particle when it migrates (physical mass, target
+// volume) is kept by id on every rank.
+
+/// The decomposition the simulation runs on; null when serial.
+DomainHooks* domain_of(const Simulation& sim) {
+#if TOMODEM_HAVE_MPI
+  return sim.domain();
+#else
+  (void)sim;
+  return nullptr;
+#endif
+}
+
+/// Whether local particle i is this rank's own (every particle of a serial run).
+bool owns(const DomainHooks* d, std::size_t i) { return !d || !d->ghost[i]; }
+
+/// Per group, Σ v of the terms of every rank added in id order from zero (a serial run's terms come
+/// in id order already). Collective.
+std::vector<Vec3> sum_in_id_order(DomainHooks* d, const std::vector<OrderedTerm>& terms, int groups) {
+  if (d) return d->ordered_sum(terms, groups);
+  std::vector<Vec3> out(static_cast<std::size_t>(groups));
+  for (const OrderedTerm& t : terms) out[std::size_t(t.group)] += t.v;
+  return out;
+}
+
+double max_over_ranks(DomainHooks* d, double v) { return d ? -d->min(-v) : v; }
+
+/// Particles of the whole sample. Collective.
+std::size_t sample_size(const Simulation& sim) {
+  DomainHooks* d = domain_of(sim);
+  const Particles& p = sim.particles();
+  if (!d) return p.size();
+  double n = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) n += owns(d, i);
+  d->sum(&n, 1);
+  return std::size_t(n);
+}
+
+/// Per particle id, f(i) computed by the particle's owner: the whole sample's column on every
+/// rank. Ids are the serial indices 0..n-1 (Particles::add). Collective.
+template <class F>
+std::vector<Vec3> column_by_id(const Simulation& sim, std::size_t n, F f) {
+  DomainHooks* d = domain_of(sim);
+  const Particles& p = sim.particles();
+  std::vector<OrderedTerm> terms;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    if (owns(d, i)) terms.push_back({int32_t(p.id[i]), p.id[i], f(i)});
+  return sum_in_id_order(d, terms, int(n));
+}
+
 /// One pass over the neighbour list: overlaps, necks and each particle's part of the union.
 struct Scan {
   double solid = 0, lens = 0, neck_sum = 0, force_l = 0, area_sum = 0, r_sum = 0;
@@ -339,56 +395,78 @@ spatial::ClippedSphere sphere_part(double r, const std::vector<spatial::HalfSpac
   return c;
 }
 
+/// The sums over the whole sample: per particle the terms of its row's pairs (each pair is in the
+/// row of its lower index) and of its sphere, then the particles' terms in id order (the same bits
+/// on any number of ranks). Collective when decomposed; share and dshare are filled for the owned
+/// particles.
 Scan scan(const Simulation& sim, bool per_particle) {
   const Simulation::EngineState e = sim.engine_state();
   const Particles& p = sim.particles();
   const ContactModel& model = sim.model();
+  DomainHooks* dom = domain_of(sim);
   const Mat3& H = sim.cell().h;
   const std::size_t n = p.size();
   Scan sc;
   if (per_particle) sc.share.assign(n, 0.0), sc.dshare.assign(n, 0.0);
   std::vector<std::vector<spatial::HalfSpace>> cuts(n);
-  double spheres = 0;
-  for (std::size_t i = 0; i < n; ++i) spheres += 4.0 / 3.0 * M_PI * p.r[i] * p.r[i] * p.r[i];
+  // Per particle: lens, a/R, a², R, F_s l, (η_n + ⅔η_t) l², contacts, necks, sphere, union part.
+  enum { kLens, kNeck, kArea, kR, kForceL, kModulus, kContacts, kNecks, kSphere, kSolid, kTerms = 12 };
+  std::vector<std::array<double, kTerms>> term(n, std::array<double, kTerms>{});
   const std::size_t stride = e.j.empty() ? 0 : e.history.size() / e.j.size();
   if (e.start.size() == n + 1)
-    for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t i = 0; i < n; ++i) {
+      // A ghost's row too: the cuts of an owned particle come from every pair it is in.
+      const bool mine = owns(dom, i);
+      std::array<double, kTerms>& t = term[i];
       for (int k = e.start[i]; k < e.start[i + 1]; ++k) {
         const int j = e.j[k];
         const Vec3 dv = p.x[j] + H * image_of(e.image[k]) - p.x[i];
         const double d = norm(dv), ri = p.r[i], rj = p.r[j];
         if (d >= ri + rj) continue;
-        sc.lens += lens_volume(ri, rj, d);
-        ++sc.contacts;
         if (d > 0) {
           cuts[i].push_back(spatial::radical_plane(dv, ri, rj));
           cuts[std::size_t(j)].push_back(spatial::radical_plane(-dv, rj, ri));
         }
+        if (!mine) continue;
+        t[kLens] += lens_volume(ri, rj, d);
+        t[kContacts] += 1;
         const PairParams& pp = model.pair(p.phase[i], p.phase[j]);
         if (!(pp.sinter_delta_b > 0)) continue;
         const double R = 2 * ri * rj / (ri + rj);
         double a = stride > 0 ? e.history[std::size_t(k) * stride] : 0;
         if (a <= 0) a = law::NormalSintering::initial_neck(pp, R, ri + rj - d);
-        sc.neck_sum += a / R;
-        sc.area_sum += a * a;
-        sc.r_sum += R;
-        sc.force_l += law::NormalSintering::driving_force(pp, a, R) * d;
+        t[kNeck] += a / R;
+        t[kArea] += a * a;
+        t[kR] += R;
+        t[kForceL] += law::NormalSintering::driving_force(pp, a, R) * d;
         // Affine Δσ_kk/Δε̇_kk = Σ l² (η_n ⟨n_k⁴⟩ + η_t ⟨n_k² − n_k⁴⟩)/V = Σ l² (η_n + ⅔ η_t)/(5V).
         const double et = model.tangential == TangentialLaw::viscous
                               ? law::NormalSintering::tangential_viscosity(pp, a, R) : 0;
-        sc.modulus += (law::NormalSintering::viscosity(pp, a) + 2.0 / 3.0 * et) * d * d;
-        ++sc.necks;
+        t[kModulus] += (law::NormalSintering::viscosity(pp, a) + 2.0 / 3.0 * et) * d * d;
+        t[kNecks] += 1;
       }
+    }
   // The union, exactly: each sphere clipped to its power cell (triple overlaps counted right).
-  sc.solid_pairwise = spheres - sc.lens;
+  std::vector<OrderedTerm> terms;
   for (std::size_t i = 0; i < n; ++i) {
+    if (!owns(dom, i)) continue;
+    const double sphere = 4.0 / 3.0 * M_PI * p.r[i] * p.r[i] * p.r[i];
     const spatial::ClippedSphere c = sphere_part(p.r[i], cuts[i]);
-    sc.solid += c.volume;
+    std::array<double, kTerms>& t = term[i];
+    t[kSphere] = sphere;
+    t[kSolid] = c.volume;
     if (per_particle) {
-      sc.share[i] = 4.0 / 3.0 * M_PI * p.r[i] * p.r[i] * p.r[i] - c.volume;
+      sc.share[i] = sphere - c.volume;
       sc.dshare[i] = 4 * M_PI * p.r[i] * p.r[i] - c.sphere_area;
     }
+    for (int g = 0; g < kTerms / 3; ++g) terms.push_back({g, p.id[i], Vec3{t[3 * g], t[3 * g + 1], t[3 * g + 2]}});
   }
+  const std::vector<Vec3> tot = sum_in_id_order(dom, terms, kTerms / 3);
+  const auto total = [&](int k) { return tot[std::size_t(k / 3)][k % 3]; };
+  sc.lens = total(kLens), sc.neck_sum = total(kNeck), sc.area_sum = total(kArea), sc.r_sum = total(kR);
+  sc.force_l = total(kForceL), sc.modulus = total(kModulus), sc.solid = total(kSolid);
+  sc.contacts = long(total(kContacts)), sc.necks = long(total(kNecks));
+  sc.solid_pairwise = total(kSphere) - sc.lens;
   return sc;
 }
 
@@ -479,11 +557,21 @@ double two_particle_shrinkage(const SinterPhase& ph, const TemperatureProgram& p
 }
 }  // namespace
 
-double program_reach_estimate(const Simulation& sim, const SinterSettings& s) {
+namespace {
+/// Mean radius of the whole sample (in id order: the serial bits on ranks). Collective.
+double mean_radius(const Simulation& sim) {
   const Particles& p = sim.particles();
-  double rmean = 0;
-  for (double r : p.r) rmean += r;
-  rmean /= double(p.size());
+  DomainHooks* d = domain_of(sim);
+  std::vector<OrderedTerm> terms;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    if (owns(d, i)) terms.push_back({0, p.id[i], Vec3{p.r[i], 1, 0}});
+  const Vec3 s = sum_in_id_order(d, terms, 1)[0];
+  return s.x / s.y;
+}
+}  // namespace
+
+double program_reach_estimate(const Simulation& sim, const SinterSettings& s) {
+  const double rmean = mean_radius(sim);
   double best = 0;  // two spheres' shrinkage h/(2R) up to h = R (the centres meet: no further)
   for (const auto& ph : s.phases)
     if (ph.sinters) best = std::max(best, two_particle_shrinkage(ph, s.program, rmean, s.initial_neck * rmean, 1.0));
@@ -500,10 +588,7 @@ void check_sinter_settings(const Scene& scene, const SinterSettings& s) {
     throw InputError(scene.file, "sintering.stop.relative_density", v.str(),
                      "at or below the starting relative density " + std::to_string(d0.density));
   }
-  const Particles& p = sim.particles();
-  double rmean = 0;
-  for (double r : p.r) rmean += r;
-  rmean /= double(p.size());
+  const double rmean = mean_radius(sim);
   double best = 0;
   for (const auto& ph : s.phases)
     if (ph.sinters) best = std::max(best, two_particle_shrinkage(ph, s.program, rmean, s.initial_neck * rmean));
@@ -527,15 +612,19 @@ namespace {
 class SinterRun {
  public:
   SinterRun(Simulation& sim, const SinterSettings& s, bool progress, const SinterSnapshots* snaps = nullptr)
-      : sim_(sim), s_(s), progress_(progress), snaps_(snaps), p_(sim.particles()), n_(p_.size()), m_phys_(p_.m),
-        inv_m_phys_(p_.inv_m), inv_I_phys_(p_.inv_I), rot_(p_.has_rotation()), cc_(sim.cell_control()) {}
+      : sim_(sim), s_(s), progress_(progress), snaps_(snaps), p_(sim.particles()), dom_(domain_of(sim)),
+        n_(sample_size(sim)), rot_(p_.has_rotation()), cc_(sim.cell_control()) {
+    physical_masses();
+  }
   SinterReport run();
 
  private:
+  void physical_masses();
   void mark_particles();
   void reference_state();
   SinterRow make_row(const Scan& q, double dt_now, double mass_scale, double rho_prev, double t_prev) const;
   void grow_radii(const Scan& q);
+  void fresh_radius();
   void choose_step(double t, double T);
   void scale_masses();
   void servo_cell();
@@ -543,6 +632,11 @@ class SinterRun {
   bool record_rows();
   void print_progress();
   void restore();
+  /// The ghosts' radii and masses from their owners (decomposed runs; nothing when serial).
+  void refresh_ghosts() {
+    if (dom_) dom_->refresh_ghost_bodies(p_);
+  }
+  std::size_t id(std::size_t i) const { return std::size_t(p_.id[i]); }
 
   Simulation& sim_;
   const SinterSettings& s_;
@@ -550,23 +644,29 @@ class SinterRun {
   const SinterSnapshots* snaps_;  // null: none
   std::size_t next_snap_ = 0;
   const std::chrono::steady_clock::time_point wall0_ = std::chrono::steady_clock::now();
-  Particles& p_;
-  const std::size_t n_;
-  const std::vector<double> m_phys_, inv_m_phys_, inv_I_phys_;
+  Particles& p_;  // decomposed: this rank's particles and ghosts (the set changes at each rebuild)
+  DomainHooks* const dom_;
+  const std::size_t n_;  // particles of the whole sample
+  // By particle id (they follow a particle from rank to rank): physical mass, inverse mass and
+  // inverse rotational inertia.
+  std::vector<double> m_phys_, inv_m_phys_, inv_I_phys_;
   const bool rot_;
   CellControl& cc_;
   SinterReport rep_;
-  // Rayleigh time of the particles of phases with an elastic pair; which particles sinter.
+  // By particle id: the Rayleigh time of the particles of phases with an elastic pair; which
+  // particles sinter.
   std::vector<double> rayleigh_, fresh_;
-  // Reference state: each particle's share of the solid volume, density and cell lengths.
+  double r_fresh_max_ = 0;  // the largest radius of a particle that sinters
+  // Reference state: each particle's share of the solid volume (by id), density and cell lengths.
   Scan sc_;
   std::vector<double> target_;
   double V0_ = 0, rho0_ = 0, L0_[3] = {0, 0, 0}, t_end_ = 0, t_start_ = 0;
   bool servo_ = false;
   double grown_ = 0;  // radius growth since the last neighbour rebuild, m
   double skin_ = 0;
-  // Per-particle Σ(η_n + 5η_t) of the necks, kept for the pair parameters (temperature) and radii
-  // of the next force pass; after each step it also gives the stability ratio Δt Σ/m of that step.
+  // Per local particle Σ(η_n + 5η_t) of the necks, kept for the pair parameters (temperature) and
+  // radii of the next force pass; after each step it also gives the stability ratio Δt Σ/m of that
+  // step.
   std::vector<double> visc_;
   double T_visc_ = std::numeric_limits<double>::quiet_NaN();  // the temperature visc was summed at
   bool visc_stale_ = true;                                    // radii grown since the last sum
@@ -577,25 +677,44 @@ class SinterRun {
   Progress bar_{"sintering", 1.0};  // stderr, with the time left (core/progress.hpp)
 };
 
+/// The physical masses by id, before the run scales them.
+void SinterRun::physical_masses() {
+  for (std::size_t i = 0; i < p_.size(); ++i)
+    if (id(i) >= n_) throw std::logic_error("sintering: particle ids must be 0..n-1 (Particles::add)");
+  const std::vector<Vec3> c = column_by_id(sim_, n_, [&](std::size_t i) {
+    return Vec3{p_.m[i], p_.inv_m[i], rot_ ? p_.inv_I[i] : 0.0};
+  });
+  m_phys_.resize(n_), inv_m_phys_.resize(n_), inv_I_phys_.resize(n_);
+  for (std::size_t k = 0; k < n_; ++k) m_phys_[k] = c[k].x, inv_m_phys_[k] = c[k].y, inv_I_phys_[k] = c[k].z;
+}
+
 /// Rayleigh time of the particles of phases with an elastic (non-sintering) pair, physical mass;
 /// and which particles sinter (their scaled masses have the floor of a fresh neck, below).
 void SinterRun::mark_particles() {
-  rayleigh_.assign(n_, 0.0);
-  fresh_.assign(n_, 0.0);
   apply_temperature(sim_, s_.phases, s_.program.temperature(sim_.time()), s_.initial_neck);
   const ContactModel& m = sim_.model();
-  for (std::size_t i = 0; i < n_; ++i) {
+  const std::vector<Vec3> c = column_by_id(sim_, n_, [&](std::size_t i) {
     const int ph = p_.phase[i];
     bool elastic = false;
     for (int b = 0; b < m.n_phases; ++b) elastic = elastic || !(m.pair(ph, b).sinter_delta_b > 0);
-    const PairParams& self = m.pair(ph, ph);
-    if (self.sinter_delta_b > 0) fresh_[i] = 1;  // filled per step below (Δ_b depends on T)
-    if (!elastic || ph >= int(m.materials.size())) continue;
+    const double fresh = m.pair(ph, ph).sinter_delta_b > 0 ? 1 : 0;  // filled per step below (Δ_b depends on T)
+    if (!elastic || ph >= int(m.materials.size())) return Vec3{0, fresh, 0};
     const Material& mat = m.materials[std::size_t(ph)];
     const double G = mat.youngs_modulus / (2 * (1 + mat.poisson_ratio));
     const double rho = p_.m[i] / (4.0 / 3.0 * M_PI * p_.r[i] * p_.r[i] * p_.r[i]);
-    if (G > 0) rayleigh_[i] = M_PI * p_.r[i] * std::sqrt(rho / G) / (0.1631 * mat.poisson_ratio + 0.8766);
-  }
+    const double rayleigh = G > 0 ? M_PI * p_.r[i] * std::sqrt(rho / G) / (0.1631 * mat.poisson_ratio + 0.8766) : 0;
+    return Vec3{rayleigh, fresh, 0};
+  });
+  rayleigh_.resize(n_), fresh_.resize(n_);
+  for (std::size_t k = 0; k < n_; ++k) rayleigh_[k] = c[k].x, fresh_[k] = c[k].y;
+}
+
+/// The largest radius of a particle that sinters (fresh_neck_mass's partner), over every rank.
+void SinterRun::fresh_radius() {
+  double r_max = 0;
+  for (std::size_t i = 0; i < p_.size(); ++i)
+    if (fresh_[id(i)] > 0) r_max = std::max(r_max, p_.r[i]);
+  r_fresh_max_ = max_over_ranks(dom_, r_max);
 }
 
 /// The reference state (target volumes, density, cell lengths), the cell control at rest, the
@@ -604,8 +723,12 @@ void SinterRun::reference_state() {
   sim_.invalidate_neighbors();
   sim_.measure();  // builds the neighbour list at the current state
   sc_ = scan(sim_, true);
+  const std::vector<Vec3> t = column_by_id(sim_, n_, [&](std::size_t i) {
+    return Vec3{4.0 / 3.0 * M_PI * p_.r[i] * p_.r[i] * p_.r[i] - sc_.share[i], 2 * p_.r[i], 0};
+  });
   target_.resize(n_);
-  for (std::size_t i = 0; i < n_; ++i) target_[i] = 4.0 / 3.0 * M_PI * p_.r[i] * p_.r[i] * p_.r[i] - sc_.share[i];
+  double dsum = 0;
+  for (std::size_t k = 0; k < n_; ++k) target_[k] = t[k].x, dsum += t[k].y;
   V0_ = sim_.cell().volume();
   rho0_ = sc_.solid / V0_;
   for (int k = 0; k < 3; ++k) L0_[k] = axis_length(sim_.cell(), k);
@@ -621,9 +744,8 @@ void SinterRun::reference_state() {
   rep_.initial = make_row(sc_, 0, 1, rho0_, sim_.time());
   rep_.rows.push_back(rep_.initial);
 
-  double dsum = 0;
-  for (double r : p_.r) dsum += 2 * r;
   skin_ = sim_.settings().skin > 0 ? sim_.settings().skin : 0.1 * dsum / double(n_);
+  fresh_radius();
 
   rho_last_ = rho0_;
   t_last_ = sim_.time();
@@ -653,23 +775,26 @@ SinterRow SinterRun::make_row(const Scan& q, double dt_now, double mass_scale, d
 }
 
 /// Volume conservation: grow the radii of sintering particles so each keeps its share of the
-/// union (one Newton step on share(r) = 4/3 π r³ − ½ Σ lens, ∂share/∂r = exposed area).
+/// union (one Newton step on share(r) = 4/3 π r³ − ½ Σ lens, ∂share/∂r = exposed area). Each rank
+/// grows its own particles; the ghosts take their owners' radii.
 void SinterRun::grow_radii(const Scan& q) {
   const ContactModel& m = sim_.model();
   double dmax = 0;
-  for (std::size_t i = 0; i < n_; ++i) {
-    if (!(m.pair(p_.phase[i], p_.phase[i]).sinter_delta_b > 0)) continue;
+  for (std::size_t i = 0; i < p_.size(); ++i) {
+    if (!owns(dom_, i) || !(m.pair(p_.phase[i], p_.phase[i]).sinter_delta_b > 0)) continue;
     const double r = p_.r[i];
     const double cur = 4.0 / 3.0 * M_PI * r * r * r - q.share[i];
     const double der = 4 * M_PI * r * r - q.dshare[i];
     // A sphere almost enclosed by its necks (< 5 % of its surface exposed) cannot hold its volume
     // by growing; and no update grows a radius by more than 1 % (a runaway guard).
     if (der < 0.05 * 4 * M_PI * r * r) continue;
-    const double dr = std::clamp((target_[i] - cur) / der, -0.01 * r, 0.01 * r);
+    const double dr = std::clamp((target_[id(i)] - cur) / der, -0.01 * r, 0.01 * r);
     p_.r[i] = r + dr;
     dmax = std::max(dmax, std::abs(dr));
   }
-  grown_ += 2 * dmax;
+  refresh_ghosts();
+  fresh_radius();
+  grown_ += 2 * max_over_ranks(dom_, dmax);
   if (grown_ > 0.25 * skin_) {
     sim_.invalidate_neighbors();
     grown_ = 0;
@@ -721,28 +846,33 @@ void SinterRun::choose_step(double t, double T) {
 /// green packing) stable too: with the normal η_n(a_min r_i) alone as the floor, such a particle
 /// had Δt Σ/m ≈ f (1 + 5η/a_min²) ≈ 1 000 in the step its first neck formed (issue 9's 20 000-
 /// sphere benchmark: a blow-up at step 1 058, then the cell servo and the time step collapsed).
+/// Each rank scales its own particles (their sums Σ(η_n + 5η_t) are whole); the ghosts take their
+/// owners' masses before the step's force pass.
 void SinterRun::scale_masses() {
-  double r_max = 0;
-  for (std::size_t i = 0; i < n_; ++i)
-    if (fresh_[i] > 0) r_max = std::max(r_max, p_.r[i]);
   double msum = 0;
-  for (std::size_t i = 0; i < n_; ++i) {
-    double m = m_phys_[i];
+  for (std::size_t i = 0; i < p_.size(); ++i) {
+    if (!owns(dom_, i)) continue;
+    const std::size_t k = id(i);
+    double m = m_phys_[k];
     const double c = visc_[i];
     if (c > 0) m = std::max(m, c * dt_ / s_.viscous_fraction);
-    if (fresh_[i] > 0) {
-      const double R = 2 * p_.r[i] * r_max / (p_.r[i] + r_max);
+    if (fresh_[k] > 0) {
+      const double R = 2 * p_.r[i] * r_fresh_max_ / (p_.r[i] + r_fresh_max_);
       m = fresh_neck_mass(sim_.model(), p_.phase[i], R, s_.initial_neck, dt_, s_.viscous_fraction, m);
     }
-    if (rayleigh_[i] > 0) {
-      const double need = dt_ / (0.2 * rayleigh_[i]);
-      if (need > 1) m = std::max(m, m_phys_[i] * need * need);
+    if (rayleigh_[k] > 0) {
+      const double need = dt_ / (0.2 * rayleigh_[k]);
+      if (need > 1) m = std::max(m, m_phys_[k] * need * need);
     }
     p_.m[i] = m;
-    if (inv_m_phys_[i] > 0) p_.inv_m[i] = 1 / m;
-    if (rot_ && inv_I_phys_[i] > 0) p_.inv_I[i] = 1 / (0.4 * m * p_.r[i] * p_.r[i]);
-    msum += m / m_phys_[i];
+    if (inv_m_phys_[k] > 0) p_.inv_m[i] = 1 / m;
+    if (rot_ && inv_I_phys_[k] > 0) p_.inv_I[i] = 1 / (0.4 * m * p_.r[i] * p_.r[i]);
+    msum += m / m_phys_[k];
   }
+  refresh_ghosts();
+  // A report, not read by the run: the ranks' parts in rank order (round-off on several ranks)
+  // spare an all-gather of one term per particle every step.
+  if (dom_) dom_->sum(&msum, 1);
   mass_scale_ = msum / double(n_);
   rep_.max_mass_scaling = std::max(rep_.max_mass_scaling, mass_scale_);
   if (sim_.time_step() != dt_) sim_.set_time_step(dt_);
@@ -768,11 +898,12 @@ void SinterRun::take_step(double T) {
   sim_.step();
   ++rep_.steps;
   // Stability of the step just taken: Δt Σ(η_n + 5η_t)/m_i over the contacts its force pass saw
-  // (same positions, radii and pair parameters), < 2 for leapfrog's viscous rows.
+  // (same positions, radii and pair parameters), < 2 for leapfrog's viscous rows. (Decomposed:
+  // this rank's particles; the maximum over the ranks is taken at the end.)
   sim_.viscous_sums(visc_);
   T_visc_ = T;
-  for (std::size_t i = 0; i < n_; ++i)
-    rep_.max_viscous_step_ratio = std::max(rep_.max_viscous_step_ratio, dt_ * visc_[i] * p_.inv_m[i]);
+  for (std::size_t i = 0; i < p_.size(); ++i)
+    if (owns(dom_, i)) rep_.max_viscous_step_ratio = std::max(rep_.max_viscous_step_ratio, dt_ * visc_[i] * p_.inv_m[i]);
 }
 
 /// A row of the curve when one is due, and the density check; true when the target is reached.
@@ -818,9 +949,11 @@ void SinterRun::print_progress() {
 
 /// Physical masses back, the cell at rest.
 void SinterRun::restore() {
-  p_.m = m_phys_;
-  p_.inv_m = inv_m_phys_;
-  if (rot_) p_.inv_I = inv_I_phys_;
+  for (std::size_t i = 0; i < p_.size(); ++i) {
+    const std::size_t k = id(i);
+    p_.m[i] = m_phys_[k], p_.inv_m[i] = inv_m_phys_[k];
+    if (rot_) p_.inv_I[i] = inv_I_phys_[k];
+  }
   for (int a = 0; a < 3; ++a) cc_.velocity_gradient(a, a) = 0;
   for (auto& v : p_.v) v = Vec3{};
   if (rot_)
@@ -829,6 +962,8 @@ void SinterRun::restore() {
 }
 
 SinterReport SinterRun::run() {
+  if (dom_ && snaps_ && !snaps_->densities.empty())
+    throw InputError("", "--snapshots-at", "", "snapshots are not taken on several ranks yet: run on one rank");
   mark_particles();
   reference_state();
   while (sim_.time() < t_end_ * (1 - 1e-12)) {
@@ -852,6 +987,7 @@ SinterReport SinterRun::run() {
     rep_.rows.push_back(make_row(scan(sim_, false), dt_, mass_scale_, rho_last_, t_last_));
   }
   rep_.final = rep_.rows.back();
+  rep_.max_viscous_step_ratio = max_over_ranks(dom_, rep_.max_viscous_step_ratio);
   if (progress_) bar_.finish(rep_.stop_reason);
   restore();
   rep_.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0_).count();
@@ -872,18 +1008,59 @@ BondSet necks_to_bonds(const Simulation& sim) {
   const Simulation::EngineState e = sim.engine_state();
   const Particles& p = sim.particles();
   const ContactModel& model = sim.model();
+  DomainHooks* dom = domain_of(sim);
   const Mat3& H = sim.cell().h;
   const std::size_t stride = e.j.empty() ? 0 : e.history.size() / e.j.size();
   BondSet b;
-  if (e.start.size() != p.size() + 1 || model.normal != NormalLaw::sintering) return b;
+  if (model.normal != NormalLaw::sintering) return b;
+  if (!dom && e.start.size() != p.size() + 1) return b;
+  // Per owned row (each pair is in the row of its lower index), its necks in row order: the
+  // partner's id, a, the branch length and the image.
+  struct Neck {
+    int64_t j;
+    double a, d;
+    Vec3 img;
+  };
+  std::vector<std::vector<Neck>> rows(p.size());
+  if (e.start.size() == p.size() + 1)
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      if (!owns(dom, i)) continue;
+      for (int k = e.start[i]; k < e.start[i + 1]; ++k) {
+        const int j = e.j[k];
+        const Vec3 img = image_of(e.image[k]);
+        const double d = norm(p.x[j] + H * img - p.x[i]);
+        const double a = stride > 0 ? e.history[std::size_t(k) * stride] : 0;
+        if (d >= p.r[i] + p.r[j] || a <= 0) continue;
+        if (p.id[i] != p.id[std::size_t(j)]) rows[i].push_back({p.id[std::size_t(j)], a, d, img});  // (a self-image pair of a tiny cell is left out)
+      }
+    }
+  if (!dom) {
+    for (std::size_t i = 0; i < p.size(); ++i)
+      for (const Neck& nk : rows[i]) b.add(int32_t(i), int32_t(nk.j), nk.img, nk.a, nk.d);
+    return b;
+  }
+  // Decomposed: the rows' lengths by id, then every neck at its place in the serial order; every
+  // rank gets the whole set, indices = ids = the serial indices.
+  const std::size_t n = sample_size(sim);
+  std::vector<OrderedTerm> len;
   for (std::size_t i = 0; i < p.size(); ++i)
-    for (int k = e.start[i]; k < e.start[i + 1]; ++k) {
-      const int j = e.j[k];
-      const Vec3 img = image_of(e.image[k]);
-      const double d = norm(p.x[j] + H * img - p.x[i]);
-      const double a = stride > 0 ? e.history[std::size_t(k) * stride] : 0;
-      if (d >= p.r[i] + p.r[j] || a <= 0) continue;
-      if (int(i) != j) b.add(int32_t(i), j, img, a, d);  // (a self-image pair of a tiny cell is left out)
+    if (owns(dom, i)) len.push_back({int32_t(p.id[i]), p.id[i], Vec3{double(rows[i].size()), 0, 0}});
+  const std::vector<Vec3> count = sum_in_id_order(dom, len, int(n));
+  std::vector<std::size_t> first(n + 1, 0);
+  for (std::size_t k = 0; k < n; ++k) first[k + 1] = first[k] + std::size_t(count[k].x);
+  std::vector<OrderedTerm> terms;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    for (std::size_t q = 0; q < rows[i].size(); ++q) {
+      const Neck& nk = rows[i][q];
+      const int32_t g = int32_t(first[std::size_t(p.id[i])] + q);
+      terms.push_back({2 * g, p.id[i], Vec3{double(nk.j), nk.a, nk.d}});
+      terms.push_back({2 * g + 1, p.id[i], nk.img});
+    }
+  const std::vector<Vec3> all = sum_in_id_order(dom, terms, int(2 * first[n]));
+  for (std::size_t k = 0; k < n; ++k)
+    for (std::size_t g = first[k]; g < first[k + 1]; ++g) {
+      const Vec3& v = all[2 * g];
+      b.add(int32_t(k), int32_t(v.x), all[2 * g + 1], v.y, v.z);
     }
   return b;
 }

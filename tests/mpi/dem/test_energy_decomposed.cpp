@@ -138,33 +138,6 @@ TEST(DemDecompositionEnergy, ShearedCellWithStokesDragMatchesSerial) {
   compare_with_serial(sheared_cell, 1000, 250, "sheared cell");
 }
 
-// Sintering is not decomposed yet: refused on every rank with the same message, the simulation
-// left serial (and still runnable).
-TEST(DemDecompositionRefusals, SinteringLawIsRefusedOnEveryRank) {
-  Particles p;
-  p.add({1e-6, 1e-6, 1e-6}, 0.5e-6, 3950, 0);
-  p.add({1.999e-6, 1e-6, 1e-6}, 0.5e-6, 3950, 0);
-  Material m0;
-  m0.name = "alumina";
-  m0.youngs_modulus = 380e9;
-  m0.poisson_ratio = 0.22;
-  m0.density = 3950;
-  m0.surface_energy = 1.0;
-  ContactModel m;
-  m.normal = NormalLaw::sintering;
-  m.materials = {m0};
-  m.finalize();
-  Simulation sim(std::move(p), Cell::box({0, 0, 0}, {4e-6, 4e-6, 4e-6}, true), m, Settings{});
-  std::string why;
-  try {
-    decompose(sim);
-  } catch (const InputError& e) {
-    why = std::string(e.field()) + ": " + e.why();
-  }
-  EXPECT_EQ(why, "physics.normal: the sintering law is not decomposed yet: run on one rank");
-  EXPECT_EQ(sim.domain(), nullptr);
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {

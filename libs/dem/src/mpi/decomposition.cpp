@@ -126,6 +126,7 @@ class Domain final : public DomainHooks {
   explicit Domain(const DecompositionOptions& opt);
 
   void forward(SimState& s) override;
+  void refresh_ghost_bodies(Particles& p) override;
   bool any(bool local) override;
   void before_build(SimState& s, NeighbourList& nl) override;
   void after_build(SimState& s, NeighbourList& nl) override;
@@ -397,6 +398,32 @@ void Domain::forward(SimState& s) {
       s.p.x[i] = {d[0], d[1], d[2]};
       s.p.v[i] = {d[3], d[4], d[5]};
       if (rot) s.p.omega[i] = {d[6], d[7], d[8]};
+      d += per;
+    }
+  }
+}
+
+void Domain::refresh_ghost_bodies(Particles& p) {
+  const bool rot = p.has_rotation();
+  const int per = rot ? 4 : 3;
+  const std::size_t nn = nbr_.size();
+  std::vector<std::vector<double>> out(nn), in(nn);
+  std::vector<MPI_Request> req(2 * nn);
+  for (std::size_t q = 0; q < nn; ++q) {
+    in[q].resize(recv_idx_[q].size() * std::size_t(per));
+    MPI_Irecv(in[q].data(), int(in[q].size()), MPI_DOUBLE, nbr_[q], 32, comm_, &req[2 * q]);
+    for (int32_t i : send_idx_[q]) {
+      out[q].insert(out[q].end(), {p.r[i], p.m[i], p.inv_m[i]});
+      if (rot) out[q].push_back(p.inv_I[i]);
+    }
+    MPI_Isend(out[q].data(), int(out[q].size()), MPI_DOUBLE, nbr_[q], 32, comm_, &req[2 * q + 1]);
+  }
+  MPI_Waitall(int(req.size()), req.data(), MPI_STATUSES_IGNORE);
+  for (std::size_t q = 0; q < nn; ++q) {
+    const double* d = in[q].data();
+    for (int32_t i : recv_idx_[q]) {
+      p.r[i] = d[0], p.m[i] = d[1], p.inv_m[i] = d[2];
+      if (rot) p.inv_I[i] = d[3];
       d += per;
     }
   }
@@ -906,10 +933,6 @@ ContactTable contacts_on_rank0(Simulation& sim, const Domain& d, const std::vect
 // ------------------------------------------------------------------------------------ public
 void decompose(Simulation& sim, const DecompositionOptions& opt) {
   if (sim.domain()) throw InputError("", "decompose", "twice", "the simulation is already decomposed");
-  // The sintering driver (sinter.cpp: radius growth, mass scaling, densification) reads and
-  // changes the whole sample between steps; it has no decomposed path yet.
-  if (sim.model().normal == NormalLaw::sintering)
-    throw InputError("", "physics.normal", "sintering", "the sintering law is not decomposed yet: run on one rank");
   sim.attach_domain(std::make_unique<Domain>(opt));
 }
 

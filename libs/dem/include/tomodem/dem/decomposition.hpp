@@ -48,6 +48,9 @@ class DomainHooks {
   std::vector<int32_t> bond_id;
   /// Refreshes the ghosts' positions, velocities and spins from their owners (every force pass).
   virtual void forward(SimState& s) = 0;
+  /// Refreshes the ghosts' radii, masses and inverse inertia from their owners, for a driver that
+  /// changes them between steps (sintering: radius growth, mass scaling). Collective.
+  virtual void refresh_ghost_bodies(Particles& p) = 0;
   /// True on every rank when it is true on any.
   virtual bool any(bool local) = 0;
   /// Migration and a new ghost layer, with the contact history carried by particle id.
@@ -89,8 +92,7 @@ struct DomainLayout {
 /// Splits `sim`, built identically on every rank of MPI_COMM_WORLD (same particles, cell, model
 /// and settings), into sub-domains: each rank keeps its own particles and gets its ghost layer.
 /// Collective. Throws InputError (the same on every rank) when a sub-domain would be thinner
-/// than the interaction reach plus skin (too many ranks along a cell vector for this sample),
-/// and for what is not decomposed yet (the sintering law).
+/// than the interaction reach plus skin (too many ranks along a cell vector for this sample).
 ///
 /// Walls: each rank computes the wall contacts of the particles it owns; a wall's force is the
 /// sum of its contacts' forces over every rank in the serial order (ordered_sum), so the servo

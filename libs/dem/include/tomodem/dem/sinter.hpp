@@ -105,7 +105,7 @@ struct DensityState {
   double density_pairwise = 0;  ///< pairwise lens sum (triple overlaps subtracted twice)
   long contacts = 0;
 };
-DensityState density_state(const Simulation& sim);
+DensityState density_state(const Simulation& sim);  ///< collective when decomposed
 /// Volume of the lens shared by two spheres at centre distance d, m³ (0 when apart).
 using spatial::lens_volume;
 
@@ -121,7 +121,9 @@ void apply_temperature(Simulation& sim, const std::vector<SinterPhase>& phases, 
 void check_sinter_settings(const Scene& scene, const SinterSettings& s);
 
 /// Runs the program on a scene's simulation: mass scaling and the automatic step, the stress-free
-/// (or constrained) cell, radius growth; restores the physical masses at the end.
+/// (or constrained) cell, radius growth; restores the physical masses at the end. On a decomposed
+/// simulation (decomposition.hpp) it is collective and every rank gets the same report
+/// (docs/sintering.md, "On several ranks"); snapshots are refused there.
 SinterReport run_sintering(Simulation& sim, const SinterSettings& s, bool progress = false);
 
 /// Snapshots of one run at given relative densities (tomodem-sinter --snapshots-at): `take(sim,
@@ -146,7 +148,8 @@ double program_reach_estimate(const Simulation& sim, const SinterSettings& s);
 Scene sinter_scene(const Packing& green, const std::string& source, const std::string& settings_file, int threads = 1);
 
 /// The necks as bonds: every sintering contact becomes a bond with radius = neck radius and
-/// rest length = current centre distance (image through the periodic cell).
+/// rest length = current centre distance (image through the periodic cell). Decomposed: collective,
+/// the whole sample's necks on every rank in the serial order, i and j the particle ids.
 BondSet necks_to_bonds(const Simulation& sim);
 /// The same as the /bonds table of the shared data model.
 BondTable necks_to_bond_table(const Simulation& sim);
