@@ -13,7 +13,10 @@
 # env:   BUILD_MPI=<repo>/build-mpi  OUT=<BUILD_MPI>/petsc-bench  MPIRUN=mpirun
 #        CASES="amg gamg0 gamg02 gamg gamg2 boomeramg boomeramg2"  (which runs; 2: on two ranks;
 #        gamg0, gamg02: tomodem's own GAMG settings without the tuning below, on one and two ranks:
-#        the peak RSS per rank of the distributed assembly, docs/solvers.md)
+#        the peak RSS per rank of the distributed assembly, docs/solvers.md; amgt2: the in-house
+#        multigrid on two OpenMP threads)
+#        PETSC_MEMORY=1: PETSc's own memory report for every PETSc case (-memory_view, -malloc_debug,
+#        -log_view with -log_view_memory into <case>.log_view, -ksp_view into <case>.out; slower)
 # out:   OUT/<particles>/<case>.json (the tool's summary, rank 0), <case>.time (/usr/bin/time -v of
 #        every rank), results.csv: one line per run with the load average before and after.
 set -u
@@ -62,6 +65,7 @@ for n in $SIZES; do
     young=("$BIN/tomodem-young" bonded.h5 --no-tensor --tolerance 1e-10 -q --json "$c.json")
     case $c in
       amg)        env=""; cmd=(/usr/bin/time -v -o "$c.time" "${young[@]}" --solver amg --threads 1) ;;
+      amgt2)      env=""; cmd=(/usr/bin/time -v -o "$c.time" "${young[@]}" --solver amg --threads 2) ;;
       gamg0)      env=""; cmd=(/usr/bin/time -v -o "$c.time" "${young[@]}" --solver petsc) ;;  # tomodem's GAMG settings only
       gamg02)     env=""; cmd=($MPIRUN --oversubscribe -np 2 sh -c '/usr/bin/time -v -o "$0.$OMPI_COMM_WORLD_RANK.time" "$@"' "$c" "${young[@]}" --solver petsc) ;;
       gamg)       env="$GAMG"; cmd=(/usr/bin/time -v -o "$c.time" "${young[@]}" --solver petsc) ;;
@@ -70,9 +74,10 @@ for n in $SIZES; do
       boomeramg2) env="$BOOMER"; cmd=($MPIRUN --oversubscribe -np 2 sh -c '/usr/bin/time -v -o "$0.$OMPI_COMM_WORLD_RANK.time" "$@"' "$c" "${young[@]}" --solver petsc) ;;
       *) die "unknown case $c" ;;
     esac
+    [ "${PETSC_MEMORY:-0}" = 1 ] && env+=" -memory_view -malloc_debug -log_view :$c.log_view -log_view_memory -ksp_view"
     before=$(load)
     rm -f "$c".*time
-    PETSC_OPTIONS="$env" "${cmd[@]}" 2> "$c.err" || { echo "petsc_bench: $n $c failed: $(tail -3 "$c.err")" >&2; continue; }
+    PETSC_OPTIONS="$env" "${cmd[@]}" > "$c.out" 2> "$c.err" || { echo "petsc_bench: $n $c failed: $(tail -3 "$c.err")" >&2; continue; }
     after=$(load)
     python3 - "$c" "$before" "$after" >> results.csv <<'EOF'
 import glob, json, re, sys
