@@ -28,6 +28,7 @@ std::vector<double> material_sigma(const Packing& pk, const std::vector<std::str
   return sigma_of;
 }
 
+// Mean diameter of the particles whose material conducts (all particles when none does).
 double mean_diameter_of(const Packing& pk, const std::vector<double>& sigma_of) {
   double sum = 0, all = 0;
   std::size_t n = 0;
