@@ -10,7 +10,17 @@
 // - macropores: a voxel depends on the pores within 2r + 2 voxels (segment.hpp, macropore_mask);
 // - labels: each block's core labelled on its own, the labels joined across block faces by
 //   union-find (6-connectivity), numbered by their first voxel in x-fastest order and filtered by
-//   size as components()/macropores() do; a second pass writes them.
+//   size as components()/macropores() do; a second pass writes them;
+// - grains (--grains): the distance map of a block is exact in its core when the halo is wider
+//   than the largest distance found there (a nearer pore would lie inside the block), so a first
+//   pass finds the solid's largest inscribed radius R exactly, widening a block's halo until it
+//   holds; the markers (h-maxima of the distance map) are then found per block with a halo of
+//   2R + 4, numbered over the whole volume (26-connected, by first voxel, as components()), and
+//   each block floods from every marker in its reach, so a grain has one id in every block. The
+//   h-maxima and the watershed are not local operations in general (a plateau or a flood can run
+//   along a ridge of the distance map farther than any halo): a grain whose id reaches the halo's
+//   inner edge is counted in the summary (chunked.grains_reaching_halo_edge), where blocks may
+//   disagree. The tests compare the grains with the in-memory path's (tests/e2e/segment).
 #include <hdf5.h>
 #include <fcntl.h>
 #include <unistd.h>
@@ -90,7 +100,7 @@ class RawBlocks {
     if (nx == 0 || ny == 0 || nz == 0)
       throw InputError(path, "--raw-dims", "", "a raw file needs its dimensions (--raw-dims NX,NY,NZ)");
     d_ = {nx, ny, nz};
-    bytes_ = type_size();
+    bytes_ = type_size(o.raw_type);
     const std::uintmax_t expected = o.raw_header + nx * ny * nz * bytes_;
     std::error_code ec;
     if (fs::is_directory(path)) throw InputError(path, "", "", "is a folder, not a raw file");
@@ -144,15 +154,6 @@ class RawBlocks {
   float vmin = std::numeric_limits<float>::max(), vmax = std::numeric_limits<float>::lowest();  ///< raw values seen
 
  private:
-  std::size_t type_size() const {
-    switch (o_.raw_type) {
-      case RawType::uint8: case RawType::int8: return 1;
-      case RawType::uint16: case RawType::int16: return 2;
-      case RawType::uint32: case RawType::int32: case RawType::float32: return 4;
-      case RawType::float64: return 8;
-    }
-    return 1;
-  }
   template <class T>
   static void conv(const char* p, std::size_t n, bool swap, float* out) {
     for (std::size_t i = 0; i < n; ++i) {
@@ -233,7 +234,11 @@ struct MemoryModel {
   double fixed = 0, per_block = 0;
   double total() const { return fixed + per_block; }
 };
-MemoryModel memory_model(const Dims& d, std::size_t chunk, std::size_t halo, bool phase2, std::size_t type_bytes) {
+// Grains (grains_halo > 0): the ITK distance map, h-maxima, markers and watershed of one block
+// with its halo, 40 bytes per voxel (measured, docs/segment.md); the stages run one after the other.
+constexpr double kGrainsBytesPerBlockVoxel = 40;
+MemoryModel memory_model(const Dims& d, std::size_t chunk, std::size_t halo, bool phase2, std::size_t type_bytes,
+                         std::size_t grains_halo = 0) {
   const double N = double(d.nx) * double(d.ny) * double(d.nz);
   const double words = double((d.nx + 63) / 64) * double(d.ny) * double(d.nz) * 8;
   MemoryModel m;
@@ -241,6 +246,10 @@ MemoryModel memory_model(const Dims& d, std::size_t chunk, std::size_t halo, boo
   (void)N;
   const double s = double(chunk + 2 * halo), c = double(chunk);
   m.per_block = s * s * s * (6 + double(std::min<std::size_t>(type_bytes, 8)) / 2) + c * c * c * 15;
+  if (grains_halo > 0) {
+    const double g = double(chunk + 2 * grains_halo);
+    m.per_block = std::max(m.per_block, g * g * g * kGrainsBytesPerBlockVoxel + c * c * c * 19);
+  }
   return m;
 }
 
@@ -268,7 +277,8 @@ struct Joins {
 // carries tomodem's provenance (written first with h5::File).
 class LabelsWriter {
  public:
-  LabelsWriter(const std::string& tmp, const Dims& d, std::size_t chunk, const std::vector<std::string>& inputs) : d_(d) {
+  LabelsWriter(const std::string& tmp, const Dims& d, std::size_t chunk, const std::vector<std::string>& inputs, bool grains)
+      : d_(d) {
     {
       h5::File f(tmp, h5::File::Mode::create);
       write_provenance(f, inputs);
@@ -283,19 +293,23 @@ class LabelsWriter {
     const hsize_t cd[3] = {std::min<hsize_t>(hc, d.nz), std::min<hsize_t>(hc, d.ny), std::min<hsize_t>(hc, d.nx)};
     labels_ = make(tmp, "labels", H5T_STD_U8LE, dims, cd);
     macro_ = make(tmp, "macropores", H5T_STD_I32LE, dims, cd);
+    if (grains) grains_ = make(tmp, "grains", H5T_STD_I32LE, dims, cd);
     path_ = tmp;
   }
   ~LabelsWriter() {
     if (labels_ >= 0) H5Dclose(labels_);
     if (macro_ >= 0) H5Dclose(macro_);
+    if (grains_ >= 0) H5Dclose(grains_);
     if (file_ >= 0) H5Fclose(file_);
   }
   void write(const Box& b, const std::vector<uint8_t>& phases, const std::vector<int32_t>& ids) {
     put(labels_, b, H5T_NATIVE_UINT8, phases.data());
     put(macro_, b, H5T_NATIVE_INT32, ids.data());
   }
+  void write_grains(const Box& b, const std::vector<int32_t>& ids) { put(grains_, b, H5T_NATIVE_INT32, ids.data()); }
   void finish(const std::array<double, 3>& spacing, const std::array<double, 3>& origin, const std::string& legend) {
-    for (hid_t ds : {labels_, macro_}) {
+    for (hid_t ds : {labels_, macro_, grains_}) {
+      if (ds < 0) continue;
       attr_doubles(ds, "spacing", spacing);
       attr_doubles(ds, "origin", origin);
       attr_string(ds, "axes", "z,y,x (spacing and origin listed x,y,z, m)");
@@ -304,7 +318,8 @@ class LabelsWriter {
     attr_string(labels_, "legend", legend);
     H5Dclose(labels_);
     H5Dclose(macro_);
-    labels_ = macro_ = -1;
+    if (grains_ >= 0) H5Dclose(grains_);
+    labels_ = macro_ = grains_ = -1;
     const herr_t e = H5Fclose(file_);
     file_ = -1;
     if (e < 0) throw RuntimeFailure(path_ + ": closing the labels file failed (disk full?)");
@@ -355,7 +370,7 @@ class LabelsWriter {
   }
   Dims d_;
   std::string path_;
-  hid_t file_ = -1, labels_ = -1, macro_ = -1;
+  hid_t file_ = -1, labels_ = -1, macro_ = -1, grains_ = -1;
 };
 
 // What the chunked path does not do (yet): refused before any work, naming the option.
@@ -365,7 +380,6 @@ void refuse_unsupported(const SegmentConfig& c, const std::string& format) {
   if (c.filter != ImageFilter::median && c.filter != ImageFilter::none)
     throw InputError("", "--filter", to_string(c.filter), why + "; use median or none");
   if (c.method == ThresholdMethod::hysteresis) throw InputError("", "--method", "hysteresis", why);
-  if (c.grains) throw InputError("", c.packing.empty() ? "--grains" : "--packing", c.packing.empty() ? "" : c.packing, why);
   if (c.open_r > 0) throw InputError("", "--open", num(c.open_r), why);
   if (c.close_r > 0) throw InputError("", "--close", num(c.close_r), why);
   if (c.min_island > 1) throw InputError("", "--min-island", std::to_string(c.min_island), why);
@@ -420,6 +434,9 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
   const std::size_t fhalo = std::size_t(*std::max_element(fr.begin(), fr.end()));
   const std::size_t halo = std::max(mhalo, fhalo);
   const bool phase2 = cfg.method == ThresholdMethod::multiotsu3 || (cfg.method == ThresholdMethod::manual && cfg.levels.size() == 2);
+  // Grains: the halo is known once the largest inscribed radius is (below); the block size from
+  // --memory plans for grains up to 10 voxels in radius (a halo of 24) and is checked again then.
+  const std::size_t grains_guess = cfg.grains ? std::max<std::size_t>(halo, 24) : 0;
 
   // The block size: given (--chunk), or the largest multiple of 32 the budget (--memory) allows.
   const double budget = cfg.memory_text.empty() ? 0 : parse_bytes(cfg.memory_text);
@@ -427,9 +444,9 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
   const std::size_t biggest = std::max({D.nx, D.ny, D.nz});
   if (chunk == 0) {
     for (std::size_t c = 32; c <= biggest + 31; c += 32)
-      if (memory_model(D, c, halo, phase2, src.type_bytes()).total() <= budget) chunk = c;
+      if (memory_model(D, c, halo, phase2, src.type_bytes(), grains_guess).total() <= budget) chunk = c;
     if (chunk == 0) {
-      const MemoryModel m = memory_model(D, std::max<std::size_t>(halo, 32), halo, phase2, src.type_bytes());
+      const MemoryModel m = memory_model(D, std::max<std::size_t>(halo, 32), halo, phase2, src.type_bytes(), grains_guess);
       throw InputError("", "--memory", cfg.as_written.count("--memory") ? cfg.as_written.at("--memory") : cfg.memory_text,
                        "is below what one block needs: " + bytes_text(m.total()) + " for the smallest block (" +
                            std::to_string(std::max<std::size_t>(halo, 32)) + " voxels per side with a halo of " +
@@ -444,7 +461,7 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
                          ", macropores 2r + 2 = " + std::to_string(mhalo) + " at r = " + num(macro_r) +
                          " voxels): a block would be mostly halo; give --chunk >= " + std::to_string(halo));
   chunk = std::min(chunk, biggest);
-  const MemoryModel mem = memory_model(D, chunk, halo, phase2, src.type_bytes());
+  MemoryModel mem = memory_model(D, chunk, halo, phase2, src.type_bytes(), grains_guess);
   if (budget > 0 && mem.total() > budget)
     throw InputError("", "--memory", cfg.as_written.count("--memory") ? cfg.as_written.at("--memory") : cfg.memory_text,
                      "is below what --chunk " + std::to_string(chunk) + " needs: " + bytes_text(mem.total()) + " (" +
@@ -682,6 +699,101 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
   std::vector<uint64_t>().swap(total);
   done("labels");
 
+  // 4b. Grains (--grains): the largest inscribed radius, the markers numbered over the volume;
+  // the watershed runs block by block with the outputs (5).
+  GrainOptions go;
+  go.h = cfg.h;
+  const auto solid_block = [&](const Box& outer, Mask& m) {
+    m.dims = outer.dims();
+    m.spacing = ro.spacing;
+    m.origin = {0, 0, 0};
+    m.v.resize(m.dims.count());
+    std::size_t i = 0;
+    for (std::size_t z = outer.lo[2]; z < outer.hi[2]; ++z)
+      for (std::size_t y = outer.lo[1]; y < outer.hi[1]; ++y)
+        for (std::size_t x = outer.lo[0]; x < outer.hi[0]; ++x, ++i) m.v[i] = solid.get(x, y, z);
+  };
+  const auto whole = [&](const Box& b) { return b.n(0) == D.nx && b.n(1) == D.ny && b.n(2) == D.nz; };
+  double inscribed_max = 0;  // the largest distance to a pore (finest voxels)
+  std::size_t ghalo = 0;
+  std::vector<uint64_t> peak_at;   // marker voxels (x-fastest global index), ascending
+  std::vector<int32_t> peak_id;    // their marker ids, 1..n by first voxel
+  int n_grains = 0;
+  if (cfg.grains) {
+    Mask m;
+    for (std::size_t k = 0; k < G.count(); ++k) {
+      const Box core = G.core(k);
+      // A core voxel's distance d found in the block is at least the true one, and exact when
+      // the ball of radius d fits in the block (its nearest pore is then inside).
+      for (std::size_t H = std::max<std::size_t>(halo, 8);; H *= 2) {
+        const Box outer = core.grown({H, H, H}, D);
+        solid_block(outer, m);
+        const auto d2 = distance_squared(m);
+        float mx = 0;
+        for_core(outer, core, [&](std::size_t i, std::size_t, std::size_t, std::size_t) { mx = std::max(mx, d2[i]); });
+        if (whole(outer) || std::sqrt(double(mx)) + 1 <= double(H)) {
+          inscribed_max = std::max(inscribed_max, std::sqrt(double(mx)));
+          break;
+        }
+        if (H > 2 * chunk)
+          throw InputError("", "--chunk", std::to_string(chunk),
+                           "is too small for grain separation: the solid holds a ball of radius above " + std::to_string(H - 1) +
+                               " voxels, and the distance map needs a halo wider than that; give a larger --chunk");
+      }
+    }
+    ghalo = std::size_t(std::ceil(2 * inscribed_max)) + 4;
+    done("grains_radius");
+    mem = memory_model(D, chunk, halo, phase2, src.type_bytes(), ghalo);
+    if (budget > 0 && mem.total() > budget)
+      throw InputError("", "--memory", cfg.as_written.count("--memory") ? cfg.as_written.at("--memory") : cfg.memory_text,
+                       "is below what grain separation needs with --chunk " + std::to_string(chunk) + ": " + bytes_text(mem.total()) +
+                           " (the solid's largest inscribed radius is " + num(inscribed_max) + " voxels, so a grains halo of " +
+                           std::to_string(ghalo) + "); give a smaller --chunk or more --memory");
+    check_memory_request(mem.total(), cfg.input, "--chunk", std::to_string(chunk), "chunked grain separation");
+    info("grains: largest inscribed radius " + num(inscribed_max) + " voxels, halo " + std::to_string(ghalo) +
+         ", planned memory " + bytes_text(mem.total()));
+    // Marker voxels of each core, from its block with the grains halo.
+    const std::array<std::size_t, 3> gh{ghalo, ghalo, ghalo};
+    for (std::size_t k = 0; k < G.count(); ++k) {
+      const Box core = G.core(k), outer = core.grown(gh, D);
+      solid_block(outer, m);
+      const Mask peaks = grain_peaks(m, go);
+      for_core(outer, core, [&](std::size_t i, std::size_t x, std::size_t y, std::size_t z) {
+        if (peaks.v[i]) peak_at.push_back((z * D.ny + y) * D.nx + x);
+      });
+    }
+    // 26-connected marker components over the whole volume, numbered by first voxel.
+    std::sort(peak_at.begin(), peak_at.end());
+    std::vector<std::size_t> up(peak_at.size());
+    std::iota(up.begin(), up.end(), std::size_t(0));
+    const auto root = [&](std::size_t a) {
+      while (up[a] != a) a = up[a] = up[up[a]];
+      return a;
+    };
+    for (std::size_t i = 0; i < peak_at.size(); ++i) {
+      const uint64_t g = peak_at[i];
+      const long x = long(g % D.nx), y = long(g / D.nx % D.ny), z = long(g / (D.nx * D.ny));
+      for (long dz = 0; dz <= 1; ++dz)
+        for (long dy = dz ? -1 : 0; dy <= 1; ++dy)
+          for (long dx = (dz || dy) ? -1 : 1; dx <= 1; ++dx) {  // the 13 neighbours after this voxel
+            const long X = x + dx, Y = y + dy, Z = z + dz;
+            if (X < 0 || Y < 0 || X >= long(D.nx) || Y >= long(D.ny) || Z >= long(D.nz)) continue;
+            const uint64_t q = (uint64_t(Z) * D.ny + uint64_t(Y)) * D.nx + uint64_t(X);
+            const auto it = std::lower_bound(peak_at.begin() + std::ptrdiff_t(i), peak_at.end(), q);
+            if (it == peak_at.end() || *it != q) continue;
+            const std::size_t a = root(i), b = root(std::size_t(it - peak_at.begin()));
+            if (a != b) up[std::max(a, b)] = std::min(a, b);  // the root is the component's first voxel
+          }
+    }
+    peak_id.assign(peak_at.size(), 0);
+    for (std::size_t i = 0; i < peak_at.size(); ++i) {
+      const std::size_t r = root(i);
+      peak_id[i] = r == i ? ++n_grains : peak_id[r];
+    }
+    done("grains_markers");
+    info("grains: " + std::to_string(n_grains) + " markers");
+  }
+
   // 5. Outputs block by block; each macropore's statistics as regions() sums them (whole
   // numbers in doubles: the same in any order).
   const int n_macro = int(kept.size());
@@ -694,9 +806,108 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
   if (!cfg.output.empty()) {
     tmp = temporary_path(cfg.output);
     // No input hashes, as the in-memory writer (hashing a 16 GiB scan would read it once more).
-    out = std::make_unique<LabelsWriter>(tmp, D, chunk, std::vector<std::string>{});
+    out = std::make_unique<LabelsWriter>(tmp, D, chunk, std::vector<std::string>{}, cfg.grains);
   }
+  // Grains: each block floods from the markers in its reach; statistics as regions() sums them.
+  std::vector<Region> grain_regs(static_cast<std::size_t>(n_grains));
+  std::vector<std::array<double, 3>> grain_sum(std::size_t(n_grains), std::array<double, 3>{0, 0, 0});
+  std::vector<float> inscribed(std::size_t(n_grains) + 1, 0.0f);
+  std::vector<std::size_t> n_phase2(std::size_t(n_grains) + 1, 0);
+  std::vector<char> at_edge(std::size_t(n_grains) + 1, 0);
+  // A grain of the core whose voxels reach the block's outer edge (a face that is not the
+  // volume's) through voxels of the same id may be cut otherwise with more of the volume in view:
+  // its id in the core is not certain. Returns those ids.
+  const auto reaching_edge = [&](const Box& outer, const Box& core, const Labels& L) {
+    const std::size_t nx = outer.n(0), ny = outer.n(1), nz = outer.n(2);
+    std::vector<uint8_t> seen(L.v.size(), 0);
+    std::vector<std::size_t> stack;
+    std::vector<int32_t> found;
+    for_core(outer, core, [&](std::size_t i, std::size_t, std::size_t, std::size_t) {
+      if (L.v[i] && !seen[i]) {
+        seen[i] = 1;
+        stack.push_back(i);
+      }
+    });
+    while (!stack.empty()) {
+      const std::size_t i = stack.back();
+      stack.pop_back();
+      const std::size_t x = i % nx, y = i / nx % ny, z = i / (nx * ny);
+      if ((x == 0 && outer.lo[0] > 0) || (x + 1 == nx && outer.hi[0] < D.nx) || (y == 0 && outer.lo[1] > 0) ||
+          (y + 1 == ny && outer.hi[1] < D.ny) || (z == 0 && outer.lo[2] > 0) || (z + 1 == nz && outer.hi[2] < D.nz))
+        found.push_back(L.v[i]);
+      for (std::size_t c = z ? z - 1 : 0; c <= std::min(z + 1, nz - 1); ++c)
+        for (std::size_t b = y ? y - 1 : 0; b <= std::min(y + 1, ny - 1); ++b)
+          for (std::size_t a = x ? x - 1 : 0; a <= std::min(x + 1, nx - 1); ++a) {
+            const std::size_t q = (c * ny + b) * nx + a;
+            if (!seen[q] && L.v[q] == L.v[i]) {
+              seen[q] = 1;
+              stack.push_back(q);
+            }
+          }
+    }
+    std::sort(found.begin(), found.end());
+    found.erase(std::unique(found.begin(), found.end()), found.end());
+    return found;
+  };
+  std::size_t widened = 0, widest = ghalo;
+  const auto grains_pass = [&] {
+    // The widest halo a block may take: what the budget (or twice the plan) allows.
+    const double limit = budget > 0 ? budget : 2 * mem.total();
+    std::size_t cap = ghalo;
+    while (memory_model(D, chunk, halo, phase2, src.type_bytes(), 2 * cap).total() <= limit) cap *= 2;
+    Mask m;
+    Labels markers, L;
+    std::vector<int32_t> ids;
+    for (std::size_t k = 0; k < G.count(); ++k) {
+      const Box core = G.core(k);
+      Box outer;
+      // The block's watershed with the grains halo; twice as wide while a grain of the core
+      // reaches its edge (a grain longer than the halo), up to the cap.
+      for (std::size_t H = ghalo;; H *= 2) {
+        outer = core.grown({H, H, H}, D);
+        solid_block(outer, m);
+        markers.copy_geometry(m);
+        markers.v.assign(m.v.size(), 0);
+        for (std::size_t z = outer.lo[2]; z < outer.hi[2]; ++z)
+          for (std::size_t y = outer.lo[1]; y < outer.hi[1]; ++y) {
+            const uint64_t row = (z * D.ny + y) * D.nx;
+            auto it = std::lower_bound(peak_at.begin(), peak_at.end(), row + outer.lo[0]);
+            for (; it != peak_at.end() && *it < row + outer.hi[0]; ++it)
+              markers.v[((z - outer.lo[2]) * outer.n(1) + (y - outer.lo[1])) * outer.n(0) + (*it - row - outer.lo[0])] =
+                  peak_id[std::size_t(it - peak_at.begin())];
+          }
+        L = watershed_from_markers(m, markers, go);
+        const auto far = reaching_edge(outer, core, L);
+        if (far.empty() || whole(outer) || 2 * H > cap) {
+          for (auto id : far) at_edge[std::size_t(id)] = 1;
+          widest = std::max(widest, H);
+          break;
+        }
+        ++widened;
+      }
+      const auto d2 = distance_squared(m);  // exact in the core: the halo passes the largest distance
+      ids.assign(core.dims().count(), 0);
+      std::size_t j = 0;
+      for_core(outer, core, [&](std::size_t i, std::size_t x, std::size_t y, std::size_t z) {
+        const int32_t id = L.v[i];
+        ids[j++] = id;
+        if (!id) return;
+        auto& R = grain_regs[std::size_t(id - 1)];
+        ++R.voxels;
+        auto& s = grain_sum[std::size_t(id - 1)];
+        s[0] += double(x);
+        s[1] += double(y);
+        s[2] += double(z);
+        if (x == 0 || y == 0 || z == 0 || x + 1 == D.nx || y + 1 == D.ny || z + 1 == D.nz) R.touches_surface = true;
+        inscribed[std::size_t(id)] = std::max(inscribed[std::size_t(id)], d2[i]);
+        if (phase2 && second.get(x, y, z)) ++n_phase2[std::size_t(id)];
+      });
+      if (out) out->write_grains(core, ids);
+    }
+    done("grains_watershed");
+  };
   try {
+    if (cfg.grains) grains_pass();
     std::vector<uint8_t> phases;
     std::vector<int32_t> ids;
     for (std::size_t k = 0; k < G.count(); ++k) {
@@ -733,8 +944,9 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
       out->finish(ro.spacing, {0, 0, 0}, legend);
       out.reset();
       commit_output(cfg.output);
-      write_volume_xdmf(cfg.output, {D.nx, D.ny, D.nz}, {0, 0, 0}, ro.spacing,
-                        {{"labels", "/labels", "UChar", 1}, {"macropores", "/macropores", "Int", 4}});
+      std::vector<XdmfField> fields{{"labels", "/labels", "UChar", 1}, {"macropores", "/macropores", "Int", 4}};
+      if (cfg.grains) fields.push_back({"grains", "/grains", "Int", 4});
+      write_volume_xdmf(cfg.output, {D.nx, D.ny, D.nz}, {0, 0, 0}, ro.spacing, fields);
     }
   } catch (...) {
     out.reset();
@@ -769,9 +981,31 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
     }
     macropore_summary(regs, summary);
   }
+  if (cfg.grains) {
+    const double vox = sp[0] * sp[1] * sp[2];
+    for (std::size_t k = 0; k < grain_regs.size(); ++k) {
+      auto& R = grain_regs[k];
+      R.label = int(k + 1);
+      if (!R.voxels) continue;
+      const double c = double(R.voxels);
+      R.centroid = {grain_sum[k][0] / c * sp[0], grain_sum[k][1] / c * sp[1], grain_sum[k][2] / c * sp[2]};
+      R.volume_m3 = c * vox;
+      R.equivalent_diameter_m = std::cbrt(6.0 * R.volume_m3 / M_PI);
+    }
+    Packing packing = grains_packing(grain_regs, inscribed, n_phase2, D, sp, {0, 0, 0}, phase2, cfg.h, summary);
+    summary.n_particles(packing.particles.size());
+    write_grains_packing(cfg, packing, summary);
+  }
   summary["chunked"] = {{"chunk_vox", chunk}, {"halo_vox", halo}, {"blocks", G.count()},
                         {"memory_budget_bytes", budget > 0 ? json(budget) : json(nullptr)},
                         {"planned_memory_bytes", mem.total()}, {"histogram_passes", exact ? 1 : 2}};
+  if (cfg.grains) {
+    summary["chunked"]["grains_halo_vox"] = ghalo;
+    summary["chunked"]["largest_inscribed_radius_vox"] = inscribed_max;
+    summary["chunked"]["grains_blocks_widened"] = widened;
+    summary["chunked"]["grains_widest_halo_vox"] = widest;
+    summary["chunked"]["grains_reaching_halo_edge"] = std::count(at_edge.begin(), at_edge.end(), char(1));
+  }
   summary["stage_times_s"] = times;
   summary.unit("stage_times_s", "s");
   return summary.text();

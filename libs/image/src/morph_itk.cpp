@@ -29,9 +29,12 @@ Mask hysteresis(const Volume& v, double low, double high) {
   return itkb::from_voxel_image<uint8_t>(f->GetOutput(), v);
 }
 
-Labels watershed_grains(const Mask& solid, const GrainOptions& opt, int* count) {
+namespace {
+
+// The signed Maurer distance of the solid (inside positive), in voxels of the finest axis, each
+// axis weighted by its spacing (anisotropic scans).
+FI::Pointer solid_distance(const Mask& solid) {
   auto dist = itk::SignedMaurerDistanceMapImageFilter<UI, FI>::New();
-  // Distances in voxels of the finest axis, each axis weighted by its spacing (anisotropic scans).
   auto in = itkb::to_voxel_image<uint8_t>(solid);
   const double finest = std::min({solid.spacing[0], solid.spacing[1], solid.spacing[2]});
   UI::SpacingType sp;
@@ -42,8 +45,16 @@ Labels watershed_grains(const Mask& solid, const GrainOptions& opt, int* count) 
   dist->SetSquaredDistance(false);
   dist->SetUseImageSpacing(true);
   dist->SetBackgroundValue(0);
+  dist->Update();
+  FI::Pointer d = dist->GetOutput();
+  d->DisconnectPipeline();
+  return d;
+}
+
+// The h-maxima's regional maxima of the distance, inside the solid (0/1).
+Mask peaks_of(FI* d, const Mask& solid, const GrainOptions& opt, Progress* bar) {
   auto hmax = itk::HMaximaImageFilter<FI, FI>::New();
-  hmax->SetInput(dist->GetOutput());
+  hmax->SetInput(d);
   hmax->SetHeight(opt.h);
   auto maxima = itk::RegionalMaximaImageFilter<FI, UI>::New();
   maxima->SetInput(hmax->GetOutput());
@@ -51,19 +62,18 @@ Labels watershed_grains(const Mask& solid, const GrainOptions& opt, int* count) 
   maxima->SetFlatIsMaxima(true);
   maxima->SetForegroundValue(1);
   maxima->SetBackgroundValue(0);
-  // Progress on stderr (unless -q): the distance map and its maxima are the first half of the
-  // work, the watershed the second (measured on the demo scan: about equal).
-  Progress bar("grain separation", 1.0);
-  maxima->AddObserver(itk::ProgressEvent(), [&](const itk::EventObject&) {
-    bar.update(0.5 * maxima->GetProgress(), "distance map and maxima");
-  });
+  if (bar)
+    maxima->AddObserver(itk::ProgressEvent(), [&](const itk::EventObject&) {
+      bar->update(0.5 * maxima->GetProgress(), "distance map and maxima");
+    });
   maxima->Update();
   Mask peaks = itkb::from_voxel_image<uint8_t>(maxima->GetOutput(), solid);
   for (std::size_t i = 0; i < peaks.v.size(); ++i) peaks.v[i] = peaks.v[i] && solid.v[i];
-  int n = 0;
-  Labels markers = components(peaks, 26, &n);
-  // Watershed of -distance from the markers; the pore space is cut away afterwards.
-  const FI* d = dist->GetOutput();
+  return peaks;
+}
+
+// Watershed of -distance from the markers; the pore space is cut away afterwards.
+Labels flood(const FI* d, const Mask& solid, const Labels& markers, const GrainOptions& opt, Progress* bar) {
   auto neg = FI::New();
   neg->SetRegions(d->GetLargestPossibleRegion());
   neg->Allocate();
@@ -74,16 +84,36 @@ Labels watershed_grains(const Mask& solid, const GrainOptions& opt, int* count) 
   ws->SetMarkerImage(itkb::to_voxel_image<int32_t>(markers));
   ws->SetMarkWatershedLine(false);
   ws->SetFullyConnected(opt.connectivity == 26);
-  ws->AddObserver(itk::ProgressEvent(), [&](const itk::EventObject&) {
-    bar.update(0.5 + 0.5 * ws->GetProgress(), "watershed");
-  });
+  if (bar)
+    ws->AddObserver(itk::ProgressEvent(), [&](const itk::EventObject&) {
+      bar->update(0.5 + 0.5 * ws->GetProgress(), "watershed");
+    });
   ws->Update();
-  bar.finish(std::to_string(n) + " grains");
   Labels out = itkb::from_voxel_image<int32_t>(ws->GetOutput(), solid);
   for (std::size_t i = 0; i < N; ++i)
     if (!solid.v[i]) out.v[i] = 0;
+  return out;
+}
+
+}  // namespace
+
+Labels watershed_grains(const Mask& solid, const GrainOptions& opt, int* count) {
+  // Progress on stderr (unless -q): the distance map and its maxima are the first half of the
+  // work, the watershed the second (measured on the demo scan: about equal).
+  Progress bar("grain separation", 1.0);
+  const FI::Pointer d = solid_distance(solid);
+  int n = 0;
+  const Labels markers = components(peaks_of(d, solid, opt, &bar), 26, &n);
+  Labels out = flood(d, solid, markers, opt, &bar);
+  bar.finish(std::to_string(n) + " grains");
   if (count) *count = n;
   return out;
+}
+
+Mask grain_peaks(const Mask& solid, const GrainOptions& opt) { return peaks_of(solid_distance(solid), solid, opt, nullptr); }
+
+Labels watershed_from_markers(const Mask& solid, const Labels& markers, const GrainOptions& opt) {
+  return flood(solid_distance(solid), solid, markers, opt, nullptr);
 }
 
 }  // namespace tomodem::image

@@ -360,17 +360,14 @@ void macropore_keys(const Labels& macro, int n_macro, Summary& summary) {
   macropore_summary(regions(macro, n_macro), summary);
 }
 
-// Grain separation (distance map, h-maxima, watershed) and the grains as a packing: one sphere
-// of the grain's volume at its centroid, phase 1 where the second solid phase is the majority.
+// Grain separation (distance map, h-maxima, watershed) and the grains as a packing.
 Packing separate_grains(const SegmentConfig& cfg, const Mask& solid, const Mask& phases, bool two_phases, Labels& grains,
                         Summary& summary) {
   int n = 0;
   GrainOptions go;
   go.h = cfg.h;
   grains = watershed_grains(solid, go, &n);
-  const auto g = regions(grains, n);
   const auto d2 = distance_squared(solid);
-  const double finest = std::min({solid.spacing[0], solid.spacing[1], solid.spacing[2]});
   std::vector<float> inscribed(std::size_t(n) + 1, 0.0f);
   std::vector<std::size_t> n_phase2(std::size_t(n) + 1, 0);
   for (std::size_t i = 0; i < d2.size(); ++i) {
@@ -379,38 +376,7 @@ Packing separate_grains(const SegmentConfig& cfg, const Mask& solid, const Mask&
     inscribed[k] = std::max(inscribed[k], d2[i]);
     if (phases.v[i] == 3) ++n_phase2[k];
   }
-  std::vector<double> vols;
-  for (const auto& r : g) vols.push_back(double(r.voxels));
-  std::sort(vols.begin(), vols.end());
-  const double med = vols.empty() ? 0 : vols[vols.size() / 2];
-  int over = 0, under = 0, cut = 0;
-  Packing packing;
-  for (const auto& r : g) {
-    if (!r.voxels) continue;
-    // The inscribed radius is in voxels of the finest axis (distance_squared): compare volumes in m³.
-    const double rin = std::sqrt(double(inscribed[std::size_t(r.label)])) * finest;
-    const double ratio = r.volume_m3 / (4.0 / 3.0 * M_PI * rin * rin * rin);
-    under += ratio > 2.0;                  // much more volume than its largest inscribed ball: merged grains
-    over += double(r.voxels) < 0.2 * med;  // a fragment far below the typical grain
-    cut += r.touches_surface;
-    packing.particles.position.push_back(r.centroid);
-    packing.particles.radius.push_back(0.5 * r.equivalent_diameter_m);
-    packing.particles.phase.push_back(2 * n_phase2[std::size_t(r.label)] > r.voxels ? 1 : 0);
-  }
-  const auto& sp = solid.spacing;
-  const Vec3 lo{solid.origin[0] - 0.5 * sp[0], solid.origin[1] - 0.5 * sp[1], solid.origin[2] - 0.5 * sp[2]};
-  packing.cell = Cell::box(lo, lo + Vec3{double(solid.dims.nx) * sp[0], double(solid.dims.ny) * sp[1],
-                                         double(solid.dims.nz) * sp[2]}, false);
-  Material m1, m2;
-  m1.name = "solid";
-  m2.name = "solid_phase_2";
-  packing.materials = {m1};
-  if (two_phases) packing.materials.push_back(m2);
-  summary["n_grains"] = packing.particles.size();
-  summary["grains"] = {{"h_vox", cfg.h}, {"median_voxels", med}, {"cut_by_surface", cut},
-                       {"over_segmentation_suspects", over}, {"under_segmentation_suspects", under},
-                       {"rules", "over: volume < 0.2 x median; under: volume > 2 x the ball of its largest inscribed radius"}};
-  return packing;
+  return grains_packing(regions(grains, n), inscribed, n_phase2, solid.dims, solid.spacing, solid.origin, two_phases, cfg.h, summary);
 }
 
 // Everything computed: the outputs now, each atomically.
@@ -429,15 +395,7 @@ void write_segment_outputs(const SegmentConfig& cfg, const Mask& phases, const L
   }
   summary.output("macropores_vdb", cfg.vdb);
   if (!cfg.overlay.empty()) summary.output("overlays", json(write_overlays(cfg.overlay, planes, phases)));
-  if (cfg.grains && !cfg.packing.empty()) {
-    packing.provenance.tool = "tomodem-segment";
-    packing.provenance.version = version_string();
-    packing.provenance.parameters = "input: " + cfg.input + "\nh_vox: " + std::to_string(cfg.h);
-    packing.provenance.wall_time_s = process_wall_time_s();
-    packing.provenance.created_utc = utc_now();
-    write_packing(cfg.packing, packing);
-    summary.output("packing", cfg.packing);
-  }
+  if (cfg.grains) write_grains_packing(cfg, packing, summary);
 }
 
 }  // namespace
@@ -598,6 +556,55 @@ void macropore_summary(const std::vector<Region>& regs, Summary& summary) {
   summary["pore_size_distribution"] = {{"kind", "macropore equivalent diameters (6V/pi)^(1/3), ascending"},
                                        {"equivalent_diameters_m", diam},
                                        {"median_m", diam.empty() ? 0.0 : diam[diam.size() / 2]}};
+}
+
+void write_grains_packing(const SegmentConfig& cfg, Packing& packing, Summary& summary) {
+  if (cfg.packing.empty()) return;
+  packing.provenance.tool = "tomodem-segment";
+  packing.provenance.version = version_string();
+  packing.provenance.parameters = "input: " + cfg.input + "\nh_vox: " + std::to_string(cfg.h);
+  packing.provenance.wall_time_s = process_wall_time_s();
+  packing.provenance.created_utc = utc_now();
+  write_packing(cfg.packing, packing);
+  summary.output("packing", cfg.packing);
+}
+
+// One sphere of each grain's volume at its centroid, phase 1 where the second solid phase is the
+// majority (the in-memory and the chunked path).
+Packing grains_packing(const std::vector<Region>& g, const std::vector<float>& inscribed_d2, const std::vector<std::size_t>& n_phase2,
+                       const Dims& dims, const std::array<double, 3>& sp, const std::array<double, 3>& origin, bool two_phases,
+                       double h, Summary& summary) {
+  const double finest = std::min({sp[0], sp[1], sp[2]});
+  std::vector<double> vols;
+  for (const auto& r : g) vols.push_back(double(r.voxels));
+  std::sort(vols.begin(), vols.end());
+  const double med = vols.empty() ? 0 : vols[vols.size() / 2];
+  int over = 0, under = 0, cut = 0;
+  Packing packing;
+  for (const auto& r : g) {
+    if (!r.voxels) continue;
+    // The inscribed radius is in voxels of the finest axis (distance_squared): compare volumes in m³.
+    const double rin = std::sqrt(double(inscribed_d2[std::size_t(r.label)])) * finest;
+    const double ratio = r.volume_m3 / (4.0 / 3.0 * M_PI * rin * rin * rin);
+    under += ratio > 2.0;                  // much more volume than its largest inscribed ball: merged grains
+    over += double(r.voxels) < 0.2 * med;  // a fragment far below the typical grain
+    cut += r.touches_surface;
+    packing.particles.position.push_back(r.centroid);
+    packing.particles.radius.push_back(0.5 * r.equivalent_diameter_m);
+    packing.particles.phase.push_back(2 * n_phase2[std::size_t(r.label)] > r.voxels ? 1 : 0);
+  }
+  const Vec3 lo{origin[0] - 0.5 * sp[0], origin[1] - 0.5 * sp[1], origin[2] - 0.5 * sp[2]};
+  packing.cell = Cell::box(lo, lo + Vec3{double(dims.nx) * sp[0], double(dims.ny) * sp[1], double(dims.nz) * sp[2]}, false);
+  Material m1, m2;
+  m1.name = "solid";
+  m2.name = "solid_phase_2";
+  packing.materials = {m1};
+  if (two_phases) packing.materials.push_back(m2);
+  summary["n_grains"] = packing.particles.size();
+  summary["grains"] = {{"h_vox", h}, {"median_voxels", med}, {"cut_by_surface", cut},
+                       {"over_segmentation_suspects", over}, {"under_segmentation_suspects", under},
+                       {"rules", "over: volume < 0.2 x median; under: volume > 2 x the ball of its largest inscribed radius"}};
+  return packing;
 }
 
 }  // namespace tomodem::image

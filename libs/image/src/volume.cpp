@@ -89,15 +89,6 @@ std::vector<std::string> stack_files(const std::string& input) {
   return files;
 }
 
-std::size_t type_size(RawType t) {
-  switch (t) {
-    case RawType::uint8: case RawType::int8: return 1;
-    case RawType::uint16: case RawType::int16: return 2;
-    case RawType::uint32: case RawType::int32: case RawType::float32: return 4;
-    case RawType::float64: return 8;
-  }
-  return 1;
-}
 
 template <class T>
 void convert(const char* p, std::size_t n, bool swap, std::vector<float>& out) {
@@ -217,6 +208,16 @@ Volume read_h5(const std::string& path, const ReadOptions& o, bool* has_spacing,
 }
 
 }  // namespace
+
+std::size_t type_size(RawType t) {
+  switch (t) {
+    case RawType::uint8: case RawType::int8: return 1;
+    case RawType::uint16: case RawType::int16: return 2;
+    case RawType::uint32: case RawType::int32: case RawType::float32: return 4;
+    case RawType::float64: return 8;
+  }
+  return 1;
+}
 
 std::array<double, 2> type_range(const std::string& t) {
   if (t == "uint8") return {0, 255};

@@ -1,9 +1,11 @@
-// segment_gen_raw N FILE [SEED]: an N^3 little-endian uint16 volume for the out-of-core
+// segment_gen_raw N FILE [SEED [grains]]: an N^3 little-endian uint16 volume for the out-of-core
 // benchmark, written slab by slab (32 planes in memory), so a 2048^3 volume (16 GiB) needs
 // about 0.5 GB. The recipe of bench_segment.cpp: N^3/20000 spheres of pores (grey 10000,
 // radius 3-11 voxels, centres uniform) in solid (30000), near-Gaussian noise of sigma 20000/3
 // (SNR 3; Irwin-Hall, see normal()), rounded and clamped to 0..65535. The noise of voxel i is a hash of (seed, i), so the
 // file does not depend on the slab size. Written to FILE.part, then renamed.
+// "grains": N^3/4000 solid spheres (grains, radius 6-10 voxels, overlapping where they fall so)
+// in pore space instead, for --grains (about 41 % solid).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -32,20 +34,21 @@ struct Sphere { double x, y, z, r; };
 
 int main(int argc, char** argv) {
   if (argc < 3) {
-    std::fprintf(stderr, "usage: segment_gen_raw N FILE [SEED]\n");
+    std::fprintf(stderr, "usage: segment_gen_raw N FILE [SEED [grains]]\n");
     return 2;
   }
   const long n = std::atol(argv[1]);
   const std::string path = argv[2];
   const uint64_t seed = argc > 3 ? std::strtoull(argv[3], nullptr, 10) : 1;
+  const bool grains = argc > 4 && std::string(argv[4]) == "grains";
   if (n < 8 || n > 8192) {
     std::fprintf(stderr, "segment_gen_raw: N = %s: expected 8..8192\n", argv[1]);
     return 2;
   }
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> U(0, double(n));
-  std::vector<Sphere> s(std::size_t(double(n) * double(n) * double(n) / 20000));
-  for (auto& p : s) p = {U(rng), U(rng), U(rng), 3 + std::fmod(U(rng), 8.0)};
+  std::vector<Sphere> s(std::size_t(double(n) * double(n) * double(n) / (grains ? 4000 : 20000)));
+  for (auto& p : s) p = grains ? Sphere{U(rng), U(rng), U(rng), 6 + std::fmod(U(rng), 4.0)} : Sphere{U(rng), U(rng), U(rng), 3 + std::fmod(U(rng), 8.0)};
   std::sort(s.begin(), s.end(), [](const Sphere& a, const Sphere& b) { return a.z - a.r < b.z - b.r; });
   const long slab = 32, P = n * n;
   std::vector<uint8_t> pore(std::size_t(slab * P));
@@ -72,7 +75,7 @@ int main(int argc, char** argv) {
     const long m = (z1 - z0) * P;
 #pragma omp parallel for schedule(static)
     for (long i = 0; i < m; ++i) {
-      const double v = (pore[std::size_t(i)] ? 10000.0 : 30000.0) + normal(seed, uint64_t(z0 * P + i)) * 20000.0 / 3;
+      const double v = ((pore[std::size_t(i)] != 0) != grains ? 10000.0 : 30000.0) + normal(seed, uint64_t(z0 * P + i)) * 20000.0 / 3;
       out[std::size_t(i)] = uint16_t(std::lround(std::clamp(v, 0.0, 65535.0)));
     }
     if (std::fwrite(out.data(), 2, std::size_t(m), f) != std::size_t(m)) {

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "tomodem/core/packing.hpp"
 #include "tomodem/core/vec3.hpp"
 #include "tomodem/image/volume.hpp"
 
@@ -104,6 +105,13 @@ std::vector<Region> regions(const Labels& l, int n);
 /// The summary keys of the macropores: `macropores` (id, voxels, volume_m3, equivalent_diameter_m,
 /// centroid_m, touches_surface), `n_macropores_touching_surface`, `pore_size_distribution`.
 void macropore_summary(const std::vector<Region>& regs, Summary& summary);
+/// The grains as a packing: one sphere of each grain's volume at its centroid, phase 1 where the
+/// second solid phase holds most of its voxels; and the summary's `n_grains` and `grains` keys.
+/// Indexed by label: `inscribed_d2`, the grain's largest squared distance to the pores (finest
+/// voxels², distance_squared); `n_phase2`, its voxels of the second solid phase.
+Packing grains_packing(const std::vector<Region>& grains, const std::vector<float>& inscribed_d2,
+                       const std::vector<std::size_t>& n_phase2, const Dims& dims, const std::array<double, 3>& spacing,
+                       const std::array<double, 3>& origin, bool two_phases, double h, Summary& summary);
 
 /// Interface area between m != 0 and m == 0 per unit total volume (1/m): face count × 2/3,
 /// the mean-projection correction of voxel faces for isotropic surfaces (Lang et al. 2001).
@@ -127,5 +135,10 @@ struct GrainOptions {
 /// Separates touching grains of `solid`: signed Maurer distance (ITK), h-maxima markers,
 /// morphological watershed from markers on -distance, restricted to the solid.
 Labels watershed_grains(const Mask& solid, const GrainOptions& opt, int* count);
+/// watershed_grains in its two steps, for a block of a larger volume (the chunked path numbers the
+/// markers over the whole volume between them): the marker voxels (the h-maxima's regional maxima
+/// of the distance map, in the solid; 0/1), and the watershed from given markers (labels > 0).
+Mask grain_peaks(const Mask& solid, const GrainOptions& opt);
+Labels watershed_from_markers(const Mask& solid, const Labels& markers, const GrainOptions& opt);
 
 }  // namespace tomodem::image

@@ -10,6 +10,10 @@
 #include "tomodem/image/phantom.hpp"
 #include "tomodem/image/volume.hpp"
 
+namespace tomodem {
+class Summary;
+}
+
 namespace tomodem::image {
 
 /// Every option given on the command line, as typed (long name -> values joined by ',').
@@ -96,6 +100,8 @@ std::string run_segment(const SegmentConfig& cfg);
 /// The out-of-core path (chunked.cpp): a raw volume read and processed in blocks with halos,
 /// labels written block by block; the same labels as run_segment. `ro`: checked read options.
 std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro);
+/// Writes the grains' packing to cfg.packing (nothing when it is empty), with its provenance.
+void write_grains_packing(const SegmentConfig& cfg, Packing& packing, Summary& summary);
 
 struct PhantomConfig {
   PhantomOptions opt;

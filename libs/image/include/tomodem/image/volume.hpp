@@ -62,6 +62,8 @@ inline constexpr NameTable<RawType, 8> kRawTypeNames = {{{RawType::uint8, "uint8
                                                          {RawType::float32, "float32"},
                                                          {RawType::float64, "float64"}}};
 inline const char* to_string(RawType t) { return name_of(kRawTypeNames, t); }
+/// Bytes per voxel of a raw type.
+std::size_t type_size(RawType t);
 
 /// The byte order of a raw file's voxels.
 enum class ByteOrder : uint8_t { little, big };
