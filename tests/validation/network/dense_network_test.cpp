@@ -7,6 +7,8 @@
 // are unchanged; (4) the composite electrode uses the same law.
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -18,6 +20,7 @@
 #include "tomodem/dem/scene.hpp"
 #include "tomodem/dem/sinter.hpp"
 #include "tomodem/geometry/pack.hpp"
+#include "tomodem/network/conduct_tool.hpp"
 #include "tomodem/network/conductivity.hpp"
 #include "tomodem/network/electrode.hpp"
 #include "tomodem/spatial/union_volume.hpp"
@@ -303,4 +306,23 @@ TEST(ConductDenseNetwork, CompositeElectrodeUsesTheSameNeckLaw) {
     }
     EXPECT_EQ(n_ee, 3u * 27u) << (cap ? "capped" : "isolated");  // 27 corner sites, 3 ⟨100⟩ neighbours each
   }
+}
+
+// The tool's summary records the law (`neck_law`), and --isolated-necks (ConductConfig::
+// isolated_necks) restores Holm's law: on the worked example no neck reaches its face, so both
+// laws give the same σ (the cap only ever lowers a conductance, and none is lowered here).
+TEST(ConductDenseNetwork, SummaryRecordsTheNeckLaw) {
+  ConductConfig c;
+  c.input = std::string(TOMODEM_TEST_DATA) + "/examples/cathode.h5";
+  c.phases = {"LSM"};
+  c.bc = "periodic";
+  const nlohmann::json capped = nlohmann::json::parse(run_conduct(c));
+  c.isolated_necks = true;
+  const nlohmann::json iso = nlohmann::json::parse(run_conduct(c));
+  EXPECT_EQ(capped["neck_law"]["law"], "face_capped");
+  EXPECT_EQ(iso["neck_law"]["law"], "isolated_necks");
+  EXPECT_EQ(capped["neck_law"]["face_capped_edges"], 0);
+  EXPECT_EQ(capped["neck_law"]["edges_without_face"], 0);
+  for (const char* ax : {"x", "y", "z"})
+    EXPECT_EQ(capped["sigma_eff"][ax].get<double>(), iso["sigma_eff"][ax].get<double>()) << ax;
 }
