@@ -11,35 +11,20 @@
 #include <sstream>
 
 #include "../../validation/mechanics/networks.hpp"
+#include "../common/tool_test.hpp"
 #include "tomodem/core/packing_io.hpp"
 
 namespace fs = std::filesystem;
 using namespace tomodem;
 
 namespace {
-const std::string kBin = std::string(TOMODEM_BIN_DIR);
-
-class YoungCli : public ::testing::Test {
+class YoungCli : public tomodem::test::ToolTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("tomodem-young-e2e-" + std::to_string(::getpid()) + "-" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string path(const std::string& n) const { return (dir_ / n).string(); }
+  YoungCli() : ToolTest("tomodem-young-e2e") {}
+  /// The exit code of `tool args` and its stderr.
   std::pair<int, std::string> run(const std::string& tool, const std::string& args) const {
-    const std::string err = path("stderr.txt");
-    const int st = std::system((kBin + "/" + tool + " " + args + " > " + path("stdout.txt") + " 2> " + err).c_str());
-    std::ifstream in(err);
-    std::stringstream s;
-    s << in.rdbuf();
-    return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, s.str()};
-  }
-  nlohmann::json read_json(const std::string& f) const {
-    std::ifstream in(f);
-    return nlohmann::json::parse(in);
+    const int code = sh(bin(tool) + " " + args);
+    return {code, text("stderr.txt")};
   }
   // SC lattice n³ (default 6³), R = 0.5 mm, touching.
   std::string lattice(double E = 1e9, double nu = 0.25, int n = 6) const {
@@ -47,7 +32,6 @@ class YoungCli : public ::testing::Test {
     write_packing(path("lattice.h5"), p);
     return path("lattice.h5");
   }
-  fs::path dir_;
 };
 }  // namespace
 
@@ -55,14 +39,14 @@ TEST_F(YoungCli, BondThenYoungImplicitGivesKnOver2R) {
   auto [code, err] = run("tomodem-bond", lattice() + " -o " + path("bonded.h5") + " --rule ratio --neck-ratio 0.1 " +
                                              "--gap-tolerance 1e-6 --json " + path("bond.json"));
   ASSERT_EQ(code, 0) << err;
-  const auto b = read_json(path("bond.json"));
+  const auto b = json("bond.json");
   EXPECT_EQ(b["n_bonds"], 3 * 216);
   EXPECT_NEAR(b["bonds_per_particle"].get<double>(), 6.0, 1e-12);
   EXPECT_NEAR(b["relative_density"].get<double>(), M_PI / 6, 1e-9);
   EXPECT_TRUE(fs::exists(path("bonded.xdmf")));
   std::tie(code, err) = run("tomodem-young", path("bonded.h5") + " --method implicit --json " + path("young.json"));
   ASSERT_EQ(code, 0) << err;
-  const auto y = read_json(path("young.json"));
+  const auto y = json("young.json");
   // k_n = 2E* a g_n, E* = E/(2(1−ν²)), g_n = 1 + 4 (a/R)²; E_net = k_n/(2R). Tolerance 0.5%.
   const double Es = 1e9 / (2 * (1 - 0.0625)), a = 0.05e-3, kn = 2 * Es * a * (1 + 4 * 0.01);
   EXPECT_NEAR(y["E"].get<double>() / (kn / 1e-3), 1.0, 0.005);
@@ -82,7 +66,7 @@ TEST_F(YoungCli, FaceCapGivesTheSolidModulusOnFullFaces) {
   ASSERT_EQ(code, 0) << err;
   std::tie(code, err) = run("tomodem-young", path("bonded.h5") + " --method implicit --json " + path("y.json"));
   ASSERT_EQ(code, 0) << err;
-  const auto y = read_json(path("y.json"));
+  const auto y = json("y.json");
   EXPECT_NEAR(y["E"].get<double>() / 1e9, 1.0, 1e-6);
   EXPECT_EQ(y["neck_law"]["law"], "face_capped");
   EXPECT_EQ(y["neck_law"]["face_capped_bonds"], 3 * 216);
@@ -90,7 +74,7 @@ TEST_F(YoungCli, FaceCapGivesTheSolidModulusOnFullFaces) {
   std::tie(code, err) =
       run("tomodem-young", path("bonded.h5") + " --method implicit --isolated-necks --json " + path("y.json"));
   ASSERT_EQ(code, 0) << err;
-  const auto yi = read_json(path("y.json"));
+  const auto yi = json("y.json");
   const double Es = 1e9 / (2 * (1 - 0.45 * 0.45)), kn = 2 * Es * 0.45e-3 * (1 + 4 * 0.25);
   EXPECT_NEAR(yi["E"].get<double>() / (kn / 1e-3), 1.0, 1e-6);
   EXPECT_EQ(yi["neck_law"]["law"], "isolated_necks");
@@ -150,7 +134,7 @@ TEST_F(YoungCli, BothMethodsReportAgreement) {
   auto [code, err] = run("tomodem-young", path("b.h5") + " --method both --transits 20 --points 3 --threads 1 --json " +
                                               path("y.json") + " --curve " + path("curve.csv"));
   ASSERT_EQ(code, 0) << err;
-  const auto y = read_json(path("y.json"));
+  const auto y = json("y.json");
   // Explicit vs implicit on the lattice: 1% (20 transits: the dynamic error is ~1e-4 at 50 transits
   // and falls as 1/time², so below 1e-3 here), and the reported estimate (rate check) bounds it.
   EXPECT_NEAR(y["explicit_vs_implicit"].get<double>(), 0.0, 0.01);
