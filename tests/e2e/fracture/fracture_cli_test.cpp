@@ -13,31 +13,20 @@
 #include <sstream>
 
 #include "../../validation/fracture/samples.hpp"
+#include "../common/tool_test.hpp"
 #include "tomodem/core/h5.hpp"
 
 namespace fs = std::filesystem;
 using namespace tomodem;
 
 namespace {
-const std::string kBin = std::string(TOMODEM_BIN_DIR);
-
-class FractureCli : public ::testing::Test {
+class FractureCli : public tomodem::test::ToolTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("tomodem-fracture-e2e-" + std::to_string(::getpid()) + "-" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string path(const std::string& n) const { return (dir_ / n).string(); }
+  FractureCli() : ToolTest("tomodem-fracture-e2e") {}
+  /// The exit code of `tomodem-fracture args` and its stderr.
   std::pair<int, std::string> run(const std::string& args) const {
-    const std::string err = path("stderr.txt");
-    const int st = std::system((kBin + "/tomodem-fracture " + args + " > " + path("stdout.txt") + " 2> " + err).c_str());
-    std::ifstream in(err);
-    std::stringstream s;
-    s << in.rdbuf();
-    return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, s.str()};
+    const int code = sh(bin("tomodem-fracture") + " " + args);
+    return {code, text("stderr.txt")};
   }
   std::string network(mechanics::Network net) const {
     mechanics::write_network(path("net.h5"), net);
@@ -49,7 +38,6 @@ class FractureCli : public ::testing::Test {
   void expect_no_output() const {
     for (const char* f : {"out.json", "curve.csv", "map.h5", "map.xdmf"}) EXPECT_FALSE(fs::exists(path(f))) << f;
   }
-  fs::path dir_;
 };
 }  // namespace
 
@@ -58,8 +46,7 @@ TEST_F(FractureCli, SlaAndExplicitWriteCurveMapAndSummary) {
   const std::string in = network(net);
   auto [code, err] = run(in + " --method both --a-over-w 0.2 --stop-fraction 0.5 --no-elastic" + outputs());
   ASSERT_EQ(code, 0) << err;
-  std::ifstream js(path("out.json"));
-  const auto j = nlohmann::json::parse(js);
+  const auto j = json("out.json");
   for (const char* key : {"K_IC", "K_IC_error", "peak_stress", "crack_length", "broken_bonds", "wall_time_s"})
     EXPECT_TRUE(j.contains(key)) << key;
   // K_IC = Y σ sqrt(πa), Y = sqrt(sec(πa/W)) (docs/physics.md#fracture-toughness, centre crack), σ = peak force / (W B).
@@ -125,13 +112,13 @@ TEST_F(FractureCli, UnbondedMaterialNeedsNoSurfaceEnergy) {
   mechanics::Network net = mechanics::test::slab(12, 3, 18, 11);
   auto [c0, e0] = run(network(net) + " --a-over-w 0.2 --stop-fraction 0.5 --no-elastic" + outputs());
   ASSERT_EQ(c0, 0) << e0;
-  const double k0 = nlohmann::json::parse(std::ifstream(path("out.json")))["K_IC"];
+  const double k0 = json("out.json")["K_IC"];
   Material pore_former = mechanics::test::alumina(3e9, 0.35, 1190, 0.0);
   pore_former.name = "pore_former";
   net.packing.materials.push_back(pore_former);
   auto [c1, e1] = run(network(net) + " --a-over-w 0.2 --stop-fraction 0.5 --no-elastic" + outputs());
   ASSERT_EQ(c1, 0) << e1;
-  EXPECT_EQ(nlohmann::json::parse(std::ifstream(path("out.json")))["K_IC"].get<double>(), k0);
+  EXPECT_EQ(json("out.json")["K_IC"].get<double>(), k0);
 }
 
 TEST_F(FractureCli, NoBondsAcrossTheCrackPathExit2WithoutOutput) {
