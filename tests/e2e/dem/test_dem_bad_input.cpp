@@ -9,6 +9,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "../common/tool_test.hpp"
 #include "bad_input_table.hpp"
 #include "tomodem/core/h5.hpp"
 
@@ -155,25 +156,17 @@ void rewrite(const std::string& from, const std::string& to, const std::string& 
   copy_group(in, out, "/", dataset, values);
 }
 
-class DemRestart : public ::testing::Test {
+class DemRestart : public tomodem::test::ToolTest {
  protected:
-  void SetUp() override {
-    dir = fs::temp_directory_path() / ("tomodem_dem_restart_" + std::to_string(::getpid()) + "_" +
-                                       ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-  }
-  void TearDown() override { fs::remove_all(dir); }
+  DemRestart() : ToolTest("tomodem_dem_restart") {}
   std::string write(const std::string& name, const std::string& text) {
-    std::ofstream(dir / name) << text;
-    return (dir / name).string();
+    std::ofstream(dir_ / name) << text;
+    return (dir_ / name).string();
   }
   int run(const std::string& args) {
-    const std::string cmd = "cd '" + dir.string() + "' && " + std::string(TOMODEM_BIN_DIR) + "/tomodem-dem " + args +
-                            " -q > stdout.txt 2> stderr.txt";
-    const int status = std::system(cmd.c_str());
-    err = bad_input::slurp(dir / "stderr.txt");
-    return WEXITSTATUS(status);
+    const int code = sh(bin("tomodem-dem") + " " + args + " -q");
+    err = text("stderr.txt");
+    return code;
   }
   /// A checkpoint at step 20 of kScene, in half/ck.h5.
   void half_run() {
@@ -186,7 +179,6 @@ class DemRestart : public ::testing::Test {
     for (std::string l; std::getline(in, l);) out.push_back(l);
     return out;
   }
-  fs::path dir;
   std::string err;
 };
 
@@ -194,13 +186,13 @@ class DemRestart : public ::testing::Test {
 
 TEST_F(DemRestart, DamagedCheckpointsExit2NamingFileAndDataset) {
   half_run();
-  const std::string ck = bad_input::slurp(dir / "half" / "ck.h5");
+  const std::string ck = bad_input::slurp(dir_ / "half" / "ck.h5");
   ASSERT_GT(ck.size(), 1000u);
   // Truncated.
-  std::ofstream(dir / "trunc.h5", std::ios::binary) << ck.substr(0, ck.size() / 2);
+  std::ofstream(dir_ / "trunc.h5", std::ios::binary) << ck.substr(0, ck.size() / 2);
   EXPECT_EQ(run("scene.yaml --output-dir o1 --restart trunc.h5"), 2) << err;
   EXPECT_NE(err.find("trunc.h5"), std::string::npos) << err;
-  EXPECT_FALSE(fs::exists(dir / "o1" / "out.h5"));
+  EXPECT_FALSE(fs::exists(dir_ / "o1" / "out.h5"));
   // Wrong dataset shapes: the neighbour list's start offsets and the engine scalars.
   struct Shape {
     const char* dataset;
@@ -209,14 +201,14 @@ TEST_F(DemRestart, DamagedCheckpointsExit2NamingFileAndDataset) {
   for (const Shape& s : {Shape{"/engine/start", {0, 5, 3}}, Shape{"/engine/scalars", {1, 2}},
                          Shape{"/particles/velocity", {1, 2, 3}}, Shape{"/engine/history", {1}},
                          Shape{"/engine/j", {1.0e6}}, Shape{"/cell/h", {1, 0, 0}}}) {
-    rewrite((dir / "half" / "ck.h5").string(), (dir / "shape.h5").string(), s.dataset, s.values);
+    rewrite((dir_ / "half" / "ck.h5").string(), (dir_ / "shape.h5").string(), s.dataset, s.values);
     EXPECT_EQ(run("scene.yaml --output-dir o2 --restart shape.h5"), 2) << s.dataset << ": " << err;
     EXPECT_NE(err.find("shape.h5"), std::string::npos) << err;
     EXPECT_NE(err.find(s.dataset), std::string::npos) << err;
-    EXPECT_FALSE(fs::exists(dir / "o2" / "out.h5"));
+    EXPECT_FALSE(fs::exists(dir_ / "o2" / "out.h5"));
   }
   // A missing dataset.
-  rewrite((dir / "half" / "ck.h5").string(), (dir / "missing.h5").string(), "/engine/force", {});
+  rewrite((dir_ / "half" / "ck.h5").string(), (dir_ / "missing.h5").string(), "/engine/force", {});
   EXPECT_EQ(run("scene.yaml --output-dir o4 --restart missing.h5"), 2) << err;
   EXPECT_NE(err.find("/engine/force"), std::string::npos) << err;
   // A checkpoint of a different particle count (3^3 FCC cells instead of 2^3).
@@ -229,7 +221,7 @@ TEST_F(DemRestart, DamagedCheckpointsExit2NamingFileAndDataset) {
   EXPECT_EQ(run("scene.yaml --output-dir o3 --restart big/ck.h5 --restart-changed-physics"), 2) << err;
   EXPECT_NE(err.find("big/ck.h5"), std::string::npos) << err;
   EXPECT_NE(err.find("/particles/position"), std::string::npos) << err;
-  EXPECT_FALSE(fs::exists(dir / "o3" / "out.h5"));
+  EXPECT_FALSE(fs::exists(dir_ / "o3" / "out.h5"));
 }
 
 TEST_F(DemRestart, ChangedPhysicsIsRefusedNamingTheChangeOrAcceptedWithTheFlagAndAWarning) {
@@ -248,7 +240,7 @@ TEST_F(DemRestart, ChangedPhysicsIsRefusedNamingTheChangeOrAcceptedWithTheFlagAn
     EXPECT_NE(err.find("half/ck.h5"), std::string::npos) << err;
     EXPECT_NE(err.find(c.named), std::string::npos) << err;
     EXPECT_NE(err.find("--restart-changed-physics"), std::string::npos) << err;
-    EXPECT_FALSE(fs::exists(dir / "o" / "out.h5"));
+    EXPECT_FALSE(fs::exists(dir_ / "o" / "out.h5"));
   }
   // Not physics: more steps, another output name, other threads.
   write("same.yaml", with(with(kScene, "steps: 40", "steps: 60"), "series: series.csv", "series: s.csv"));
@@ -265,11 +257,11 @@ TEST_F(DemRestart, TheTimeSeriesContinuesInTheSameFile) {
   ASSERT_EQ(run("scene.yaml --output-dir run --steps 20"), 0) << err;
   ASSERT_EQ(run("scene.yaml --output-dir run --restart run/ck.h5"), 0) << err;
   // The restarted series holds every row from step 0, once each, as the uninterrupted run's.
-  const auto full = lines(dir / "full" / "series.csv"), cont = lines(dir / "run" / "series.csv");
+  const auto full = lines(dir_ / "full" / "series.csv"), cont = lines(dir_ / "run" / "series.csv");
   ASSERT_EQ(full.size(), 6u);  // header + steps 0, 10, 20, 30, 40
   EXPECT_EQ(cont, full);
   // A restart into another folder carries the series too (it travels in the checkpoint).
   ASSERT_EQ(run("scene.yaml --output-dir half --steps 20"), 0) << err;
   ASSERT_EQ(run("scene.yaml --output-dir elsewhere --restart half/ck.h5"), 0) << err;
-  EXPECT_EQ(lines(dir / "elsewhere" / "series.csv"), full);
+  EXPECT_EQ(lines(dir_ / "elsewhere" / "series.csv"), full);
 }

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <string>
 
+#include "../common/tool_test.hpp"
 #include "tomodem/core/h5.hpp"
 #include "tomodem/core/packing_io.hpp"
 
@@ -22,30 +23,18 @@ struct Result {
   std::string err;
 };
 
-class DemCli : public ::testing::Test {
+class DemCli : public tomodem::test::ToolTest {
  protected:
-  void SetUp() override {
-    dir = fs::temp_directory_path() / ("tomodem_dem_cli_" + std::to_string(::getpid()) + "_" +
-                                       ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-  }
-  void TearDown() override { fs::remove_all(dir); }
+  DemCli() : ToolTest("tomodem_dem_cli") {}
 
   std::string write(const std::string& name, const std::string& text) {
-    const fs::path p = dir / name;
+    const fs::path p = dir_ / name;
     std::ofstream(p) << text;
     return p.string();
   }
   Result run(const std::string& args) {
-    const std::string err = (dir / "stderr.txt").string();
-    const std::string cmd = std::string(TOMODEM_BIN_DIR) + "/tomodem-dem " + args + " -q > " +
-                            (dir / "stdout.txt").string() + " 2> " + err;
-    const int status = std::system(cmd.c_str());
-    std::ifstream in(err);
-    std::stringstream s;
-    s << in.rdbuf();
-    return {WEXITSTATUS(status), s.str()};
+    const int code = sh(bin("tomodem-dem") + " " + args + " -q");
+    return {code, text("stderr.txt")};
   }
   /// Files in the output folder other than the scene inputs and captured streams.
   int outputs(const std::string& out) {
@@ -54,7 +43,6 @@ class DemCli : public ::testing::Test {
     for (const auto& e : fs::directory_iterator(out)) (void)e, ++n;
     return n;
   }
-  fs::path dir;
 };
 
 // A small periodic FCC packing, compressed so that contacts exist (Hertz–Mindlin).
@@ -78,7 +66,7 @@ std::string replace(std::string s, const std::string& from, const std::string& t
 
 TEST_F(DemCli, SummaryHasTheDocumentedKeysInSIUnits) {
   const std::string scene = write("scene.yaml", kScene);
-  const std::string out = (dir / "out").string();
+  const std::string out = (dir_ / "out").string();
   ASSERT_EQ(run(scene + " --output-dir " + out + " --json " + out + "/summary.json").code, 0);
   std::ifstream in(out + "/summary.json");
   const auto j = nlohmann::json::parse(in);
@@ -104,7 +92,7 @@ TEST_F(DemCli, SummaryHasTheDocumentedKeysInSIUnits) {
 
 TEST_F(DemCli, RestartReproducesTheUninterruptedRunBitForBit) {
   const std::string scene = write("scene.yaml", kScene);
-  const std::string full = (dir / "full").string(), half = (dir / "half").string(), rest = (dir / "rest").string();
+  const std::string full = (dir_ / "full").string(), half = (dir_ / "half").string(), rest = (dir_ / "rest").string();
   ASSERT_EQ(run(scene + " --output-dir " + full).code, 0);
   ASSERT_EQ(run(scene + " --output-dir " + half + " --steps 200").code, 0);
   ASSERT_EQ(run(scene + " --output-dir " + rest + " --restart " + half + "/ck.h5").code, 0);
@@ -143,7 +131,7 @@ TEST_F(DemCli, BadInputExitsWithCode2AndLeavesNoOutput) {
   };
   for (const auto& c : cases) {
     const std::string scene = write(std::string(c.name) + ".yaml", c.scene);
-    const std::string out = (dir / (std::string("out_") + c.name)).string();
+    const std::string out = (dir_ / (std::string("out_") + c.name)).string();
     const Result r = run(scene + " --output-dir " + out);
     EXPECT_EQ(r.code, 2) << c.name << ": " << r.err;
     EXPECT_NE(r.err.find(c.expect_field), std::string::npos) << c.name << ": " << r.err;
@@ -163,7 +151,7 @@ TEST_F(DemCli, HelpAndVersion) {
 // --list-laws prints the registry's table, the one docs/dem.md holds between its markers.
 TEST_F(DemCli, ListLawsPrintsTheDocsTable) {
   ASSERT_EQ(run("--list-laws").code, 0);
-  std::ifstream out(dir / "stdout.txt"), doc(fs::path(TOMODEM_SOURCE_DIR) / "docs" / "dem.md");
+  std::ifstream out(dir_ / "stdout.txt"), doc(fs::path(TOMODEM_SOURCE_DIR) / "docs" / "dem.md");
   std::stringstream o, d;
   o << out.rdbuf();
   d << doc.rdbuf();
