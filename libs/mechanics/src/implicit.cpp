@@ -390,6 +390,7 @@ LinearResponse StiffnessSystem::solve(const std::array<double, 6>& strain) const
     const PcgReport r = m.petsc->solve(rhs.data(), q.data());
     out.iterations = r.iterations;
     out.residual = r.residual;
+    out.converged = r.converged;
   } else if (fn > 0) {
     if (m.kind == ElasticSolver::ldlt) {
       q = m.ldlt->solve(rhs);
@@ -402,6 +403,7 @@ LinearResponse StiffnessSystem::solve(const std::array<double, 6>& strain) const
     } else {
       const PcgReport r = pcg(m.view(), m.amg.get(), rhs.data(), q.data(), m.o.tolerance, int(m.cap));
       out.iterations = r.iterations;
+      out.converged = r.converged;
     }
     out.residual = (rhs - m.K * q).norm() / fn;
   }
@@ -468,6 +470,7 @@ ImplicitResult solve_implicit(const Packing& p, const std::vector<Image>& image,
     for (int x = 0; x < 6; ++x) C(x, c) = r.stress[x];
     res.iterations += r.iterations;
     res.residual = std::max(res.residual, r.residual);
+    res.converged = res.converged && r.converged;
     if (res.solver != ElasticSolver::ldlt)
       info("  strain case " + std::to_string(c + 1) + "/" + std::to_string(ncase) + ": " +
            std::to_string(r.iterations) + " iterations, residual " + std::to_string(r.residual));
@@ -485,6 +488,12 @@ ImplicitResult solve_implicit(const Packing& p, const std::vector<Image>& image,
   // this number on random networks (docs/young.md); an energy-norm estimate from Jacobi-weighted
   // residuals was optimistic by 40–300× and is not used.
   res.E_error = res.residual;
+  // A solve stopped by its iteration cap (--max-iterations, or PETSC_OPTIONS' -ksp_max_it) still
+  // gives numbers; E_error carries its residual, and the user is told.
+  if (!res.converged)
+    warn("the linear solve stopped before its tolerance " + value_text(o.tolerance) + " (largest residual " +
+         value_text(res.residual) + " after " + std::to_string(res.iterations) +
+         " iterations): E and nu are unconverged; E_error reports the residual (summary: converged false)");
   res.wall_time_s = seconds_since(t0);
   return res;
 }

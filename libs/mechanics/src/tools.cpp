@@ -251,6 +251,7 @@ json implicit_json(const ImplicitResult& ir, double tolerance) {
           {"E_error", ir.E_error},
           {"C", tensor_json(ir.C, ir.full_tensor)},
           {"residual", ir.residual},
+          {"converged", ir.converged},
           {"solver", to_string(ir.solver)},
           {"predicted_s", {{"ldlt", ir.predicted.ldlt_s}, {"amg", ir.predicted.amg_s}, {"cg", ir.predicted.cg_s}}},
           {"tolerance", tolerance},

@@ -79,6 +79,7 @@ struct ImplicitResult {
   double E_error = 0;           ///< relative: the largest relative residual (docs/young.md)
   double residual = 0;          ///< largest relative residual |K q − f| / |f| over the cases
   long iterations = 0;          ///< CG iterations, all cases
+  bool converged = true;        ///< every case met the tolerance within the iteration cap
   int levels = 0;               ///< amg: multigrid levels
   double operator_complexity = 0;  ///< amg: Σ nonzeros of all levels / nonzeros of K
   double setup_s = 0;           ///< factorisation or preconditioner set-up
@@ -104,6 +105,7 @@ struct LinearResponse {
   std::vector<Vec3> force, fluctuation;
   long iterations = 0;             ///< iterative solvers
   double residual = 0;             ///< |K q − f| / |f|
+  bool converged = true;           ///< iterative solvers: the tolerance met within the cap
 };
 
 /// The stiffness matrix of the load-bearing network (six DOF per particle, periodic), assembled and
