@@ -218,7 +218,7 @@ std::string program_field(const std::string& text) {
 }
 
 /// One snapshot: the packing as the run has it then (velocities zeroed, contacts left out: the
-/// necks are the bonds, with their periodic images), and its row of the curve.
+/// necks are the bonds, with their periodic images), and its row of the curve. Collective on ranks.
 struct Snapshot {
   mechanics::Network net;
   dem::SinterRow row;
@@ -230,7 +230,13 @@ Snapshot take_snapshot(dem::Simulation& sim, const std::vector<Material>& materi
   Snapshot s;
   s.row = r;
   Packing& p = s.net.packing;
+  // Every rank takes it at the same step (the density is a sum in id order); the particles come
+  // together on rank 0, which writes it.
+#if TOMODEM_HAVE_MPI
+  p = dem::gather_packing(sim, materials);  // to_packing when not decomposed
+#else
   p = dem::to_packing(sim, materials);
+#endif
   p.contacts = ContactTable{};
   for (auto& v : p.particles.velocity) v = Vec3{};
   p.particles.angular_velocity.clear();
@@ -316,8 +322,6 @@ int run(int argc, char** argv) {
   const int ranks = launched_ranks();
   const bool rank0 = launched_rank() == 0;
   if (!rank0) set_quiet(true);
-  if (ranks > 1 && app.count("--snapshots-at"))
-    throw InputError("", "--snapshots-at", snapshots_at, "snapshots are not taken on several ranks yet: run on one rank");
   if (ranks > 1 && !settings_path.empty())
     throw InputError("", "--sinter-config", settings_path,
                      "a packing with a settings file is not sintered on several ranks yet: run on one rank, or "

@@ -962,8 +962,6 @@ void SinterRun::restore() {
 }
 
 SinterReport SinterRun::run() {
-  if (dom_ && snaps_ && !snaps_->densities.empty())
-    throw InputError("", "--snapshots-at", "", "snapshots are not taken on several ranks yet: run on one rank");
   mark_particles();
   reference_state();
   while (sim_.time() < t_end_ * (1 - 1e-12)) {

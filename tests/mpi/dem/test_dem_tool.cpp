@@ -28,6 +28,8 @@
 
 namespace fs = std::filesystem;
 using json = nlohmann::json;
+using tomodem::Packing;
+using tomodem::read_packing;
 
 namespace {
 
@@ -45,11 +47,11 @@ std::string slurp(const fs::path& p) {
   return s.str();
 }
 
-/// Runs a shell command with stdout and stderr captured; ranks 0: without mpirun.
-Ran run(const fs::path& dir, int ranks, const std::string& args) {
+/// Runs a tool with stdout and stderr captured; ranks 0: without mpirun.
+Ran run_tool(const std::string& exe, const fs::path& dir, int ranks, const std::string& args) {
   const std::string launch = ranks > 0 ? std::string(TOMODEM_MPIEXEC) + " --oversubscribe -np " + std::to_string(ranks) + " " : "";
   const std::string cmd = "cd '" + dir.string() + "' && OMP_NUM_THREADS=1 OMPI_ALLOW_RUN_AS_ROOT=1 "
-                          "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 " + launch + kDem + " " + args + " >stdout.txt 2>stderr.txt";
+                          "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 " + launch + exe + " " + args + " >stdout.txt 2>stderr.txt";
   Ran r;
   const int st = std::system(cmd.c_str());
   r.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
@@ -57,6 +59,7 @@ Ran run(const fs::path& dir, int ranks, const std::string& args) {
   r.err = slurp(dir / "stderr.txt");
   return r;
 }
+Ran run(const fs::path& dir, int ranks, const std::string& args) { return run_tool(kDem, dir, ranks, args); }
 
 /// Scene A of docs/dem.md at 12³ spheres (the lattice planes fall on the sub-domain faces of 2
 /// and 3 ranks, so particles migrate from the first steps), a small skin so the list is rebuilt
@@ -183,6 +186,64 @@ TEST(DemToolOnRanks, WhatIsNotDecomposedIsRefusedOnceWithNothingWritten) {
   EXPECT_FALSE(fs::exists(root / "out"));
   EXPECT_FALSE(fs::exists(root / "out.json"));
   // Checkpoints on ranks are written and read (test_checkpoint_ranks.cpp).
+  fs::remove_all(root);
+}
+
+// tomodem-sinter with snapshots on 2 ranks against the run without mpirun: 256 alumina spheres (the
+// worked example of docs/sintering.md at 4³ FCC cells) from 0.74, a snapshot at 0.75, stop at 0.77.
+// Every rank takes the snapshot at the same step (the density is a sum in id order on any rank
+// count), so the step, the neck pairs and the counts are equal; positions and neck radii agree to
+// round-off (the cell servo reads a stress summed in rank order: 1e-9 relative, as the engine test
+// dem_decomposition_sinter_tests bounds the whole run).
+TEST(DemToolOnRanks, SinteringSnapshotsEqualTheSerialRun) {
+  const fs::path root = fs::temp_directory_path() / ("tomodem_sinter_ranks_" + std::to_string(::getpid()));
+  fs::remove_all(root);
+  const std::string kSinter = std::string(TOMODEM_BIN_DIR) + "/tomodem-sinter";
+  const std::string scene = R"(materials:
+  - {name: alumina, youngs_modulus: 380.0e9, poisson_ratio: 0.22, density: 3950, surface_energy: 1.0}
+particles:
+  generate: {arrangement: fcc, cells: 4, radius: 1.0e-6, spacing: 2.82277e-6, jitter: 0.01, phase: alumina}
+physics: {normal: sintering, tangential: none}
+settings: {threads: 1}
+sintering:
+  temperature:
+    start: 300
+    segments: [{rate: 50, to: 1600}, {hold: 5000}]
+  phases:
+    - {material: alumina, atomic_volume: 8.47e-30, boundary_diffusion: 8.6e-10,
+       activation_energy: 418.0e3, dihedral_angle: 150}
+  stop: {relative_density: 0.77}
+)";
+  Packing snap[2];
+  json summary[2];
+  for (int k = 0; k < 2; ++k) {
+    const fs::path dir = root / (k == 0 ? "serial" : "ranks");
+    fs::create_directories(dir);
+    std::ofstream(dir / "alumina.yaml") << scene;
+    const Ran r = run_tool(kSinter, dir, 2 * k, "alumina.yaml --output-dir out --snapshots-at 0.75 --no-plot --json out/summary.json");
+    ASSERT_EQ(r.code, 0) << r.err;
+    summary[k] = json::parse(slurp(dir / "out/summary.json"));
+    snap[k] = read_packing((dir / "out/snapshot-0.75.h5").string());
+  }
+  const json& a = summary[0]["snapshots"][0];
+  const json& b = summary[1]["snapshots"][0];
+  EXPECT_EQ(a["step"], b["step"]);
+  EXPECT_EQ(a["bonds"], b["bonds"]);
+  EXPECT_GT(a["bonds"].get<int>(), 500);  // necks grew between most neighbours
+  EXPECT_NEAR(b["relative_density"].get<double>() / a["relative_density"].get<double>(), 1.0, 1e-9);
+  ASSERT_EQ(snap[0].particles.size(), 256u);
+  ASSERT_EQ(snap[1].particles.size(), snap[0].particles.size());
+  for (std::size_t i = 0; i < snap[0].particles.size(); ++i) {
+    const tomodem::Vec3 d = snap[1].particles.position[i] - snap[0].particles.position[i];
+    EXPECT_LT(std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z), 1e-9 * snap[0].particles.radius[i]) << "particle " << i;
+    EXPECT_NEAR(snap[1].particles.radius[i] / snap[0].particles.radius[i], 1.0, 1e-9) << "particle " << i;
+  }
+  ASSERT_EQ(snap[1].bonds.size(), snap[0].bonds.size());
+  for (std::size_t n = 0; n < snap[0].bonds.size(); ++n) {
+    EXPECT_EQ(snap[1].bonds.i[n], snap[0].bonds.i[n]);
+    EXPECT_EQ(snap[1].bonds.j[n], snap[0].bonds.j[n]);
+    EXPECT_NEAR(snap[1].bonds.radius[n] / snap[0].bonds.radius[n], 1.0, 1e-9) << "neck " << n;
+  }
   fs::remove_all(root);
 }
 
