@@ -20,25 +20,14 @@
 #include "tomodem/dem/decomposition.hpp"
 #include "tomodem/dem/scene.hpp"
 #include "tomodem/dem/simulation.hpp"
+#include "mpi_test.hpp"
 
 using namespace tomodem;
 using namespace tomodem::dem;
+using namespace tomodem::test;  // world_rank, all_ranks, rank0_verdict, same
 using tomodem::dem::mpi_test::bonded_lattice;
 
 namespace {
-
-int world_rank() {
-  int r = 0;
-  MPI_Comm_rank(MPI_COMM_WORLD, &r);
-  return r;
-}
-bool shared(bool ok_on_rank0) {
-  int v = ok_on_rank0 ? 1 : 0;
-  MPI_Bcast(&v, 1, MPI_INT, 0, MPI_COMM_WORLD);
-  return v != 0;
-}
-bool same(const Vec3& a, const Vec3& b) { return std::memcmp(&a, &b, sizeof(Vec3)) == 0; }
-bool same(double a, double b) { return std::memcmp(&a, &b, sizeof(double)) == 0; }  // NaN == NaN
 
 TEST(DemDecompositionBonds, LatticeToFailureMatchesSerial) {
   const int rows = 15, every = 100;
@@ -96,21 +85,8 @@ TEST(DemDecompositionBonds, LatticeToFailureMatchesSerial) {
                 "agrees to %.1e\n", B.size(), tension, shear, times.size(), times.empty() ? 0.0 : times.front() / dt,
                 worst_stress);
   }
-  EXPECT_TRUE(shared(diff.empty())) << diff;
+  EXPECT_TRUE(rank0_verdict(diff.empty())) << diff;
 }
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  MPI_Init(&argc, &argv);
-  ::testing::InitGoogleTest(&argc, argv);
-  if (world_rank() != 0) {
-    auto& listeners = ::testing::UnitTest::GetInstance()->listeners();
-    delete listeners.Release(listeners.default_result_printer());
-  }
-  const int rc = RUN_ALL_TESTS();
-  int worst = rc;
-  MPI_Allreduce(&rc, &worst, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
-  MPI_Finalize();
-  return worst;
-}

@@ -34,30 +34,14 @@
 #include "tomodem/dem/decomposition.hpp"
 #include "tomodem/dem/scene.hpp"
 #include "tomodem/dem/simulation.hpp"
+#include "mpi_test.hpp"
 
 using namespace tomodem;
 using namespace tomodem::dem;
+using namespace tomodem::test;  // world_rank, all_ranks, rank0_verdict, same
 namespace fs = std::filesystem;
 
 namespace {
-
-int world_rank() {
-  int r = 0;
-  MPI_Comm_rank(MPI_COMM_WORLD, &r);
-  return r;
-}
-int world_size() {
-  int r = 1;
-  MPI_Comm_size(MPI_COMM_WORLD, &r);
-  return r;
-}
-bool shared(bool ok_here) {  // true when true on every rank
-  int v = ok_here ? 1 : 0, all = 0;
-  MPI_Allreduce(&v, &all, 1, MPI_INT, MPI_LAND, MPI_COMM_WORLD);
-  return all != 0;
-}
-bool same(const Vec3& a, const Vec3& b) { return std::memcmp(&a, &b, sizeof(Vec3)) == 0; }
-bool same(double a, double b) { return std::memcmp(&a, &b, sizeof(double)) == 0; }
 
 /// A scratch folder every rank knows (rank 0's name).
 std::string shared_dir(const std::string& name) {
@@ -188,21 +172,21 @@ void restart_matches_serial(const std::function<Simulation()>& make, int first, 
   }
   MPI_Barrier(MPI_COMM_WORLD);
   const std::string files = world_rank() == 0 ? file_differences(serial_file, ranks_file) : "";
-  EXPECT_TRUE(shared(files.empty())) << name << ": the checkpoints differ: " << files;
+  EXPECT_TRUE(all_ranks(files.empty())) << name << ": the checkpoints differ: " << files;
   for (const std::string& file : {ranks_file, serial_file}) {
     SCOPED_TRACE(std::string(name) + ", restart on " + std::to_string(world_size()) + " ranks from " + file);
     const auto sim = restored(make, file, true);
     sim->run(second);
     const Measurements m = sim->measure();
     const std::string diff = state_differences(ref, *sim, mref, m, tracked, events_before);
-    EXPECT_TRUE(shared(diff.empty())) << diff;
+    EXPECT_TRUE(all_ranks(diff.empty())) << diff;
   }
   {
     SCOPED_TRACE(std::string(name) + ", the serial engine from the decomposed checkpoint");
     const auto sim = restored(make, ranks_file, false);
     sim->run(second);
     const std::string diff = state_differences(ref, *sim, mref, sim->measure(), tracked, events_before);
-    EXPECT_TRUE(shared(diff.empty())) << diff;
+    EXPECT_TRUE(all_ranks(diff.empty())) << diff;
   }
   if (world_rank() == 0) {
     std::printf("%s on %d ranks: checkpoint at step %d of %d; %zu bonds, %zu broken before it and %zu in all; "
@@ -222,16 +206,3 @@ TEST(DemCheckpointState, WallsAndEnergyBudgetRestartAsIfNeverStopped) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  MPI_Init(&argc, &argv);
-  ::testing::InitGoogleTest(&argc, argv);
-  if (world_rank() != 0) {
-    auto& listeners = ::testing::UnitTest::GetInstance()->listeners();
-    delete listeners.Release(listeners.default_result_printer());
-  }
-  const int rc = RUN_ALL_TESTS();
-  int worst = rc;
-  MPI_Allreduce(&rc, &worst, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
-  MPI_Finalize();
-  return worst;
-}

@@ -19,28 +19,14 @@
 #include "tomodem/core/error.hpp"
 #include "tomodem/dem/decomposition.hpp"
 #include "tomodem/dem/simulation.hpp"
+#include "mpi_test.hpp"
 
 using namespace tomodem;
 using namespace tomodem::dem;
+using namespace tomodem::test;  // world_rank, all_ranks, rank0_verdict, same
 
 namespace {
 
-int world_rank() {
-  int r = 0;
-  MPI_Comm_rank(MPI_COMM_WORLD, &r);
-  return r;
-}
-int world_size() {
-  int s = 1;
-  MPI_Comm_size(MPI_COMM_WORLD, &s);
-  return s;
-}
-/// Rank 0's verdict on every rank.
-bool shared(bool ok_on_rank0) {
-  int v = ok_on_rank0 ? 1 : 0;
-  MPI_Bcast(&v, 1, MPI_INT, 0, MPI_COMM_WORLD);
-  return v != 0;
-}
 long global_sum(long v) {
   long g = 0;
   MPI_Allreduce(&v, &g, 1, MPI_LONG, MPI_SUM, MPI_COMM_WORLD);
@@ -131,7 +117,7 @@ TEST(DemDecomposition, SceneAMatchesSerialBitwise) {
     EXPECT_GT(global_sum(l.migrated), 0) << "no particle changed rank: the test proves little";
   }
   std::string diff = world_rank() == 0 ? first_difference(serial.particles(), all) : "";
-  EXPECT_TRUE(shared(diff.empty())) << diff;
+  EXPECT_TRUE(rank0_verdict(diff.empty())) << diff;
   expect_same_measurements(ms, mp);
 }
 
@@ -152,7 +138,7 @@ TEST(DemDecomposition, ShearedCellMatchesSerialBitwise) {
   EXPECT_EQ(std::memcmp(&serial.cell().h, &sim.cell().h, sizeof(Mat3)), 0);
   EXPECT_GT(serial.cell().h(0, 1), 0.09 * serial.cell().h(1, 1));  // the cell did shear
   std::string diff = world_rank() == 0 ? first_difference(serial.particles(), all) : "";
-  EXPECT_TRUE(shared(diff.empty())) << diff;
+  EXPECT_TRUE(rank0_verdict(diff.empty())) << diff;
   expect_same_measurements(ms, mp);
 }
 
@@ -170,7 +156,7 @@ TEST(DemDecomposition, FixedDecompositionIsBitReproducible) {
   if (world_rank() == 0) {
     EXPECT_EQ(runs[0].size(), 216u);
   }
-  EXPECT_TRUE(shared(diff.empty())) << diff;
+  EXPECT_TRUE(rank0_verdict(diff.empty())) << diff;
 }
 
 TEST(DemDecomposition, TooManySubdomainsIsRefusedOnEveryRank) {
@@ -189,16 +175,3 @@ TEST(DemDecomposition, TooManySubdomainsIsRefusedOnEveryRank) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  MPI_Init(&argc, &argv);
-  ::testing::InitGoogleTest(&argc, argv);
-  if (world_rank() != 0) {
-    auto& listeners = ::testing::UnitTest::GetInstance()->listeners();
-    delete listeners.Release(listeners.default_result_printer());
-  }
-  const int rc = RUN_ALL_TESTS();
-  int worst = rc;
-  MPI_Allreduce(&rc, &worst, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
-  MPI_Finalize();
-  return worst;
-}

@@ -25,29 +25,14 @@
 #include "tomodem/dem/decomposition.hpp"
 #include "tomodem/dem/scene.hpp"
 #include "tomodem/dem/simulation.hpp"
+#include "mpi_test.hpp"
 
 using namespace tomodem;
 using namespace tomodem::dem;
+using namespace tomodem::test;  // world_rank, all_ranks, rank0_verdict, same
 using namespace tomodem::dem::mpi_test;
 
 namespace {
-
-int world_rank() {
-  int r = 0;
-  MPI_Comm_rank(MPI_COMM_WORLD, &r);
-  return r;
-}
-int world_size() {
-  int r = 1;
-  MPI_Comm_size(MPI_COMM_WORLD, &r);
-  return r;
-}
-bool shared(bool ok_here) {
-  int v = ok_here ? 1 : 0, all = 0;
-  MPI_Allreduce(&v, &all, 1, MPI_INT, MPI_LAND, MPI_COMM_WORLD);
-  return all != 0;
-}
-bool same(const Vec3& a, const Vec3& b) { return std::memcmp(&a, &b, sizeof(Vec3)) == 0; }
 
 /// 10³ jittered spheres (±10 % radius) with random velocities in a periodic cell sheared at
 /// γ̇ = 200 /s, Stokes drag η = 0.05 Pa s, energy tracked.
@@ -120,7 +105,7 @@ void compare_with_serial(const std::function<Simulation()>& make, int steps, int
       if (!same(p.x[i], all.x[i]) || !same(p.v[i], all.v[i]) || !same(p.omega[i], all.omega[i]))
         diff = std::string(name) + ": particle " + std::to_string(i);
   }
-  EXPECT_TRUE(shared(diff.empty())) << diff;
+  EXPECT_TRUE(all_ranks(diff.empty())) << diff;
   // Every term must be at work for the comparison to mean something.
   EXPECT_GT(last.dissipated, 0.1 * last.e_scale) << name;
   EXPECT_GT(std::abs(last.work), 0.1 * last.e_scale) << name;
@@ -140,16 +125,3 @@ TEST(DemDecompositionEnergy, ShearedCellWithStokesDragMatchesSerial) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  MPI_Init(&argc, &argv);
-  ::testing::InitGoogleTest(&argc, argv);
-  if (world_rank() != 0) {
-    auto& listeners = ::testing::UnitTest::GetInstance()->listeners();
-    delete listeners.Release(listeners.default_result_printer());
-  }
-  const int rc = RUN_ALL_TESTS();
-  int worst = rc;
-  MPI_Allreduce(&rc, &worst, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
-  MPI_Finalize();
-  return worst;
-}

@@ -26,28 +26,13 @@
 #include "tomodem/dem/fire.hpp"
 #include "tomodem/dem/scene.hpp"
 #include "tomodem/dem/simulation.hpp"
+#include "mpi_test.hpp"
 
 using namespace tomodem;
 using namespace tomodem::dem;
+using namespace tomodem::test;  // world_rank, all_ranks, rank0_verdict, same
 
 namespace {
-
-int world_rank() {
-  int r = 0;
-  MPI_Comm_rank(MPI_COMM_WORLD, &r);
-  return r;
-}
-int world_size() {
-  int r = 1;
-  MPI_Comm_size(MPI_COMM_WORLD, &r);
-  return r;
-}
-bool shared(bool ok_here) {  // true when true on every rank
-  int v = ok_here ? 1 : 0, all = 0;
-  MPI_Allreduce(&v, &all, 1, MPI_INT, MPI_LAND, MPI_COMM_WORLD);
-  return all != 0;
-}
-bool same(const Vec3& a, const Vec3& b) { return std::memcmp(&a, &b, sizeof(Vec3)) == 0; }
 
 /// A disordered packing above jamming: an FCC crystal of 5³ cells (500 spheres) of mean diameter d
 /// at nearest-neighbour distance d (packing fraction 0.76 with the radii ±15 %), positions
@@ -114,7 +99,7 @@ void fire_matches_serial(bool friction, const char* name) {
                 name, world_size(), rp.steps, int(rp.converged), rp.last.unbalanced_force_ratio, rp.last.coordination,
                 rp.last.pressure, migrated);
   }
-  EXPECT_TRUE(shared(diff.empty())) << diff;
+  EXPECT_TRUE(all_ranks(diff.empty())) << diff;
 }
 
 TEST(DemDecompositionFire, FrictionlessJammedPackingRelaxesAsSerial) { fire_matches_serial(false, "frictionless"); }
@@ -138,16 +123,3 @@ TEST(DemDecompositionFire, EnthalpyMinimiserIsRefusedOnEveryRank) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  MPI_Init(&argc, &argv);
-  ::testing::InitGoogleTest(&argc, argv);
-  if (world_rank() != 0) {
-    auto& listeners = ::testing::UnitTest::GetInstance()->listeners();
-    delete listeners.Release(listeners.default_result_printer());
-  }
-  const int rc = RUN_ALL_TESTS();
-  int worst = rc;
-  MPI_Allreduce(&rc, &worst, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
-  MPI_Finalize();
-  return worst;
-}

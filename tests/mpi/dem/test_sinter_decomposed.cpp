@@ -29,28 +29,13 @@
 #include "tomodem/dem/scene.hpp"
 #include "tomodem/dem/simulation.hpp"
 #include "tomodem/dem/sinter.hpp"
+#include "mpi_test.hpp"
 
 using namespace tomodem;
 using namespace tomodem::dem;
+using namespace tomodem::test;  // world_rank, all_ranks, rank0_verdict, same
 
 namespace {
-
-int world_rank() {
-  int r = 0;
-  MPI_Comm_rank(MPI_COMM_WORLD, &r);
-  return r;
-}
-int world_size() {
-  int r = 1;
-  MPI_Comm_size(MPI_COMM_WORLD, &r);
-  return r;
-}
-bool same(const Vec3& a, const Vec3& b) { return std::memcmp(&a, &b, sizeof(Vec3)) == 0; }
-bool shared(bool ok_here) {  // true when true on every rank
-  int v = ok_here ? 1 : 0, all = 0;
-  MPI_Allreduce(&v, &all, 1, MPI_INT, MPI_LAND, MPI_COMM_WORLD);
-  return all != 0;
-}
 
 constexpr double kR = 1e-6;  // sphere radius, m
 const Vec3 kDrift{2.0e-8, 1.4e-8, 1.0e-8};  // m/s: over the run (583 s) about a cell width along x
@@ -180,7 +165,7 @@ TEST(SinterDecomposed, FreeSinteringMatchesSerial) {
   const double worst = compare(ref, got, diff);
   // One rank: every sum is the serial one, bit for bit (see the top of the file).
   const double tolerance = world_size() == 1 ? 0.0 : 1e-9;
-  EXPECT_TRUE(shared(diff.empty() && worst <= tolerance)) << diff << "; worst relative difference " << worst;
+  EXPECT_TRUE(all_ranks(diff.empty() && worst <= tolerance)) << diff << "; worst relative difference " << worst;
   // The comparison proves something only if the run did: it densified to the target, necks grew,
   // the radii grew (volume conservation) and, on several ranks, particles changed ranks.
   const SinterRow& f = ref.rep.final;
@@ -201,21 +186,8 @@ TEST(SinterDecomposed, TwoRunsOnTheSameRanksAreBitIdentical) {
   const Result a = sinter(true), b = sinter(true);
   std::string diff;
   const double worst = compare(a, b, diff);
-  EXPECT_TRUE(shared(diff.empty() && worst == 0.0)) << diff << "; worst relative difference " << worst;
+  EXPECT_TRUE(all_ranks(diff.empty() && worst == 0.0)) << diff << "; worst relative difference " << worst;
 }
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  MPI_Init(&argc, &argv);
-  ::testing::InitGoogleTest(&argc, argv);
-  if (world_rank() != 0) {
-    auto& listeners = ::testing::UnitTest::GetInstance()->listeners();
-    delete listeners.Release(listeners.default_result_printer());
-  }
-  const int rc = RUN_ALL_TESTS();
-  int worst = rc;
-  MPI_Allreduce(&rc, &worst, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
-  MPI_Finalize();
-  return worst;
-}

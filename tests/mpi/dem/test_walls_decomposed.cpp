@@ -23,29 +23,14 @@
 #include "falling_column.hpp"
 #include "tomodem/dem/decomposition.hpp"
 #include "tomodem/dem/simulation.hpp"
+#include "mpi_test.hpp"
 
 using namespace tomodem;
 using namespace tomodem::dem;
+using namespace tomodem::test;  // world_rank, all_ranks, rank0_verdict, same
 using namespace tomodem::dem::mpi_test;
 
 namespace {
-
-int world_rank() {
-  int r = 0;
-  MPI_Comm_rank(MPI_COMM_WORLD, &r);
-  return r;
-}
-int world_size() {
-  int r = 1;
-  MPI_Comm_size(MPI_COMM_WORLD, &r);
-  return r;
-}
-bool shared(bool ok_here) {  // true when true on every rank
-  int v = ok_here ? 1 : 0, all = 0;
-  MPI_Allreduce(&v, &all, 1, MPI_INT, MPI_LAND, MPI_COMM_WORLD);
-  return all != 0;
-}
-bool same(const Vec3& a, const Vec3& b) { return std::memcmp(&a, &b, sizeof(Vec3)) == 0; }
 
 struct Trace {
   std::vector<Measurements> rows;
@@ -113,7 +98,7 @@ void compare_with_serial(const DecompositionOptions& opt) {
       if (!same(ref_p.x[i], all.x[i]) || !same(ref_p.v[i], all.v[i]) || !same(ref_p.omega[i], all.omega[i]))
         diff = "particle " + std::to_string(i);
   }
-  EXPECT_TRUE(shared(diff.empty())) << diff;
+  EXPECT_TRUE(all_ranks(diff.empty())) << diff;
   // The comparison proves something only if the walls did: both carry contacts at the end, the
   // floor's servo has moved it, and on several ranks particles migrated.
   const Measurements& last = ref.rows.back();
@@ -139,16 +124,3 @@ TEST(DemDecompositionWalls, FallingColumnLayersAlongTheWallNormalMatchSerial) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  MPI_Init(&argc, &argv);
-  ::testing::InitGoogleTest(&argc, argv);
-  if (world_rank() != 0) {
-    auto& listeners = ::testing::UnitTest::GetInstance()->listeners();
-    delete listeners.Release(listeners.default_result_printer());
-  }
-  const int rc = RUN_ALL_TESTS();
-  int worst = rc;
-  MPI_Allreduce(&rc, &worst, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
-  MPI_Finalize();
-  return worst;
-}
