@@ -24,6 +24,7 @@
 #include "tomodem/network/conductivity.hpp"
 #include "tomodem/network/electrode.hpp"
 #include "tomodem/spatial/union_volume.hpp"
+#include "../sinter/sintered_sweep.hpp"
 
 using namespace tomodem;
 using namespace tomodem::network;
@@ -187,54 +188,8 @@ TEST(ConductDenseNetwork, SinteredToNinetyPercentStaysUnderTheHashinShtrikmanBou
   alumina.density = 3950;
   alumina.surface_energy = 1.0;
   alumina.conductivity = kSigma;
-  geometry::PackSpec spec;
-  geometry::PhaseSpec ph;
-  ph.name = "alumina";
-  ph.material = alumina;
-  ph.psd.kind = geometry::PsdKind::monodisperse;
-  ph.psd.diameter = 2e-6;
-  spec.phases = {ph};
-  spec.n_particles = 100;
-  spec.initial_solid_fraction = 0.3;
-  spec.seed = 1;
-  spec.normal = dem::NormalLaw::hertz;
-  spec.friction = 0.5;
-  spec.method = geometry::PackMethod::dynamic;
-  spec.target = geometry::Target::solid_fraction;
-  spec.target_solid_fraction = 0.6;
-  spec.unbalanced_force_ratio = 0.01;
-  spec.max_steps = 10000;
-  spec.tessellate = false;
-  const Packing green = geometry::make_packing(spec).packing;
-
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
-                                    ("tomodem_conduct_dense_network_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  const std::string file = (dir / "sinter.yaml").string();
-  std::ofstream(file) << "physics: {tangential: viscous}\n"
-                         "sintering:\n"
-                         "  temperature:\n"
-                         "    start: 300\n"
-                         "    segments: [{rate: 50, to: 1800}, {hold: 1.0e6}]\n"
-                         "  phases:\n"
-                         "    - {material: alumina, atomic_volume: 8.47e-30, boundary_diffusion: 8.6e-10,\n"
-                         "       activation_energy: 418.0e3, dihedral_angle: 150, tangential_viscosity: 1.0}\n"
-                         "  stop: {relative_density: 0.9}\n"
-                         "  accuracy: {strain_per_step: 5.0e-6}\n";
-  dem::Scene scene = dem::sinter_scene(green, "green", file);
-  dem::SinterSettings s = dem::read_sinter_settings(scene);
-  dem::check_sinter_settings(scene, s);
   std::vector<Packing> snaps;
-  dem::SinterSnapshots snap;
-  snap.densities = {0.6, 0.7, 0.8, 0.9};
-  snap.take = [&](dem::Simulation& sim, const dem::SinterRow&, std::size_t) {
-    Packing p = dem::to_packing(sim, green.materials);
-    p.contacts = ContactTable{};
-    p.bonds = dem::necks_to_bond_table(sim);
-    snaps.push_back(std::move(p));
-  };
-  dem::run_sintering(*scene.sim, s, false, snap);
-  std::filesystem::remove_all(dir);
+  for (auto& snap : ::tomodem::test::sintered_sweep(alumina)) snaps.push_back(std::move(snap.packing));
   ASSERT_EQ(snaps.size(), 4u);
 
   std::printf("| rho | sigma/sigma_s face-capped (x, y, z) | isolated necks | HS upper 2phi/(3-phi) | trace bound lhs / rhs | capped / no face / edges |\n");
@@ -250,7 +205,7 @@ TEST(ConductDenseNetwork, SinteredToNinetyPercentStaysUnderTheHashinShtrikmanBou
     std::printf("| %.4f | %.4f (%.4f, %.4f, %.4f) | %.4f | %.4f | %.2f / %.2f | %zu / %zu / %zu |\n", phi, s,
                 t.sigma[0][0] / kSigma, t.sigma[1][1] / kSigma, t.sigma[2][2] / kSigma, si, hs, trace_bound_lhs(t),
                 (3 - phi) / (1 - phi), net.face_capped, net.no_face, iso.n_edges());
-    EXPECT_NEAR(phi, snap.densities[k], 0.01);
+    EXPECT_NEAR(phi, 0.6 + 0.1 * double(k), 0.01);  // the sweep's snapshots: 0.6, 0.7, 0.8, 0.9
     EXPECT_LE(s, hs) << "at " << phi;
     EXPECT_LE(trace_bound_lhs(t), (3 - phi) / (1 - phi)) << "at " << phi;
     for (int a = 0; a < 3; ++a) EXPECT_LE(t.sigma[a][a] / kSigma, phi) << "axis " << a << " at " << phi;

@@ -20,6 +20,7 @@
 #include "tomodem/mechanics/bounds.hpp"
 #include "tomodem/mechanics/elastic.hpp"
 #include "tomodem/spatial/union_volume.hpp"
+#include "sintered_sweep.hpp"
 
 using namespace tomodem;
 using namespace tomodem::mechanics;
@@ -159,60 +160,14 @@ TEST(dense_network, OpenDirectionLeavesHullFacesOpen) {
 // its union density at each, and the isolated-neck law above it at 0.9 (so the check can fail).
 // Small necks far apart are unchanged: at 0.6 no neck reaches its cap and E is the same.
 TEST(dense_network, SinteredToNinetyPercentStaysUnderTheHashinShtrikmanBound) {
-  geometry::PackSpec spec;
-  geometry::PhaseSpec ph;
-  ph.name = "alumina";
-  ph.material = alumina();
-  ph.psd.kind = geometry::PsdKind::monodisperse;
-  ph.psd.diameter = 2e-6;
-  spec.phases = {ph};
-  spec.n_particles = 100;
-  spec.initial_solid_fraction = 0.3;
-  spec.seed = 1;
-  spec.normal = dem::NormalLaw::hertz;
-  spec.friction = 0.5;
-  spec.method = geometry::PackMethod::dynamic;
-  spec.target = geometry::Target::solid_fraction;
-  spec.target_solid_fraction = 0.6;
-  spec.unbalanced_force_ratio = 0.01;
-  spec.max_steps = 10000;
-  spec.tessellate = false;
-  const Packing green = geometry::make_packing(spec).packing;
-
-  // docs/sintering.md's alumina program (tests/bench/sinter/sinter.yaml) to 1800 K with a long
-  // hold (1600 K stalls near 0.85), stopped at 0.9.
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
-                                    ("tomodem_dense_network_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  const std::string file = (dir / "sinter.yaml").string();
-  std::ofstream(file) << "physics: {tangential: viscous}\n"
-                         "sintering:\n"
-                         "  temperature:\n"
-                         "    start: 300\n"
-                         "    segments: [{rate: 50, to: 1800}, {hold: 1.0e6}]\n"
-                         "  phases:\n"
-                         "    - {material: alumina, atomic_volume: 8.47e-30, boundary_diffusion: 8.6e-10,\n"
-                         "       activation_energy: 418.0e3, dihedral_angle: 150, tangential_viscosity: 1.0}\n"
-                         "  stop: {relative_density: 0.9}\n"
-                         "  accuracy: {strain_per_step: 5.0e-6}\n";
-  dem::Scene scene = dem::sinter_scene(green, "green", file);
-  dem::SinterSettings s = dem::read_sinter_settings(scene);
-  dem::check_sinter_settings(scene, s);
   std::vector<Network> nets;
-  dem::SinterSnapshots snap;
-  snap.densities = {0.6, 0.7, 0.8, 0.9};
-  snap.take = [&](dem::Simulation& sim, const dem::SinterRow&, std::size_t) {
+  for (auto& snap : ::tomodem::test::sintered_sweep(alumina())) {
     Network net;
-    net.packing = dem::to_packing(sim, green.materials);
-    net.packing.contacts = ContactTable{};
-    const dem::BondSet b = dem::necks_to_bonds(sim);
-    net.packing.bonds = dem::necks_to_bond_table(sim);
-    for (const Vec3& im : b.image)
+    net.packing = std::move(snap.packing);
+    for (const Vec3& im : snap.image)
       net.image.push_back({int32_t(std::lround(im.x)), int32_t(std::lround(im.y)), int32_t(std::lround(im.z))});
     nets.push_back(std::move(net));
-  };
-  dem::run_sintering(*scene.sim, s, false, snap);
-  std::filesystem::remove_all(dir);
+  }
   ASSERT_EQ(nets.size(), 4u);
 
   double iso_last = 0, bound_last = 0;
@@ -261,7 +216,7 @@ TEST(dense_network, SinteredToNinetyPercentStaysUnderTheHashinShtrikmanBound) {
                 "HS %.4f\n",
                 c.relative_density, 2.0 * double(net.packing.bonds.size()) / double(net.packing.particles.size()),
                 st.face_capped, net.packing.bonds.size(), st.no_face, c.E_over_Es, ci.E_over_Es, c.hs_upper_E_over_Es);
-    EXPECT_NEAR(c.relative_density, snap.densities[k], 0.01);
+    EXPECT_NEAR(c.relative_density, 0.6 + 0.1 * double(k), 0.01);  // the sweep's snapshots: 0.6, 0.7, 0.8, 0.9
     EXPECT_LE(c.E_over_Es, c.hs_upper_E_over_Es) << "at relative density " << c.relative_density;
     for (int a = 0; a < 3; ++a)
       EXPECT_LE(r.E_axes[a] / c.E_s, c.hs_upper_E_over_Es) << "axis " << a << " at " << c.relative_density;
