@@ -228,17 +228,22 @@ PathRun run_path(const Network& net, const std::vector<dem::BondLaw>& laws, Elas
 
 // The table of docs/young.md "How auto chooses": every serial path of the implicit test (ldlt,
 // amg, cg, cg-ic) on random networks at three densities (Z ≈ 3.7, 5, 6.5) and on SC (Z = 6) and
-// BCC (Z = 8) lattices, N from ~100 up to TOMODEM_BENCH_MAX_N (default 10 000; 100 000 adds the
-// multigrid-only row), six strain cases to 1e-10 (the CLI defaults), one thread. Per path: CPU
-// time (user + system, the child process's own: comparable under load) and peak memory; the
-// model's prediction beside it; a path is skipped when the model predicts more than
-// TOMODEM_BENCH_MAX_S (default 60) CPU seconds for it. Writes young-solver-costs.csv.
+// BCC (Z = 8) lattices, N from TOMODEM_BENCH_MIN_N (default 0) to TOMODEM_BENCH_MAX_N (default
+// 10 000, so the default run stays short; 100 000 adds the rows at ~10^5: TOMODEM_BENCH_MIN_N=30000
+// runs those alone), six strain cases to 1e-10 (the CLI defaults), one thread. Per path: CPU time
+// (user + system, the child process's own: comparable under load) and peak memory; the model's
+// prediction beside it. The iterative paths (amg, cg) always run; ldlt and cg-ic are skipped when
+// the model predicts more than TOMODEM_BENCH_MAX_S (default 40) CPU seconds for them. Writes
+// young-solver-costs.csv.
 TEST(YoungBench, SolverCostTable) {
   omp_set_num_threads(1);
+  const char* env_min_n = std::getenv("TOMODEM_BENCH_MIN_N");
   const char* env_n = std::getenv("TOMODEM_BENCH_MAX_N");
   const char* env_s = std::getenv("TOMODEM_BENCH_MAX_S");
+  const int min_n = env_min_n ? std::atoi(env_min_n) : 0;
   const int max_n = env_n ? std::atoi(env_n) : 10000;
-  const double max_s = env_s ? std::atof(env_s) : 60;
+  const double max_s = env_s ? std::atof(env_s) : 40;
+  const auto in_range = [&](int n) { return n >= min_n && n <= max_n; };
   const double tol = 1e-10;
   struct Case {
     std::string family;
@@ -247,11 +252,11 @@ TEST(YoungBench, SolverCostTable) {
   std::vector<Case> cases;
   for (int n : {100, 300, 1000, 3000, 10000, 100000})
     for (const char* f : {"random 0.55", "random 0.65", "random 0.75"})
-      if (n <= max_n) cases.push_back({f, n});
-  for (int c : {5, 7, 10, 14, 22})
-    if (c * c * c <= max_n) cases.push_back({"sc", c});
-  for (int c : {4, 6, 8, 11, 17})
-    if (2 * c * c * c <= max_n) cases.push_back({"bcc", c});
+      if (in_range(n)) cases.push_back({f, n});
+  for (int c : {5, 7, 10, 14, 22, 46})
+    if (in_range(c * c * c)) cases.push_back({"sc", c});
+  for (int c : {4, 6, 8, 11, 17, 37})
+    if (in_range(2 * c * c * c)) cases.push_back({"bcc", c});
   std::string csv = "network,N,Z,dofs,path,predicted_s,cpu_s,peak_mb,iterations_per_case,predicted_iterations,"
                     "factor_flops,predicted_factor_flops,auto\n";
   std::printf("load %.1f\n| network | N | Z | path | predicted CPU s | CPU s | peak MB | it./case (pred.) | "
@@ -269,9 +274,8 @@ TEST(YoungBench, SolverCostTable) {
     const auto laws = bond_laws(net.packing, "", LawOptions{}, false);
     ImplicitOptions po;
     po.tolerance = tol;
-    po.solver = ElasticSolver::amg;  // any: the prediction does not depend on it
-    const StiffnessSystem probe(net.packing, net.image, bond_stiffnesses(net.packing, laws), po);
-    const ImplicitResult& s = probe.summary();
+    po.solver = ElasticSolver::cg;  // any: the prediction does not depend on it; cg's set-up is the cheapest
+    const ImplicitResult s = StiffnessSystem(net.packing, net.image, bond_stiffnesses(net.packing, laws), po).summary();
     const SolverCosts& pc = s.predicted;
     const double Z = 2.0 * double(s.bonds_used) / double(s.particles_used);
     const std::string label = c.family + (c.family == "sc" || c.family == "bcc" ? " " + std::to_string(c.n) + "^3" : "");
@@ -280,7 +284,7 @@ TEST(YoungBench, SolverCostTable) {
                           : path == ElasticSolver::amg ? pc.amg_s
                           : path == ElasticSolver::cg  ? pc.cg_s
                                                        : 2 * pc.ldlt_s;  // cg-ic: not modelled; fill like ldlt
-      if (pred > max_s && !(path == ElasticSolver::amg)) {
+      if (pred > max_s && (path == ElasticSolver::ldlt || path == ElasticSolver::cg_ic)) {
         std::printf("| %s | %ld | %.2f | %s | %.3g | skipped | | | | |\n", label.c_str(), s.particles_used, Z,
                     to_string(path), pred);
         continue;
