@@ -230,7 +230,8 @@ PathRun run_path(const Network& net, const std::vector<dem::BondLaw>& laws, Elas
 // amg, cg, cg-ic) on random networks at three densities (Z ≈ 3.7, 5, 6.5) and on SC (Z = 6) and
 // BCC (Z = 8) lattices, N from TOMODEM_BENCH_MIN_N (default 0) to TOMODEM_BENCH_MAX_N (default
 // 10 000, so the default run stays short; 100 000 adds the rows at ~10^5: TOMODEM_BENCH_MIN_N=30000
-// runs those alone), six strain cases to 1e-10 (the CLI defaults), one thread. Per path: CPU time
+// runs those alone; TOMODEM_BENCH_NETWORKS, e.g. "random 0.75,bcc", keeps only the networks named),
+// six strain cases to 1e-10 (the CLI defaults), one thread. Per path: CPU time
 // (user + system, the child process's own: comparable under load) and peak memory; the model's
 // prediction beside it. The iterative paths (amg, cg) always run; ldlt and cg-ic are skipped when
 // the model predicts more than TOMODEM_BENCH_MAX_S (default 40) CPU seconds for them. Writes
@@ -243,7 +244,11 @@ TEST(YoungBench, SolverCostTable) {
   const int min_n = env_min_n ? std::atoi(env_min_n) : 0;
   const int max_n = env_n ? std::atoi(env_n) : 10000;
   const double max_s = env_s ? std::atof(env_s) : 40;
-  const auto in_range = [&](int n) { return n >= min_n && n <= max_n; };
+  const char* env_networks = std::getenv("TOMODEM_BENCH_NETWORKS");
+  const std::string networks = "," + std::string(env_networks ? env_networks : "") + ",";
+  const auto wanted = [&](const std::string& family, int n) {
+    return n >= min_n && n <= max_n && (!env_networks || networks.find("," + family + ",") != std::string::npos);
+  };
   const double tol = 1e-10;
   struct Case {
     std::string family;
@@ -252,11 +257,11 @@ TEST(YoungBench, SolverCostTable) {
   std::vector<Case> cases;
   for (int n : {100, 300, 1000, 3000, 10000, 100000})
     for (const char* f : {"random 0.55", "random 0.65", "random 0.75"})
-      if (in_range(n)) cases.push_back({f, n});
+      if (wanted(f, n)) cases.push_back({f, n});
   for (int c : {5, 7, 10, 14, 22, 46})
-    if (in_range(c * c * c)) cases.push_back({"sc", c});
+    if (wanted("sc", c * c * c)) cases.push_back({"sc", c});
   for (int c : {4, 6, 8, 11, 17, 37})
-    if (in_range(2 * c * c * c)) cases.push_back({"bcc", c});
+    if (wanted("bcc", 2 * c * c * c)) cases.push_back({"bcc", c});
   std::string csv = "network,N,Z,dofs,path,predicted_s,cpu_s,peak_mb,iterations_per_case,predicted_iterations,"
                     "factor_flops,predicted_factor_flops,auto\n";
   std::printf("load %.1f\n| network | N | Z | path | predicted CPU s | CPU s | peak MB | it./case (pred.) | "
