@@ -105,12 +105,14 @@ TEST(Pack, PoreFormersRemovedAfterPacking) {
 // F/(k_n l) ≈ F/(0.9 E R²) under contact forces F of order p d² at most a few times over, i.e.
 // ≈ 2e-3 at p = 1e-4 E. Without the bonds the frictionless, non-adhesive members would separate
 // by O(R); the test asks every bonded distance to stay within 2 % of its rest length, no bonded
-// pair in the contact table, and the count of bonds (size − 1 per aggregate).
+// pair in the contact table, and the count of bonds (size − 1 per aggregate). 200 particles: 50
+// aggregates and 150 bonds under a jammed packing's forces are as good a sample of the claim as
+// 400 (which took 19 s CPU).
 TEST(Pack, AggregatesStayBondedThroughPacking) {
   PackSpec s;
   s.phases = {phase("agglomerated", 1.0, PsdKind::monodisperse, 1e-6, 0, PsdBasis::number)};
   s.phases[0].aggregate_size = 4;
-  s.n_particles = 400;
+  s.n_particles = 200;
   s.initial_solid_fraction = 0.15;  // rigid clusters of 4 find room by random insertion
   s.target = Target::pressure;
   s.target_pressure = 1e-4 * s.phases[0].material.youngs_modulus;
@@ -118,9 +120,9 @@ TEST(Pack, AggregatesStayBondedThroughPacking) {
   const auto out = make_packing(s);
   const auto& r = out.report;
   const auto& pk = out.packing;
-  EXPECT_EQ(r.aggregates, 100u);
-  ASSERT_EQ(pk.bonds.size(), 300u);
-  EXPECT_EQ(r.aggregate_bonds, 300u);
+  EXPECT_EQ(r.aggregates, 50u);
+  ASSERT_EQ(pk.bonds.size(), 150u);
+  EXPECT_EQ(r.aggregate_bonds, 150u);
   EXPECT_TRUE(r.equilibrium);
   const double L = pk.cell.h(0, 0);
   double worst = 0;
