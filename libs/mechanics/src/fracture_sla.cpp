@@ -26,6 +26,7 @@
 #include "tomodem/core/tool.hpp"
 #include "tomodem/linalg/amg.hpp"
 #include "tomodem/linalg/petsc_solver.hpp"
+#include "tomodem/mechanics/bond_section.hpp"
 #include "tomodem/mechanics/fracture.hpp"
 
 namespace tomodem::mechanics {
@@ -46,6 +47,7 @@ struct Sla {
   const SlaOptions& o;
   bool pcg = false;
   BondStiffnesses k;
+  std::vector<double> section;    ///< per bond: radius of the load-bearing section (bond_section.hpp)
   std::vector<dem::BondStrength> strength;
   std::vector<uint8_t> intact;    ///< per bond: a load bond that still holds
   std::vector<uint8_t> touch;     ///< per bond: broken (or pre-crack) faces in contact: normal spring on
@@ -88,7 +90,7 @@ struct Sla {
       const SlaOptions& opt)
       : s(sample), p(sample.packing), o(opt) {
     const std::size_t n = p.particles.size(), m = p.bonds.size();
-    k = bond_stiffnesses(p, laws);
+    k = bond_stiffnesses(p, laws, section);
     const int nph = int(std::lround(std::sqrt(double(laws.size()))));
     strength.resize(m);
     intact.assign(m, 0);
@@ -106,8 +108,11 @@ struct Sla {
       intact[b] = 1;
       const int i = p.bonds.i[b], j = p.bonds.j[b];
       const dem::BondLaw& law = laws[std::size_t(p.particles.phase[i] * nph + p.particles.phase[j])];
-      const dem::BondStiffness st = dem::bond_stiffness(law, p.bonds.radius[b], p.particles.radius[i], p.particles.radius[j]);
-      strength[b] = dem::bond_strength(criterion, law, p.bonds.radius[b], st);
+      // Face-capped laws: the strength of the bond's section and capped springs (bond_section.hpp).
+      const dem::BondStiffness st =
+          law.face_cap ? equivalent_neck(law, section[b], k.kn[b], k.kt[b])
+                       : dem::bond_stiffness(law, p.bonds.radius[b], p.particles.radius[i], p.particles.radius[j]);
+      strength[b] = dem::bond_strength(criterion, law, section[b], st);
       ++adj_start[i + 1];
       ++adj_start[j + 1];
     }
@@ -580,7 +585,7 @@ Sla::Eval Sla::evaluate(const Eigen::VectorXd& q) const {
       ++ev.closed;
       continue;
     }
-    const double a = p.bonds.radius[b], A = M_PI * a * a;
+    const double a = section[b], A = M_PI * a * a;
     const double sigma = std::max(T, 0.0) / A + 4 * std::sqrt(Mb2) / (A * a);
     const double tau = std::sqrt(Ft2) / A + 2 * std::abs(Mt) / (A * a);
     const double rt = sigma / strength[b].tension, rsh = tau / strength[b].shear;

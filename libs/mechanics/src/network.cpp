@@ -1,5 +1,6 @@
 // Bonded networks: bond images in the data model, bond laws from the materials, clusters.
 #include "tomodem/mechanics/network.hpp"
+#include "tomodem/mechanics/bond_section.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -168,7 +169,14 @@ std::vector<double> bond_face_areas(const Packing& p) {
 }
 
 BondStiffnesses bond_stiffnesses(const Packing& p, const std::vector<dem::BondLaw>& laws) {
+  std::vector<double> section;
+  return bond_stiffnesses(p, laws, section);
+}
+
+BondStiffnesses bond_stiffnesses(const Packing& p, const std::vector<dem::BondLaw>& laws,
+                                 std::vector<double>& section) {
   const std::size_t m = p.bonds.size();
+  section = p.bonds.radius;
   const int n = int(std::lround(std::sqrt(double(laws.size()))));
   BondStiffnesses k;
   k.kn.resize(m);
@@ -184,6 +192,7 @@ BondStiffnesses bond_stiffnesses(const Packing& p, const std::vector<dem::BondLa
     if (law.face_cap && p.bonds.state[b] == BondTable::intact) {
       if (dem::face_cap_stiffness(s, law.E_face, area[b], p.bonds.rest_length[b])) ++k.face_capped;
       if (area[b] == 0) ++k.no_face;
+      section[b] = section_radius(p.bonds.radius[b], area[b]);
     }
     k.kn[b] = s.kn;
     k.kt[b] = s.kt;
