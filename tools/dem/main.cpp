@@ -156,16 +156,29 @@ int run(int argc, char** argv) {
   const dem::RunReport rep = dem::run_protocol(scene, out(scene.outputs.checkpoint), !common.quiet && rank0);
   const dem::Measurements& m = rep.final;
   const double critical_step = scene.sim->critical_time_step();  // collective on ranks
+  // The whole series: the rows before a restart (from the checkpoint) and this run's.
+  const auto rows = dem::full_series(scene, rep.series);
 
-  // Outputs: each written under a temporary name and renamed (core/output.hpp).
+  // Outputs: each written under a temporary name and renamed (core/output.hpp). Those that read
+  // the engine come first; the packing comes last and is written with the engine freed, so that
+  // its arrays never stack on the engine's (issue 19: the CLI's memory per particle).
+  if (!scene.outputs.checkpoint.empty())  // on ranks, collective: every rank writes its particles
+    dem::write_checkpoint(out(scene.outputs.checkpoint), *scene.sim, scene.text, rows);
+  const json fields_summary = cg && rank0 ? json::parse(cg->write(*scene.sim, scene.text)) : json();
 #if TOMODEM_HAVE_MPI
-  if (ranks > 1 && !scene.outputs.checkpoint.empty())  // collective: every rank writes its particles
-    dem::write_checkpoint(out(scene.outputs.checkpoint), *scene.sim, scene.text, dem::full_series(scene, rep.series));
   Packing packing = dem::gather_packing(*scene.sim, scene.materials);  // to_packing when not decomposed
   if (!rank0) return 0;  // the gathered state and the reduced measurements are rank 0's to write
 #else
   Packing packing = dem::to_packing(*scene.sim, scene.materials);
 #endif
+  const long step = scene.sim->step_count();
+  const int threads_used = scene.sim->settings().threads;
+  const double time_step = scene.sim->time_step();
+  const bool track_energy = scene.sim->settings().track_energy;
+  if (ranks == 1) {  // (decomposed, the engine's destructor may talk to the other ranks: kept)
+    cg.reset();
+    scene.sim.reset();
+  }
   packing.provenance.tool = "tomodem-dem";
   packing.provenance.version = version_string();
   packing.provenance.parameters = scene.text;
@@ -178,16 +191,12 @@ int run(int argc, char** argv) {
                              {"time", m.time}};
   packing.results.units = {{"pressure", "Pa"}, {"coordination", "1"}, {"kinetic_energy", "J"},
                            {"unbalanced_force_ratio", "1"}, {"time", "s"}};
-  // The whole series: the rows before a restart (from the checkpoint) and this run's.
-  const auto rows = dem::full_series(scene, rep.series);
   const auto& kSeriesColumns = dem::series_columns();
   auto& series = packing.results.series["dem"];
   for (std::size_t c = 0; c < kSeriesColumns.size(); ++c)
     for (const auto& r : rows) series[kSeriesColumns[c]].push_back(r[c]);
   write_packing(out(scene.outputs.packing), packing);
   write_text_atomic(out(scene.outputs.series), csv_table(kSeriesColumns, rows));
-  if (!scene.outputs.checkpoint.empty() && ranks == 1) dem::write_checkpoint(out(scene.outputs.checkpoint), *scene.sim, scene.text, rows);
-  const json fields_summary = cg ? json::parse(cg->write(*scene.sim, scene.text)) : json();
 
   Summary j("tomodem-dem");
   j.input(scene_path, {{"reads", scene.inputs}});
@@ -195,21 +204,21 @@ int run(int argc, char** argv) {
   j.n_particles(n_particles);
   j["physics"] = physics;
   j["steps"] = rep.steps;
-  j["step"] = scene.sim->step_count();
+  j["step"] = step;
   j["stop_reason"] = rep.stop_reason;
-  j["threads"] = scene.sim->settings().threads;
+  j["threads"] = threads_used;
   if (ranks > 1) j["ranks"] = ranks;
   j["run_time_s"] = rep.wall_time_s;  // the protocol alone (wall_time_s: the whole process)
   // Of the whole sample (a rank's particles().size() counts its part and its ghosts).
   j["particle_steps_per_second"] = rep.wall_time_s > 0 ? double(rep.steps) * double(n_particles) / rep.wall_time_s : 0.0;
-  j["time_step_s"] = scene.sim->time_step();
+  j["time_step_s"] = time_step;
   j["critical_time_step_s"] = critical_step;
-  measurement_keys(j, m, scene.sim->settings().track_energy);
+  measurement_keys(j, m, track_energy);
   j.output("packing", out(scene.outputs.packing));
   j.output("xdmf", std::filesystem::path(out(scene.outputs.packing)).replace_extension(".xdmf").string());
   j.output("series", out(scene.outputs.series));
   j.output("checkpoint", out(scene.outputs.checkpoint));
-  if (cg) j["fields"] = fields_summary, j.output("fields", out(fields_block.settings.output));
+  if (fields_block.present) j["fields"] = fields_summary, j.output("fields", out(fields_block.settings.output));
   emit_summary(j.text(), json_path);
   return 0;
 }

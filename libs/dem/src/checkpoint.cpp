@@ -373,6 +373,10 @@ static void read_checkpoint_checked(const std::string& path, Simulation& sim) {
 
 Packing to_packing(Simulation& sim, const std::vector<Material>& materials) {
   Packing out;
+  // The contacts first: their tally pass then runs without the copies of the particle arrays
+  // (issue 19: the CLI's memory per particle). A rebuild inside it wraps the positions into the
+  // cell, so the positions copied after it are those the contacts' images refer to.
+  out.contacts = sim.contacts();
   const Particles& p = sim.particles();
   out.particles.position = p.x;
   out.particles.radius = p.r;
@@ -380,7 +384,6 @@ Packing to_packing(Simulation& sim, const std::vector<Material>& materials) {
   out.particles.velocity = p.v;
   if (p.has_rotation()) out.particles.angular_velocity = p.omega;
   out.cell = sim.cell();
-  out.contacts = sim.contacts();
   out.materials = materials;
   return out;
 }

@@ -124,15 +124,18 @@ struct Simulation::Impl : SimState {
     return m.kinetic_energy + m.elastic_energy;
   }
 
-  Measurements measure_now(std::vector<Vec3>* pair_force = nullptr) {
+  /// `scratch_list`: the list is a copy the caller discards (contacts()), so its history and
+  /// contact flags are not saved and restored.
+  Measurements measure_now(std::vector<Vec3>* pair_force = nullptr, bool scratch_list = false) {
     // A tally pass on the current state. History (incremental springs, JKR flags) is saved
     // and restored, so measuring never changes the trajectory.
     // Rebuild first when due: a rebuild inside the tally pass would resize the history, and
     // restoring the saved copy afterwards would leave it shorter than the neighbour list.
     rebuild_if_due();
     if (pair_force) pair_force->assign(nl.nj.size(), Vec3{});
-    const std::vector<double> h = nl.hist;
-    const std::vector<uint8_t> tf = nl.touch;
+    std::vector<double> h;
+    std::vector<uint8_t> tf;
+    if (!scratch_list) h = nl.hist, tf = nl.touch;
     std::vector<WallData> wd = nl.wall_data;
     std::vector<Vec3> wall_force;
     for (auto& w : walls) wall_force.push_back(w.force);
@@ -149,8 +152,7 @@ struct Simulation::Impl : SimState {
 #endif
     m.neighbor_rebuilds = nl.builds;
     // Restore.
-    nl.hist = h;
-    nl.touch = tf;
+    if (!scratch_list) nl.hist.swap(h), nl.touch.swap(tf);
     nl.wall_data = wd;
     for (std::size_t w = 0; w < walls.size(); ++w) walls[w].force = wall_force[w];
     p.f = f;
@@ -292,41 +294,93 @@ std::string Simulation::describe() const {
   return o.str();
 }
 
+namespace {
+/// Arrays of a neighbour list swapped in for one pass: a second swap (or the destructor, when
+/// the pass throws) puts the list's own arrays back.
+struct SwappedList {
+  NeighbourList& nl;
+  std::vector<int32_t> start, nj, owner;
+  std::vector<uint8_t> img, touch;
+  std::vector<double> hist;
+  std::vector<int> split;
+  std::vector<std::size_t> bond_split;
+  bool swapped = false;
+  void swap() {
+    nl.start.swap(start), nl.nj.swap(nj), nl.owner.swap(owner), nl.img.swap(img), nl.touch.swap(touch);
+    nl.hist.swap(hist), nl.split.swap(split), nl.bond_split.swap(bond_split);
+    swapped = !swapped;
+  }
+  ~SwappedList() {
+    if (swapped) swap();
+  }
+};
+}  // namespace
+
 ContactTable Simulation::contacts() {
   Impl& s = *impl_;
-  std::vector<Vec3> force;
-  s.measure_now(&force);  // per-pair forces of the current state (trajectory unchanged)
-  ContactTable ct;
-  auto touching = [&s](std::size_t i, int k, Vec3& d, double& delta) {
-    const int j = s.nl.nj[k];
-    d = s.p.x[j] + s.nl.shift[s.nl.img[k]] - s.p.x[i];
+  NeighbourList& nl = s.nl;
+  s.rebuild_if_due();  // the contacts are picked from the list the tally pass runs on
+  auto touching = [&s, &nl](std::size_t i, int k, Vec3& d, double& delta) {
+    const int j = nl.nj[k];
+    d = s.p.x[j] + nl.shift[nl.img[k]] - s.p.x[i];
     delta = s.p.r[i] + s.p.r[j] - norm(d);
-    return s.kern.touch_flag ? s.nl.touch[k] != 0 : delta > 0;
+    return s.kern.touch_flag ? nl.touch[k] != 0 : delta > 0;
   };
-  // Counted first and reserved exactly: grown by doubling, the table's five arrays held up to
-  // twice their size at the tool's memory peak (issue 19: the CLI's memory per particle).
-  std::size_t count = 0;
+  const std::size_t n = s.p.size();
+  std::vector<int32_t> contact_start(n + 1, 0);  // CSR of the listed pairs in contact
   Vec3 d;
   double delta;
-  for (std::size_t i = 0; i < s.p.size(); ++i)
-    for (int k = s.nl.start[i]; k < s.nl.start[i + 1]; ++k) count += touching(i, k, d, delta);
+  for (std::size_t i = 0; i < n; ++i) {
+    contact_start[i + 1] = contact_start[i];
+    for (int k = nl.start[i]; k < nl.start[i + 1]; ++k) contact_start[i + 1] += touching(i, k, d, delta);
+  }
+  const std::size_t count = std::size_t(contact_start[n]);
+  std::vector<Vec3> force;  // on j from i, per contact
+  if (count == nl.nj.size()) {
+    s.measure_now(&force);  // every listed pair is in contact: the pass runs on the list itself
+  } else {
+    // The tally pass on the pairs in contact alone: it is the scalar loop, where a pair's force
+    // depends on that pair only, so the forces are those of a pass over the whole list; but it
+    // holds O(contacts) memory, not a force and a history copy per listed pair (issue 19: the
+    // CLI's memory per particle; a dilute scene lists 20-30 pairs per contact).
+    const std::size_t stride = std::size_t(s.stride);
+    SwappedList in_contact{nl};
+    in_contact.start = std::move(contact_start);
+    in_contact.nj.reserve(count);
+    in_contact.img.reserve(count);
+    in_contact.touch.reserve(s.kern.touch_flag ? count : 0);
+    in_contact.hist.reserve(count * stride);
+    for (std::size_t i = 0; i < n; ++i)
+      for (int k = nl.start[i]; k < nl.start[i + 1]; ++k) {
+        if (!touching(i, k, d, delta)) continue;
+        in_contact.nj.push_back(nl.nj[k]);
+        in_contact.img.push_back(nl.img[k]);
+        if (s.kern.touch_flag) in_contact.touch.push_back(nl.touch[k]);
+        in_contact.hist.insert(in_contact.hist.end(), nl.hist.begin() + long(k * stride), nl.hist.begin() + long((k + 1) * stride));
+      }
+    in_contact.swap();
+    nl.reindex(s);  // pair owners and thread split of the narrowed list
+    s.measure_now(&force, true);  // not rebuilt inside: rebuild_if_due() above found it current
+    in_contact.swap();
+  }
+  ContactTable ct;
   ct.i.reserve(count);
   ct.j.reserve(count);
   ct.overlap.reserve(count);
   ct.normal_force.reserve(count);
-  ct.tangential_force.reserve(count);
-  for (std::size_t i = 0; i < s.p.size(); ++i)
-    for (int k = s.nl.start[i]; k < s.nl.start[i + 1]; ++k) {
+  std::size_t c = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    for (int k = nl.start[i]; k < nl.start[i + 1]; ++k) {
       if (!touching(i, k, d, delta)) continue;
-      const int j = s.nl.nj[k];
       ct.i.push_back(int32_t(i));
-      ct.j.push_back(j);
+      ct.j.push_back(nl.nj[k]);
       ct.overlap.push_back(delta);
-      const Vec3 n = (1.0 / norm(d)) * d;
-      const Vec3 fn = dot(force[k], n) * n;
+      const Vec3 normal = (1.0 / norm(d)) * d;
+      const Vec3 fn = dot(force[c], normal) * normal;
       ct.normal_force.push_back(fn);
-      ct.tangential_force.push_back(force[k] - fn);
+      force[c++] -= fn;
     }
+  ct.tangential_force = std::move(force);  // what is left of each force: its tangential part
   return ct;
 }
 
