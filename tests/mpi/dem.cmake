@@ -14,7 +14,7 @@ add_test(NAME dem_decomposition_doc_example
   COMMAND sh ${CMAKE_CURRENT_SOURCE_DIR}/dem/doc_example.sh ${MPIEXEC_EXECUTABLE}
           $<TARGET_FILE:dem_decomposition_bench> ${CMAKE_SOURCE_DIR}/docs/dem.md)
 set_tests_properties(dem_decomposition_doc_example PROPERTIES LABELS mpi PROCESSORS 3
-  ENVIRONMENT "OMP_NUM_THREADS=1;OMPI_ALLOW_RUN_AS_ROOT=1;OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1")
+  ENVIRONMENT "OMP_NUM_THREADS=1;OMPI_MCA_mpi_yield_when_idle=1;OMPI_ALLOW_RUN_AS_ROOT=1;OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1")
 
 # tomodem-dem started by mpirun on 1, 2 and 3 ranks against its run without mpirun: the test
 # starts the launcher itself (it is not an MPI program), so it is an ordinary executable.
@@ -25,7 +25,7 @@ target_compile_definitions(dem_tool_ranks_tests PRIVATE
 add_dependencies(tomodem_mpi_tests dem_tool_ranks_tests tomodem-dem tomodem-sinter)
 add_test(NAME dem_tool_ranks COMMAND dem_tool_ranks_tests)
 set_tests_properties(dem_tool_ranks PROPERTIES LABELS mpi PROCESSORS 3
-  ENVIRONMENT "OMP_NUM_THREADS=1;OMPI_ALLOW_RUN_AS_ROOT=1;OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1")
+  ENVIRONMENT "OMP_NUM_THREADS=1;OMPI_MCA_mpi_yield_when_idle=1;OMPI_ALLOW_RUN_AS_ROOT=1;OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1")
 
 # A bonded lattice pulled to failure: the same bonds break in the same steps on 1 to 4 ranks.
 tomodem_mpi_test(dem_decomposition_bond_tests
@@ -48,7 +48,7 @@ target_compile_definitions(dem_checkpoint_ranks_tests PRIVATE
 add_dependencies(tomodem_mpi_tests dem_checkpoint_ranks_tests tomodem-dem)
 add_test(NAME dem_checkpoint_ranks COMMAND dem_checkpoint_ranks_tests)
 set_tests_properties(dem_checkpoint_ranks PROPERTIES LABELS mpi PROCESSORS 3
-  ENVIRONMENT "OMP_NUM_THREADS=1;OMPI_ALLOW_RUN_AS_ROOT=1;OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1")
+  ENVIRONMENT "OMP_NUM_THREADS=1;OMPI_MCA_mpi_yield_when_idle=1;OMPI_ALLOW_RUN_AS_ROOT=1;OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1")
 
 # The energy budget (track_energy) across ranks: the falling column with local damping and a
 # sheared periodic cell with Stokes drag, 1-4 ranks, terms to 1e-12 of the budget.

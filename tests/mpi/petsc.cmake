@@ -12,7 +12,7 @@ find_package(Python3 REQUIRED COMPONENTS Interpreter)
 add_test(NAME petsc_docs_example
   COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_LIST_DIR}/petsc/docs_example.py ${CMAKE_SOURCE_DIR} ${CMAKE_BINARY_DIR}/bin)
 set_tests_properties(petsc_docs_example PROPERTIES LABELS mpi PROCESSORS 2
-  ENVIRONMENT "OMP_NUM_THREADS=1;OMPI_MCA_rmaps_base_oversubscribe=1;OMPI_ALLOW_RUN_AS_ROOT=1;OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1")
+  ENVIRONMENT "OMP_NUM_THREADS=1;OMPI_MCA_rmaps_base_oversubscribe=1;OMPI_MCA_mpi_yield_when_idle=1;OMPI_ALLOW_RUN_AS_ROOT=1;OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1")
 add_dependencies(tomodem_mpi_tests tomodem-pack tomodem-bond tomodem-young)
 
 # Rank 0 alone speaks and writes (docs/scaling.md): young, conduct and fracture with PETSc under
@@ -21,5 +21,5 @@ add_dependencies(tomodem_mpi_tests tomodem-pack tomodem-bond tomodem-young)
 add_test(NAME petsc_ranks_output
   COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_LIST_DIR}/petsc/ranks_output.py ${CMAKE_BINARY_DIR}/bin
           ${CMAKE_SOURCE_DIR} ${MPIEXEC_EXECUTABLE})
-set_tests_properties(petsc_ranks_output PROPERTIES LABELS mpi PROCESSORS 2)
+set_tests_properties(petsc_ranks_output PROPERTIES LABELS mpi PROCESSORS 2 ENVIRONMENT "OMPI_MCA_mpi_yield_when_idle=1")
 add_dependencies(tomodem_mpi_tests tomodem-conduct tomodem-fracture)

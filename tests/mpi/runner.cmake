@@ -6,7 +6,7 @@ add_test(NAME mpi_runner_ranks_step
           $<TARGET_FILE:tomodem-bench-mpi-pingpong>)
 set_tests_properties(mpi_runner_ranks_step PROPERTIES LABELS mpi TIMEOUT 300 PROCESSORS 2
   PASS_REGULAR_EXPRESSION "OK: ranks: 2 ran through mpirun"
-  ENVIRONMENT "TOMODEM_MPIRUN=mpirun --oversubscribe;OMP_NUM_THREADS=1;OMPI_ALLOW_RUN_AS_ROOT=1;OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1")
+  ENVIRONMENT "TOMODEM_MPIRUN=mpirun --oversubscribe;OMP_NUM_THREADS=1;OMPI_MCA_mpi_yield_when_idle=1;OMPI_ALLOW_RUN_AS_ROOT=1;OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1")
 # tools/scripts/test.sh builds only tomodem_mpi_tests: the programs these tests start come with it.
 add_dependencies(tomodem_mpi_tests tomodem-run)
 if(TARGET tomodem-bench-mpi-pingpong)
