@@ -59,7 +59,7 @@ int main(int argc, char** argv) {
     app.add_option("--mha", c.mha, "labels as MetaImage (.mha or .mhd)");
     app.add_option("--vdb", c.vdb, "macropores as an OpenVDB signed-distance level set (world unit mm, stated in its metadata)");
     app.add_option("--overlay", c.overlay, "mid-plane PNG overlays: PREFIX_xy.png, _xz, _yz");
-    app.add_option("--chunk", c.chunk, "out of core: process blocks of this many voxels per side with halos (raw input; docs/segment.md)")
+    app.add_option("--chunk", c.chunk, "out of core: process blocks of this many voxels per side with halos (raw or HDF5 input; docs/segment.md)")
         ->check(non_negative);
     app.add_option("--memory", c.memory_text, "out of core: memory budget (8GB, 512MB, 8GiB); the block size is chosen from it");
     tomodem::cli::Common common;

@@ -1,5 +1,5 @@
 // Out-of-core tomodem-segment (--chunk / --memory, docs/segment.md "Volumes larger than memory"):
-// the volume is read block by block (pread of a raw file), never whole. Held for the whole run:
+// the volume is read block by block (pread of a raw file's rows, or an HDF5 hyperslab), never whole. Held for the whole run:
 // the solid and macropore masks as bits (2 bits per voxel, 3 with a second solid phase); every
 // other array is one block with its halo. Each stage gives the in-memory path's result exactly:
 // - median: a block with a halo of the box radius gives its core exactly (borders are replicated
@@ -92,16 +92,60 @@ struct Bits {
   }
 };
 
-// A raw file read block by block (pread per row), converted to float as read_raw does.
-class RawBlocks {
+// The input read block by block, never whole: a raw file (RawBlocks) or an HDF5 dataset
+// (H5Blocks). Values are converted to float as the in-memory readers convert them.
+class BlockSource {
  public:
-  RawBlocks(const std::string& path, const ReadOptions& o) : path_(path), o_(o) {
+  virtual ~BlockSource() = default;
+  const Dims& dims() const { return d_; }
+  RawType type() const { return type_; }  ///< the stored voxel type
+  std::size_t type_bytes() const { return type_size(type_); }
+  /// Bytes the reader holds while it reads a block, beyond the block itself (an HDF5 chunk).
+  virtual double reader_bytes() const { return 0; }
+  // Values of <= 16-bit integer types are whole numbers in [offset, offset + 65535].
+  bool small_integers() const { return type_ == RawType::uint8 || type_ == RawType::int8 || type_ == RawType::uint16 || type_ == RawType::int16; }
+  long offset() const { return (type_ == RawType::int8) ? -128 : (type_ == RawType::int16) ? -32768 : 0; }
+
+  // The block b as floats (x fastest); NaN/Inf refused naming the voxel.
+  void read(const Box& b, Volume& out) {
+    out.dims = b.dims();
+    out.v.resize(out.dims.count());
+    largest_read = std::max(largest_read, out.v.size());
+    fill(b, out.v.data());
+    const std::size_t nx = b.n(0), ny = b.n(1);
+    for (std::size_t i = 0; i < out.v.size(); ++i) {
+      const float x = out.v[i];
+      if (!std::isfinite(x)) {
+        const std::size_t X = b.lo[0] + i % nx, Y = b.lo[1] + i / nx % ny, Z = b.lo[2] + i / (nx * ny);
+        throw InputError(path_, field_, "voxel (" + std::to_string(X) + ", " + std::to_string(Y) + ", " + std::to_string(Z) + ") (x, y, z)",
+                         "is NaN or infinite");
+      }
+      vmin = std::min(vmin, x);
+      vmax = std::max(vmax, x);
+    }
+  }
+  float vmin = std::numeric_limits<float>::max(), vmax = std::numeric_limits<float>::lowest();  ///< values seen
+  std::size_t largest_read = 0;  ///< voxels of the largest block read (the tests check it is never the volume)
+
+ protected:
+  BlockSource(std::string path, std::string field) : path_(std::move(path)), field_(std::move(field)) {}
+  virtual void fill(const Box& b, float* out) = 0;
+  std::string path_, field_;
+  Dims d_;
+  RawType type_ = RawType::uint8;
+};
+
+// A raw file: pread per row of the block, converted as read_raw does.
+class RawBlocks : public BlockSource {
+ public:
+  RawBlocks(const std::string& path, const ReadOptions& o) : BlockSource(path, "data"), o_(o) {
     const auto [nx, ny, nz] = o.raw_dims;
     if (nx == 0 || ny == 0 || nz == 0)
       throw InputError(path, "--raw-dims", "", "a raw file needs its dimensions (--raw-dims NX,NY,NZ)");
     d_ = {nx, ny, nz};
-    bytes_ = type_size(o.raw_type);
-    const std::uintmax_t expected = o.raw_header + nx * ny * nz * bytes_;
+    type_ = o.raw_type;
+    const std::size_t bytes = type_bytes();
+    const std::uintmax_t expected = o.raw_header + nx * ny * nz * bytes;
     std::error_code ec;
     if (fs::is_directory(path)) throw InputError(path, "", "", "is a folder, not a raw file");
     const std::uintmax_t size = fs::file_size(path, ec);
@@ -115,45 +159,27 @@ class RawBlocks {
     fd_ = ::open(path.c_str(), O_RDONLY);
     if (fd_ < 0) throw InputError(path, "", "", std::string("cannot open: ") + std::strerror(errno));
   }
-  ~RawBlocks() { if (fd_ >= 0) ::close(fd_); }
+  ~RawBlocks() override { if (fd_ >= 0) ::close(fd_); }
   RawBlocks(const RawBlocks&) = delete;
   RawBlocks& operator=(const RawBlocks&) = delete;
-  const Dims& dims() const { return d_; }
-  std::size_t type_bytes() const { return bytes_; }
-  // Values of <= 16-bit integer types are whole numbers in [offset, offset + 65535].
-  bool small_integers() const { return o_.raw_type == RawType::uint8 || o_.raw_type == RawType::int8 || o_.raw_type == RawType::uint16 || o_.raw_type == RawType::int16; }
-  long offset() const { return (o_.raw_type == RawType::int8) ? -128 : (o_.raw_type == RawType::int16) ? -32768 : 0; }
 
-  // The block b as floats (x fastest); NaN/Inf refused naming the voxel.
-  void read(const Box& b, Volume& out) {
-    out.dims = b.dims();
-    out.v.resize(out.dims.count());
-    const std::size_t nxb = b.n(0);
-    std::vector<char> buf(nxb * bytes_);
+ private:
+  void fill(const Box& b, float* out) override {
+    const std::size_t nxb = b.n(0), bytes = type_bytes();
+    std::vector<char> buf(nxb * bytes);
     const bool swap = o_.byte_order == ByteOrder::big;
     for (std::size_t z = b.lo[2]; z < b.hi[2]; ++z)
       for (std::size_t y = b.lo[1]; y < b.hi[1]; ++y) {
-        const off_t at = off_t(o_.raw_header + ((z * d_.ny + y) * d_.nx + b.lo[0]) * bytes_);
+        const off_t at = off_t(o_.raw_header + ((z * d_.ny + y) * d_.nx + b.lo[0]) * bytes);
         std::size_t got = 0;
         while (got < buf.size()) {
           const ssize_t r = ::pread(fd_, buf.data() + got, buf.size() - got, at + off_t(got));
           if (r <= 0) throw InputError(path_, "data", "row y " + std::to_string(y) + ", z " + std::to_string(z), "read failed (truncated?)");
           got += std::size_t(r);
         }
-        float* o = &out.v[((z - b.lo[2]) * b.n(1) + (y - b.lo[1])) * nxb];
-        convert_row(buf.data(), nxb, swap, o);
-        for (std::size_t x = 0; x < nxb; ++x) {
-          if (!std::isfinite(o[x]))
-            throw InputError(path_, "data", "voxel (" + std::to_string(b.lo[0] + x) + ", " + std::to_string(y) + ", " + std::to_string(z) + ")",
-                             "is NaN or infinite");
-          vmin = std::min(vmin, o[x]);
-          vmax = std::max(vmax, o[x]);
-        }
+        convert_row(buf.data(), nxb, swap, out + ((z - b.lo[2]) * b.n(1) + (y - b.lo[1])) * nxb);
       }
   }
-  float vmin = std::numeric_limits<float>::max(), vmax = std::numeric_limits<float>::lowest();  ///< raw values seen
-
- private:
   template <class T>
   static void conv(const char* p, std::size_t n, bool swap, float* out) {
     for (std::size_t i = 0; i < n; ++i) {
@@ -177,11 +203,78 @@ class RawBlocks {
       case RawType::float64: conv<double>(p, n, swap, out); break;
     }
   }
-  std::string path_;
   ReadOptions o_;
-  Dims d_;
-  std::size_t bytes_ = 1;
   int fd_ = -1;
+};
+
+// An HDF5 dataset (z, y, x), contiguous or chunked: one hyperslab per block, converted to float
+// by HDF5 (a C cast, as read_h5's double -> float; exact for <= 16-bit integers and float32).
+// A chunked dataset is decompressed chunk by chunk: one chunk is held while a block is read.
+class H5Blocks : public BlockSource {
+ public:
+  H5Blocks(const std::string& path, const std::string& dataset) : BlockSource(path, dataset) {
+    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors are InputErrors naming the file, not HDF5's stack
+    file_ = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    if (file_ < 0) throw InputError(path, "", "", "cannot open as HDF5");
+    if (H5Lexists(file_, dataset.c_str(), H5P_DEFAULT) <= 0 || (ds_ = H5Dopen2(file_, dataset.c_str(), H5P_DEFAULT)) < 0)
+      throw InputError(path, dataset, "", "no such dataset (give --dataset)");
+    const hid_t space = H5Dget_space(ds_);
+    const int rank = H5Sget_simple_extent_ndims(space);
+    hsize_t n[3] = {0, 0, 0};
+    if (rank == 3) H5Sget_simple_extent_dims(space, n, nullptr);
+    H5Sclose(space);
+    if (rank != 3) throw InputError(path, dataset, std::to_string(rank) + "-D", "expected a 3-D dataset (z, y, x)");
+    d_ = {std::size_t(n[2]), std::size_t(n[1]), std::size_t(n[0])};
+    const hid_t t = H5Dget_type(ds_);
+    const H5T_class_t cls = H5Tget_class(t);
+    const std::size_t size = H5Tget_size(t);
+    const bool sign = cls == H5T_INTEGER && H5Tget_sign(t) == H5T_SGN_2;
+    H5Tclose(t);
+    const std::map<std::pair<std::size_t, bool>, RawType> ints{{{1, false}, RawType::uint8}, {{1, true}, RawType::int8},
+                                                               {{2, false}, RawType::uint16}, {{2, true}, RawType::int16},
+                                                               {{4, false}, RawType::uint32}, {{4, true}, RawType::int32}};
+    if (cls == H5T_INTEGER && ints.count({size, sign})) type_ = ints.at({size, sign});
+    else if (cls == H5T_FLOAT && (size == 4 || size == 8)) type_ = size == 4 ? RawType::float32 : RawType::float64;
+    else
+      throw InputError(path, dataset, std::to_string(size * 8) + "-bit " + (cls == H5T_INTEGER ? "integer" : cls == H5T_FLOAT ? "float" : "non-numeric"),
+                       "the chunked path reads 8-, 16- and 32-bit integers and 32- and 64-bit floats; convert the dataset or read it in memory");
+    const hid_t dcpl = H5Dget_create_plist(ds_);
+    if (H5Pget_layout(dcpl) == H5D_CHUNKED) {
+      hsize_t c[3] = {0, 0, 0};
+      H5Pget_chunk(dcpl, 3, c);
+      chunk_ = {std::size_t(c[2]), std::size_t(c[1]), std::size_t(c[0])};
+    }
+    H5Pclose(dcpl);
+  }
+  ~H5Blocks() override {
+    if (ds_ >= 0) H5Dclose(ds_);
+    if (file_ >= 0) H5Fclose(file_);
+  }
+  H5Blocks(const H5Blocks&) = delete;
+  H5Blocks& operator=(const H5Blocks&) = delete;
+  /// The dataset's HDF5 chunk (x, y, z voxels); zeros when contiguous.
+  const std::array<std::size_t, 3>& chunk() const { return chunk_; }
+  // One decompressed chunk and its compressed bytes (at most as many), plus HDF5's 1 MiB
+  // conversion buffer and 1 MiB chunk cache.
+  double reader_bytes() const override {
+    return 2.0 * double(chunk_[0]) * double(chunk_[1]) * double(chunk_[2]) * double(type_bytes()) + 2 * 1048576.0;
+  }
+
+ private:
+  void fill(const Box& b, float* out) override {
+    const hsize_t start[3] = {b.lo[2], b.lo[1], b.lo[0]}, count[3] = {b.n(2), b.n(1), b.n(0)};
+    const hid_t fspace = H5Dget_space(ds_);
+    H5Sselect_hyperslab(fspace, H5S_SELECT_SET, start, nullptr, count, nullptr);
+    const hid_t mspace = H5Screate_simple(3, count, nullptr);
+    const herr_t e = H5Dread(ds_, H5T_NATIVE_FLOAT, mspace, fspace, H5P_DEFAULT, out);
+    H5Sclose(mspace);
+    H5Sclose(fspace);
+    if (e < 0)
+      throw InputError(path_, field_, "block x " + std::to_string(b.lo[0]) + ", y " + std::to_string(b.lo[1]) + ", z " + std::to_string(b.lo[2]),
+                       "read failed (a damaged or truncated file?)");
+  }
+  hid_t file_ = -1, ds_ = -1;
+  std::array<std::size_t, 3> chunk_{0, 0, 0};
 };
 
 // The block grid: cores of `chunk` voxels per side (the last ones shorter), in x-fastest order.
@@ -237,15 +330,16 @@ struct MemoryModel {
 // Grains (grains_halo > 0): the ITK distance map, h-maxima, markers and watershed of one block
 // with its halo, 40 bytes per voxel (measured, docs/segment.md); the stages run one after the other.
 constexpr double kGrainsBytesPerBlockVoxel = 40;
-MemoryModel memory_model(const Dims& d, std::size_t chunk, std::size_t halo, bool phase2, std::size_t type_bytes,
+MemoryModel memory_model(const Dims& d, std::size_t chunk, std::size_t halo, bool phase2, const BlockSource& src,
                          std::size_t grains_halo = 0) {
+  const std::size_t type_bytes = src.type_bytes();
   const double N = double(d.nx) * double(d.ny) * double(d.nz);
   const double words = double((d.nx + 63) / 64) * double(d.ny) * double(d.nz) * 8;
   MemoryModel m;
   m.fixed = words * (phase2 ? 3 : 2) + 2.0 * 4 * double(d.nx) * double(d.ny) + 64e6;  // bits, faces, process
   (void)N;
   const double s = double(chunk + 2 * halo), c = double(chunk);
-  m.per_block = s * s * s * (6 + double(std::min<std::size_t>(type_bytes, 8)) / 2) + c * c * c * 15;
+  m.per_block = s * s * s * (6 + double(std::min<std::size_t>(type_bytes, 8)) / 2) + c * c * c * 15 + src.reader_bytes();
   if (grains_halo > 0) {
     const double g = double(chunk + 2 * grains_halo);
     m.per_block = std::max(m.per_block, g * g * g * kGrainsBytesPerBlockVoxel + c * c * c * 19);
@@ -376,7 +470,8 @@ class LabelsWriter {
 // What the chunked path does not do (yet): refused before any work, naming the option.
 void refuse_unsupported(const SegmentConfig& c, const std::string& format) {
   const std::string why = "is not available with --chunk/--memory (the chunked path, docs/segment.md \"Volumes larger than memory\")";
-  if (format != "raw") throw InputError(c.input, "format", format, "the chunked path reads raw files only (--raw-dims, by block); " + why);
+  if (format != "raw" && format != "h5")
+    throw InputError(c.input, "format", format, "the chunked path reads raw files only (--raw-dims) or HDF5 datasets (--dataset), by block; " + why);
   if (c.filter != ImageFilter::median && c.filter != ImageFilter::none)
     throw InputError("", "--filter", to_string(c.filter), why + "; use median or none");
   if (c.method == ThresholdMethod::hysteresis) throw InputError("", "--method", "hysteresis", why);
@@ -401,22 +496,26 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
     times[stage] = std::chrono::duration<double>(t - last).count();
     last = t;
   };
-  std::string format = ro.format == VolumeFormat::automatic ? "" : to_string(ro.format);
-  if (format.empty()) {
-    std::string l = cfg.input;
-    for (auto& ch : l) ch = char(std::tolower(static_cast<unsigned char>(ch)));
-    for (const char* e : {".raw", ".bin", ".vol"})
-      if (l.size() > 4 && l.compare(l.size() - 4, 4, e) == 0) format = "raw";
-    if (format.empty()) format = fs::path(cfg.input).extension().string();
-  }
+  const std::string format = input_format(cfg.input, ro);
   refuse_unsupported(cfg, format);
-  if (!(ro.spacing[0] > 0)) throw InputError(cfg.input, "spacing", "", "raw carries no voxel size; give --spacing (e.g. 60.7um)");
-  RawBlocks src(cfg.input, ro);
+  // The voxel size and origin: --spacing for raw; an HDF5 dataset's attributes or --spacing.
+  VolumeGeometry vg{ro.spacing, {0, 0, 0}, "--spacing", ""};
+  std::unique_ptr<BlockSource> source;
+  if (format == "h5") {
+    if (!fs::is_regular_file(cfg.input)) throw InputError(cfg.input, "", "", "no such file");
+    source = std::make_unique<H5Blocks>(cfg.input, ro.h5_dataset);
+    vg = h5_geometry(cfg.input, ro);
+  } else {
+    if (!(ro.spacing[0] > 0)) throw InputError(cfg.input, "spacing", "", "raw carries no voxel size; give --spacing (e.g. 60.7um)");
+    source = std::make_unique<RawBlocks>(cfg.input, ro);
+  }
+  BlockSource& src = *source;
   const Dims D = src.dims();
   Volume geom;  // geometry only (spacing, origin) for the helpers that take a volume
   geom.dims = D;
-  geom.spacing = ro.spacing;
-  const double finest = std::min({ro.spacing[0], ro.spacing[1], ro.spacing[2]});
+  geom.spacing = vg.spacing;
+  const auto& sp = vg.spacing;
+  const double finest = std::min({sp[0], sp[1], sp[2]});
 
   // Halos: the median's box, and 2r + 2 for the macropores (segment.hpp, macropore_mask).
   std::array<int, 3> fr{0, 0, 0};
@@ -444,9 +543,9 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
   const std::size_t biggest = std::max({D.nx, D.ny, D.nz});
   if (chunk == 0) {
     for (std::size_t c = 32; c <= biggest + 31; c += 32)
-      if (memory_model(D, c, halo, phase2, src.type_bytes(), grains_guess).total() <= budget) chunk = c;
+      if (memory_model(D, c, halo, phase2, src, grains_guess).total() <= budget) chunk = c;
     if (chunk == 0) {
-      const MemoryModel m = memory_model(D, std::max<std::size_t>(halo, 32), halo, phase2, src.type_bytes(), grains_guess);
+      const MemoryModel m = memory_model(D, std::max<std::size_t>(halo, 32), halo, phase2, src, grains_guess);
       throw InputError("", "--memory", cfg.as_written.count("--memory") ? cfg.as_written.at("--memory") : cfg.memory_text,
                        "is below what one block needs: " + bytes_text(m.total()) + " for the smallest block (" +
                            std::to_string(std::max<std::size_t>(halo, 32)) + " voxels per side with a halo of " +
@@ -461,7 +560,7 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
                          ", macropores 2r + 2 = " + std::to_string(mhalo) + " at r = " + num(macro_r) +
                          " voxels): a block would be mostly halo; give --chunk >= " + std::to_string(halo));
   chunk = std::min(chunk, biggest);
-  MemoryModel mem = memory_model(D, chunk, halo, phase2, src.type_bytes(), grains_guess);
+  MemoryModel mem = memory_model(D, chunk, halo, phase2, src, grains_guess);
   if (budget > 0 && mem.total() > budget)
     throw InputError("", "--memory", cfg.as_written.count("--memory") ? cfg.as_written.at("--memory") : cfg.memory_text,
                      "is below what --chunk " + std::to_string(chunk) + " needs: " + bytes_text(mem.total()) + " (" +
@@ -477,7 +576,7 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
   // Filters block k: calls f(block volume, its box, the core box) for the core's filtered values.
   const auto filtered = [&](auto&& f) {
     Volume b;
-    b.spacing = ro.spacing;
+    b.spacing = sp;
     for (std::size_t k = 0; k < G.count(); ++k) {
       const Box core = G.core(k), outer = core.grown(fh, D);
       src.read(outer, b);
@@ -526,10 +625,10 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
   done("filter_histogram");
 
   Summary summary("tomodem-segment");
-  const auto range = type_range(to_string(ro.raw_type));
-  summary.input(cfg.input, {{"format", "raw"}, {"pixel_type", to_string(ro.raw_type)}, {"files", 1},
-                            {"dims", {D.nx, D.ny, D.nz}}, {"spacing_m", ro.spacing}, {"origin_m", {0.0, 0.0, 0.0}},
-                            {"spacing_source", "--spacing"}, {"value_range", {src.vmin, src.vmax}}, {"type_range", {range[0], range[1]}}});
+  const auto range = type_range(to_string(src.type()));
+  summary.input(cfg.input, {{"format", format}, {"pixel_type", to_string(src.type())}, {"files", 1},
+                            {"dims", {D.nx, D.ny, D.nz}}, {"spacing_m", sp}, {"origin_m", vg.origin},
+                            {"spacing_source", vg.spacing_source}, {"value_range", {src.vmin, src.vmax}}, {"type_range", {range[0], range[1]}}});
   json filt{{"name", to_string(cfg.filter)}};
   if (cfg.filter == ImageFilter::median) {
     filt["radius_vox"] = radius;
@@ -585,7 +684,6 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
         }
       }
   }
-  const auto& sp = ro.spacing;
   const double surface = specific_surface(fx, fy, fz, D, sp);
 
   // 3. Macropore voxels, block by block with the 2r + 2 halo.
@@ -593,7 +691,7 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
   {
     const std::array<std::size_t, 3> mh{mhalo, mhalo, mhalo};
     Mask pores;
-    pores.spacing = ro.spacing;
+    pores.spacing = sp;
     for (std::size_t k = 0; k < G.count(); ++k) {
       const Box core = G.core(k), outer = core.grown(mh, D);
       pores.dims = outer.dims();
@@ -705,7 +803,7 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
   go.h = cfg.h;
   const auto solid_block = [&](const Box& outer, Mask& m) {
     m.dims = outer.dims();
-    m.spacing = ro.spacing;
+    m.spacing = sp;
     m.origin = {0, 0, 0};
     m.v.resize(m.dims.count());
     std::size_t i = 0;
@@ -743,7 +841,7 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
     }
     ghalo = std::size_t(std::ceil(2 * inscribed_max)) + 4;
     done("grains_radius");
-    mem = memory_model(D, chunk, halo, phase2, src.type_bytes(), ghalo);
+    mem = memory_model(D, chunk, halo, phase2, src, ghalo);
     if (budget > 0 && mem.total() > budget)
       throw InputError("", "--memory", cfg.as_written.count("--memory") ? cfg.as_written.at("--memory") : cfg.memory_text,
                        "is below what grain separation needs with --chunk " + std::to_string(chunk) + ": " + bytes_text(mem.total()) +
@@ -854,7 +952,7 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
     // The widest halo a block may take: what the budget (or twice the plan) allows.
     const double limit = budget > 0 ? budget : 2 * mem.total();
     std::size_t cap = ghalo;
-    while (memory_model(D, chunk, halo, phase2, src.type_bytes(), 2 * cap).total() <= limit) cap *= 2;
+    while (memory_model(D, chunk, halo, phase2, src, 2 * cap).total() <= limit) cap *= 2;
     Mask m;
     Labels markers, L;
     std::vector<int32_t> ids;
@@ -941,12 +1039,12 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
     }
     done("outputs_blocks");
     if (out) {
-      out->finish(ro.spacing, {0, 0, 0}, legend);
+      out->finish(sp, vg.origin, legend);
       out.reset();
       commit_output(cfg.output);
       std::vector<XdmfField> fields{{"labels", "/labels", "UChar", 1}, {"macropores", "/macropores", "Int", 4}};
       if (cfg.grains) fields.push_back({"grains", "/grains", "Int", 4});
-      write_volume_xdmf(cfg.output, {D.nx, D.ny, D.nz}, {0, 0, 0}, ro.spacing, fields);
+      write_volume_xdmf(cfg.output, {D.nx, D.ny, D.nz}, vg.origin, sp, fields);
     }
   } catch (...) {
     out.reset();
@@ -975,7 +1073,7 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
       auto& R = regs[k];
       R.label = int(k + 1);
       const double c = double(R.voxels);
-      R.centroid = {sum[k][0] / c * sp[0], sum[k][1] / c * sp[1], sum[k][2] / c * sp[2]};
+      R.centroid = {vg.origin[0] + sum[k][0] / c * sp[0], vg.origin[1] + sum[k][1] / c * sp[1], vg.origin[2] + sum[k][2] / c * sp[2]};
       R.volume_m3 = c * vox;
       R.equivalent_diameter_m = std::cbrt(6.0 * R.volume_m3 / M_PI);
     }
@@ -988,17 +1086,20 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
       R.label = int(k + 1);
       if (!R.voxels) continue;
       const double c = double(R.voxels);
-      R.centroid = {grain_sum[k][0] / c * sp[0], grain_sum[k][1] / c * sp[1], grain_sum[k][2] / c * sp[2]};
+      R.centroid = {vg.origin[0] + grain_sum[k][0] / c * sp[0], vg.origin[1] + grain_sum[k][1] / c * sp[1],
+                    vg.origin[2] + grain_sum[k][2] / c * sp[2]};
       R.volume_m3 = c * vox;
       R.equivalent_diameter_m = std::cbrt(6.0 * R.volume_m3 / M_PI);
     }
-    Packing packing = grains_packing(grain_regs, inscribed, n_phase2, D, sp, {0, 0, 0}, phase2, cfg.h, summary);
+    Packing packing = grains_packing(grain_regs, inscribed, n_phase2, D, sp, vg.origin, phase2, cfg.h, summary);
     summary.n_particles(packing.particles.size());
     write_grains_packing(cfg, packing, summary);
   }
   summary["chunked"] = {{"chunk_vox", chunk}, {"halo_vox", halo}, {"blocks", G.count()},
                         {"memory_budget_bytes", budget > 0 ? json(budget) : json(nullptr)},
-                        {"planned_memory_bytes", mem.total()}, {"histogram_passes", exact ? 1 : 2}};
+                        {"planned_memory_bytes", mem.total()}, {"histogram_passes", exact ? 1 : 2},
+                        {"largest_read_voxels", src.largest_read}};
+  if (const auto* h5 = dynamic_cast<const H5Blocks*>(&src)) summary["chunked"]["input_h5_chunk_vox"] = h5->chunk();
   if (cfg.grains) {
     summary["chunked"]["grains_halo_vox"] = ghalo;
     summary["chunked"]["largest_inscribed_radius_vox"] = inscribed_max;

@@ -177,6 +177,27 @@ Volume read_raw(const std::string& path, const ReadOptions& o, ReadInfo* info) {
   return v;
 }
 
+// The dataset's spacing and origin attributes in m (the root attribute `units`; metres when
+// absent); returns whether it has a spacing.
+bool h5_attributes(const h5::File& f, const std::string& path, const ReadOptions& o, VolumeGeometry& g) {
+  const bool has_geometry = f.has_attr(o.h5_dataset, "spacing") || f.has_attr(o.h5_dataset, "origin");
+  // Lengths in the file's unit (root attribute `units`); files without it were written in metres.
+  const double u = has_geometry ? h5_length_unit(f, o.spacing[0] == 0) : 1.0;
+  if (f.has_attr("/", "units")) g.length_unit = f.attr_string("/", "units");
+  bool has_spacing = false;
+  if (f.has_attr(o.h5_dataset, "spacing")) {
+    const auto s = f.attr_doubles(o.h5_dataset, "spacing");
+    if (s.size() != 3) throw InputError(path, o.h5_dataset + "@spacing", "", "expected 3 values (x, y, z) in m");
+    g.spacing = {s[0] * u, s[1] * u, s[2] * u};
+    has_spacing = true;
+  }
+  if (f.has_attr(o.h5_dataset, "origin")) {
+    const auto s = f.attr_doubles(o.h5_dataset, "origin");
+    if (s.size() == 3) g.origin = {s[0] * u, s[1] * u, s[2] * u};
+  }
+  return has_spacing;
+}
+
 Volume read_h5(const std::string& path, const ReadOptions& o, bool* has_spacing, std::string* unit) {
   h5::File f(path, h5::File::Mode::read);
   std::vector<std::size_t> d = f.shape(o.h5_dataset);  // InputError naming the dataset when missing
@@ -189,21 +210,11 @@ Volume read_h5(const std::string& path, const ReadOptions& o, bool* has_spacing,
     throw InputError(path, o.h5_dataset, std::to_string(data.size()) + " values", "does not match its shape");
   Volume v(Dims{d[2], d[1], d[0]});
   for (std::size_t i = 0; i < data.size(); ++i) v.v[i] = static_cast<float>(data[i]);
-  *has_spacing = false;
-  const bool has_geometry = f.has_attr(o.h5_dataset, "spacing") || f.has_attr(o.h5_dataset, "origin");
-  // Lengths in the file's unit (root attribute `units`); files without it were written in metres.
-  const double u = has_geometry ? h5_length_unit(f, o.spacing[0] == 0) : 1.0;
-  if (f.has_attr("/", "units")) *unit = f.attr_string("/", "units");
-  if (f.has_attr(o.h5_dataset, "spacing")) {
-    const auto s = f.attr_doubles(o.h5_dataset, "spacing");
-    if (s.size() != 3) throw InputError(path, o.h5_dataset + "@spacing", "", "expected 3 values (x, y, z) in m");
-    v.spacing = {s[0] * u, s[1] * u, s[2] * u};
-    *has_spacing = true;
-  }
-  if (f.has_attr(o.h5_dataset, "origin")) {
-    const auto s = f.attr_doubles(o.h5_dataset, "origin");
-    if (s.size() == 3) v.origin = {s[0] * u, s[1] * u, s[2] * u};
-  }
+  VolumeGeometry g;
+  *has_spacing = h5_attributes(f, path, o, g);
+  v.spacing = g.spacing;
+  v.origin = g.origin;
+  *unit = g.length_unit;
   return v;
 }
 
@@ -300,8 +311,7 @@ void check_read_options(const ReadOptions& o) {
 }
 
 std::vector<std::string> input_files(const std::string& input, const ReadOptions& o) {
-  std::string format = (o.format == VolumeFormat::automatic) ? detect_format(input) : to_string(o.format);
-  if (format == "tiff" && (input.find_first_of("*?") != std::string::npos || fs::is_directory(input))) format = "tiff-stack";
+  const std::string format = input_format(input, o);
   if (format == "tiff-stack") return stack_files(input);
   if (format == "dicom") {  // every file of the folder (the series is found when it is read)
     std::vector<std::string> files;
@@ -334,12 +344,34 @@ void check_finite(const Volume& v, const std::string& file, const std::string& f
 }
 }  // namespace
 
+std::string input_format(const std::string& input, const ReadOptions& o) {
+  const std::string format = (o.format == VolumeFormat::automatic) ? detect_format(input) : to_string(o.format);
+  if (format == "tiff" && (input.find_first_of("*?") != std::string::npos || fs::is_directory(input))) return "tiff-stack";
+  return format;
+}
+
+VolumeGeometry h5_geometry(const std::string& path, const ReadOptions& o) {
+  h5::File f(path, h5::File::Mode::read);
+  VolumeGeometry g;
+  const bool header_spacing = h5_attributes(f, path, o, g);
+  if (o.spacing[0] > 0) {  // as read_volume: --spacing wins; the origin stays only with a header spacing
+    g.spacing = o.spacing;
+    if (!header_spacing) g.origin = {0, 0, 0};
+    g.spacing_source = "--spacing";
+  } else if (header_spacing) {
+    for (double s : g.spacing)
+      if (!(s > 0) || !std::isfinite(s)) throw InputError(path, "spacing", std::to_string(s), "invalid voxel size in header");
+    g.spacing_source = "header";
+  } else {
+    throw InputError(path, "spacing", "", "h5 carries no voxel size; give --spacing (e.g. 60.7um)");
+  }
+  return g;
+}
+
 Volume read_volume(const std::string& input, const ReadOptions& o, ReadInfo* info_out) {
   check_read_options(o);
   ReadInfo info;
-  info.format = (o.format == VolumeFormat::automatic) ? detect_format(input) : to_string(o.format);
-  if (info.format == "tiff" && (input.find_first_of("*?") != std::string::npos || fs::is_directory(input)))
-    info.format = "tiff-stack";
+  info.format = input_format(input, o);
   const bool folder_format = info.format == "tiff-stack" || info.format == "dicom";
   if (info.format == "dicom" && !fs::is_directory(input))
     throw InputError(input, "", "", "a DICOM series is read from its folder: give the folder that holds the slices");

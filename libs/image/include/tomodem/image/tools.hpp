@@ -97,7 +97,7 @@ struct SegmentConfig {
 /// Runs the whole segmentation; returns the JSON summary (also written to cfg.json when set).
 /// With --chunk or --memory: run_segment_chunked.
 std::string run_segment(const SegmentConfig& cfg);
-/// The out-of-core path (chunked.cpp): a raw volume read and processed in blocks with halos,
+/// The out-of-core path (chunked.cpp): a raw or HDF5 volume read and processed in blocks with halos,
 /// labels written block by block; the same labels as run_segment. `ro`: checked read options.
 std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro);
 /// Writes the grains' packing to cfg.packing (nothing when it is empty), with its provenance.

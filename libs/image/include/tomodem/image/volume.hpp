@@ -129,6 +129,19 @@ std::vector<std::string> input_files(const std::string& input, const ReadOptions
 /// spacing that is not finite and > 0, an empty --roi region, a --dataset not starting with '/'.
 void check_read_options(const ReadOptions& opt);
 
+/// The format read_volume reads `input` as: tiff-stack | tiff | mha | nrrd | nifti | raw | h5 | dicom.
+std::string input_format(const std::string& input, const ReadOptions& opt);
+
+/// An HDF5 input's voxel size and origin (m) as read_volume gives them: the dataset's `spacing`
+/// and `origin` attributes (x y z) in the file's root attribute `units`, or opt.spacing, which
+/// overrides them. InputError when neither gives a voxel size.
+struct VolumeGeometry {
+  std::array<double, 3> spacing{0, 0, 0}, origin{0, 0, 0};
+  std::string spacing_source;  ///< header | --spacing
+  std::string length_unit;     ///< the file's root attribute `units`; "" = none
+};
+VolumeGeometry h5_geometry(const std::string& path, const ReadOptions& opt);
+
 /// Crop to [x0, x0+nx) × … and block-average by `factor` (origin and spacing follow).
 Volume crop(const Volume& v, const std::array<std::size_t, 6>& roi);
 Volume downsample(const Volume& v, int factor);
