@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <climits>
 #include <limits>
 #include <cmath>
@@ -214,6 +215,14 @@ QuasiStaticResult enthalpy(dem::Simulation& sim, const PackSpec& spec, double vs
   };
   dem::FireOptions fo = rs.fo;
   double phi = vsolid / sim.cell().volume();
+  // CPU seconds of each stage and relaxation in the log lines: where a run's time goes.
+  std::clock_t c0 = std::clock();
+  const auto cpu_since = [&c0] {
+    const std::clock_t c = std::clock();
+    const double s = double(c - c0) / CLOCKS_PER_SEC;
+    c0 = c;
+    return ", " + num(s) + " s CPU";
+  };
   for (int k = stages; k >= 0 && out.steps < spec.max_steps; --k) {
     const bool last_stage = k == 0;
     eo.pressure = pt * std::pow(kStageFactor, k);
@@ -228,7 +237,7 @@ QuasiStaticResult enthalpy(dem::Simulation& sim, const PackSpec& spec, double vs
     phi = vsolid / sim.cell().volume();
     say("enthalpy FIRE at " + num(eo.pressure) + " Pa: " + (r.converged ? "converged" : "stopped") + " after " +
         std::to_string(r.steps) + " steps, phi " + num(phi) + ", p " + num(-r.last.stress_contact.trace() / 3) +
-        " Pa, unbalanced " + num(r.last.unbalanced_force_ratio));
+        " Pa, unbalanced " + num(r.last.unbalanced_force_ratio) + cpu_since());
   }
   const auto q_of = [&](double p) { return p > 0 ? std::pow(p, 1 / (alpha - 1)) : 0.0; };
   const double qt = q_of(pt);
@@ -253,7 +262,8 @@ QuasiStaticResult enthalpy(dem::Simulation& sim, const PackSpec& spec, double vs
     out.last = f.last;
     const double p = f.below_floor ? 0.0 : std::max(f.last.pressure, 0.0);
     bar.update(pressure_progress(p, pt, log_start), "phi " + num(phi) + ", p " + num(p) + " Pa");
-    say("relaxed at phi " + num(phi) + ": p " + num(p) + " Pa, Z " + num(f.last.coordination) + ", " + std::to_string(f.steps) + " steps");
+    say("relaxed at phi " + num(phi) + ": p " + num(p) + " Pa, Z " + num(f.last.coordination) + ", unbalanced " +
+        num(f.last.unbalanced_force_ratio) + ", " + std::to_string(f.steps) + " steps" + cpu_since());
     if (f.converged && std::abs(p / pt - 1) < kPressureTolerance) {
       out.converged = true;
       break;
