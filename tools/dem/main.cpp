@@ -165,19 +165,30 @@ int run(int argc, char** argv) {
   if (!scene.outputs.checkpoint.empty())  // on ranks, collective: every rank writes its particles
     dem::write_checkpoint(out(scene.outputs.checkpoint), *scene.sim, scene.text, rows);
   const json fields_summary = cg && rank0 ? json::parse(cg->write(*scene.sim, scene.text)) : json();
-#if TOMODEM_HAVE_MPI
-  Packing packing = dem::gather_packing(*scene.sim, scene.materials);  // to_packing when not decomposed
-  if (!rank0) return 0;  // the gathered state and the reduced measurements are rank 0's to write
-#else
-  Packing packing = dem::to_packing(*scene.sim, scene.materials);
-#endif
   const long step = scene.sim->step_count();
   const int threads_used = scene.sim->settings().threads;
   const double time_step = scene.sim->time_step();
   const bool track_energy = scene.sim->settings().track_energy;
-  if (ranks == 1) {  // (decomposed, the engine's destructor may talk to the other ranks: kept)
+  Packing packing;
+  if (ranks == 1) {
+    // The engine's last use: dem::to_packing's fields, the particle arrays moved instead of copied,
+    // then the engine freed (decomposed, its destructor may talk to the other ranks: kept).
+    packing.contacts = scene.sim->contacts();
+    dem::Particles& p = scene.sim->particles();
+    packing.particles.position = std::move(p.x);
+    packing.particles.radius = std::move(p.r);
+    packing.particles.phase = std::move(p.phase);
+    packing.particles.velocity = std::move(p.v);
+    if (p.has_rotation()) packing.particles.angular_velocity = std::move(p.omega);
+    packing.cell = scene.sim->cell();
+    packing.materials = scene.materials;
     cg.reset();
     scene.sim.reset();
+  } else {
+#if TOMODEM_HAVE_MPI
+    packing = dem::gather_packing(*scene.sim, scene.materials);
+    if (!rank0) return 0;  // the gathered state and the reduced measurements are rank 0's to write
+#endif
   }
   packing.provenance.tool = "tomodem-dem";
   packing.provenance.version = version_string();

@@ -363,6 +363,12 @@ ContactTable Simulation::contacts() {
     s.measure_now(&force, true);  // not rebuilt inside: rebuild_if_due() above found it current
     in_contact.swap();
   }
+  // The force pass's per-thread buffers are scratch (zero between passes, allocated again by the
+  // next one): freed, so that the table below and the caller's copies do not stack on them.
+  ForceLoop released;
+  released.last = s.forces.last;
+  released.stiffness.swap(s.forces.stiffness);
+  s.forces = std::move(released);
   ContactTable ct;
   ct.i.reserve(count);
   ct.j.reserve(count);
