@@ -12,7 +12,7 @@
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/packing_io.hpp"
 #include "tomodem/dem/law_registry.hpp"
-#include "tomodem/geometry/laguerre.hpp"
+#include "tomodem/geometry/laguerre_faces.hpp"
 
 namespace tomodem::mechanics {
 
@@ -146,25 +146,14 @@ void override_materials(Packing& p, const std::optional<double>& youngs_modulus,
 }
 
 std::vector<double> bond_face_areas(const Packing& p) {
-  const std::size_t m = p.bonds.size(), n = p.particles.size();
+  const std::size_t m = p.bonds.size();
   std::vector<double> area(m, 0.0);
   if (m == 0) return area;
-  const std::vector<geometry::LaguerreFace> faces =
-      geometry::laguerre_faces(p.particles.position, p.particles.radius, p.cell);
-  std::vector<std::vector<std::size_t>> of(n);  // faces of each particle's cell
-  for (std::size_t f = 0; f < faces.size(); ++f) of[std::size_t(faces[f].i)].push_back(f);
-  for (std::size_t b = 0; b < m; ++b) {
-    // The face between i and the image of j at the bond's length (several images of j can
-    // neighbour i in a small cell; an unloaded network has its bonds at their rest lengths).
-    double best = HUGE_VAL;
-    for (std::size_t f : of[std::size_t(p.bonds.i[b])]) {
-      if (faces[f].j != p.bonds.j[b]) continue;
-      const double miss = std::abs(norm(faces[f].offset) - p.bonds.rest_length[b]);
-      if (miss < best) best = miss, area[b] = faces[f].area;
-    }
-    // No face within 1e-6 of the length: the pair's radical disc lies inside other cells.
-    if (best > 1e-6 * p.bonds.rest_length[b]) area[b] = 0;
-  }
+  const geometry::LaguerreFaces faces(p.particles.position, p.particles.radius, p.cell);
+  // The face of j's image at the bond's length (several images of j can neighbour i in a small
+  // cell; an unloaded network has its bonds at their rest lengths).
+  for (std::size_t b = 0; b < m; ++b)
+    area[b] = faces.area_at_distance(p.bonds.i[b], p.bonds.j[b], p.bonds.rest_length[b]);
   return area;
 }
 

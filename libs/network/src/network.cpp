@@ -7,7 +7,7 @@
 #include <unordered_set>
 
 #include "tomodem/core/error.hpp"
-#include "tomodem/geometry/laguerre.hpp"
+#include "tomodem/geometry/laguerre_faces.hpp"
 #include "tomodem/spatial/grid.hpp"
 #include "tomodem/spatial/overlap.hpp"
 
@@ -187,32 +187,6 @@ void add_contact_edges(const Packing& pk, const NetworkOptions& opt, const std::
   }
 }
 
-/// Whether the centres, with the periodic cell vectors, span three dimensions. A chain or a layer
-/// in an open cell has unbounded power cells (every face reaches the hull: nothing to cap), and
-/// CGAL's triangulation of it is not three-dimensional.
-bool spans_space(const Packing& pk) {
-  const Vec3 x0 = pk.particles.position[0];
-  std::vector<Vec3> d;
-  for (const Vec3& x : pk.particles.position) d.push_back(x - x0);
-  for (int k = 0; k < 3; ++k)
-    if (pk.cell.periodic[k]) d.push_back(pk.cell.h.col(k));
-  const auto farthest = [&](const auto& dist) {
-    double best = 0;
-    Vec3 arg;
-    for (const Vec3& v : d)
-      if (dist(v) > best) best = dist(v), arg = v;
-    return std::make_pair(best, arg);
-  };
-  const auto [l1, v1] = farthest([](const Vec3& v) { return norm(v); });
-  if (!(l1 > 0)) return false;
-  const Vec3 u1 = v1 * (1 / l1);
-  const auto [l2, v2] = farthest([&](const Vec3& v) { return norm(v - dot(v, u1) * u1); });
-  if (!(l2 > 1e-12 * l1)) return false;
-  Vec3 n = cross(u1, v2);
-  n *= 1 / norm(n);
-  return farthest([&](const Vec3& v) { return std::abs(dot(v, n)); }).first > 1e-12 * l1;
-}
-
 /// The dense-network cap: each edge's conductance is at most face_conductance() of the face its
 /// pair shares in the radical tessellation of the whole packing (every phase: a face shrinks
 /// where any neighbour's cell takes space); edges whose pair shares no face (their neck disc lies
@@ -220,28 +194,19 @@ bool spans_space(const Packing& pk) {
 void cap_at_faces(const Packing& pk, Network& net) {
   const std::size_t m = net.n_edges();
   if (m == 0) return;
-  if (!spans_space(pk)) {
+  const geometry::LaguerreFaces faces(pk.particles.position, pk.particles.radius, pk.cell);
+  if (!faces.spans_space()) {  // a chain or a layer in an open cell: every face open
     net.face_area.assign(m, HUGE_VAL);
     return;
   }
-  const std::vector<geometry::LaguerreFace> faces =
-      geometry::laguerre_faces(pk.particles.position, pk.particles.radius, pk.cell);
-  std::vector<std::vector<std::size_t>> of(pk.particles.size());  // faces of each particle's cell
-  for (std::size_t f = 0; f < faces.size(); ++f) of[std::size_t(faces[f].i)].push_back(f);
   Network out;  // the kept edges
   out.graph.n_nodes = net.graph.n_nodes;
   for (std::size_t e = 0; e < m; ++e) {
     const int32_t a = net.graph.i[e], b = net.graph.j[e];
     const Vec3 d = net.branch(e);
     const double L = norm(d);
-    // The face between i and the image of j this edge joins (several images of j can neighbour
-    // i in a small cell): its offset is the branch vector, to round-off.
-    double area = 0;
-    for (std::size_t f : of[std::size_t(net.particle[a])])
-      if (faces[f].j == net.particle[b] && norm(faces[f].offset - d) <= 1e-9 * L) {
-        area = faces[f].area;
-        break;
-      }
+    // The face between i and the image of j this edge joins: its offset is the branch vector.
+    const double area = faces.area(net.particle[a], net.particle[b], d);
     // Cells that meet in an edge or a corner only (e.g. FCC's second shell at contact) come out of
     // CGAL as degenerate faces of ~1e-43 m²: no face.
     if (!(area > 1e-12 * L * L)) {

@@ -138,3 +138,35 @@ TEST(DenseStrength, BrokenBondsHoldAtMostTheirFacesEnergy) {
               r.events.size(), capped, worst, r.K_IC);
   EXPECT_GT(capped, 0);  // the check is about capped bonds: some of them must break
 }
+
+// A chain and a layer of bonded spheres in an open cell have no three-dimensional tessellation
+// (geometry::LaguerreFaces leaves every face open): the face-capped law falls back to the
+// isolated necks, stiffness and section alike, without calling CGAL on a flat point set.
+TEST(DenseStrength, ChainsAndLayersInAnOpenCellKeepTheIsolatedNecks) {
+  const double R = 1e-6;
+  const std::vector<std::vector<Vec3>> shapes{{{0, 0, 0}, {1.8 * R, 0, 0}, {3.6 * R, 0, 0}},
+                                              {{0, 0, 0}, {1.8 * R, 0, 0}, {0, 1.8 * R, 0}, {1.8 * R, 1.8 * R, 0}}};
+  for (const std::vector<Vec3>& x : shapes) {
+    Network net;
+    Packing& p = net.packing;
+    for (const Vec3& c : x) {
+      p.particles.position.push_back(c);
+      p.particles.radius.push_back(R);
+      p.particles.phase.push_back(0);
+    }
+    p.cell = Cell::box({-10 * R, -10 * R, -10 * R}, {10 * R, 10 * R, 10 * R}, false);
+    p.materials = {alumina()};
+    bond_ratio(net, 0.4);
+    ASSERT_EQ(p.bonds.size(), x.size() - 1 + (x.size() == 4 ? 1 : 0));
+    FailureOptions f;
+    const std::vector<dem::BondLaw> laws = lefm_laws(p, f);
+    std::vector<double> section;
+    const BondStiffnesses k = bond_stiffnesses(p, laws, section);
+    EXPECT_EQ(k.face_capped, 0);
+    EXPECT_EQ(k.no_face, 0);
+    for (std::size_t b = 0; b < p.bonds.size(); ++b) {
+      EXPECT_EQ(k.kn[b], dem::bond_stiffness(laws[0], p.bonds.radius[b], R, R).kn);  // same formula: exact
+      EXPECT_EQ(section[b], p.bonds.radius[b]);
+    }
+  }
+}
