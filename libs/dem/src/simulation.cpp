@@ -298,6 +298,7 @@ namespace {
 /// Arrays of a neighbour list swapped in for one pass: a second swap (or the destructor, when
 /// the pass throws) puts the list's own arrays back.
 struct SwappedList {
+  explicit SwappedList(NeighbourList& list) : nl(list) {}
   NeighbourList& nl;
   std::vector<int32_t> start, nj, owner;
   std::vector<uint8_t> img, touch;
