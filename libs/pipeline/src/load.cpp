@@ -179,7 +179,7 @@ class Vars {
   std::vector<std::string> get(const std::string& name, int depth = 0) const {
     if (depth > 32) throw RefError{"variables refer to each other in a cycle"};
     const auto it = vars_.find(name);
-    if (it == vars_.end()) throw RefError{"unknown variable 'vars." + name + "'"};
+    if (it == vars_.end()) throw RefError{"unknown variable 'vars." + name + "'" + known_under(name)};
     const YAML::Node& n = it->second.node;
     const auto inner = [&](const std::string& r) {
       if (r.rfind("vars.", 0) != 0) throw RefError{"a variable can only refer to other variables"};
@@ -200,6 +200,22 @@ class Vars {
   }
 
  private:
+  // For a missing `a.b.c`: the keys the nearest existing map `a.b` or `a` has, so a computed
+  // name (`${vars.scales.${vars.scale}.particles}`) with an unknown value lists the known ones.
+  std::string known_under(const std::string& name) const {
+    for (auto dot = name.rfind('.'); dot != std::string::npos && dot > 0; dot = name.rfind('.', dot - 1)) {
+      const std::string map = name.substr(0, dot + 1);
+      std::set<std::string> keys;
+      for (auto it = vars_.lower_bound(map); it != vars_.end() && it->first.compare(0, map.size(), map) == 0; ++it)
+        keys.insert(it->first.substr(map.size(), it->first.find('.', map.size()) - map.size()));
+      if (keys.empty()) continue;
+      std::string list;
+      for (const auto& k : keys) list += (list.empty() ? "" : ", ") + k;
+      return " (vars." + name.substr(0, dot) + " has: " + list + ")";
+    }
+    return "";
+  }
+
   const std::map<std::string, Var>& vars_;
 };
 

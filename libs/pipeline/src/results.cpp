@@ -141,6 +141,8 @@ std::string make_row(const std::vector<std::string>& values, const std::vector<s
     const auto [name, file] = split_eq(item, "--summary");
     for (const auto& [k, v] : flatten_json(read_file(file, "--summary " + name), name, file)) put(k, v);
   }
+  // The step that wrote the row (set by the runner): the report matches adaptive stops by it.
+  if (const char* step = std::getenv("TOMODEM_STEP"); step && *step && !row.contains("step")) row["step"] = step;
   return row.dump(1) + "\n";
 }
 
@@ -337,8 +339,9 @@ bool is_property(const std::string& c, const std::vector<std::string>& group) {
          c.find("_error") == std::string::npos && !ends("_time_s") && !ends("_bytes");
 }
 
-// One adaptive-replica cell from the runner's record: its matrix values and why it stopped.
+// One adaptive-replica cell from the runner's record: its step, matrix values and why it stopped.
 struct Stop {
+  std::string step;
   std::map<std::string, std::string> matrix;
   std::string because;
   std::size_t n = 0;
@@ -351,6 +354,7 @@ std::vector<Stop> read_stops(const std::string& file) {
     const json j = json::parse(read_file(file, "--replicas"));
     for (const auto& g : j.at("groups")) {
       Stop s;
+      s.step = g.at("step").get<std::string>();
       for (auto it = g.at("matrix").begin(); it != g.at("matrix").end(); ++it) s.matrix[it.key()] = it.value().get<std::string>();
       s.because = g.at("stopped_because").get<std::string>();
       s.n = g.at("n").get<std::size_t>();
@@ -368,8 +372,9 @@ bool same_value(const std::string& a, const std::string& b) {
   return x.number && y.number && x.x == y.x;
 }
 
-// The rows that share the group values: the replicas of one cell.
+// The rows of one step that share the group values: the replicas of one cell.
 struct Cell {
+  std::string step;                                      // the row's `step` column ("" without one)
   std::vector<std::pair<std::string, std::string>> key;  // group column -> value text
   std::vector<const Row*> rows;
   double cpu_s = 0;
@@ -384,10 +389,19 @@ std::vector<Cell> cells_of(const Table& t, const std::vector<std::string>& group
       const Value* v = find(r, g);
       key.emplace_back(g, v ? v->text : "");
     }
-    auto it = std::find_if(cells.begin(), cells.end(), [&](const Cell& c) { return c.key == key; });
-    if (it == cells.end()) it = cells.insert(cells.end(), Cell{key, {}, 0, "fixed replicas"});
+    const Value* sv = find(r, "step");
+    const std::string step = sv ? sv->text : "";
+    auto it = std::find_if(cells.begin(), cells.end(), [&](const Cell& c) { return c.step == step && c.key == key; });
+    if (it == cells.end()) it = cells.insert(cells.end(), Cell{step, key, {}, 0, "fixed replicas"});
     it->rows.push_back(&r);
   }
+  // Two steps with the same group values: the step becomes the last group column, so the
+  // cells are told apart on the page and only cells of one step are ranked against each other.
+  const bool clash = std::any_of(cells.begin(), cells.end(), [&](const Cell& a) {
+    return std::any_of(cells.begin(), cells.end(), [&](const Cell& b) { return &a != &b && a.key == b.key; });
+  });
+  if (clash && std::find(group.begin(), group.end(), "step") == group.end())
+    for (auto& c : cells) c.key.emplace_back("step", c.step);
   // Replicas in the order they were made, so the error-against-time curve follows the run.
   const auto replica = [](const Row* r) { return number_in(*r, "replica"); };
   for (auto& c : cells) {
@@ -395,6 +409,9 @@ std::vector<Cell> cells_of(const Table& t, const std::vector<std::string>& group
     for (const Row* r : c.rows)
       if (const double cpu = row_cpu(*r); std::isfinite(cpu)) c.cpu_s += cpu;
     for (const auto& s : stops) {
+      // By step and values; a row without a step (not written by `tomodem run row` under the
+      // runner) by its values alone.
+      if (!c.step.empty() && c.step != s.step) continue;
       const bool match = std::all_of(s.matrix.begin(), s.matrix.end(), [&](const auto& kv) {
         const auto k = std::find_if(c.key.begin(), c.key.end(), [&](const auto& x) { return x.first == kv.first; });
         return k == c.key.end() || same_value(k->second, kv.second);

@@ -165,6 +165,7 @@ pid_t spawn(const Pipeline& p, const Instance& in, const std::string& log, const
     const std::string t = std::to_string(in.threads);
     ::setenv("OMP_NUM_THREADS", t.c_str(), 1);
     ::setenv("TOMODEM_THREADS", t.c_str(), 1);
+    ::setenv("TOMODEM_STEP", in.step.c_str(), 1);  // `tomodem run row` records it (the report's cells)
     const std::string header = "# tomodem-run " + in.id + "\n# " + (launch.empty() ? "" : launch + " ") + in.command + "\n";
     if (::write(1, header.data(), header.size()) < 0) ::_exit(127);
     if (::chdir(p.dir.c_str()) != 0) {

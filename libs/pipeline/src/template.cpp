@@ -3,9 +3,35 @@
 namespace tomodem::pipeline::detail {
 
 namespace {
-// Calls on_text / on_ref for the pieces of `text` in order.
+// The end of the reference opened at `open` ("${"): its matching '}', past any nested "${...}".
+std::size_t reference_end(const std::string& text, std::size_t open) {
+  int depth = 0;
+  for (std::size_t i = open; i < text.size(); ++i) {
+    if (text.compare(i, 2, "${") == 0) {
+      ++depth;
+      ++i;
+    } else if (text[i] == '}' && --depth == 0) {
+      return i;
+    }
+  }
+  throw RefError{"unterminated '${' (write '$${' for a literal '${')"};
+}
+
+std::string join(const std::vector<std::string>& v) {
+  std::string s;
+  for (std::size_t k = 0; k < v.size(); ++k) s += (k ? " " : "") + v[k];
+  return s;
+}
+
+std::string written_name(const std::string& text, std::size_t open, std::size_t end) {
+  return text.substr(open + 2, end - open - 2);
+}
+
+// Calls on_text / on_ref for the pieces of `text` in order. A name holding references
+// (`${vars.n_${vars.scale}}`) is computed first, innermost first, with `lookup` (Make's computed
+// variable names); without a lookup (references()) the name is passed as written.
 template <class Text, class Ref>
-void scan(const std::string& text, Text on_text, Ref on_ref) {
+void scan(const std::string& text, Text on_text, Ref on_ref, const Lookup* lookup = nullptr) {
   std::size_t i = 0;
   while (i < text.size()) {
     if (text.compare(i, 3, "$${") == 0) {
@@ -14,11 +40,21 @@ void scan(const std::string& text, Text on_text, Ref on_ref) {
       continue;
     }
     if (text.compare(i, 2, "${") == 0) {
-      const std::size_t end = text.find('}', i + 2);
-      if (end == std::string::npos) throw RefError{"unterminated '${' (write '$${' for a literal '${')"};
-      const std::string name = text.substr(i + 2, end - i - 2);
+      const std::size_t end = reference_end(text, i);
+      const std::string written = written_name(text, i, end);
+      const bool computed = lookup && written.find("${") != std::string::npos;
+      const std::string name = computed ? substitute(written, *lookup) : written;
       if (name.empty()) throw RefError{"empty reference '${}'"};
-      on_ref(name);
+      if (computed && name.find_first_of(" ${}") != std::string::npos)
+        throw RefError{"the computed name '" + name + "' of '${" + written + "}' is not a reference name"};
+      try {
+        on_ref(name);
+      } catch (const RefError& e) {
+        if (!computed) throw;
+        std::string from;  // the values the name was computed from, e.g. "vars.scale = 'tiny'"
+        for (const auto& r : references(written)) from += (from.empty() ? "" : ", ") + r + " = '" + join((*lookup)(r)) + "'";
+        throw RefError{e.why + "; the name was computed from '${" + written + "}' with " + from};
+      }
       i = end + 1;
       continue;
     }
@@ -27,16 +63,11 @@ void scan(const std::string& text, Text on_text, Ref on_ref) {
   }
 }
 
-std::string join(const std::vector<std::string>& v) {
-  std::string s;
-  for (std::size_t k = 0; k < v.size(); ++k) s += (k ? " " : "") + v[k];
-  return s;
-}
 }  // namespace
 
 std::string substitute(const std::string& text, const Lookup& lookup) {
   std::string out;
-  scan(text, [&](const std::string& t) { out += t; }, [&](const std::string& r) { out += join(lookup(r)); });
+  scan(text, [&](const std::string& t) { out += t; }, [&](const std::string& r) { out += join(lookup(r)); }, &lookup);
   return out;
 }
 
@@ -86,13 +117,16 @@ std::string substitute_shell(const std::string& text, const Lookup& lookup) {
         out += (c == '"' || c == '\\' || c == '$' || c == '`') ? std::string("\\") + c : std::string(1, c);
     }
   };
-  scan(text, on_text, on_ref);
+  scan(text, on_text, on_ref, &lookup);
   return out;
 }
 
 std::vector<std::string> substitute_list(const std::string& text, const Lookup& lookup) {
-  const auto refs = references(text);
-  if (refs.size() == 1 && text == "${" + refs[0] + "}") return lookup(refs[0]);
+  if (text.compare(0, 2, "${") == 0 && reference_end(text, 0) == text.size() - 1) {
+    std::vector<std::string> values;
+    scan(text, [](const std::string&) {}, [&](const std::string& r) { values = lookup(r); }, &lookup);
+    return values;
+  }
   return {substitute(text, lookup)};
 }
 

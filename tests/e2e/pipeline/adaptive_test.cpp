@@ -222,3 +222,63 @@ TEST(Adaptive, UntilKeyTheStepDoesNotWriteIsRefusedAtLoad) {
   EXPECT_NE(q.err.find("q.yaml:3:"), std::string::npos) << q.err;
   EXPECT_NE(q.err.find("no JSON output"), std::string::npos) << q.err;
 }
+
+TEST(Adaptive, ReportMatchesStopsByStepNotOnlyByGroupValues) {
+  // Two row steps with the same level values: `adaptive` adds replicas until d.x is narrow
+  // enough, `fixed` always has 3. The report keeps them apart (the row's step column, set by the
+  // runner) and gives the runner's stop to the adaptive cells only.
+  auto s = adaptive_pipeline();
+  s.write("p.yaml", R"(vars: {levels: [a, b]}
+steps:
+  gen:
+    matrix: {level: '${vars.levels}'}
+    replicas: 12
+    seed: 100
+    cell: ${matrix.level}-r${replica}
+    cmd: sh draw.sh ${seed} ${matrix.level} ${replica} > ${outs.0}
+    outs: ['out/${cell}/draw.json']
+  adaptive:
+    matrix: {level: '${vars.levels}'}
+    replicas: {until: {d.x: 0.05}, min: 3, max: 12}
+    cell: ${matrix.level}-r${replica}
+    tool: run
+    args: [row, -o, '${outs.row}', --value, 'level=${matrix.level}', --value, 'replica=${replica}', --summary, 'd=${steps.gen.outs.0}']
+    outs: {row: 'out/${cell}/row.json'}
+  fixed:
+    matrix: {level: '${vars.levels}'}
+    replicas: 3
+    cell: ${matrix.level}-r${replica}
+    tool: run
+    args: [row, -o, '${outs.row}', --value, 'level=${matrix.level}', --value, 'replica=${replica}', --summary, 'd=${steps.gen.outs.0}']
+    outs: {row: 'out/fixed/${cell}/row.json'}
+  report:
+    tool: run
+    args: [report, -o, '${outs.report}', --group, level, --stats, d.x, --replicas, '${run.replicas}',
+           '${steps.adaptive.outs.row}', '${steps.fixed.outs.row}']
+    outs: {report: report}
+)");
+  const ByHand a = by_hand('a', 0.05), b = by_hand('b', 0.05);
+  const auto r = run(s, "p.yaml -j 2");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto sum = nlohmann::json::parse(s.read("report/summary.json"));
+  int cells = 0;
+  for (const auto& c : sum.at("cells")) {
+    if (c.at("property") != "d.x") continue;
+    ++cells;
+    const bool adaptive = c.at("step") == "adaptive";
+    ASSERT_TRUE(adaptive || c.at("step") == "fixed") << c;
+    const ByHand& h = c.at("level") == "a" ? a : b;
+    EXPECT_EQ(c.at("n"), adaptive ? h.n : 3) << c;
+    EXPECT_EQ(c.at("stopped_because"), adaptive ? h.because : "fixed replicas") << c;
+  }
+  EXPECT_EQ(cells, 4);
+  // Rankings compare the levels within one step, never a step against the other.
+  int ranked = 0;
+  for (const auto& k : sum.at("rankings"))
+    if (k.at("property") == "d.x") {
+      ++ranked;
+      const std::string at = k.at("at").get<std::string>();
+      EXPECT_TRUE(at == "step=adaptive" || at == "step=fixed") << at;
+    }
+  EXPECT_EQ(ranked, 2);
+}

@@ -1,4 +1,4 @@
-// The study's CI variant (pipelines/study-small.yaml, issue 18 item 9): the sintering route and
+// The study's CI variant (pipelines/study.yaml --set scale=small, issue 18 item 9): the sintering route and
 // the homothetic one for 150-particle packings, adaptive replicas, the report. The test copies the
 // pipeline to a temporary folder, runs it with -j 2, and recomputes from the replica table it
 // wrote (table.csv: every replica) what the report and the runner say: the 95 % intervals
@@ -117,10 +117,9 @@ TEST(StudySmall, ReportIntervalsAdaptiveStopAndRankingsMatchTheReplicaTable) {
   fs::create_directories(dir / "pipelines");
   const fs::path src = fs::path(TOMODEM_SOURCE_DIR) / "pipelines";
   fs::copy_file(src / "study.yaml", dir / "pipelines" / "study.yaml");
-  fs::copy_file(src / "study-small.yaml", dir / "pipelines" / "study-small.yaml");
   fs::copy(src / "study", dir / "pipelines" / "study", fs::copy_options::recursive);
-  const std::string cmd = std::string(TOMODEM_BIN_DIR) + "/tomodem run " + (dir / "pipelines" / "study-small.yaml").string() +
-                          " -j 2 -q > " + (dir / "run.out").string() + " 2>&1";
+  const std::string cmd = std::string(TOMODEM_BIN_DIR) + "/tomodem run " + (dir / "pipelines" / "study.yaml").string() +
+                          " --set scale=small -j 2 -q > " + (dir / "run.out").string() + " 2>&1";
   const int st = std::system(cmd.c_str());
   ASSERT_EQ(WEXITSTATUS(st), 0) << slurp(dir / "run.out");
 
@@ -131,7 +130,7 @@ TEST(StudySmall, ReportIntervalsAdaptiveStopAndRankingsMatchTheReplicaTable) {
   const fs::path rep = dir / "pipelines" / "out" / "study-small" / "report";
   const Table t = read_csv(rep / "table.csv");
   const json summary = json::parse(slurp(rep / "summary.json"));
-  const json record = json::parse(slurp(dir / "pipelines" / "study-small.replicas.json"));
+  const json record = json::parse(slurp(dir / "pipelines" / "study.replicas.json"));
   ASSERT_FALSE(t.rows.empty());
 
   // Rows by (family, density), in replica order.
@@ -177,7 +176,7 @@ TEST(StudySmall, ReportIntervalsAdaptiveStopAndRankingsMatchTheReplicaTable) {
   // 2. The adaptive stop of every sintered group: the rule applied to the first k replicas,
   // k = min..max, with the runner's keys and targets; its n and reason, and the report's.
   const int mn = 2, mx = 4;
-  const double tE = 0.1, tK = 1.0;  // study-small.yaml's target_E, target_K
+  const double tE = 0.1, tK = 1.0;  // study.yaml's scales.small.target_E, target_K
   const std::vector<std::pair<std::string, std::string>> keys = {
       {"young.E", "young.E_error"}, {"conduct.sigma_eff.x", "conduct.sigma_eff_error.x"}, {"fracture.K_IC", "fracture.K_IC_error"}};
   int met = 0, maxed = 0;

@@ -181,6 +181,33 @@ steps:
   EXPECT_EQ(d.instances[0].command, "echo \"\\$(x) \\`y\\` \\\\ \\\"q\\\"\" > a.txt");
 }
 
+// Computed names (docs/pipelines.md): the inner reference first, then the name it makes; a list
+// variable read through a computed name stays a list (a matrix sweeps it).
+const char* kScales = R"(vars:
+  scale: full
+  scales:
+    full: {n: 1000, levels: [a, b, c]}
+    small: {n: 10, levels: [a]}
+  n: ${vars.scales.${vars.scale}.n}
+steps:
+  count:
+    matrix: {level: '${vars.scales.${vars.scale}.levels}'}
+    cmd: seq ${vars.n} ${vars.scales.${vars.scale}.n} > ${outs.0}
+    outs: ['out/${matrix.level}.txt']
+)";
+
+TEST(PipelineLoad, ComputedNamesExpandInnermostFirstAndFollowSet) {
+  Scratch s;
+  const auto full = tp::load(s.write("p.yaml", kScales));
+  EXPECT_EQ(ids(full), (std::vector<std::string>{"count[level-a]", "count[level-b]", "count[level-c]"}));
+  EXPECT_EQ(full.instances[0].command, "seq 1000 1000 > out/a.txt");
+  tp::LoadOptions o;
+  o.overrides = {"scale=small"};
+  const auto small = tp::load(s.write("p.yaml", kScales), o);
+  EXPECT_EQ(ids(small), (std::vector<std::string>{"count[level-a]"}));
+  EXPECT_EQ(small.instances[0].command, "seq 10 10 > out/a.txt");
+}
+
 // ---- bad input: each names the file, the line and the offending name ----------------------
 
 TEST(PipelineBadInput, CycleNamesTheStepsInIt) {
@@ -251,6 +278,20 @@ TEST(PipelineBadInput, UnknownReferenceSuggestsTheEscape) {
   const auto m = load_error(s, "steps:\n  a:\n    cmd: echo ${HOME}\n");
   EXPECT_NE(m.find("p.yaml:3"), std::string::npos) << m;
   EXPECT_NE(m.find("$${"), std::string::npos) << m;
+}
+
+TEST(PipelineBadInput, UnknownValueOfAComputedNameListsTheKnownOnes) {
+  Scratch s;
+  tp::LoadOptions o;
+  o.overrides = {"scale=tiny"};
+  const auto m = load_error(s, kScales, o);
+  EXPECT_NE(m.find("p.yaml:"), std::string::npos) << m;
+  EXPECT_NE(m.find("'vars.scales.tiny."), std::string::npos) << m;
+  EXPECT_NE(m.find("vars.scale = 'tiny'"), std::string::npos) << m;
+  EXPECT_NE(m.find("vars.scales has: full, small"), std::string::npos) << m;
+  // An unterminated inner reference is refused, not read as a name with a brace in it.
+  EXPECT_NE(load_error(s, "vars: {a: '${vars.b${vars.c}'}\nsteps:\n  s:\n    cmd: echo ${vars.a}\n").find("unterminated"),
+            std::string::npos);
 }
 
 TEST(PipelineBadInput, UnknownSetKeyAndParam) {
