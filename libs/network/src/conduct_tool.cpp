@@ -20,6 +20,7 @@
 #include "tomodem/network/image_transport.hpp"
 #include "tomodem/network/output.hpp"
 #include "tomodem/network/voxel.hpp"
+#include "tomodem/spatial/union_volume.hpp"
 
 namespace tomodem::network {
 
@@ -377,6 +378,50 @@ void solve_network(const ConductConfig& c, const Network& net, const ConductOpti
   out["percolates"] = any;
 }
 
+// σ_eff against the bounds of a conductor with insulating pores (docs/conduct.md#bounds): the
+// Hashin–Shtrikman upper bound 2φ/(3 − φ) for the mean over the axes solved, Voigt's φ for each
+// axis, φ the union-volume density of the network's particles and σ_s the largest conductivity
+// among them (raising every phase to it only raises σ_eff, so the two-phase bound covers them all).
+// The HS bound is for an isotropic body: one axis of a small, anisotropic cell may pass it by
+// a little, so the mean is what is flagged.
+json conductivity_bounds(const Packing& pk, const Network& net, const json& sigma) {
+  std::vector<Vec3> x;
+  std::vector<double> r;
+  double sigma_s = 0;
+  for (std::size_t n = 0; n < net.n_nodes(); ++n) {
+    x.push_back(pk.particles.position[std::size_t(net.particle[n])]);
+    r.push_back(net.radius[n]);
+    sigma_s = std::max(sigma_s, net.node_conductivity[n]);
+  }
+  if (!(sigma_s > 0)) return nullptr;
+  const double phi = std::clamp(spatial::union_relative_density(x, r, pk.cell), 0.0, 1.0);
+  const double hs = 2 * phi / (3 - phi);
+  json ratio = json::object();
+  double mean = 0;
+  bool voigt_exceeded = false;
+  for (auto it = sigma.begin(); it != sigma.end(); ++it) {
+    const double s = it.value().get<double>() / sigma_s;
+    ratio[it.key()] = s;
+    mean += s / double(sigma.size());
+    // Relative 1e-9: the union volume and the solve are exact to round-off, not to this.
+    voigt_exceeded = voigt_exceeded || s > phi * (1 + 1e-9);
+  }
+  const bool hs_exceeded = mean > hs * (1 + 1e-9);
+  if (hs_exceeded)
+    warn("sigma_eff/sigma_s = " + value_text(mean) + " (mean over the axes) exceeds the Hashin-Shtrikman upper bound " +
+         value_text(hs) + " of a conductor with insulating pores at relative density " + value_text(phi) +
+         " (docs/conduct.md#bounds)");
+  if (voigt_exceeded)
+    warn("sigma_eff/sigma_s exceeds the Voigt bound " + value_text(phi) + " along an axis (docs/conduct.md#bounds)");
+  return {{"relative_density", phi},
+          {"sigma_s", sigma_s},
+          {"sigma_over_sigma_s", ratio},
+          {"mean_sigma_over_sigma_s", mean},
+          {"hs_upper_sigma_over_sigma_s", hs},
+          {"voigt_sigma_over_sigma_s", phi},
+          {"bound_exceeded", hs_exceeded || voigt_exceeded}};
+}
+
 // The voxel cross-check at each --voxel-check resolution, then its convergence (Richardson).
 json voxel_check(const ConductConfig& c, const Packing& pk, const Network& net, const ConductOptions& co, int axis,
                  double network_sigma, double diameter) {
@@ -598,6 +643,7 @@ std::string run_conduct(const ConductConfig& c) {
   out["solver"] = {{"method", "conjugate gradient"}, {"preconditioner", c.preconditioner}, {"tolerance", c.tolerance}};
   std::vector<FieldSet> fields;
   solve_network(c, net, co, axes, out, fields);
+  out["bounds"] = conductivity_bounds(pk, net, out["sigma_eff"]);
 
   if (!c.electronic.empty() || !c.ionic.empty()) {
     CompositeOptions cp;

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -47,8 +48,8 @@ class ConductCli : public ::testing::Test {
     return nlohmann::json::parse(in);
   }
   // Lattice 5×4×4 of spheres R = 5 µm, bonds a = 1 µm, σ = 1e4 S/m: σ_eff = 2σa/(2R) = 2000 S/m.
-  std::string lattice(bool periodic = false) const {
-    Packing p = network::test::sc_lattice(5, 4, 4, 5e-6, 1e-6, periodic);
+  std::string lattice(bool periodic = false, double neck_radius = 1e-6) const {
+    Packing p = network::test::sc_lattice(5, 4, 4, 5e-6, neck_radius, periodic);
     p.materials[0].name = "LSM";
     p.materials[0].conductivity = 1e4;
     p.materials[1].name = "YSZ";
@@ -103,6 +104,36 @@ TEST_F(ConductCli, PeriodicTensor) {
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j)
       EXPECT_NEAR(s["sigma_tensor"][i][j].get<double>(), i == j ? 2000.0 : 0.0, 2000.0 * 1e-6);
+}
+
+// The bounds are computed from the packing alone (union volume), not from the network: on the
+// touching-sphere lattice φ = π/6 exactly, so HS = 2φ/(3 − φ) and Voigt = φ are hand values.
+TEST_F(ConductCli, SummaryChecksTheHashinShtrikmanAndVoigtBounds) {
+  const double phi = M_PI / 6, hs = 2 * phi / (3 - phi);
+  {  // necks a = 0.2 R: σ/σ_s = a/R = 0.2 on every axis, under both bounds
+    const std::string in = lattice(true);
+    const CliResult r = run(in + " --bc periodic --json " + path("s.json") + " --quiet");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto b = summary(path("s.json"))["bounds"];
+    // 1e-9: the union volume of touching spheres is exact up to round-off in the power-cell clipping.
+    EXPECT_NEAR(b["relative_density"].get<double>(), phi, 1e-9);
+    EXPECT_NEAR(b["hs_upper_sigma_over_sigma_s"].get<double>(), hs, 1e-9);
+    EXPECT_NEAR(b["voigt_sigma_over_sigma_s"].get<double>(), phi, 1e-9);
+    EXPECT_DOUBLE_EQ(b["sigma_s"].get<double>(), 1e4);
+    EXPECT_NEAR(b["mean_sigma_over_sigma_s"].get<double>(), 0.2, 1e-6);  // the solver's tolerance
+    EXPECT_FALSE(b["bound_exceeded"].get<bool>());
+  }
+  {  // necks a = 0.98 R between spheres that only touch: Holm gives σ/σ_s = 0.98, more than
+     // any body of density π/6 can conduct (the face cap, σ A/d = 10 µm σ per edge, does not bind)
+    const std::string in = lattice(true, 4.9e-6);
+    const CliResult r = run(in + " --bc periodic --json " + path("s.json"));
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto b = summary(path("s.json"))["bounds"];
+    EXPECT_NEAR(b["mean_sigma_over_sigma_s"].get<double>(), 0.98, 1e-6);
+    EXPECT_TRUE(b["bound_exceeded"].get<bool>());
+    EXPECT_NE(r.err.find("Hashin-Shtrikman upper bound"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("Voigt bound"), std::string::npos) << r.err;
+  }
 }
 
 TEST_F(ConductCli, CompositeAndVoxelSections) {
