@@ -3,6 +3,7 @@
 // and budgets with exit 2 and the numbers (issue 19 item 5); --grains gives the in-memory
 // grains. The 512^3 comparisons and the 2048^3 run are tests/bench/segment/chunked_bench.sh.
 #include <gtest/gtest.h>
+#include <unistd.h>
 #include <nlohmann/json.hpp>
 
 #include <cstdlib>
@@ -20,8 +21,9 @@ using json = nlohmann::json;
 
 namespace {
 const std::string bin = TOMODEM_BIN_DIR;
+// stderr in a file of this process: ctest -j runs the tests of one binary side by side.
 int run_err(const std::string& cmd, std::string* err) {
-  const std::string ef = (fs::temp_directory_path() / "tomodem_seg_chunked_stderr.txt").string();
+  const std::string ef = (fs::temp_directory_path() / ("tomodem_seg_chunked_stderr-" + std::to_string(::getpid()) + ".txt")).string();
   const int r = std::system((cmd + " >/dev/null 2>" + ef).c_str());
   std::ifstream in(ef);
   err->assign(std::istreambuf_iterator<char>(in), {});

@@ -1,5 +1,6 @@
 // End-to-end: the tomodem-segment and tomodem-phantom executables, their summaries and exit codes.
 #include <gtest/gtest.h>
+#include <unistd.h>
 #include <nlohmann/json.hpp>
 
 #include <cstdlib>
@@ -16,8 +17,9 @@ int run(const std::string& cmd) {
   const int r = std::system((cmd + " >/dev/null 2>&1").c_str());
   return WIFEXITED(r) ? WEXITSTATUS(r) : -1;
 }
+// stderr in a file of this process: ctest -j runs the tests of one binary side by side.
 int run_err(const std::string& cmd, std::string* err) {
-  const std::string ef = (fs::temp_directory_path() / "tomodem_seg_e2e_stderr.txt").string();
+  const std::string ef = (fs::temp_directory_path() / ("tomodem_seg_e2e_stderr-" + std::to_string(::getpid()) + ".txt")).string();
   const int r = std::system((cmd + " >/dev/null 2>" + ef).c_str());
   std::ifstream in(ef);
   err->assign(std::istreambuf_iterator<char>(in), {});

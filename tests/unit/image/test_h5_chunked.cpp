@@ -4,6 +4,7 @@
 // The summary's chunked.largest_read_voxels (the largest hyperslab the reader asked HDF5 for)
 // shows the volume is never read whole.
 #include <gtest/gtest.h>
+#include <unistd.h>
 #include <hdf5.h>
 #include <nlohmann/json.hpp>
 
@@ -19,8 +20,9 @@ using json = nlohmann::json;
 
 namespace {
 const std::string bin = TOMODEM_BIN_DIR;
+// stderr in a file of this process: ctest -j runs the tests of one binary side by side.
 int run_err(const std::string& cmd, std::string* err) {
-  const std::string ef = (fs::temp_directory_path() / "tomodem_h5_chunked_stderr.txt").string();
+  const std::string ef = (fs::temp_directory_path() / ("tomodem_h5_chunked_stderr-" + std::to_string(::getpid()) + ".txt")).string();
   const int r = std::system((cmd + " >/dev/null 2>" + ef).c_str());
   std::ifstream in(ef);
   err->assign(std::istreambuf_iterator<char>(in), {});
