@@ -13,6 +13,8 @@
 #include <set>
 #include <sys/wait.h>
 
+#include "../common/scratch.hpp"
+
 #include "tomodem/core/h5.hpp"
 #include "tomodem/core/packing_io.hpp"
 
@@ -21,25 +23,9 @@ using json = nlohmann::json;
 
 namespace {
 const std::string bin = TOMODEM_BIN_DIR;
-// stderr in a file of this process: ctest -j runs the tests of one binary side by side.
-int run_err(const std::string& cmd, std::string* err) {
-  const std::string ef = (fs::temp_directory_path() / ("tomodem_seg_chunked_stderr-" + std::to_string(::getpid()) + ".txt")).string();
-  const int r = std::system((cmd + " >/dev/null 2>" + ef).c_str());
-  std::ifstream in(ef);
-  err->assign(std::istreambuf_iterator<char>(in), {});
-  return WIFEXITED(r) ? WEXITSTATUS(r) : -1;
-}
-fs::path tmpdir(const std::string& name) {
-  const fs::path p = fs::temp_directory_path() / ("tomodem_seg_chunked_" + name);
-  fs::remove_all(p);
-  fs::create_directories(p);
-  return p;
-}
-json read_json(const fs::path& p) {
-  json j;
-  std::ifstream(p) >> j;
-  return j;
-}
+using tomodem::test::run_err;
+using tomodem::test::read_json;
+fs::path tmpdir(const std::string& name) { return tomodem::test::fresh_dir("tomodem_seg_chunked_", name); }
 
 // A 96^3 pores phantom as a raw uint16 file (its macropores have radii 9-14 voxels: wider than a
 // 16-voxel block, so they cross block faces, edges and corners).

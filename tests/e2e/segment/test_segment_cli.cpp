@@ -8,29 +8,19 @@
 #include <fstream>
 #include <sys/wait.h>
 
+#include "../common/scratch.hpp"
+
 namespace fs = std::filesystem;
 using json = nlohmann::json;
 
 namespace {
 const std::string bin = TOMODEM_BIN_DIR;
+using tomodem::test::run_err;
 int run(const std::string& cmd) {
   const int r = std::system((cmd + " >/dev/null 2>&1").c_str());
   return WIFEXITED(r) ? WEXITSTATUS(r) : -1;
 }
-// stderr in a file of this process: ctest -j runs the tests of one binary side by side.
-int run_err(const std::string& cmd, std::string* err) {
-  const std::string ef = (fs::temp_directory_path() / ("tomodem_seg_e2e_stderr-" + std::to_string(::getpid()) + ".txt")).string();
-  const int r = std::system((cmd + " >/dev/null 2>" + ef).c_str());
-  std::ifstream in(ef);
-  err->assign(std::istreambuf_iterator<char>(in), {});
-  return WIFEXITED(r) ? WEXITSTATUS(r) : -1;
-}
-fs::path tmpdir(const std::string& name) {
-  const fs::path p = fs::temp_directory_path() / ("tomodem_seg_e2e_" + name);
-  fs::remove_all(p);
-  fs::create_directories(p);
-  return p;
-}
+fs::path tmpdir(const std::string& name) { return tomodem::test::fresh_dir("tomodem_seg_e2e_", name); }
 bool only(const fs::path& d, std::size_t n) {  // no partial outputs: the folder holds exactly n entries
   return std::size_t(std::distance(fs::directory_iterator(d), fs::directory_iterator())) == n;
 }

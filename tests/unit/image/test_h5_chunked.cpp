@@ -13,6 +13,8 @@
 #include <fstream>
 #include <sys/wait.h>
 
+#include "../../e2e/common/scratch.hpp"
+
 #include "tomodem/core/h5.hpp"
 
 namespace fs = std::filesystem;
@@ -20,25 +22,9 @@ using json = nlohmann::json;
 
 namespace {
 const std::string bin = TOMODEM_BIN_DIR;
-// stderr in a file of this process: ctest -j runs the tests of one binary side by side.
-int run_err(const std::string& cmd, std::string* err) {
-  const std::string ef = (fs::temp_directory_path() / ("tomodem_h5_chunked_stderr-" + std::to_string(::getpid()) + ".txt")).string();
-  const int r = std::system((cmd + " >/dev/null 2>" + ef).c_str());
-  std::ifstream in(ef);
-  err->assign(std::istreambuf_iterator<char>(in), {});
-  return WIFEXITED(r) ? WEXITSTATUS(r) : -1;
-}
-fs::path tmpdir(const std::string& name) {
-  const fs::path p = fs::temp_directory_path() / ("tomodem_h5_chunked_" + name);
-  fs::remove_all(p);
-  fs::create_directories(p);
-  return p;
-}
-json read_json(const fs::path& p) {
-  json j;
-  std::ifstream(p) >> j;
-  return j;
-}
+using tomodem::test::run_err;
+using tomodem::test::read_json;
+fs::path tmpdir(const std::string& name) { return tomodem::test::fresh_dir("tomodem_h5_chunked_", name); }
 
 constexpr std::size_t N = 64;  // phantom side; blocks of 16 leave interior blocks on every axis
 
