@@ -102,15 +102,19 @@ double tool_error(const Row& r, const std::string& c, double value) {
     const auto d = key.rfind('.');
     return d == std::string::npos ? "units." + key : key.substr(0, d) + ".units." + key.substr(d + 1);
   };
-  double e = number_in(r, c + "_error");
-  std::string unit_col = units_of(c + "_error");
+  std::string key = c + "_error";
+  double e = number_in(r, key);
   const auto dot = c.rfind('.');
   if (!std::isfinite(e) && dot != std::string::npos) {
-    e = number_in(r, c.substr(0, dot) + "_error" + c.substr(dot));
-    unit_col = units_of(c.substr(0, dot) + "_error");
+    key = c.substr(0, dot) + "_error";
+    e = number_in(r, key + c.substr(dot));
   }
   if (!std::isfinite(e)) return NAN;
-  const Value* unit = find(r, unit_col);
+  // An error the tool marks random (`<key>_error_kind: "random"`: independent between runs, as
+  // fracture's crack-tip discreteness) is already in the replicas' scatter; adding it again as
+  // systematic would count it twice.
+  if (const Value* kind = find(r, key + "_kind"); kind && kind->text == "random") return NAN;
+  const Value* unit = find(r, units_of(key));
   const bool relative = !unit || unit->text.empty() || unit->text == "relative" || unit->text == "1";
   return relative ? std::fabs(e * value) : std::fabs(e);
 }

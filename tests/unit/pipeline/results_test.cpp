@@ -151,6 +151,30 @@ TEST(Results, BadReportRequestsWriteNothing) {
   EXPECT_THROW(tp::write_report(s.path("report"), {s.write("x.json", "{\"E\": {\"a\": 1}}")}, {}), tomodem::InputError);
 }
 
+// The same family b with its E_error marked random: the interval is the replicas' alone,
+// u = sem = 1.4142, dof = n - 1 = 4, half-width = t_{0.975,4} sem = 2.77645 * 1.41421 = 3.9265.
+TEST(Results, RandomToolErrorLeavesTheReplicaInterval) {
+  Scratch s;
+  std::vector<std::string> files;
+  for (int r = 0; r < 5; ++r)
+    files.push_back(s.write("b" + std::to_string(r) + ".json",
+                            "{\"family\": \"b\", \"replica\": " + std::to_string(r) + ", \"E\": " + std::to_string(3 + 2 * r) +
+                                ", \"E_error\": 0.1, \"E_error_kind\": \"random\"}"));
+  tp::ReportOptions o;
+  o.group = {"family"};
+  o.plots = {};
+  tp::write_report(s.path("report"), files, o);
+  const std::string j = s.read("report/summary.json");
+  const auto number_after = [&](const std::string& key) {
+    const auto at = j.find("\"" + key + "\":");
+    return std::stod(j.substr(at + key.size() + 3));
+  };
+  EXPECT_NEAR(number_after("tool_error"), 0, 1e-12);
+  EXPECT_NEAR(number_after("u"), 1.41421, 1e-5);
+  EXPECT_NEAR(number_after("dof"), 4, 1e-9);
+  EXPECT_NEAR(number_after("half_width95"), 2.77645 * 1.41421, 5e-5);  // t_{0.975,4} = 2.77645
+}
+
 // The worked example of docs/pipelines.md ("Statistics"): two families of five replicas.
 // a: E = 1..5 (mean 3, sd 1.5811, sem 0.70711), b: E = 3, 5, .., 11 (mean 7, sd 3.1623,
 // sem 1.4142). 95 % CI of a: 3 -/+ t_{0.975,4} sem = 3 -/+ 2.776 * 0.70711 = [1.037, 4.963].
@@ -207,4 +231,15 @@ TEST(Results, PerAxisToolErrorsInBothLayouts) {
   EXPECT_NEAR(tp::own_error(row(R"({"sigma_eff": {"x": 10}, "sigma_eff_error": {"x": 0.5},
                                    "units": {"sigma_eff_error": "relative"}})"), "c.sigma_eff.x", 10), 5.0, 1e-12);
   EXPECT_TRUE(std::isnan(tp::own_error(row(R"({"sigma_eff": {"x": 10}})"), "c.sigma_eff.x", 10)));
+}
+
+// An error marked random (`K_IC_error_kind: "random"`, as tomodem-fracture writes for its
+// crack-tip discreteness) is already in the replicas' scatter: it is no tool error to add again,
+// in either layout; any other kind (or none) stays systematic.
+TEST(Results, RandomToolErrorsAreNotAddedAgain) {
+  const auto row = [](const std::string& json) { return tp::flatten_json(json, "f", "summary.json"); };
+  EXPECT_TRUE(std::isnan(tp::own_error(row(R"({"K_IC": 2, "K_IC_error": 0.3, "K_IC_error_kind": "random"})"), "f.K_IC", 2)));
+  EXPECT_NEAR(tp::own_error(row(R"({"K_IC": 2, "K_IC_error": 0.3, "K_IC_error_kind": "systematic"})"), "f.K_IC", 2), 0.6, 1e-12);
+  EXPECT_TRUE(std::isnan(tp::own_error(row(R"({"sigma_eff": {"x": 10}, "sigma_eff_error": {"x": 0.5},
+                                             "sigma_eff_error_kind": "random"})"), "f.sigma_eff.x", 10)));
 }
