@@ -7,7 +7,7 @@ PKGS=(build-essential cmake ninja-build pkg-config git
       libfmt-dev libspdlog-dev libxxhash-dev
       libgtest-dev libgmock-dev libbenchmark-dev python3 gnuplot-nox
       libcgal-dev libgmp-dev libmpfr-dev
-      libinsighttoolkit5-dev libopencv-imgproc-dev libopencv-imgcodecs-dev
+      libinsighttoolkit5-dev libopencv-imgproc-dev zlib1g-dev
       libopenvdb-dev libboost-iostreams-dev libtbb-dev libblosc-dev
       python3-h5py python3-openvdb
       libopenmpi-dev openmpi-bin petsc-dev libhdf5-openmpi-dev)
@@ -18,6 +18,8 @@ PKGS=(build-essential cmake ninja-build pkg-config git
 # 2.5 min); with them it pulls 194 packages, 1.0 GB. Debian 12's ParaView 5.11 renders only
 # through GLX, so CI, headless, checks what ParaView reads, not a picture.
 PV_PKGS=(python3-paraview)
+# OpenCV imgproc draws the overlays and pictures; zlib writes them as PNG (libopencv-imgcodecs
+# loads GDAL, poppler and ~140 libraries at every start of tomodem-segment and tomodem-carve).
 # OpenMPI, PETSc and the parallel HDF5 build the MPI tests (-DTOMODEM_MPI=ON, ctest -L mpi, run by
 # test.sh after the serial tests). libhdf5-openmpi-dev switches Debian's hdf5.pc alternative to
 # the MPI library; the serial build is unaffected: it finds HDF5 through /usr/bin/h5cc (serial).

@@ -1,4 +1,5 @@
-// HDF5 labels (core h5), the OpenVDB level set and OpenCV overlays.
+// HDF5 labels (core h5), the OpenVDB level set and OpenCV overlays (drawn by imgproc, written as
+// PNG by zlib: OpenCV's imgcodecs loads GDAL, poppler and ~140 libraries at every start of the tools).
 #include <openvdb/openvdb.h>
 #include <openvdb/io/Archive.h>
 #include <openvdb/io/GridDescriptor.h>
@@ -7,10 +8,10 @@
 #include <openvdb/tools/ChangeBackground.h>
 #include <openvdb/tools/LevelSetRebuild.h>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <sys/stat.h>
+#include <zlib.h>
 #include <cerrno>
 #include <cstring>
 #include <algorithm>
@@ -296,6 +297,46 @@ ScaleBar scale_bar(double metres_per_pixel, int width_px) {
 }
 
 namespace {
+void put_be32(std::string& s, uint32_t v) {
+  for (int shift = 24; shift >= 0; shift -= 8) s += char((v >> shift) & 0xff);
+}
+// One PNG chunk: length, type, data, CRC-32 of type and data (PNG spec, section 5.3).
+void put_chunk(std::string& png, const char* type, const std::string& data) {
+  put_be32(png, uint32_t(data.size()));
+  const std::size_t from = png.size();
+  png.append(type, 4);
+  png += data;
+  put_be32(png, uint32_t(crc32(0, reinterpret_cast<const Bytef*>(png.data() + from), uInt(png.size() - from))));
+}
+}  // namespace
+
+std::string png_from_bgr(const uint8_t* bgr, int width, int height, std::size_t row_bytes) {
+  // Each row: filter type 0 (none), then R G B.
+  std::string raw;
+  raw.reserve(std::size_t(height) * (1 + 3 * std::size_t(width)));
+  for (int y = 0; y < height; ++y) {
+    raw += '\0';
+    const uint8_t* row = bgr + std::size_t(y) * row_bytes;
+    for (int x = 0; x < width; ++x) raw += {char(row[3 * x + 2]), char(row[3 * x + 1]), char(row[3 * x])};
+  }
+  uLongf packed_size = compressBound(uLong(raw.size()));
+  std::string packed(packed_size, '\0');
+  if (compress2(reinterpret_cast<Bytef*>(packed.data()), &packed_size, reinterpret_cast<const Bytef*>(raw.data()),
+                uLong(raw.size()), Z_DEFAULT_COMPRESSION) != Z_OK)
+    throw RuntimeFailure("PNG encoding failed (zlib)");
+  packed.resize(packed_size);
+  std::string header;  // IHDR: width, height, 8 bits, colour type 2 (RGB), deflate, no interlace
+  put_be32(header, uint32_t(width));
+  put_be32(header, uint32_t(height));
+  header += {char(8), char(2), char(0), char(0), char(0)};
+  std::string png("\x89PNG\r\n\x1a\n", 8);
+  put_chunk(png, "IHDR", header);
+  put_chunk(png, "IDAT", packed);
+  put_chunk(png, "IEND", "");
+  return png;
+}
+
+namespace {
 // The white strip under an overlay: the scale bar on the first row, then one swatch and name per
 // phase present, wrapped to the picture's width.
 cv::Mat with_footer(const cv::Mat& img, double metres_per_pixel, const std::vector<std::pair<cv::Scalar, std::string>>& legend) {
@@ -370,10 +411,8 @@ std::vector<std::string> write_overlays(const std::string& prefix, const Overlay
     if (size != img.size()) cv::resize(img, img, size, 0, 0, cv::INTER_NEAREST);
     const double metres_per_pixel = phases.spacing[p == 2 ? 1 : 0] * double(planes[p].w) / double(size.width);
     img = with_footer(img, metres_per_pixel, legend);
-    std::vector<uchar> png;
-    if (!cv::imencode(".png", img, png)) throw RuntimeFailure("PNG encoding failed");
     const std::string path = prefix + "_" + planes[p].name + ".png";
-    write_text_atomic(path, std::string(png.begin(), png.end()));
+    write_text_atomic(path, png_from_bgr(img.ptr(), img.cols, img.rows, img.step));
     written.push_back(path);
   }
   return written;

@@ -9,6 +9,7 @@
 #include <fstream>
 
 #include "../../validation/carve/carve_util.hpp"
+#include "../segment/png_read.hpp"
 #include "tomodem/core/packing_io.hpp"
 #include "tomodem/image/volume.hpp"
 
@@ -79,6 +80,19 @@ TEST(CarveCli, LevelSetWithEveryOutput) {
   EXPECT_EQ(out.provenance.tool, "tomodem-carve");
   for (const char* f : {"carved.h5", "carved.xdmf", "mid.png", "s.json"}) EXPECT_TRUE(fs::exists(d + "/" + f)) << f;
   EXPECT_EQ(entries(d), 4u);  // nothing else (no temporary files)
+  // The picture decodes (an independent reader: CRCs, inflate, row filters) and shows both
+  // backgrounds of picture.cpp: the macropore tint RGB (255, 200, 200), as the mid-plane cuts the
+  // sphere, and the solid region's RGB (245, 245, 245).
+  const auto mid = tomodem::test::read_png_rgb(d + "/mid.png");
+  int pore = 0, solid = 0;
+  for (int y = 0; y < mid.height; ++y)
+    for (int x = 0; x < mid.width; ++x) {
+      const uint8_t* c = mid.at(x, y);
+      pore += c[0] == 255 && c[1] == 200 && c[2] == 200;
+      solid += c[0] == 245 && c[1] == 245 && c[2] == 245;
+    }
+  EXPECT_GT(pore, 0);
+  EXPECT_GT(solid, 0);
 }
 
 TEST(CarveCli, LabelsAndMeshAgreeWithTheLevelSet) {

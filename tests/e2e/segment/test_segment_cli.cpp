@@ -9,6 +9,7 @@
 #include <sys/wait.h>
 
 #include "../common/scratch.hpp"
+#include "png_read.hpp"
 
 namespace fs = std::filesystem;
 using json = nlohmann::json;
@@ -64,6 +65,17 @@ TEST(SegmentCli, PhantomToLabelsWithEveryOutput) {
   for (const char* f : {"labels.h5", "labels.mha", "pores.vdb", "ov_xy.png", "ov_xz.png", "ov_yz.png", "grains.h5",
                         "grains.xdmf"})
     EXPECT_TRUE(fs::exists(d / f)) << f;
+  // The overlay decodes with a reader of its own (png_read.hpp: CRCs, inflate, row filters). Its
+  // last row is the white footer, and the legend holds the 10 x 10 macropore swatch, 0.55 grey 128
+  // + 0.45 red 255 = RGB (185, 70, 70) (outputs.cpp, write_overlays).
+  const auto ov = tomodem::test::read_png_rgb((d / "ov_xy.png").string());
+  ASSERT_GT(ov.width * ov.height, 0);
+  int white = 0, swatch = 0;
+  for (int x = 0; x < ov.width; ++x) white += ov.at(x, ov.height - 1)[0] == 255 && ov.at(x, ov.height - 1)[1] == 255 && ov.at(x, ov.height - 1)[2] == 255;
+  EXPECT_EQ(white, ov.width);
+  for (int y = 0; y < ov.height; ++y)
+    for (int x = 0; x < ov.width; ++x) swatch += ov.at(x, y)[0] == 185 && ov.at(x, y)[1] == 70 && ov.at(x, y)[2] == 70;
+  EXPECT_GE(swatch, 100);
   for (const auto& e : fs::directory_iterator(d)) EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos);
 }
 
