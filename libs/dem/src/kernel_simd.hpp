@@ -5,8 +5,10 @@
 // contacts per vector instruction hide it. Same formulas as laws.hpp, contact by contact:
 // tests/validation/dem/test_law_registry.cpp runs both on random contacts and compares forces,
 // torques and history to round-off (test_cross_path.cpp compares whole runs). Forces are summed
-// in another order. Used only for non-tally passes. The body is kernel_simd_body.inc (also
-// compiled for AVX2 + FMA in a generic build, kernels.cpp).
+// in another order. The Hertz–Mindlin loop serves non-tally passes; the frictionless Hertz loop
+// (no history, no torque) serves tally passes too, since a deforming cell (the enthalpy
+// minimiser of issue 19) tallies every step. The body is kernel_simd_body.inc (also compiled
+// for AVX2 + FMA in a generic build, kernels.cpp).
 #include <cmath>
 
 #include "kernel.hpp"

@@ -32,21 +32,23 @@ namespace tomodem::dem {
 namespace {
 using law::End;
 
-/// The four-wide loop for this processor: the AVX2 + FMA copy where the build has one and the
-/// processor runs it, unless TOMODEM_DEM_SIMD=baseline asks for the build's own target (used by
-/// tests/bench/peers/equal_terms.sh to time both).
-PairKernel four_wide_loop() {
+/// The four-wide loops for this processor: the AVX2 + FMA copies where the build has them and
+/// the processor runs them, unless TOMODEM_DEM_SIMD=baseline asks for the build's own target
+/// (used by tests/bench/peers/equal_terms.sh to time both).
 #if TOMODEM_X4_AVX2_CLONE
+bool avx2_loops() {
   static const bool avx2 = [] {
     const char* force = std::getenv("TOMODEM_DEM_SIMD");
     if (force && std::string_view(force) == "baseline") return false;
     __builtin_cpu_init();
     return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
   }();
-  if (avx2) return &detail::avx2::pair_kernel_hertz_mindlin_x4;
-#endif
-  return &detail::pair_kernel_hertz_mindlin_x4;
+  return avx2;
 }
+#define TOMODEM_X4_LOOP(name) (avx2_loops() ? PairKernel(&detail::avx2::name) : PairKernel(&detail::name))
+#else
+#define TOMODEM_X4_LOOP(name) PairKernel(&detail::name)
+#endif
 using law::List;
 
 /// The compile-time form of ContactModel::incompatibility(): the same declarations decide both.
@@ -72,7 +74,15 @@ KernelSet make(bool vectorised) {
   if constexpr (std::is_same_v<N, law::NormalHertz> && std::is_same_v<T, law::TangentialMindlin> &&
                 std::is_same_v<R, law::RollingNone>) {
     if (vectorised) {
-      k.pair[0] = four_wide_loop();  // the four-contact-wide loop
+      k.pair[0] = TOMODEM_X4_LOOP(pair_kernel_hertz_mindlin_x4);  // the four-contact-wide loop
+      k.vectorised = true;
+    }
+  }
+  if constexpr (std::is_same_v<N, law::NormalHertz> && std::is_same_v<T, law::TangentialNone> &&
+                std::is_same_v<R, law::RollingNone>) {
+    if (vectorised) {  // frictionless: tally passes too (a deforming cell tallies every step)
+      k.pair[0] = TOMODEM_X4_LOOP(pair_kernel_hertz_x4<false>);
+      k.pair[1] = TOMODEM_X4_LOOP(pair_kernel_hertz_x4<true>);
       k.vectorised = true;
     }
   }

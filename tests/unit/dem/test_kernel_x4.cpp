@@ -1,0 +1,138 @@
+// The four-contact-wide frictionless Hertz loop (kernel_simd_body.inc, pair_kernel_hertz_x4)
+// against the scalar loop of kernel.hpp over the laws of laws.hpp, with and without tallies
+// (issue 19: a deforming cell tallies every step, so the tally pass runs four-wide too).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "kernel_simd.hpp"
+
+using namespace tomodem;
+using namespace tomodem::dem;
+
+namespace {
+
+Material material(double E, double nu, double rho) {
+  Material m;
+  m.name = "m";
+  m.youngs_modulus = E;
+  m.poisson_ratio = nu;
+  m.density = rho;
+  return m;
+}
+
+/// Random isolated pairs (no sum over contacts reorders anything) of two phases: the first 256
+/// mostly touching, the rest mostly apart (both block paths of the loop); 517 pairs, so the last
+/// group of four has spare lanes.
+struct RandomPairs {
+  static constexpr int kPairs = 517;
+  ContactModel m;
+  std::vector<Vec3> x, v;
+  std::vector<double> r, mass;
+  std::vector<int32_t> phase, start, owner, jj;
+  std::vector<uint8_t> img;
+  Vec3 shift[27] = {}, vshift[27] = {};
+
+  RandomPairs() {
+    std::mt19937_64 rng(7);
+    std::uniform_real_distribution<double> u(-1, 1), u01(0, 1);
+    m.normal = NormalLaw::hertz;
+    m.tangential = TangentialLaw::none;
+    m.materials = {material(1e8, 0.25, 2500), material(3e8, 0.3, 7800)};
+    m.finalize();
+    for (int a = 0; a < 2; ++a)
+      for (int b = 0; b < 2; ++b) m.pair(a, b).restitution = a == b ? 0.5 : 0.3;
+    m.finalize();
+    const std::size_t np = 2 * std::size_t(kPairs);
+    x.resize(np), v.resize(np), r.resize(np), mass.resize(np), phase.resize(np), start.resize(np + 1);
+    for (int k = 0; k < kPairs; ++k) {
+      const std::size_t i = 2 * std::size_t(k), j = i + 1;
+      r[i] = 1e-3 * (1 + 0.3 * u(rng));
+      r[j] = 1e-3 * (1 + 0.3 * u(rng));
+      for (std::size_t q : {i, j}) {
+        phase[q] = u01(rng) < 0.5 ? 0 : 1;
+        mass[q] = (phase[q] ? 7800 : 2500) * 4.0 / 3.0 * M_PI * r[q] * r[q] * r[q];
+        v[q] = {0.1 * u(rng), 0.1 * u(rng), 0.1 * u(rng)};
+      }
+      const bool touching = u01(rng) < (k < 256 ? 0.8 : 0.3);
+      const double overlap = touching ? 0.02 * std::min(r[i], r[j]) * u01(rng) : -0.01 * r[i] * u01(rng);
+      Vec3 dir{u(rng), u(rng), u(rng)};
+      dir = (1 / norm(dir)) * dir;
+      x[i] = {0.1 * k, 0, 0};
+      x[j] = x[i] + (r[i] + r[j] - overlap) * dir;
+      start[i] = k, start[j] = k + 1;
+      owner.push_back(int32_t(i));
+      jj.push_back(int32_t(j));
+      img.push_back(13);  // the centre image
+    }
+    start[np] = kPairs;
+  }
+  ForceJob job(Vec3* pair_force) {
+    ForceJob jb{x.data(), v.data(), nullptr, r.data(), mass.data(), phase.data(), start.data(), owner.data(),
+                jj.data(), img.data(), nullptr, nullptr, 0, shift, vshift, m.pairs.data(), 2, 1e-6};
+    jb.pair_force = pair_force;
+    return jb;
+  }
+  int n() const { return int(x.size()); }
+};
+
+double max_norm(const std::vector<Vec3>& a) {
+  double s = 0;
+  for (const Vec3& q : a) s = std::max(s, norm(q));
+  return s;
+}
+double max_diff(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
+  double s = 0;
+  for (std::size_t q = 0; q < a.size(); ++q) s = std::max(s, norm(a[q] - b[q]));
+  return s;
+}
+
+}  // namespace
+
+// Each contact is the same arithmetic in another instruction order (R* and m* from one division):
+// a few ulp, so 1e-13 of the largest value. The tally's sums run over 400-odd contacts in
+// another order: 1e-12 relative.
+TEST(KernelX4, FrictionlessHertzEqualsScalarLawsWithAndWithoutTally) {
+  RandomPairs s;
+  const std::size_t np = std::size_t(s.n());
+  using Scalar = law::NormalHertz;
+  for (bool tally : {false, true}) {
+    std::vector<Vec3> f0(np), f1(np), pf0(RandomPairs::kPairs), pf1(RandomPairs::kPairs);
+    std::vector<double> st0(np), st1(np);
+    Tally t0, t1;
+    ForceJob j0 = s.job(tally ? pf0.data() : nullptr), j1 = s.job(tally ? pf1.data() : nullptr);
+    if (tally) {
+      detail::pair_kernel<Scalar, law::TangentialNone, law::RollingNone, true>(j0, 0, s.n(), f0.data(), nullptr, &t0, st0.data());
+      detail::pair_kernel_hertz_x4<true>(j1, 0, s.n(), f1.data(), nullptr, &t1, st1.data());
+    } else {
+      detail::pair_kernel<Scalar, law::TangentialNone, law::RollingNone, false>(j0, 0, s.n(), f0.data(), nullptr, nullptr, nullptr);
+      detail::pair_kernel_hertz_x4<false>(j1, 0, s.n(), f1.data(), nullptr, nullptr, nullptr);
+    }
+    const double fmax = max_norm(f0);
+    ASSERT_GT(fmax, 0);
+    EXPECT_LT(max_diff(f0, f1), 1e-13 * fmax) << "tally " << tally;
+    if (!tally) continue;
+    std::printf("measured: %ld contacts, virial trace %.6e / %.6e, elastic %.6e / %.6e J\n", t0.contacts,
+                t0.virial.trace(), t1.virial.trace(), t0.elastic, t1.elastic);
+    EXPECT_GT(t0.contacts, 200);  // both block paths hold contacts
+    EXPECT_EQ(t1.contacts, t0.contacts);
+    EXPECT_LT(max_diff(pf0, pf1), 1e-13 * max_norm(pf0));
+    double vmax = 0, dv = 0, smax = 0, ds = 0;
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) vmax = std::max(vmax, std::abs(t0.virial(a, b))), dv = std::max(dv, std::abs(t1.virial(a, b) - t0.virial(a, b)));
+    for (std::size_t q = 0; q < np; ++q) smax = std::max(smax, st0[q]), ds = std::max(ds, std::abs(st1[q] - st0[q]));
+    EXPECT_LT(dv, 1e-12 * vmax);
+    EXPECT_LT(ds, 1e-13 * smax);
+    EXPECT_NEAR(t1.elastic, t0.elastic, 1e-12 * t0.elastic);
+    EXPECT_NEAR(t1.dissipated, t0.dissipated, 1e-12 * t0.dissipated);
+    EXPECT_NEAR(t1.sum_contact_force, t0.sum_contact_force, 1e-12 * t0.sum_contact_force);
+    EXPECT_NEAR(t1.max_overlap_ratio, t0.max_overlap_ratio, 1e-13 * t0.max_overlap_ratio);
+    EXPECT_GT(t0.dissipated, 0);
+    // An independent check of the virial: Σ F_j ⊗ l has the trace Σ F_j · l (pair k joins
+    // particles 2k and 2k + 1).
+    double trace = 0;
+    for (std::size_t k = 0; k < std::size_t(RandomPairs::kPairs); ++k) trace += dot(pf0[k], s.x[2 * k + 1] - s.x[2 * k]);
+    EXPECT_NEAR(t1.virial.trace(), trace, 1e-12 * std::abs(trace));
+  }
+}
