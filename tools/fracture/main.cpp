@@ -66,6 +66,9 @@ int main(int argc, char** argv) {
                    "sla: bonds within (1 + this) of the critical opening break together")->capture_default_str();
     bool no_contact = false;
     app.add_flag("--no-contact", no_contact, "sla: broken faces pass through each other (no compression)");
+    app.add_option("--cracks", c.cracks,
+                   "sla: pre-cracks per sample, each with the network moved by 1/cracks of the cell along x and z; "
+                   "K_IC is their mean")->capture_default_str();
     app.add_option("--widths", c.widths, "sla: size-effect study, sample widths in mean diameters (>= 3)")->delimiter(',');
     app.add_option("--transits", ex.transits, "explicit: loading time to the reference strain, in elastic-wave transits")
         ->capture_default_str();

@@ -203,6 +203,21 @@ FractureSample make_sample(const Network& net, const CrackOptions& o, const std:
   return s;
 }
 
+FractureSample make_crack_sample(const Network& net, const CrackOptions& o, int k, int cracks, const std::string& file) {
+  if (k == 0) return make_sample(net, o, file);
+  const Cell& cell = net.packing.cell;
+  if (!cell.periodic[0] || !cell.periodic[2])
+    throw InputError(file, "/cell/periodic", std::string(cell.periodic[0] ? "" : "x ") + (cell.periodic[2] ? "" : "z ") + "not periodic",
+                     "--cracks " + std::to_string(cracks) + " moves the network along x and z between cracks: the cell must be periodic along both");
+  // A periodic network moved by a fraction of its cell is the same material; make_sample wraps
+  // the particles back into the cell (the bond images follow), so the cut faces move with it.
+  Network moved = net;
+  const double f = double(k) / double(cracks);
+  const Vec3 shift{f * cell.h(0, 0), 0.0, f * cell.h(2, 2)};
+  for (Vec3& x : moved.packing.particles.position) x = x + shift;
+  return make_sample(moved, o, file);
+}
+
 double geometry_factor(CrackGeometry geometry, double a) {
   if (geometry == CrackGeometry::centre) return std::sqrt(1 / std::cos(M_PI * a));
   return 1.12 - 0.231 * a + 10.55 * a * a - 21.72 * a * a * a + 30.39 * a * a * a * a;

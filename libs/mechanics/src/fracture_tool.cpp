@@ -233,16 +233,71 @@ json size_effect_study(const FractureConfig& c, const Network& net, const std::v
                     {"K_IC", r.K_IC}, {"K_IC_error", r.K_IC_error}, {"broken_bonds", r.events.size()},
                     {"wall_time_s", r.wall_time_s}});
   }
-  json out = {{"samples", rows}, {"height_over_width", aspect}};
+  json out = json::parse(size_effect_fits_json(Wm, K, err));
+  out["samples"] = rows;
+  out["height_over_width"] = aspect;
+  return out;
+}
+
+/// Several cracks per sample (docs/fracture.md#several-cracks-per-sample): K_IC is the mean over
+/// the cracks; its uncertainty combines the standard error of the mean from the spread between
+/// cracks with the cracks' own K_IC_error (crack-tip discreteness) propagated to the mean, in
+/// quadrature. Returns the `cracks` object; `K`, `rel_error` get the mean and the combined error.
+json crack_statistics(const std::vector<FractureResult>& runs, double& K, double& rel_error) {
+  const double n = double(runs.size());
+  double sum = 0, method = 0;
+  json per = json::array(), per_error = json::array(), per_peak = json::array(), per_broken = json::array();
+  for (const FractureResult& r : runs) {
+    sum += r.K_IC;
+    method += std::pow(r.K_IC_error * r.K_IC, 2);
+    per.push_back(r.K_IC), per_error.push_back(r.K_IC_error), per_peak.push_back(r.peak_stress);
+    per_broken.push_back(r.events.size());
+  }
+  const double mean = sum / n;
+  double ss = 0;
+  for (const FractureResult& r : runs) ss += std::pow(r.K_IC - mean, 2);
+  const double sd = runs.size() > 1 ? std::sqrt(ss / (n - 1)) : 0.0, sem = sd / std::sqrt(n);
+  const double method_sem = std::sqrt(method) / n;  // Σ (e_k K_k)² / n² : each crack's error, independent
+  K = mean;
+  rel_error = std::hypot(sem, method_sem) / mean;
+  return {{"count", runs.size()},          {"K_IC", per},
+          {"K_IC_error", per_error},       {"peak_stress", per_peak},
+          {"broken_bonds", per_broken},    {"mean", mean},
+          {"sd", sd},                      {"cv", sd / mean},
+          {"sem", sem},                    {"sem_relative", sem / mean},
+          {"method_error", method_sem / mean}, {"combined_error", rel_error}};
+}
+
+}  // namespace
+
+std::string size_effect_fits_json(const std::vector<double>& W, const std::vector<double>& K,
+                                  const std::vector<double>& rel_error) {
+  json out;
   for (SizeEffectLaw law : {SizeEffectLaw::bazant, SizeEffectLaw::linear}) {
-    const SizeEffectFit f = fit_size_effect(Wm, K, err, law);
+    const SizeEffectFit f = fit_size_effect(W, K, rel_error, law);
     out[law == SizeEffectLaw::bazant ? "bazant" : "linear"] = {
         {"K_inf", finite(f.K_inf)}, {"K_inf_error", finite(f.K_inf_error)},
         {law == SizeEffectLaw::bazant ? "W0" : "c", finite(f.length)}, {"length_error", finite(f.length_error)},
         {"chi2", finite(f.chi2)}, {"dof", f.dof}};
   }
-  return out;
+  // Bažant's K∞ = 1/sqrt(intercept of 1/K² against 1/W): none when that intercept is not positive,
+  // i.e. K_IC grows at least as sqrt(W) over these widths (the small-size branch of the law).
+  const bool bazant = out["bazant"]["K_inf"].is_number();
+  if (!bazant && W.size() >= 3) {
+    const std::string why =
+        "no finite large-sample K_IC from Bazant's law: the intercept 1/K_inf^2 of 1/K_IC^2 against 1/W is not "
+        "positive (K_IC grows at least as sqrt(W) over these widths); K_inf is the first-order law's";
+    out["bazant"]["reason"] = why;
+    warn("--widths: " + why);
+  }
+  const json& chosen = out[bazant ? "bazant" : "linear"];
+  out["K_inf"] = chosen["K_inf"];
+  out["K_inf_error"] = chosen["K_inf_error"];
+  out["K_inf_law"] = bazant ? "bazant" : "linear";
+  return out.dump();
 }
+
+namespace {
 
 FailureOptions check_fracture_options(const FractureConfig& c) {
   FailureOptions fo = c.failure;
@@ -271,6 +326,10 @@ FailureOptions check_fracture_options(const FractureConfig& c) {
   require_range("--event-tolerance", c.sla.event_tolerance, 0, true, 0.2, true, "of the critical opening");
   require_range("--rebuild-factor", c.sla.rebuild_factor, 1, false, 100, true, "x the iterations of a fresh multigrid");
   check_widths(c);
+  if (c.cracks < 1 || c.cracks > 100)
+    throw InputError("", "--cracks", std::to_string(c.cracks), "must lie in [1, 100] (pre-cracks per sample)");
+  if (c.cracks > 1 && c.method == FractureMethod::explicit_test)
+    throw InputError("", "--cracks", std::to_string(c.cracks), "the cracks are SLA tests: use --method sla or both");
   require_positive("--transits", c.explicit_.transits, "elastic-wave transits");
   require_non_negative("--strain-rate", c.explicit_.strain_rate, "1/s; 0: from --transits");
   check_bond_damping_ratio(c.explicit_.damping_ratio);
@@ -415,6 +474,8 @@ std::string run_fracture(const FractureConfig& c) {
   std::vector<dem::BondLaw> laws = bond_laws(p, c.input, c.law, want_explicit);
   set_failure(laws, p, fo, c.input);
   const FractureSample s = make_sample(net, c.crack, c.input);
+  std::vector<FractureSample> more_cracks;  // cracks 1 .. K-1, cut before any run: bad input stops here
+  for (int k = 1; k < c.cracks; ++k) more_cracks.push_back(make_crack_sample(net, c.crack, k, c.cracks, c.input));
   check_widths_fit(c, net, s.mean_diameter);
   if (c.fields.requested()) check_fracture_fields(c.fields, s);  // width and grid, before any solve
   if (want_sla && !sla_uses_pcg(c.sla, long(s.packing.particles.size() - s.removed_particles)))
@@ -429,11 +490,16 @@ std::string run_fracture(const FractureConfig& c) {
   double E = std::nan(""), nu = std::nan("");
   if (c.elastic) std::tie(E, nu) = elastic_constants(net, laws, c.input);
   FractureResult sla, ex;
+  std::vector<FractureResult> crack_runs;  // cracks 2 .. K
   if (want_sla) {
     info("sequentially linear analysis");
     SlaOptions so = c.sla;
     so.stop_fraction = c.stop_fraction;
     sla = run_sla(s, laws, fo, so);
+    for (std::size_t k = 0; k < more_cracks.size(); ++k) {
+      info("crack " + std::to_string(k + 2) + " of " + std::to_string(c.cracks));
+      crack_runs.push_back(run_sla(more_cracks[k], laws, fo, so));
+    }
   }
   if (want_explicit) {
     info("explicit quasi-static test");
@@ -448,6 +514,14 @@ std::string run_fracture(const FractureConfig& c) {
   out["method"] = to_string(c.method);
   out["criterion"] = to_string_criterion(c.failure.criterion);
   primary_keys(out, primary, s, E, nu);
+  if (c.cracks > 1) {
+    crack_runs.insert(crack_runs.begin(), sla);
+    double K = 0, error = 0;
+    out["cracks"] = crack_statistics(crack_runs, K, error);
+    out["K_IC"] = K;
+    out["K_IC_error"] = error;
+    out["G_from_K_IC"] = finite(K * K * (1 - nu * nu) / E);
+  }
   out["sample"] = sample_json(s, p.particles.size());
   if (want_sla) out["sla"] = result_json(sla, s);
   if (want_explicit) out["explicit"] = result_json(ex, s);

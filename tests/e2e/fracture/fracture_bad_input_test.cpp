@@ -81,6 +81,8 @@ const std::vector<Case> kCases = {
     {"max_breaks_zero", "fracture", B + " --max-breaks 0", 2, {"--max-breaks", "0"}},
     {"timestep_fraction_sla", "fracture", B + " --timestep-fraction 2", 2, {"--timestep-fraction", "2"}},
     {"geometry_unknown", "fracture", B + " --geometry middle", 2, {"--geometry", "middle"}},
+    {"cracks_zero", "fracture", B + " --cracks 0", 2, {"--cracks", "0"}},
+    {"cracks_explicit", "fracture", B + " --method explicit --cracks 2", 2, {"--cracks", "2", "--method sla or both"}},
     // ---- outputs
     {"map_is_input", "fracture", B + " --map {D}/bonded.h5", 2, {"--map", "bonded.h5"}},
     {"curve_is_input", "fracture", B + " --curve {D}/bonded.h5", 2, {"--curve", "bonded.h5"}},

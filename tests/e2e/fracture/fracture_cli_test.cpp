@@ -139,3 +139,72 @@ TEST_F(FractureCli, NoBondsAcrossTheCrackPathExit2WithoutOutput) {
   EXPECT_NE(err.find("no bonds across the crack path"), std::string::npos) << err;
   expect_no_output();
 }
+
+// --cracks K on a simple cubic lattice (every bond alike, spacing d, 8 d cell): moving the lattice
+// by 2 d along x and z maps it onto itself, so each of the K = 4 cracks sees the same sample and
+// must give the single-crack K_IC. Tolerance 1e-9: the same systems with the particles numbered
+// differently (round-off of the solve order; the lattice's tied bonds break as one group).
+TEST_F(FractureCli, CracksOnALatticeAllGiveTheSingleCrackValue) {
+  const double d = 2e-6;
+  mechanics::Network net;
+  net.packing = mechanics::test::lattice("simple_cubic", 8, d, 0.6 * d, mechanics::test::alumina());
+  // Sites half a spacing from the cell faces: a site on a face could wrap to either side after the move.
+  for (Vec3& x : net.packing.particles.position) x = x + Vec3{0.5 * d, 0.5 * d, 0.5 * d};
+  mechanics::test::bond_ratio(net, 1.0);
+  const std::string in = network(net), opts = " --a-over-w 0.22 --no-elastic --json " + path("out.json") + " -q";
+  auto [c1, e1] = run(in + opts);
+  ASSERT_EQ(c1, 0) << e1;
+  const auto one = json("out.json");
+  auto [c4, e4] = run(in + opts + " --cracks 4");
+  ASSERT_EQ(c4, 0) << e4;
+  const auto four = json("out.json");
+  const double K1 = one["K_IC"], e1rel = one["K_IC_error"];
+  ASSERT_EQ(four["cracks"]["K_IC"].size(), 4u);
+  for (double K : four["cracks"]["K_IC"]) EXPECT_NEAR(K / K1, 1.0, 1e-9);
+  EXPECT_NEAR(four["K_IC"].get<double>() / K1, 1.0, 1e-9);
+  EXPECT_LT(four["cracks"]["sd"].get<double>(), 1e-9 * K1);
+  // No spread: the uncertainty is the method's alone, its relative error / sqrt(4) (docs/fracture.md).
+  EXPECT_NEAR(four["K_IC_error"].get<double>() / (e1rel / 2), 1.0, 1e-6);
+}
+
+// --cracks 3 on a random network: crack k is the single-crack test of the network moved by k/3 of
+// the cell along x and z. The test moves the network itself, runs one crack on each moved file and
+// checks the per-crack values (same arithmetic: 1e-12), their mean, sd, standard error and the
+// combined error sqrt(sem² + Σ(e_k K_k)²/K²)/mean from those values.
+TEST_F(FractureCli, CracksAreSingleCrackRunsOnTheMovedNetwork) {
+  const mechanics::Network net = mechanics::test::slab(12, 3, 18, 11);
+  const std::string opts = " --a-over-w 0.2 --no-elastic --json " + path("out.json") + " -q";
+  auto [c3, e3] = run(network(net) + opts + " --cracks 3");
+  ASSERT_EQ(c3, 0) << e3;
+  const auto three = json("out.json");
+  std::vector<double> K, e;
+  for (int k = 0; k < 3; ++k) {
+    mechanics::Network moved = net;
+    const Vec3 shift{k / 3.0 * net.packing.cell.h(0, 0), 0.0, k / 3.0 * net.packing.cell.h(2, 2)};
+    for (Vec3& x : moved.packing.particles.position) x = x + shift;
+    auto [c, err] = run(network(moved) + opts);
+    ASSERT_EQ(c, 0) << err;
+    K.push_back(json("out.json")["K_IC"]);
+    e.push_back(json("out.json")["K_IC_error"]);
+    EXPECT_NEAR(three["cracks"]["K_IC"][k].get<double>() / K.back(), 1.0, 1e-12) << "crack " << k;
+  }
+  const double mean = (K[0] + K[1] + K[2]) / 3;
+  double ss = 0, method = 0;
+  for (int k = 0; k < 3; ++k) ss += (K[k] - mean) * (K[k] - mean), method += std::pow(e[k] * K[k], 2);
+  const double sd = std::sqrt(ss / 2), sem = sd / std::sqrt(3.0);
+  EXPECT_GT(sd, 0.01 * mean);  // three different places in a random network: the cracks differ
+  EXPECT_NEAR(three["K_IC"].get<double>() / mean, 1.0, 1e-12);
+  EXPECT_NEAR(three["cracks"]["sd"].get<double>() / sd, 1.0, 1e-9);
+  EXPECT_NEAR(three["cracks"]["sem"].get<double>() / sem, 1.0, 1e-9);
+  EXPECT_NEAR(three["K_IC_error"].get<double>() / (std::sqrt(sem * sem + method / 9) / mean), 1.0, 1e-9);
+}
+
+TEST_F(FractureCli, CracksNeedACellPeriodicAlongXAndZ) {
+  mechanics::Network net = mechanics::test::slab(12, 3, 18, 11);
+  net.packing.cell.periodic[0] = false;
+  auto [code, err] = run(network(net) + " --cracks 2 --no-elastic" + outputs());
+  EXPECT_EQ(code, 2) << err;
+  EXPECT_NE(err.find("--cracks 2"), std::string::npos) << err;
+  EXPECT_NE(err.find("/cell/periodic"), std::string::npos) << err;
+  expect_no_output();
+}

@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <nlohmann/json.hpp>
 
 #include "samples.hpp"
+#include "tomodem/mechanics/fracture.hpp"
 #include "tomodem/mechanics/size_effect.hpp"
 
 using namespace tomodem;
@@ -70,4 +72,30 @@ TEST(SizeEffect, CropKeepsTheWindowAndItsInnerBonds) {
   const FractureSample s = make_sample(half, c);
   EXPECT_NEAR(s.W, 0.5 * L, 1e-12 * L);
   EXPECT_GT(s.ligament_bonds, 0);
+}
+
+// --widths' summary (size_effect_fits_json): when K_IC grows faster than sqrt(W) the intercept of
+// 1/K² against 1/W is negative and Bažant's law has no finite K∞: the summary says why and gives
+// the first-order law's K∞ (the estimate docs/rve.md quotes) as the large-sample value.
+// K = K1 (W/W1)^0.75: 1/K² ∝ x^1.5 (x = 1/W) is convex and 0 at x = 0, so every line through its
+// points has a negative intercept (by hand, x ∝ 1, 0.5, 0.25: unweighted fit −0.20, the secant of
+// the two widest −0.10, in units of the first point's y).
+TEST(SizeEffect, NoFiniteBazantLimitFallsBackToTheFirstOrderLaw) {
+  std::vector<double> W = {20e-6, 40e-6, 80e-6}, K, e(3, 0.05);
+  for (double w : W) K.push_back(1e5 * std::pow(w / 20e-6, 0.75));
+  const nlohmann::json j = nlohmann::json::parse(size_effect_fits_json(W, K, e));
+  EXPECT_TRUE(j["bazant"]["K_inf"].is_null());
+  ASSERT_TRUE(j["bazant"].contains("reason"));
+  EXPECT_NE(j["bazant"]["reason"].get<std::string>().find("not positive"), std::string::npos);
+  EXPECT_EQ(j["K_inf_law"], "linear");
+  const SizeEffectFit lin = fit_size_effect(W, K, e, SizeEffectLaw::linear);
+  EXPECT_EQ(j["K_inf"].get<double>(), lin.K_inf);
+  EXPECT_EQ(j["K_inf_error"].get<double>(), lin.K_inf_error);
+  // Bažant's own law (K∞ = 1.5e5, W0 = 30 µm): finite, so it is the large-sample value, no reason.
+  K.clear();
+  for (double w : W) K.push_back(1.5e5 / std::sqrt(1 + 30e-6 / w));
+  const nlohmann::json b = nlohmann::json::parse(size_effect_fits_json(W, K, e));
+  EXPECT_EQ(b["K_inf_law"], "bazant");
+  EXPECT_NEAR(b["K_inf"].get<double>() / 1.5e5, 1.0, 1e-12);
+  EXPECT_FALSE(b["bazant"].contains("reason"));
 }

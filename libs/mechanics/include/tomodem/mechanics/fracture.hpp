@@ -57,6 +57,12 @@ struct FractureSample {
 /// Builds the sample. InputError (exit 2) for a non-orthogonal cell or one not periodic in y, a
 /// crack longer than the sample, no intact bond across the crack path, grips not connected.
 FractureSample make_sample(const Network& net, const CrackOptions& o, const std::string& file = "");
+/// Crack k of `cracks` on the same periodic network (docs/fracture.md#several-cracks-per-sample):
+/// the network moved by k/cracks of the cell along x and along z before the sample is cut, so the
+/// crack plane, its tips, the free faces and the grips lie in other material; k = 0 is
+/// make_sample's. InputError (--cracks) when the cell is not periodic along x and z.
+FractureSample make_crack_sample(const Network& net, const CrackOptions& o, int k, int cracks,
+                                 const std::string& file = "");
 
 /// Geometry factor Y(a/W) of docs/physics.md#fracture-toughness (Tada, Paris & Irwin): centre crack sqrt(sec(π a/W)),
 /// edge notch 1.12 − 0.231 α + 10.55 α² − 21.72 α³ + 30.39 α⁴.
@@ -146,7 +152,7 @@ struct FractureResult {
 };
 
 struct SlaOptions {
-  double stop_fraction = 0.2;   ///< stop once the load after the peak falls below this × peak (0: until cut through)
+  double stop_fraction = 0.5;   ///< stop once the load after the peak falls below this × peak (0: until cut through; docs/fracture.md: why 0.5)
   long max_breaks = 1'000'000;
   int woodbury_bonds = 48;      ///< broken bonds handled by low-rank updates before refactorising
   SlaSolver solver = SlaSolver::automatic;
@@ -188,7 +194,7 @@ struct ExplicitFractureOptions {
   double damping_ratio = 0.3;   ///< ζ of the bond dashpots
   double local_damping = 0;     ///< Cundall's λ (0: none)
   double timestep_fraction = 0.2;
-  double stop_fraction = 0.2;
+  double stop_fraction = 0.5;
   double ramp_transits = 2;     ///< grip velocity ramps up over this many transits
   int records_per_transit = 4;
   bool track_energy = true;
@@ -210,7 +216,8 @@ struct FractureConfig {
   FailureOptions failure;
   SlaOptions sla;
   ExplicitFractureOptions explicit_;
-  double stop_fraction = 0.2;
+  double stop_fraction = 0.5;            ///< K_IC and the peak are fixed by then (docs/fracture.md#stop); 0.2 or 0 for the curve
+  int cracks = 1;                        ///< SLA cracks per sample, each moved by 1/cracks of the cell (make_crack_sample)
   bool elastic = true;                   ///< compute E, ν of the periodic network (G = K²(1−ν²)/E check)
   std::vector<double> widths;            ///< size-effect study (SLA): sample widths in mean diameters, ≥ 3 (docs/fracture.md#size-effect)
   std::optional<double> youngs_modulus, poisson_ratio, density;  ///< overrides for every phase (unset: file)
@@ -218,5 +225,11 @@ struct FractureConfig {
 };
 /// Returns the JSON summary (also written to `json` when set).
 std::string run_fracture(const FractureConfig& c);
+
+/// The two size-effect fits of size_effect.hpp as the summary's JSON text (`bazant`, `linear`) and
+/// the large-sample value `K_inf`, `K_inf_error`, `K_inf_law`: Bažant's when it has a finite value,
+/// else the first-order law's, with `bazant.reason` saying why (also warned).
+std::string size_effect_fits_json(const std::vector<double>& W, const std::vector<double>& K,
+                                  const std::vector<double>& rel_error);
 
 }  // namespace tomodem::mechanics
