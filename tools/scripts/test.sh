@@ -23,4 +23,7 @@ cmake -S . -B "$MPI_BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=Release -DTOMODEM_NAT
 cmake --build "$MPI_BUILD_DIR" -j "${JOBS:-$(nproc)}" --target tomodem_mpi_tests
 export OMP_NUM_THREADS=1
 if [ "$(id -u)" -eq 0 ]; then export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1; fi
-ctest --test-dir "$MPI_BUILD_DIR" --output-on-failure -L mpi
+# -j: each MPI test declares its ranks (ctest PROCESSORS), so ctest pairs only one-rank tests and
+# runs a test of 2 or more ranks alone (a PROCESSORS above -j takes every slot); the tests use
+# their own per-process folders.
+ctest --test-dir "$MPI_BUILD_DIR" --output-on-failure -j "$(nproc)" -L mpi
