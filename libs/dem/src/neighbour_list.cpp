@@ -143,6 +143,52 @@ NeighbourList::KeptHistory NeighbourList::keep_history(const SimState& s) const 
   return kept;
 }
 
+NeighbourList::SavedHistory NeighbourList::save_history(const SimState& s) const {
+  const std::size_t stride = std::size_t(s.stride), pairs = nj.size();
+  auto carries = [&](std::size_t q) {
+    bool set = !touch.empty() && touch[q];
+    for (std::size_t k = 0; k < stride; ++k) set = set || hist[q * stride + k] != 0 || std::signbit(hist[q * stride + k]);
+    return set;
+  };
+  std::size_t count = 0;
+  for (std::size_t q = 0; q < pairs; ++q) count += carries(q);
+  SavedHistory saved;
+  // An index costs 4 B a pair: a dense packing, where nearly every listed pair touches, is cheaper
+  // copied whole.
+  saved.every_pair = count * (4 + 8 * stride + 1) >= pairs * (8 * stride + 1);
+  if (saved.every_pair) {
+    saved.hist = hist;
+    saved.touch = touch;
+    return saved;
+  }
+  saved.pair.reserve(count);
+  saved.hist.reserve(count * stride);
+  saved.touch.reserve(touch.empty() ? 0 : count);
+  for (std::size_t q = 0; q < pairs; ++q) {
+    if (!carries(q)) continue;
+    saved.pair.push_back(int32_t(q));
+    saved.hist.insert(saved.hist.end(), hist.begin() + std::ptrdiff_t(q * stride), hist.begin() + std::ptrdiff_t((q + 1) * stride));
+    if (!touch.empty()) saved.touch.push_back(touch[q]);
+  }
+  return saved;
+}
+
+void NeighbourList::restore_history(const SavedHistory& saved, const SimState& s) {
+  if (saved.every_pair) {
+    std::copy(saved.hist.begin(), saved.hist.end(), hist.begin());
+    std::copy(saved.touch.begin(), saved.touch.end(), touch.begin());
+    return;
+  }
+  const std::size_t stride = std::size_t(s.stride);
+  std::fill(hist.begin(), hist.end(), 0.0);
+  std::fill(touch.begin(), touch.end(), uint8_t(0));
+  for (std::size_t c = 0; c < saved.pair.size(); ++c) {
+    const std::size_t q = std::size_t(saved.pair[c]);
+    std::copy_n(&saved.hist[c * stride], stride, &hist[q * stride]);
+    if (!touch.empty()) touch[q] = saved.touch[c];
+  }
+}
+
 void NeighbourList::build(SimState& s) {
 #if TOMODEM_HAVE_MPI
   // Decomposed: the owners wrapped their particles before the exchange (the ghosts are copies).

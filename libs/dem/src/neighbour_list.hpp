@@ -45,6 +45,20 @@ class NeighbourList {
   /// Thread split and pair owners of a list restored from a checkpoint.
   void reindex(const SimState& s);
 
+  /// The history a pass that must not change it (a measurement) may alter: the pairs whose
+  /// springs or contact flag are set, bit for bit (-0.0 too); every other pair's is +0.0. In a
+  /// gas that is the few pairs in contact, not the ~25 listed per contact (issue 19: a full copy
+  /// was 24 B per listed pair on top of the list at every series row).
+  struct SavedHistory {
+    bool every_pair = false;  ///< most pairs carry history: `hist` is all of it, `pair` empty
+    std::vector<int32_t> pair;
+    std::vector<double> hist;
+    std::vector<uint8_t> touch;
+  };
+  SavedHistory save_history(const SimState& s) const;
+  /// Puts back saved history into the same list (not rebuilt since).
+  void restore_history(const SavedHistory& saved, const SimState& s);
+
  private:
   /// Cell vectors (integer, per particle) subtracted by the last wrap: a pair seen through image
   /// n before the wrap is seen through n + w_j − w_i after it (its history must follow). Held

@@ -133,9 +133,8 @@ struct Simulation::Impl : SimState {
     // restoring the saved copy afterwards would leave it shorter than the neighbour list.
     rebuild_if_due();
     if (pair_force) pair_force->assign(nl.nj.size(), Vec3{});
-    std::vector<double> h;
-    std::vector<uint8_t> tf;
-    if (!scratch_list) h = nl.hist, tf = nl.touch;
+    NeighbourList::SavedHistory history;
+    if (!scratch_list) history = nl.save_history(*this);
     std::vector<WallData> wd = nl.wall_data;
     std::vector<Vec3> wall_force;
     for (auto& w : walls) wall_force.push_back(w.force);
@@ -152,7 +151,7 @@ struct Simulation::Impl : SimState {
 #endif
     m.neighbor_rebuilds = nl.builds;
     // Restore.
-    if (!scratch_list) nl.hist.swap(h), nl.touch.swap(tf);
+    if (!scratch_list) nl.restore_history(history, *this);
     nl.wall_data = wd;
     for (std::size_t w = 0; w < walls.size(); ++w) walls[w].force = wall_force[w];
     p.f = f;
