@@ -174,34 +174,40 @@ EOF
 done
 
 # ---- memory per particle of the CLI (tomodem-dem, scene A as in docs/dem.md, default outputs) ----
-cli_rss() {  # cells -> peak RSS MB
-  local n=$1 d=$OUT/cli_$1
+# Gas: scene A-gas as the CLI generates it (FCC at solid fraction 0.55, velocities up to 1 m/s;
+# N = 4 cells³, 8788 and 62 500 as in the tables).
+cli_rss() {  # dense|gas cells -> peak RSS MB
+  local n=$2 d=$OUT/cli_$1_$2 gen
+  case $1 in
+    dense) gen="arrangement: simple_cubic, cells: $n, radius: 0.5e-3, spacing: 0.9837e-3, jitter: 0.015, velocity: 0.1" ;;
+    gas) gen="arrangement: fcc, cells: $n, radius: 0.5e-3, solid_fraction: 0.55, velocity: 1.0" ;;
+  esac
   mkdir -p "$d"
   cat > "$d/scene.yaml" << EOF
 materials:
   - {name: glass, youngs_modulus: 1.0e8, poisson_ratio: 0.25, density: 2500}
 particles:
-  generate: {arrangement: simple_cubic, cells: $n, radius: 0.5e-3, spacing: 0.9837e-3, jitter: 0.015, velocity: 0.1, seed: 3, phase: glass}
+  generate: {$gen, seed: 3, phase: glass}
 physics: {normal: hertz, tangential: mindlin, restitution: 0.5, friction: 0.5}
 protocol: {timestep: 1.35e-6, steps: 300}
 settings: {skin: 2.0e-4}
 output: {packing: out.h5, series: series.csv}
 EOF
   /usr/bin/time -v -o "$d/time.txt" "$CLI_BUILD/bin/tomodem-dem" "$d/scene.yaml" --output-dir "$d/out" --json "$d/out/summary.json" \
-    > "$d/log.txt" 2>&1 || { echo "  tomodem-dem cells $n failed (see $d/log.txt)" >&2; echo 0; return; }
+    > "$d/log.txt" 2>&1 || { echo "  tomodem-dem $1 cells $n failed (see $d/log.txt)" >&2; echo 0; return; }
   awk -F: '/Maximum resident/{printf "%.1f", $2 / 1024}' "$d/time.txt"
 }
 echo "== CLI memory (tomodem-dem, 300 steps)"
-CLI1=$(cli_rss 20); CLI2=$(cli_rss 40)
-echo "   tomodem-dem peak RSS: N=8000 $CLI1 MB, N=64000 $CLI2 MB"
+CLI1=$(cli_rss dense 20); CLI2=$(cli_rss dense 40); GAS1=$(cli_rss gas 13); GAS2=$(cli_rss gas 25)
+echo "   tomodem-dem peak RSS: dense N=8000 $CLI1 MB, N=64000 $CLI2 MB; gas N=8788 $GAS1 MB, N=62500 $GAS2 MB"
 LOAD1=$(cut -d' ' -f1-3 /proc/loadavg)
 echo "load after $LOAD1"
 
 # ---- tables ----
-python3 - "$CSV" "$OUT/table.md" "$CLI1" "$CLI2" << EOF
+python3 - "$CSV" "$OUT/table.md" "$CLI1" "$CLI2" "$GAS1" "$GAS2" << EOF
 import csv, statistics, sys
 rows = list(csv.DictReader(open(sys.argv[1])))
-cli1, cli2 = float(sys.argv[3]), float(sys.argv[4])
+cli1, cli2, gas1, gas2 = (float(a) for a in sys.argv[3:7])
 flags = {'lammps-debian': "$DEBFLAGS", 'liggghts': "$LIGFLAGS", 'tomodem-generic': "$GFLAGS",
          'tomodem-generic-baseline': "$GFLAGS".split(',')[0] + ', baseline x86-64 loop (TOMODEM_DEM_SIMD=baseline)',
          'lammps-native': "LAMMPS from Debian's source, $LNFLAGS", 'tomodem-native': "$NFLAGS"}
@@ -260,6 +266,8 @@ if len(dense) == 2:
         if a and b:
             label = names[cfg] + (' (bench binary)' if cfg.startswith('tomodem') else '') + (' native' if cfg == 'lammps-native' else '')
             out.append('| %s | %.1f | %.1f | %.3f |' % (label, med(a), med(b), (med(b) - med(a)) * 1024 / (dense[1] - dense[0])))
+if gas1 > 0 and gas2 > 0:
+    out.append('| **tomodem-dem** (CLI), gas N = 8788 / 62 500 | %.1f | %.1f | **%.3f** |' % (gas1, gas2, (gas2 - gas1) * 1024 / 53712))
 out.append('')
 out.append('(kB here = 1024 bytes, RSS in MiB as /usr/bin/time and VmHWM report it, as in the tables above.)')
 open(sys.argv[2], 'w').write('\n'.join(out) + '\n')
