@@ -618,6 +618,10 @@ void Amg::Impl::finish(const CsrView& A) {
         12 * std::size_t(L.P.nonZeros() + L.R.nonZeros()) + 8 * L.dinv.size() + 24 * std::size_t(L.A.rows);
   }
   if (use_dense) stats.memory_bytes += 8 * std::size_t(last.A.rows) * std::size_t(last.A.rows);
+  if (debug_timing())  // the hierarchy, level by level (docs/young.md, multigrid scaling)
+    for (std::size_t l = 0; l < levels.size(); ++l)
+      std::fprintf(stderr, "  amg level %zu: %ld rows, %ld nonzeros, %d nodes\n", l, stats.rows[l], stats.nonzeros[l],
+                   levels[l].nodes());
 }
 
 Amg::Amg(const CsrView& A, const NearNullspace& ns, const AmgOptions& o) : impl_(std::make_unique<Impl>()) {

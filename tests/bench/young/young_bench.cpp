@@ -314,3 +314,42 @@ TEST(YoungBench, SolverCostTable) {
   write_text_atomic(out.string(), csv);
   std::printf("load at the end %.1f; wrote %s\n", load_average(), out.c_str());
 }
+
+// Multigrid scaling (docs/young.md, "Solvers"): iterations per case, hierarchy and CPU of the amg
+// path on random networks; TOMODEM_BENCH_SIZES (default "2000,10000") and TOMODEM_BENCH_DENSITIES
+// (default "0.55,0.75") choose the networks; one thread, six strain cases to 1e-10.
+TEST(YoungBench, AmgScaling) {
+  omp_set_num_threads(1);
+  const auto list = [](const char* env, const char* fallback) {
+    std::vector<double> v;
+    std::string s = std::getenv(env) ? std::getenv(env) : fallback;
+    for (std::size_t a = 0; a < s.size();) {
+      const std::size_t b = std::min(s.find(',', a), s.size());
+      v.push_back(std::atof(s.substr(a, b - a).c_str()));
+      a = b + 1;
+    }
+    return v;
+  };
+  const char* solver = std::getenv("TOMODEM_BENCH_SOLVER");
+  for (double density : list("TOMODEM_BENCH_DENSITIES", "0.55,0.75"))
+    for (double n : list("TOMODEM_BENCH_SIZES", "2000,10000")) {
+      Network net;
+      if (std::getenv("TOMODEM_BENCH_SC")) {  // simple cubic lattice of n³ particles, a/R 0.1 (density ignored)
+        net.packing = test::lattice("simple_cubic", int(n), 1e-3, 0.5e-3);
+        test::bond_ratio(net, 0.1);
+      } else {
+        net = test::random_network(int(n), 0.5e-3, 0.30, density, 11, 0.05);
+      }
+      const auto laws = bond_laws(net.packing, "", LawOptions{}, false);
+      const double c0 = double(std::clock()) / CLOCKS_PER_SEC;
+      const bool tensor = !std::getenv("TOMODEM_BENCH_NO_TENSOR");  // three strain cases instead of six
+      const ImplicitResult r = implicit(net, laws, solver ? solver : "amg", 1e-10, tensor);
+      const double cpu = double(std::clock()) / CLOCKS_PER_SEC - c0;
+      std::printf("density %.2f N %ld Z %.2f dofs %ld %s: it/case %.1f levels %d complexity %.3f set-up %.2f s "
+                  "solve %.2f s cpu %.2f s E %.9e nu %.7f residual %.1e load %.1f\n",
+                  density, r.particles_used, 2.0 * double(r.bonds_used) / double(r.particles_used), r.dofs,
+                  solver ? solver : "amg", double(r.iterations) / (tensor ? 6 : 3), r.levels, r.operator_complexity, r.setup_s,
+                  r.solve_s, cpu, r.E, r.nu, r.residual, load_average());
+      std::fflush(stdout);
+    }
+}
