@@ -207,6 +207,24 @@ class RawBlocks : public BlockSource {
   int fd_ = -1;
 };
 
+/// The file and memory dataspaces of one block of a (z, y, x) dataset, for H5Dread and H5Dwrite:
+/// the block's hyperslab selected in the file, a memory space of its size.
+struct BlockSpaces {
+  hid_t file, memory;
+  BlockSpaces(hid_t ds, const Box& b) {
+    const hsize_t start[3] = {b.lo[2], b.lo[1], b.lo[0]}, count[3] = {b.n(2), b.n(1), b.n(0)};
+    file = H5Dget_space(ds);
+    H5Sselect_hyperslab(file, H5S_SELECT_SET, start, nullptr, count, nullptr);
+    memory = H5Screate_simple(3, count, nullptr);
+  }
+  ~BlockSpaces() {
+    H5Sclose(memory);
+    H5Sclose(file);
+  }
+  BlockSpaces(const BlockSpaces&) = delete;
+  BlockSpaces& operator=(const BlockSpaces&) = delete;
+};
+
 // An HDF5 dataset (z, y, x), contiguous or chunked: one hyperslab per block, converted to float
 // by HDF5 (a C cast, as read_h5's double -> float; exact for <= 16-bit integers and float32).
 // A chunked dataset is decompressed chunk by chunk: one chunk is held while a block is read.
@@ -262,14 +280,8 @@ class H5Blocks : public BlockSource {
 
  private:
   void fill(const Box& b, float* out) override {
-    const hsize_t start[3] = {b.lo[2], b.lo[1], b.lo[0]}, count[3] = {b.n(2), b.n(1), b.n(0)};
-    const hid_t fspace = H5Dget_space(ds_);
-    H5Sselect_hyperslab(fspace, H5S_SELECT_SET, start, nullptr, count, nullptr);
-    const hid_t mspace = H5Screate_simple(3, count, nullptr);
-    const herr_t e = H5Dread(ds_, H5T_NATIVE_FLOAT, mspace, fspace, H5P_DEFAULT, out);
-    H5Sclose(mspace);
-    H5Sclose(fspace);
-    if (e < 0)
+    const BlockSpaces spaces(ds_, b);
+    if (H5Dread(ds_, H5T_NATIVE_FLOAT, spaces.memory, spaces.file, H5P_DEFAULT, out) < 0)
       throw InputError(path_, field_, "block x " + std::to_string(b.lo[0]) + ", y " + std::to_string(b.lo[1]) + ", z " + std::to_string(b.lo[2]),
                        "read failed (a damaged or truncated file?)");
   }
@@ -433,14 +445,9 @@ class LabelsWriter {
     return ds;
   }
   void put(hid_t ds, const Box& b, hid_t mem_type, const void* data) {
-    const hsize_t start[3] = {b.lo[2], b.lo[1], b.lo[0]}, count[3] = {b.n(2), b.n(1), b.n(0)};
-    const hid_t fs_ = H5Dget_space(ds);
-    H5Sselect_hyperslab(fs_, H5S_SELECT_SET, start, nullptr, count, nullptr);
-    const hid_t ms = H5Screate_simple(3, count, nullptr);
-    const herr_t e = H5Dwrite(ds, mem_type, ms, fs_, H5P_DEFAULT, data);
-    H5Sclose(ms);
-    H5Sclose(fs_);
-    if (e < 0) throw RuntimeFailure(path_ + ": writing a block of labels failed (disk full?)");
+    const BlockSpaces spaces(ds, b);
+    if (H5Dwrite(ds, mem_type, spaces.memory, spaces.file, H5P_DEFAULT, data) < 0)
+      throw RuntimeFailure(path_ + ": writing a block of labels failed (disk full?)");
   }
   void attr_doubles(hid_t ds, const char* name, const std::array<double, 3>& v) {
     const hsize_t n = 3;
