@@ -165,6 +165,11 @@ void result_keys(Summary& j, const dem::SinterReport& rep, std::vector<double> r
   j["time_step_s"] = {{"min", rep.min_time_step}, {"max", rep.max_time_step}};
   j["max_mass_scaling"] = rep.max_mass_scaling;
   j["max_viscous_step_ratio"] = rep.max_viscous_step_ratio;
+  // Mass conservation (docs/sintering.md): the union density against rho0 V0 / V.
+  j["max_mass_mismatch"] = rep.max_mass_mismatch;
+  j["mass_tolerance"] = dem::kMassTolerance;
+  j["mass_conserved"] = rep.max_mass_mismatch <= dem::kMassTolerance;
+  j["mass_catch_ups"] = rep.mass_catch_ups;
   for (const auto& [k, u] : std::vector<std::pair<const char*, const char*>>{
            {"relative_density", "1"}, {"mean_neck_ratio", "1"}, {"sintering_time_s", "s"}, {"temperature_K", "K"},
            {"run_time_s", "s"}, {"shrinkage", "1"}, {"time_step_s", "s"}})
@@ -417,6 +422,12 @@ int run(int argc, char** argv) {
     throw InputError(scene_path, program_field(scene.text), v.str(),
                      "the program ends below the snapshot density " + targets[snaps.size()].text +
                          ": lengthen the hold or raise the temperature");
+  }
+  if (rank0 && settings.conserve_volume && rep.max_mass_mismatch > dem::kMassTolerance) {
+    std::ostringstream v;
+    v << "mass not conserved: the union density and rho0 V0/V differ by up to " << rep.max_mass_mismatch
+      << " (relative; tolerance " << dem::kMassTolerance << "); \"mass_conserved\": false in the summary";
+    warn(v.str());
   }
 
   // The whole sample on rank 0 (collective on ranks; the particles in id order, the serial one).

@@ -632,6 +632,11 @@ class SinterRun {
   bool record_rows();
   void print_progress();
   void restore();
+  /// The union density against ρ₀V₀/V now (SinterReport::max_mass_mismatch).
+  void note_mismatch(double density) {
+    const double cell = rho0_ * V0_ / sim_.cell().volume();
+    rep_.max_mass_mismatch = std::max(rep_.max_mass_mismatch, std::abs(density - cell) / cell);
+  }
   /// The ghosts' radii and masses from their owners (decomposed runs; nothing when serial).
   void refresh_ghosts() {
     if (dom_) dom_->refresh_ghost_bodies(p_);
@@ -674,6 +679,7 @@ class SinterRun {
   double row_dt_ = 0, next_row_ = 0;
   long since_update_ = 0;
   double mass_scale_ = 1;
+  double catch_up_ = 1;  // step factor, < 1 while the radius updates lag the strain (grow_radii)
   Progress bar_{"sintering", 1.0};  // stderr, with the time left (core/progress.hpp)
 };
 
@@ -774,24 +780,63 @@ SinterRow SinterRun::make_row(const Scan& q, double dt_now, double mass_scale, d
   return r;
 }
 
-/// Volume conservation: grow the radii of sintering particles so each keeps its share of the
-/// union (one Newton step on share(r) = 4/3 π r³ − ½ Σ lens, ∂share/∂r = exposed area). Each rank
-/// grows its own particles; the ghosts take their owners' radii.
+/// Volume conservation: grow the radii of sintering particles so that the union of the sintering
+/// particles keeps its initial volume (docs/sintering.md, "Mass conservation"). First each particle
+/// takes one Newton step towards its target share of the union (its sphere clipped to its power
+/// cell; ∂share/∂r = exposed area), except where that is ill-posed: a sphere almost enclosed by its
+/// necks (< 5 % of its surface exposed) is left alone, and no particle grows by more than 1 % of r
+/// (the runaway guards). What those guards leave undone, Σ(target − share after the step), goes
+/// back into the body as one uniform growth dr = deficit / Σ exposed area of every sintering
+/// particle (the union's derivative along a uniform growth is its exposed area: the deficit closes
+/// to second order), and the targets move with the volume: each particle's target becomes what it
+/// now holds, so the next update does not undo the transfer and Σ target stays the initial union.
+/// Sums in id order (the same bits on any number of ranks); the new targets go to every rank by id
+/// (they follow a particle that migrates). A uniform growth beyond 1 % of the mean radius is cut
+/// there and the rest stays owed; then the step is halved (down to 1/64) and the next update comes
+/// at once; it recovers by 1.25 per update that needs no cut. Each
+/// rank grows its own particles; the ghosts take their owners' radii.
 void SinterRun::grow_radii(const Scan& q) {
   const ContactModel& m = sim_.model();
+  const auto sinters = [&](std::size_t i) { return m.pair(p_.phase[i], p_.phase[i]).sinter_delta_b > 0; };
   double dmax = 0;
+  // Per particle: share after its own step (linear) and exposed area; the sums {target, share,
+  // area} and {r, 1, 0}.
+  std::vector<double> held(p_.size(), 0.0), exposed(p_.size(), 0.0);
+  std::vector<OrderedTerm> terms;
   for (std::size_t i = 0; i < p_.size(); ++i) {
-    if (!owns(dom_, i) || !(m.pair(p_.phase[i], p_.phase[i]).sinter_delta_b > 0)) continue;
+    if (!owns(dom_, i) || !sinters(i)) continue;
     const double r = p_.r[i];
     const double cur = 4.0 / 3.0 * M_PI * r * r * r - q.share[i];
     const double der = 4 * M_PI * r * r - q.dshare[i];
-    // A sphere almost enclosed by its necks (< 5 % of its surface exposed) cannot hold its volume
-    // by growing; and no update grows a radius by more than 1 % (a runaway guard).
-    if (der < 0.05 * 4 * M_PI * r * r) continue;
-    const double dr = std::clamp((target_[id(i)] - cur) / der, -0.01 * r, 0.01 * r);
+    double dr = 0;
+    if (der >= 0.05 * 4 * M_PI * r * r) dr = std::clamp((target_[id(i)] - cur) / der, -0.01 * r, 0.01 * r);
     p_.r[i] = r + dr;
     dmax = std::max(dmax, std::abs(dr));
+    held[i] = cur + der * dr;
+    exposed[i] = std::max(der, 0.0);
+    terms.push_back({0, p_.id[i], Vec3{target_[id(i)], held[i], exposed[i]}});
+    terms.push_back({1, p_.id[i], Vec3{r, 1, 0}});
   }
+  const std::vector<Vec3> tot = sum_in_id_order(dom_, terms, 2);
+  const double area = tot[0].z, bound = tot[1].y > 0 ? 0.01 * tot[1].x / tot[1].y : 0;
+  const double want = area > 0 ? (tot[0].x - tot[0].y) / area : 0;
+  const double dr = std::clamp(want, -bound, bound);
+  const double owed = want != 0 ? 1 - dr / want : 0;  // share of each deficit left for later
+  if (dr != want) {  // the strain outran the updates: shorter steps, the next update at once
+    catch_up_ = std::max(catch_up_ * 0.5, 1.0 / 64);
+    since_update_ = s_.update_interval;
+    ++rep_.mass_catch_ups;
+  } else {
+    catch_up_ = std::min(1.0, catch_up_ * 1.25);
+  }
+  const std::vector<Vec3> t = column_by_id(sim_, n_, [&](std::size_t i) {
+    if (!sinters(i)) return Vec3{target_[id(i)], 0, 0};
+    return Vec3{held[i] + exposed[i] * dr + owed * (target_[id(i)] - held[i]), 0, 0};
+  });
+  for (std::size_t i = 0; i < p_.size(); ++i)
+    if (owns(dom_, i) && sinters(i)) p_.r[i] += dr;
+  for (std::size_t k = 0; k < n_; ++k) target_[k] = t[k].x;
+  dmax += std::abs(dr);
   refresh_ghosts();
   fresh_radius();
   grown_ += 2 * max_over_ranks(dom_, dmax);
@@ -827,6 +872,7 @@ void SinterRun::choose_step(double t, double T) {
   const double to_boundary = std::min(s_.program.next_boundary(t), t_end_) - t;
   if (!std::isfinite(dt_new)) dt_new = to_boundary;
   dt_free_ = dt_new;  // the growth limit applies to this, not to a step cut at a boundary
+  dt_new *= catch_up_;  // shortened while the radius updates cannot keep up (grow_radii)
   // Land on the segment boundaries and the end (a remainder below 1 % of a step joins it).
   if (to_boundary > 0 && to_boundary < 1.01 * dt_new) dt_new = to_boundary;
   dt_ = dt_new;
@@ -919,6 +965,7 @@ bool SinterRun::record_rows() {
   }
   const Scan q = scan(sim_, false);
   const double dens = q.solid / sim_.cell().volume();
+  note_mismatch(dens);
   const bool reached = s_.target_density > 0 && dens >= s_.target_density;
   if (snap_due && check && dens >= snaps_->densities[next_snap_]) {
     const SinterRow r = make_row(q, dt_, mass_scale_, rho_last_, t_last_);
@@ -982,7 +1029,9 @@ SinterReport SinterRun::run() {
     print_progress();
   }
   if (rep_.rows.back().step != sim_.step_count()) {
+    if (s_.conserve_volume) grow_radii(scan(sim_, true));
     rep_.rows.push_back(make_row(scan(sim_, false), dt_, mass_scale_, rho_last_, t_last_));
+    note_mismatch(rep_.rows.back().density);
   }
   rep_.final = rep_.rows.back();
   rep_.max_viscous_step_ratio = max_over_ranks(dom_, rep_.max_viscous_step_ratio);

@@ -162,6 +162,14 @@ TEST(dense_network, OpenDirectionLeavesHullFacesOpen) {
 TEST(dense_network, SinteredToNinetyPercentStaysUnderTheHashinShtrikmanBound) {
   std::vector<Network> nets;
   for (auto& snap : ::tomodem::test::sintered_sweep(alumina())) {
+    // Mass conservation (docs/sintering.md): the snapshot's union density is the green one times
+    // V0/V of the two cells, to the tool's kMassTolerance (1e-3; the σ of these snapshots under
+    // HS is checked on the same sweep in tests/validation/network/dense_network_test.cpp).
+    const Packing& p = snap.packing;
+    const double rho = spatial::union_relative_density(p.particles.position, p.particles.radius, p.cell);
+    const double rho_cell = snap.green_density * snap.green_volume / p.cell.volume();
+    std::printf("snapshot: union %.5f, rho0 V0/V %.5f\n", rho, rho_cell);
+    EXPECT_NEAR(rho / rho_cell, 1.0, dem::kMassTolerance);
     Network net;
     net.packing = std::move(snap.packing);
     for (const Vec3& im : snap.image)

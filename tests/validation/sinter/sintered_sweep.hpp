@@ -15,12 +15,14 @@
 #include "tomodem/dem/scene.hpp"
 #include "tomodem/dem/sinter.hpp"
 #include "tomodem/geometry/pack.hpp"
+#include "tomodem/spatial/union_volume.hpp"
 
 namespace tomodem::test {
 
 struct SinteredSnapshot {
   Packing packing;          ///< contacts left out; bonds = the necks
   std::vector<Vec3> image;  ///< per bond: the periodic image of j (whole cells)
+  double green_density = 0, green_volume = 0;  ///< union density and cell volume of the green packing
 };
 
 inline std::vector<SinteredSnapshot> sintered_sweep(const Material& material) {
@@ -70,6 +72,8 @@ inline std::vector<SinteredSnapshot> sintered_sweep(const Material& material) {
     o.packing.contacts = ContactTable{};
     o.packing.bonds = dem::necks_to_bond_table(sim);
     o.image = dem::necks_to_bonds(sim).image;
+    o.green_density = spatial::union_relative_density(green.particles.position, green.particles.radius, green.cell);
+    o.green_volume = green.cell.volume();
     out.push_back(std::move(o));
   };
   dem::run_sintering(*scene.sim, s, false, snap);

@@ -96,7 +96,17 @@ struct SinterReport {
   /// force pass: leapfrog's viscous rows are stable below 2; the mass scaling aims at
   /// viscous_fraction (0.5), a fresh neck on a particle with no other neck gives up to that too.
   double max_viscous_step_ratio = 0;
+  /// Largest |ρ_union − ρ₀V₀/V| / (ρ₀V₀/V) over the rows, snapshots and the end (mass conservation,
+  /// docs/sintering.md); above kMassTolerance with conserve_volume on, the run has lost (or made) mass.
+  double max_mass_mismatch = 0;
+  /// Radius updates whose uniform correction hit its bound (each halves the step for a while).
+  long mass_catch_ups = 0;
 };
+
+/// Relative mismatch between the union density and ρ₀V₀/V that a volume-conserving run keeps to:
+/// the Newton update leaves a second-order residual (≈ 1e-6) and the density checks run right after
+/// an update; 1e-3 is what the cell's shrinkage is known to (docs/sintering.md, "Mass conservation").
+constexpr double kMassTolerance = 1e-3;
 
 /// Relative density of the spheres from their exact union volume (each sphere clipped to its
 /// power cell: spatial/union_volume.hpp), and the mean neck ratio ⟨a/R⟩.
