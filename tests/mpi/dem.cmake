@@ -1,6 +1,6 @@
 # The DEM engine on MPI domain decomposition (docs/dem.md, "Running on several ranks").
 tomodem_mpi_test(dem_decomposition_tests
-  SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/dem/test_decomposition.cpp ${CMAKE_CURRENT_SOURCE_DIR}/dem/mpi_gtest_main.cpp
+  SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/dem/test_decomposition.cpp
   LIBS tomodem_dem
   RANKS 1 2 3 4)
 
@@ -29,13 +29,13 @@ set_tests_properties(dem_tool_ranks PROPERTIES LABELS mpi PROCESSORS 3
 
 # A bonded lattice pulled to failure: the same bonds break in the same steps on 1 to 4 ranks.
 tomodem_mpi_test(dem_decomposition_bond_tests
-  SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/dem/test_bonds_decomposed.cpp ${CMAKE_CURRENT_SOURCE_DIR}/dem/mpi_gtest_main.cpp
+  SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/dem/test_bonds_decomposed.cpp
   LIBS tomodem_dem
   RANKS 1 2 3 4)
 
 # Spheres falling onto a force-controlled floor, pressed by a moving lid: walls across ranks, 1-4 ranks, bitwise.
 tomodem_mpi_test(dem_decomposition_wall_tests
-  SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/dem/test_walls_decomposed.cpp ${CMAKE_CURRENT_SOURCE_DIR}/dem/mpi_gtest_main.cpp
+  SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/dem/test_walls_decomposed.cpp
   LIBS tomodem_dem
   RANKS 1 2 3 4)
 
@@ -53,27 +53,27 @@ set_tests_properties(dem_checkpoint_ranks PROPERTIES LABELS mpi PROCESSORS 3
 # The energy budget (track_energy) across ranks: the falling column with local damping and a
 # sheared periodic cell with Stokes drag, 1-4 ranks, terms to 1e-12 of the budget.
 tomodem_mpi_test(dem_decomposition_energy_tests
-  SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/dem/test_energy_decomposed.cpp ${CMAKE_CURRENT_SOURCE_DIR}/dem/mpi_gtest_main.cpp
+  SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/dem/test_energy_decomposed.cpp
   LIBS tomodem_dem
   RANKS 1 2 3 4)
 
 # Checkpoints and restarts on ranks with bonds (breaking), walls and the energy budget, 1-4 ranks:
 # the file equals the serial one and every restart ends bitwise on the uninterrupted serial run.
 tomodem_mpi_test(dem_checkpoint_state_ranks_tests
-  SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/dem/test_checkpoint_state_ranks.cpp ${CMAKE_CURRENT_SOURCE_DIR}/dem/mpi_gtest_main.cpp
+  SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/dem/test_checkpoint_state_ranks.cpp
   LIBS tomodem_dem
   RANKS 1 2 3 4)
 
 # FIRE at a fixed cell on ranks: a disordered packing above jamming (frictionless and
 # frictional) relaxes in the serial steps to the serial positions bitwise; enthalpy FIRE refused.
 tomodem_mpi_test(dem_decomposition_fire_tests
-  SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/dem/test_fire_decomposed.cpp ${CMAKE_CURRENT_SOURCE_DIR}/dem/mpi_gtest_main.cpp
+  SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/dem/test_fire_decomposed.cpp
   LIBS tomodem_dem
   RANKS 1 2 3 4)
 
 # Free sintering of 256 spheres (the sintering driver's radius growth, mass scaling, densification
 # and necks across ranks): 1-4 ranks against the serial driver, bit-identical on a fixed rank count.
 tomodem_mpi_test(dem_decomposition_sinter_tests
-  SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/dem/test_sinter_decomposed.cpp ${CMAKE_CURRENT_SOURCE_DIR}/dem/mpi_gtest_main.cpp
+  SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/dem/test_sinter_decomposed.cpp
   LIBS tomodem_dem
   RANKS 1 2 3 4)
