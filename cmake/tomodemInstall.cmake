@@ -70,7 +70,7 @@ if(TARGET tomodem_image)
     "list(APPEND CMAKE_MODULE_PATH /usr/lib/x86_64-linux-gnu/cmake/OpenVDB /usr/local/lib/cmake/OpenVDB)\n"
     "find_dependency(OpenVDB)\n"
     "# Debian's small OpenCV packages have no CMake config: the libraries are linked by path then.\n"
-    "find_package(OpenCV QUIET COMPONENTS core imgproc imgcodecs)\n")
+    "find_package(OpenCV QUIET COMPONENTS core imgproc)\n")
 endif()
 if(TARGET tomodem_mpi)
   string(APPEND TOMODEM_CONFIG_DEPENDENCIES

@@ -10,12 +10,7 @@
 #include "tomodem/carve/carve.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
-
-namespace tomodem::image {
-// PNG bytes of an 8-bit BGR picture (libs/image/src/outputs.cpp). TODO: declare it in
-// tomodem/image/outputs.hpp (not edited in this change), then drop this line.
-std::string png_from_bgr(const uint8_t* bgr, int width, int height, std::size_t row_bytes);
-}  // namespace tomodem::image
+#include "tomodem/image/outputs.hpp"
 
 namespace tomodem::carve {
 

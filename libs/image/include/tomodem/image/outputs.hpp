@@ -1,5 +1,7 @@
 #pragma once
 // Outputs of tomodem-segment (all atomic: temporary name, then rename). Plain types only.
+#include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -7,6 +9,9 @@
 #include "tomodem/image/volume.hpp"
 
 namespace tomodem::image {
+
+/// PNG bytes (8-bit RGB, zlib) of an 8-bit BGR picture whose rows are row_bytes apart.
+std::string png_from_bgr(const uint8_t* bgr, int width, int height, std::size_t row_bytes);
 
 /// Phase labels as written: 0 solid, 1 fine pore, 2 macropore, 3 second solid phase (multi-Otsu 3).
 inline constexpr const char* kLegend = "0:solid,1:fine_pore,2:macropore,3:solid_phase_2";
