@@ -171,17 +171,9 @@ int run(int argc, char** argv) {
   const bool track_energy = scene.sim->settings().track_energy;
   Packing packing;
   if (ranks == 1) {
-    // The engine's last use: dem::to_packing's fields, the particle arrays moved instead of copied,
-    // then the engine freed (decomposed, its destructor may talk to the other ranks: kept).
-    packing.contacts = scene.sim->contacts();
-    dem::Particles& p = scene.sim->particles();
-    packing.particles.position = std::move(p.x);
-    packing.particles.radius = std::move(p.r);
-    packing.particles.phase = std::move(p.phase);
-    packing.particles.velocity = std::move(p.v);
-    if (p.has_rotation()) packing.particles.angular_velocity = std::move(p.omega);
-    packing.cell = scene.sim->cell();
-    packing.materials = scene.materials;
+    // The engine's last use: its particle arrays moved into the packing, then the engine freed
+    // (decomposed, its destructor may talk to the other ranks: kept).
+    packing = dem::to_packing(std::move(*scene.sim), scene.materials);
     cg.reset();
     scene.sim.reset();
   } else {

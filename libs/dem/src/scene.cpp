@@ -616,4 +616,18 @@ void read_scene(Scene& scene, const YAML::Node& doc, const std::string& path, in
 }
 }  // namespace
 
+Packing to_packing(Simulation&& sim, const std::vector<Material>& materials) {
+  Packing out;
+  out.contacts = sim.contacts();  // first, as in to_packing(Simulation&, ...): see there why
+  Particles& p = sim.particles();
+  out.particles.position = std::move(p.x);
+  out.particles.radius = std::move(p.r);
+  out.particles.phase = std::move(p.phase);
+  out.particles.velocity = std::move(p.v);
+  if (p.has_rotation()) out.particles.angular_velocity = std::move(p.omega);
+  out.cell = sim.cell();
+  out.materials = materials;
+  return out;
+}
+
 }  // namespace tomodem::dem

@@ -119,5 +119,9 @@ std::vector<std::string> physics_changes(const std::string& before, const std::s
 
 /// The shared data model of the final state (particles, cell, contacts, materials, results).
 Packing to_packing(Simulation& sim, const std::vector<Material>& materials);
+/// The same with the particle arrays moved out of `sim` instead of copied, for its last use (the
+/// CLI's memory peak, issue 19): `sim` is left with empty positions, radii, phases, velocities and
+/// spins, to be destroyed.
+Packing to_packing(Simulation&& sim, const std::vector<Material>& materials);
 
 }  // namespace tomodem::dem
