@@ -65,9 +65,9 @@ std::string settings(const std::string& hold, const std::string& strain = "2.0e-
   return s.replace(s.find("@STRAIN@"), 8, strain);
 }
 
-// The study's pore-former family (pipelines/study/pore-former.yaml) at 150 particles: 20 % of the
+// The study's pore-former family (pipelines/study/pore-former.yaml) at 100 particles: 20 % of the
 // solid volume in formers three times the powder's size, packed to 0.5 and burnt out (macropores).
-const std::string kPoreFormer = R"(particles: 150
+const std::string kPoreFormer = R"(particles: 100
 seed: 1
 phases:
   - name: ceramic
