@@ -66,6 +66,8 @@ TEST_F(FractureCli, SlaAndExplicitWriteCurveMapAndSummary) {
   const double dlnK_da = 1 / (2 * a) + M_PI * std::tan(M_PI * a / W) / (2 * W);
   EXPECT_GE(j["K_IC_error"].get<double>(), dlnK_da * 0.5 * lmin * (1 - 1e-9));
   EXPECT_LE(j["K_IC_error"].get<double>(), dlnK_da * 0.5 * lmax * (1 + 1e-9));
+  // ... and independent between samples: random, so a report over replicas does not add it again.
+  EXPECT_EQ(j["K_IC_error_kind"], "random");
   EXPECT_TRUE(j.contains("explicit_vs_sla"));
   // The curve: header and rising then falling load.
   std::ifstream csv(path("curve.csv"));

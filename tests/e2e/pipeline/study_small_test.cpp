@@ -148,18 +148,18 @@ TEST(StudySmall, ReportIntervalsAdaptiveStopAndRankingsMatchTheReplicaTable) {
   };
 
   // 1. Intervals: every cell of the report for properties without a tool error (the density, the
-  // bonds per particle: dof n - 1) and with one (K_IC: fracture's relative K_IC_error).
+  // bonds per particle, and K_IC, whose K_IC_error fracture marks random: it is in the replicas'
+  // scatter, docs/pipelines.md; dof n - 1).
   int checked = 0;
   for (const auto& c : summary["cells"]) {
     const std::string prop = c["property"];
-    std::string err;
-    if (prop == "fracture.K_IC") err = "fracture.K_IC_error";
-    else if (prop != "young.relative_density" && prop != "bonds_per_particle" && prop != "sigma_rel") continue;
+    if (prop != "young.relative_density" && prop != "bonds_per_particle" && prop != "sigma_rel" && prop != "fracture.K_IC")
+      continue;
     const auto key = std::make_pair(c["family"].get<std::string>(), density_key(c["density"].get<double>()));
     ASSERT_TRUE(groups.count(key)) << key.first << " " << key.second;
     const auto& rows = groups[key];
     const std::vector<double> x = column(rows, prop, rows.size());
-    const Cell h = stats(x, err.empty() ? std::vector<double>{} : column(rows, err, rows.size()));
+    const Cell h = stats(x, {});
     EXPECT_EQ(c["n"].get<std::size_t>(), rows.size());
     // (table.csv: 10 significant digits, so 1e-9 relative on the mean, 1e-6 on the spread.)
     EXPECT_NEAR(c["mean"].get<double>(), h.mean, 1e-9 * std::abs(h.mean));
@@ -178,7 +178,7 @@ TEST(StudySmall, ReportIntervalsAdaptiveStopAndRankingsMatchTheReplicaTable) {
   const int mn = 2, mx = 4;
   const double tE = 0.1, tK = 1.0;  // study.yaml's scales.small.target_E, target_K
   const std::vector<std::pair<std::string, std::string>> keys = {
-      {"young.E", "young.E_error"}, {"conduct.sigma_eff.x", "conduct.sigma_eff_error.x"}, {"fracture.K_IC", "fracture.K_IC_error"}};
+      {"young.E", "young.E_error"}, {"conduct.sigma_eff.x", "conduct.sigma_eff_error.x"}, {"fracture.K_IC", ""}};  // K_IC_error: random
   int met = 0, maxed = 0;
   for (const auto& g : record["groups"]) {
     const auto key = std::make_pair(g["matrix"]["family"].get<std::string>(), g["matrix"]["density"].get<std::string>());
@@ -189,7 +189,7 @@ TEST(StudySmall, ReportIntervalsAdaptiveStopAndRankingsMatchTheReplicaTable) {
     for (int k = mn; k <= mx && k <= int(rows.size()); ++k) {
       bool all = true;
       for (const auto& [p, e] : keys) {
-        const Cell h = stats(column(rows, p, std::size_t(k)), column(rows, e, std::size_t(k)));
+        const Cell h = stats(column(rows, p, std::size_t(k)), e.empty() ? std::vector<double>{} : column(rows, e, std::size_t(k)));
         const double target = p == "fracture.K_IC" ? tK : tE;
         all = all && h.half / std::abs(h.mean) <= target;
       }
