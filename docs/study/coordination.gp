@@ -34,4 +34,5 @@ set xlabel 'relative density (-)' noenhanced
 set ylabel 'bonds per particle n_b/N = Z/2 (-)' noenhanced
 plot 'coordination.dat' index 0 using 1:2:3 with yerrorlines linetype 1 title 'homogeneous' noenhanced, \
      'coordination.dat' index 1 using 1:2:3 with yerrorlines linetype 2 title 'pore-former' noenhanced, \
-     'coordination.dat' index 2 using 1:2:3 with yerrorlines linetype 3 title 'aggregated' noenhanced
+     'coordination.dat' index 2 using 1:2:3 with yerrorlines linetype 3 title 'aggregated' noenhanced, \
+     'coordination.dat' index 3 using 1:2:3 with yerrorlines linetype 4 title 'homogeneous-homothetic' noenhanced

@@ -33,9 +33,11 @@ set title '95 % half-width of the mean of fracture.K_IC against CPU time' noenha
 set xlabel 'CPU time spent (s, sum over replicas)' noenhanced
 set ylabel 'relative 95 % half-width (-)' noenhanced
 set logscale x 10
-set format x '%g'
+set format x '10^{%L}'
+set mxtics 10
 set logscale y 10
-set format y '%g'
+set format y '10^{%L}'
+set mytics 10
 plot 'error-vs-cpu_fracture_K_IC.dat' index 0 using 1:2 with linespoints linetype 1 title 'family=homogeneous, density=0.55' noenhanced, \
      'error-vs-cpu_fracture_K_IC.dat' index 1 using 1:2 with linespoints linetype 2 title 'family=homogeneous, density=0.6' noenhanced, \
      'error-vs-cpu_fracture_K_IC.dat' index 2 using 1:2 with linespoints linetype 3 title 'family=homogeneous, density=0.7' noenhanced, \
@@ -50,4 +52,9 @@ plot 'error-vs-cpu_fracture_K_IC.dat' index 0 using 1:2 with linespoints linetyp
      'error-vs-cpu_fracture_K_IC.dat' index 11 using 1:2 with linespoints linetype 4 title 'family=aggregated, density=0.6' noenhanced, \
      'error-vs-cpu_fracture_K_IC.dat' index 12 using 1:2 with linespoints linetype 5 title 'family=aggregated, density=0.7' noenhanced, \
      'error-vs-cpu_fracture_K_IC.dat' index 13 using 1:2 with linespoints linetype 6 title 'family=aggregated, density=0.8' noenhanced, \
-     'error-vs-cpu_fracture_K_IC.dat' index 14 using 1:2 with linespoints linetype 7 title 'family=aggregated, density=0.9' noenhanced
+     'error-vs-cpu_fracture_K_IC.dat' index 14 using 1:2 with linespoints linetype 7 title 'family=aggregated, density=0.9' noenhanced, \
+     'error-vs-cpu_fracture_K_IC.dat' index 15 using 1:2 with linespoints linetype 8 title 'family=homogeneous-homothetic, density=0.55' noenhanced, \
+     'error-vs-cpu_fracture_K_IC.dat' index 16 using 1:2 with linespoints linetype 1 title 'family=homogeneous-homothetic, density=0.6' noenhanced, \
+     'error-vs-cpu_fracture_K_IC.dat' index 17 using 1:2 with linespoints linetype 2 title 'family=homogeneous-homothetic, density=0.7' noenhanced, \
+     'error-vs-cpu_fracture_K_IC.dat' index 18 using 1:2 with linespoints linetype 3 title 'family=homogeneous-homothetic, density=0.8' noenhanced, \
+     'error-vs-cpu_fracture_K_IC.dat' index 19 using 1:2 with linespoints linetype 4 title 'family=homogeneous-homothetic, density=0.9' noenhanced

@@ -33,7 +33,8 @@ set title '95 % half-width of the mean of sigma_rel against CPU time' noenhanced
 set xlabel 'CPU time spent (s, sum over replicas)' noenhanced
 set ylabel 'relative 95 % half-width (-)' noenhanced
 set logscale x 10
-set format x '%g'
+set format x '10^{%L}'
+set mxtics 10
 set logscale y 10
 set format y '10^{%L}'
 set mytics 10
@@ -51,4 +52,9 @@ plot 'error-vs-cpu_sigma_rel.dat' index 0 using 1:2 with linespoints linetype 1 
      'error-vs-cpu_sigma_rel.dat' index 11 using 1:2 with linespoints linetype 4 title 'family=aggregated, density=0.6' noenhanced, \
      'error-vs-cpu_sigma_rel.dat' index 12 using 1:2 with linespoints linetype 5 title 'family=aggregated, density=0.7' noenhanced, \
      'error-vs-cpu_sigma_rel.dat' index 13 using 1:2 with linespoints linetype 6 title 'family=aggregated, density=0.8' noenhanced, \
-     'error-vs-cpu_sigma_rel.dat' index 14 using 1:2 with linespoints linetype 7 title 'family=aggregated, density=0.9' noenhanced
+     'error-vs-cpu_sigma_rel.dat' index 14 using 1:2 with linespoints linetype 7 title 'family=aggregated, density=0.9' noenhanced, \
+     'error-vs-cpu_sigma_rel.dat' index 15 using 1:2 with linespoints linetype 8 title 'family=homogeneous-homothetic, density=0.55' noenhanced, \
+     'error-vs-cpu_sigma_rel.dat' index 16 using 1:2 with linespoints linetype 1 title 'family=homogeneous-homothetic, density=0.6' noenhanced, \
+     'error-vs-cpu_sigma_rel.dat' index 17 using 1:2 with linespoints linetype 2 title 'family=homogeneous-homothetic, density=0.7' noenhanced, \
+     'error-vs-cpu_sigma_rel.dat' index 18 using 1:2 with linespoints linetype 3 title 'family=homogeneous-homothetic, density=0.8' noenhanced, \
+     'error-vs-cpu_sigma_rel.dat' index 19 using 1:2 with linespoints linetype 4 title 'family=homogeneous-homothetic, density=0.9' noenhanced

@@ -36,4 +36,5 @@ set logscale y 10
 set format y '%g'
 plot 'performance.dat' index 0 using 1:2:3 with yerrorlines linetype 1 title 'homogeneous' noenhanced, \
      'performance.dat' index 1 using 1:2:3 with yerrorlines linetype 2 title 'pore-former' noenhanced, \
-     'performance.dat' index 2 using 1:2:3 with yerrorlines linetype 3 title 'aggregated' noenhanced
+     'performance.dat' index 2 using 1:2:3 with yerrorlines linetype 3 title 'aggregated' noenhanced, \
+     'performance.dat' index 3 using 1:2:3 with yerrorlines linetype 4 title 'homogeneous-homothetic' noenhanced

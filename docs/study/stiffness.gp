@@ -33,7 +33,9 @@ set title 'Relative Young''s modulus against relative density' noenhanced
 set xlabel 'relative density (-)' noenhanced
 set ylabel 'E/E_s (-)' noenhanced
 set logscale y 10
-set format y '%g'
+set format y '10^{%L}'
+set mytics 10
 plot 'stiffness.dat' index 0 using 1:2:3 with yerrorlines linetype 1 title 'homogeneous' noenhanced, \
      'stiffness.dat' index 1 using 1:2:3 with yerrorlines linetype 2 title 'pore-former' noenhanced, \
-     'stiffness.dat' index 2 using 1:2:3 with yerrorlines linetype 3 title 'aggregated' noenhanced
+     'stiffness.dat' index 2 using 1:2:3 with yerrorlines linetype 3 title 'aggregated' noenhanced, \
+     'stiffness.dat' index 3 using 1:2:3 with yerrorlines linetype 4 title 'homogeneous-homothetic' noenhanced

@@ -37,4 +37,5 @@ set format y '10^{%L}'
 set mytics 10
 plot 'toughness.dat' index 0 using 1:2:3 with yerrorlines linetype 1 title 'homogeneous' noenhanced, \
      'toughness.dat' index 1 using 1:2:3 with yerrorlines linetype 2 title 'pore-former' noenhanced, \
-     'toughness.dat' index 2 using 1:2:3 with yerrorlines linetype 3 title 'aggregated' noenhanced
+     'toughness.dat' index 2 using 1:2:3 with yerrorlines linetype 3 title 'aggregated' noenhanced, \
+     'toughness.dat' index 3 using 1:2:3 with yerrorlines linetype 4 title 'homogeneous-homothetic' noenhanced
