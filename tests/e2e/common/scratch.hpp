@@ -10,6 +10,7 @@
 #include <iterator>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 namespace tomodem::test {
 
@@ -24,11 +25,23 @@ inline int run_err(const std::string& cmd, std::string* err) {
   return WIFEXITED(r) ? WEXITSTATUS(r) : -1;
 }
 
-/// An empty folder <tmp>/<prefix><name> (emptied when it exists).
+/// An empty folder <tmp>/<prefix><name>-<pid> (emptied when it exists), removed when the process
+/// ends. The pid keeps it this process's: ctest -j runs the tests of one binary side by side, and
+/// two of them setting up one shared input folder removed each other's files.
 inline std::filesystem::path fresh_dir(const std::string& prefix, const std::string& name) {
-  const std::filesystem::path p = std::filesystem::temp_directory_path() / (prefix + name);
+  struct RemovedAtExit {
+    std::vector<std::filesystem::path> dirs;
+    ~RemovedAtExit() {
+      std::error_code ec;
+      for (const auto& d : dirs) std::filesystem::remove_all(d, ec);
+    }
+  };
+  static RemovedAtExit made;
+  const std::filesystem::path p =
+      std::filesystem::temp_directory_path() / (prefix + name + "-" + std::to_string(::getpid()));
   std::filesystem::remove_all(p);
   std::filesystem::create_directories(p);
+  made.dirs.push_back(p);
   return p;
 }
 

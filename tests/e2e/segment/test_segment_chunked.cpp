@@ -229,8 +229,7 @@ TEST(SegmentChunked, BadInputExit2WithNumbers) {
   EXPECT_EQ(run_err(bin + "/tomodem-segment " + in + raw_args + iso + " --memory 1MB -o " + (d / "l.h5").string(), &err), 2);
   EXPECT_NE(err.find("held for the whole run (bit masks of the 96x96x96 volume, block faces, 64 MB for the process) plus"), std::string::npos) << err;
   // A chunked run of a non-raw file: refused, naming the format.
-  const fs::path mha = d.parent_path() / "tomodem_seg_chunked_bad_mha";
-  fs::create_directories(mha);
+  const fs::path mha = tmpdir("bad_mha");
   ASSERT_EQ(run_err(bin + "/tomodem-phantom --kind pores --size 32 -q -o " + (mha / "g.mha").string(), &err), 0) << err;
   EXPECT_EQ(run_err(bin + "/tomodem-segment " + (mha / "g.mha").string() + " --chunk 16 -q -o " + (d / "l.h5").string(), &err), 2);
   EXPECT_NE(err.find("reads raw files only"), std::string::npos) << err;
