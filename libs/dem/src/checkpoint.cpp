@@ -340,7 +340,9 @@ static void read_checkpoint_checked(const std::string& path, Simulation& sim) {
     for (std::size_t k = 0; k < et.size(); ++k) {
       if (!(eb[k] >= 0 && eb[k] < double(nb)))
         throw InputError(path, "/bonds/events/bond", std::to_string(eb[k]), "not a bond index");
-      e.bond_events.push_back({et[k], int32_t(eb[k]), uint8_t(em[k])});
+      // The format keeps an event's time, bond and mode (the MPI checkpoint writes the same):
+      // its place and released energy are not restored.
+      e.bond_events.push_back({et[k], int32_t(eb[k]), uint8_t(em[k]), Vec3{}, 0.0});
     }
   }
   const auto s = r.doubles_any("/engine/scalars");  // (the initial energy is NaN when untracked)
@@ -369,23 +371,6 @@ static void read_checkpoint_checked(const std::string& path, Simulation& sim) {
     sim.walls()[w].force = wf[w];
   }
   sim.restore(e);
-}
-
-Packing to_packing(Simulation& sim, const std::vector<Material>& materials) {
-  Packing out;
-  // The contacts first: their tally pass then runs without the copies of the particle arrays
-  // (issue 19: the CLI's memory per particle). A rebuild inside it wraps the positions into the
-  // cell, so the positions copied after it are those the contacts' images refer to.
-  out.contacts = sim.contacts();
-  const Particles& p = sim.particles();
-  out.particles.position = p.x;
-  out.particles.radius = p.r;
-  out.particles.phase = p.phase;
-  out.particles.velocity = p.v;
-  if (p.has_rotation()) out.particles.angular_velocity = p.omega;
-  out.cell = sim.cell();
-  out.materials = materials;
-  return out;
 }
 
 }  // namespace tomodem::dem

@@ -25,6 +25,10 @@ namespace tomodem::dem::detail::avx2 {
 #pragma GCC pop_options
 #else
 #define TOMODEM_X4_AVX2_CLONE 0
+namespace tomodem::dem::detail::avx2 {  // no second copy: the names are the build's own loops
+using detail::pair_kernel_hertz_mindlin_x4;
+using detail::pair_kernel_hertz_x4;
+}  // namespace tomodem::dem::detail::avx2
 #endif
 
 namespace tomodem::dem {
@@ -35,8 +39,8 @@ using law::End;
 /// The four-wide loops for this processor: the AVX2 + FMA copies where the build has them and
 /// the processor runs them, unless TOMODEM_DEM_SIMD=baseline asks for the build's own target
 /// (used by tests/bench/peers/equal_terms.sh to time both).
-#if TOMODEM_X4_AVX2_CLONE
 bool avx2_loops() {
+#if TOMODEM_X4_AVX2_CLONE
   static const bool avx2 = [] {
     const char* force = std::getenv("TOMODEM_DEM_SIMD");
     if (force && std::string_view(force) == "baseline") return false;
@@ -44,11 +48,12 @@ bool avx2_loops() {
     return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
   }();
   return avx2;
-}
-#define TOMODEM_X4_LOOP(name) (avx2_loops() ? PairKernel(&detail::avx2::name) : PairKernel(&detail::name))
 #else
-#define TOMODEM_X4_LOOP(name) PairKernel(&detail::name)
+  return false;
 #endif
+}
+/// One four-wide loop: its AVX2 + FMA copy or the build's own.
+PairKernel x4_loop(PairKernel baseline, PairKernel avx2) { return avx2_loops() ? avx2 : baseline; }
 using law::List;
 
 /// The compile-time form of ContactModel::incompatibility(): the same declarations decide both.
@@ -74,15 +79,15 @@ KernelSet make(bool vectorised) {
   if constexpr (std::is_same_v<N, law::NormalHertz> && std::is_same_v<T, law::TangentialMindlin> &&
                 std::is_same_v<R, law::RollingNone>) {
     if (vectorised) {
-      k.pair[0] = TOMODEM_X4_LOOP(pair_kernel_hertz_mindlin_x4);  // the four-contact-wide loop
+      k.pair[0] = x4_loop(&detail::pair_kernel_hertz_mindlin_x4, &detail::avx2::pair_kernel_hertz_mindlin_x4);  // the four-contact-wide loop
       k.vectorised = true;
     }
   }
   if constexpr (std::is_same_v<N, law::NormalHertz> && std::is_same_v<T, law::TangentialNone> &&
                 std::is_same_v<R, law::RollingNone>) {
     if (vectorised) {  // frictionless: tally passes too (a deforming cell tallies every step)
-      k.pair[0] = TOMODEM_X4_LOOP(pair_kernel_hertz_x4<false>);
-      k.pair[1] = TOMODEM_X4_LOOP(pair_kernel_hertz_x4<true>);
+      k.pair[0] = x4_loop(&detail::pair_kernel_hertz_x4<false>, &detail::avx2::pair_kernel_hertz_x4<false>);
+      k.pair[1] = x4_loop(&detail::pair_kernel_hertz_x4<true>, &detail::avx2::pair_kernel_hertz_x4<true>);
       k.vectorised = true;
     }
   }

@@ -12,6 +12,8 @@
 #include <random>
 #include <set>
 #include <sstream>
+#include <type_traits>
+#include <utility>
 
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
@@ -616,18 +618,40 @@ void read_scene(Scene& scene, const YAML::Node& doc, const std::string& path, in
 }
 }  // namespace
 
-Packing to_packing(Simulation&& sim, const std::vector<Material>& materials) {
+namespace {
+/// The field, moved out when `kMove`, else as a const reference (to be copied).
+template <bool kMove, class T>
+decltype(auto) take(T& field) {
+  if constexpr (kMove)
+    return std::move(field);
+  else
+    return static_cast<const T&>(field);
+}
+
+/// Both to_packing overloads: SimRef is Simulation& (copies the arrays) or Simulation (moves them).
+template <class SimRef>
+Packing packing_of(SimRef&& sim, const std::vector<Material>& materials) {
+  constexpr bool kMove = !std::is_lvalue_reference_v<SimRef>;
   Packing out;
-  out.contacts = sim.contacts();  // first, as in to_packing(Simulation&, ...): see there why
+  // The contacts first: their tally pass then runs without the copies of the particle arrays
+  // (issue 19: the CLI's memory per particle). A rebuild inside it wraps the positions into the
+  // cell, so the positions taken after it are those the contacts' images refer to.
+  out.contacts = sim.contacts();
   Particles& p = sim.particles();
-  out.particles.position = std::move(p.x);
-  out.particles.radius = std::move(p.r);
-  out.particles.phase = std::move(p.phase);
-  out.particles.velocity = std::move(p.v);
-  if (p.has_rotation()) out.particles.angular_velocity = std::move(p.omega);
+  out.particles.position = take<kMove>(p.x);
+  out.particles.radius = take<kMove>(p.r);
+  out.particles.phase = take<kMove>(p.phase);
+  out.particles.velocity = take<kMove>(p.v);
+  if (p.has_rotation()) out.particles.angular_velocity = take<kMove>(p.omega);
   out.cell = sim.cell();
   out.materials = materials;
   return out;
+}
+}  // namespace
+
+Packing to_packing(Simulation& sim, const std::vector<Material>& materials) { return packing_of(sim, materials); }
+Packing to_packing(Simulation&& sim, const std::vector<Material>& materials) {
+  return packing_of(std::move(sim), materials);
 }
 
 }  // namespace tomodem::dem

@@ -4,78 +4,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <random>
 
-#include "kernel_simd.hpp"
+#include "random_pairs.hpp"
 
 using namespace tomodem;
 using namespace tomodem::dem;
+using namespace tomodem::dem::testing;
 
 namespace {
-
-Material material(double E, double nu, double rho) {
-  Material m;
-  m.name = "m";
-  m.youngs_modulus = E;
-  m.poisson_ratio = nu;
-  m.density = rho;
-  return m;
-}
-
-/// Random isolated pairs (no sum over contacts reorders anything) of two phases: the first 256
-/// mostly touching, the rest mostly apart (both block paths of the loop); 517 pairs, so the last
-/// group of four has spare lanes.
-struct RandomPairs {
-  static constexpr int kPairs = 517;
-  ContactModel m;
-  std::vector<Vec3> x, v;
-  std::vector<double> r, mass;
-  std::vector<int32_t> phase, start, owner, jj;
-  std::vector<uint8_t> img;
-  Vec3 shift[27] = {}, vshift[27] = {};
-
-  RandomPairs() {
-    std::mt19937_64 rng(7);
-    std::uniform_real_distribution<double> u(-1, 1), u01(0, 1);
-    m.normal = NormalLaw::hertz;
-    m.tangential = TangentialLaw::none;
-    m.materials = {material(1e8, 0.25, 2500), material(3e8, 0.3, 7800)};
-    m.finalize();
-    for (int a = 0; a < 2; ++a)
-      for (int b = 0; b < 2; ++b) m.pair(a, b).restitution = a == b ? 0.5 : 0.3;
-    m.finalize();
-    const std::size_t np = 2 * std::size_t(kPairs);
-    x.resize(np), v.resize(np), r.resize(np), mass.resize(np), phase.resize(np), start.resize(np + 1);
-    for (int k = 0; k < kPairs; ++k) {
-      const std::size_t i = 2 * std::size_t(k), j = i + 1;
-      r[i] = 1e-3 * (1 + 0.3 * u(rng));
-      r[j] = 1e-3 * (1 + 0.3 * u(rng));
-      for (std::size_t q : {i, j}) {
-        phase[q] = u01(rng) < 0.5 ? 0 : 1;
-        mass[q] = (phase[q] ? 7800 : 2500) * 4.0 / 3.0 * M_PI * r[q] * r[q] * r[q];
-        v[q] = {0.1 * u(rng), 0.1 * u(rng), 0.1 * u(rng)};
-      }
-      const bool touching = u01(rng) < (k < 256 ? 0.8 : 0.3);
-      const double overlap = touching ? 0.02 * std::min(r[i], r[j]) * u01(rng) : -0.01 * r[i] * u01(rng);
-      Vec3 dir{u(rng), u(rng), u(rng)};
-      dir = (1 / norm(dir)) * dir;
-      x[i] = {0.1 * k, 0, 0};
-      x[j] = x[i] + (r[i] + r[j] - overlap) * dir;
-      start[i] = k, start[j] = k + 1;
-      owner.push_back(int32_t(i));
-      jj.push_back(int32_t(j));
-      img.push_back(13);  // the centre image
-    }
-    start[np] = kPairs;
-  }
-  ForceJob job(Vec3* pair_force) {
-    ForceJob jb{x.data(), v.data(), nullptr, r.data(), mass.data(), phase.data(), start.data(), owner.data(),
-                jj.data(), img.data(), nullptr, nullptr, 0, shift, vshift, m.pairs.data(), 2, 1e-6};
-    jb.pair_force = pair_force;
-    return jb;
-  }
-  int n() const { return int(x.size()); }
-};
 
 double max_norm(const std::vector<Vec3>& a) {
   double s = 0;
@@ -94,7 +30,7 @@ double max_diff(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
 // a few ulp, so 1e-13 of the largest value. The tally's sums run over 400-odd contacts in
 // another order: 1e-12 relative.
 TEST(KernelX4, FrictionlessHertzEqualsScalarLawsWithAndWithoutTally) {
-  RandomPairs s;
+  RandomPairs s(7, TangentialLaw::none, false, false);
   const std::size_t np = std::size_t(s.n());
   using Scalar = law::NormalHertz;
   for (bool tally : {false, true}) {

@@ -8,10 +8,9 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <random>
 #include <sstream>
 
-#include "kernel_simd.hpp"
+#include "random_pairs.hpp"
 #include "scenes.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/dem/law_registry.hpp"
@@ -77,7 +76,9 @@ TEST(LawRegistry, EveryLawIsDescribed) {
       if (s == Slot::normal) {
         EXPECT_TRUE(e.stiffness && e.restitution_damping) << e.key;
       }
-      if (s == Slot::damping) EXPECT_TRUE(e.damping) << e.key;
+      if (s == Slot::damping) {
+        EXPECT_TRUE(e.damping) << e.key;
+      }
     }
   }
   EXPECT_TRUE(find_law(Slot::tangential, "none") && find_law(Slot::rolling, "none"));
@@ -176,54 +177,15 @@ TEST(LawRegistry, DampingSlotSetsTheDashpotCoefficient) {
 // (some apart), velocities, spins and stored tangential springs (some beyond the Coulomb cone).
 // Each contact is the same arithmetic in another instruction order: 1e-13 of the largest value.
 TEST(LawRegistry, VectorisedHertzMindlinEqualsScalarLawsOnRandomContacts) {
-  const int n_pairs = 517;  // not a multiple of 4: the last group has spare lanes
-  std::mt19937_64 rng(5);
-  std::uniform_real_distribution<double> u(-1, 1), u01(0, 1);
-  ContactModel m;
-  m.normal = NormalLaw::hertz;
-  m.tangential = TangentialLaw::mindlin;
-  m.materials = {material(1e8, 0.25, 2500), material(3e8, 0.3, 7800)};
-  m.finalize();
-  for (int a = 0; a < 2; ++a)
-    for (int b = 0; b < 2; ++b) {
-      m.pair(a, b).restitution = a == b ? 0.5 : 0.3;
-      m.pair(a, b).friction = a == b ? 0.3 : 0.6;
-    }
-  m.finalize();
-  const std::size_t np = 2 * std::size_t(n_pairs);
-  std::vector<Vec3> x(np), v(np), w(np), f0(np), f1(np), t0(np), t1(np);
-  std::vector<double> r(np), mass(np);
-  std::vector<int32_t> phase(np), start(np + 1), owner, jj;
-  std::vector<uint8_t> img;
-  for (int k = 0; k < n_pairs; ++k) {
-    const std::size_t i = 2 * std::size_t(k), j = i + 1;
-    r[i] = 1e-3 * (1 + 0.3 * u(rng));
-    r[j] = 1e-3 * (1 + 0.3 * u(rng));
-    for (std::size_t q : {i, j}) {
-      phase[q] = u01(rng) < 0.5 ? 0 : 1;
-      mass[q] = (phase[q] ? 7800 : 2500) * 4.0 / 3.0 * M_PI * r[q] * r[q] * r[q];
-      v[q] = {0.1 * u(rng), 0.1 * u(rng), 0.1 * u(rng)};
-      w[q] = {100 * u(rng), 100 * u(rng), 100 * u(rng)};
-    }
-    // The first 256 pairs mostly touch, the rest mostly not: both block paths of the loop.
-    const bool touching = u01(rng) < (k < 256 ? 0.8 : 0.3);
-    const double overlap = touching ? 0.02 * std::min(r[i], r[j]) * u01(rng) : -0.01 * r[i] * u01(rng);
-    Vec3 dir{u(rng), u(rng), u(rng)};
-    dir = (1 / norm(dir)) * dir;
-    x[i] = {0.1 * k, 0, 0};
-    x[j] = x[i] + (r[i] + r[j] - overlap) * dir;
-    start[i] = k, start[j] = k + 1;
-    owner.push_back(int32_t(i));
-    jj.push_back(int32_t(j));
-    img.push_back(13);  // the centre image
-  }
-  start[np] = n_pairs;
-  std::vector<double> h0(3 * std::size_t(n_pairs));
-  for (double& h : h0) h = u01(rng) < 0.5 ? 1e-3 * u(rng) : 0;  // springs, some beyond μ F_n
+  RandomPairs s(5, TangentialLaw::mindlin, true, true, 0.3, 0.6);
+  const int n_pairs = RandomPairs::kPairs;
+  const std::size_t np = std::size_t(s.n());
+  const std::vector<Vec3>& x = s.x;
+  const std::vector<double>& r = s.r;
+  std::vector<double>& h0 = s.hist;  // the scalar loop updates these springs in place
   std::vector<double> h1 = h0;
-  const Vec3 shift[27] = {}, vshift[27] = {};
-  ForceJob job{x.data(), v.data(), w.data(), r.data(), mass.data(), phase.data(), start.data(), owner.data(),
-               jj.data(), img.data(), h0.data(), nullptr, 3, shift, vshift, m.pairs.data(), 2, 1e-6};
+  std::vector<Vec3> f0(np), f1(np), t0(np), t1(np);
+  ForceJob job = s.job(nullptr, s.hist.data());
   detail::pair_kernel<law::NormalHertz, law::TangentialMindlin, law::RollingNone, false>(job, 0, int(np), f0.data(),
                                                                                         t0.data(), nullptr, nullptr);
   job.hist = h1.data();
@@ -242,7 +204,7 @@ TEST(LawRegistry, VectorisedHertzMindlinEqualsScalarLawsOnRandomContacts) {
     const Vec3 d = x[i + 1] - x[i];
     const Vec3 n = (1 / norm(d)) * d;
     const double delta = r[i] + r[i + 1] - norm(d), rstar = r[i] * r[i + 1] / (r[i] + r[i + 1]);
-    const PairParams& pp = m.pair(phase[i], phase[i + 1]);
+    const PairParams& pp = s.m.pair(s.phase[i], s.phase[i + 1]);
     const double fel = delta > 0 ? 4.0 / 3.0 * pp.E_star * std::sqrt(rstar) * std::pow(delta, 1.5) : 0;
     const double ft = norm(f0[i] - dot(f0[i], n) * n);
     if (fel > 0 && std::abs(ft - pp.friction * fel) < 1e-9 * fel) ++slipping;
