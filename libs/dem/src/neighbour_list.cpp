@@ -10,12 +10,26 @@ namespace tomodem::dem {
 namespace {
 using spatial::kCentreImage;
 
-/// Frobenius norm, used to bound how far periodic images moved since the last build.
-double frobenius(const Mat3& m) {
-  double s = 0;
-  for (int a = 0; a < 3; ++a)
-    for (int b = 0; b < 3; ++b) s += m(a, b) * m(a, b);
-  return std::sqrt(s);
+/// Smallest singular value of F: the square root of the smallest eigenvalue of C = FᵀF
+/// (trigonometric solution of the symmetric 3×3 eigenproblem), computed on C − I so that a
+/// strain of 1e-9 is not lost in the round-off of 1. Rounded down by 1e-12 (the bound built on
+/// it must not miss a pair).
+double smallest_singular_value(const Mat3& f) {
+  Mat3 b = f.transpose() * f;
+  for (int a = 0; a < 3; ++a) b(a, a) -= 1;
+  const double q = b.trace() / 3;
+  const double off = b(0, 1) * b(0, 1) + b(0, 2) * b(0, 2) + b(1, 2) * b(1, 2);
+  double lmin = q;
+  const double p2 = (b(0, 0) - q) * (b(0, 0) - q) + (b(1, 1) - q) * (b(1, 1) - q) + (b(2, 2) - q) * (b(2, 2) - q) + 2 * off;
+  if (p2 > 0) {
+    const double p = std::sqrt(p2 / 6);
+    Mat3 c = b;
+    for (int a = 0; a < 3; ++a) c(a, a) -= q;
+    c *= 1 / p;
+    const double phi = std::acos(std::clamp(c.det() / 2, -1.0, 1.0)) / 3;
+    lmin = q + 2 * p * std::cos(phi + 2 * 3.14159265358979323846 / 3);  // the smallest root
+  }
+  return std::sqrt(std::max(0.0, 1 + lmin)) - 1e-12;
 }
 }  // namespace
 
@@ -359,18 +373,35 @@ void NeighbourList::reindex(const SimState& s) {
   fill_owner();
 }
 
+/// Rebuild test against the affine map of the cell. With F = H H₀⁻¹ (H₀ the cell at the
+/// build) and u_i = (x_i − o) − F (x⁰_i − o) each particle's non-affine displacement since the
+/// build (o the cell origin; positions are not wrapped between builds, so x − x⁰ is the motion),
+/// a pair seen through image n had d⁰ = x⁰_j + H₀n − x⁰_i and now has
+///   d = x_j + H n − x_i = F d⁰ + (u_j − u_i)   (H n = F H₀ n),
+/// so |d| ≥ s_min(F) |d⁰| − 2 max|u|. A pair left out at the build had |d⁰| ≥ r_list =
+/// 2 r_max + reach + skin; it can touch now (|d| < 2 r_max + reach = r_list − skin) only if
+///   r_list (1 − s_min) + 2 max|u| > skin,
+/// which is when the list is rebuilt (1 − s_min clamped at 0: an expansion is not counted as a
+/// gain). A homogeneous compression costs r_list ε instead of the old test's √3 |ΔH| ≈ √3 ε L:
+/// a rebuild every ~skin/(r_list ε) of strain whatever the cell's size (docs/pack.md).
+/// Walls: a particle's raw motion max|x − x⁰| against the wall's.
 bool NeighbourList::rebuild_due(const SimState& s) const {
   if (need_build) return true;
   const Particles& p = s.p;
-  double dmax2 = 0;
+  const Mat3 f = s.cell.h * h_build.inverse();
+  const Vec3 o = s.cell.origin;
+  double umax2 = 0, dmax2 = 0, rmax = 0;
   const long n = long(p.size());
-#pragma omp parallel for num_threads(s.threads) if (s.threads > 1) schedule(static) reduction(max : dmax2)
-  for (long i = 0; i < n; ++i) dmax2 = std::max(dmax2, norm2(p.x[i] - x_build[i]));
+#pragma omp parallel for num_threads(s.threads) if (s.threads > 1) schedule(static) reduction(max : umax2, dmax2, rmax)
+  for (long i = 0; i < n; ++i) {
+    const Vec3 dx = p.x[i] - x_build[i];
+    umax2 = std::max(umax2, norm2(dx - (f * (x_build[i] - o) - (x_build[i] - o))));
+    dmax2 = std::max(dmax2, norm2(dx));
+    rmax = std::max(rmax, p.r[i]);
+  }
+  const double r_list = 2 * rmax + reach_max + skin;
+  if (r_list * std::max(0.0, 1 - smallest_singular_value(f)) + 2 * std::sqrt(umax2) > skin) return true;
   const double dmax = std::sqrt(dmax2);
-  Mat3 dh = s.cell.h;
-  for (int a = 0; a < 3; ++a)
-    for (int b = 0; b < 3; ++b) dh(a, b) -= h_build(a, b);
-  if (2 * dmax + std::sqrt(3.0) * frobenius(dh) > skin) return true;
   for (std::size_t w = 0; w < s.walls.size(); ++w)
     if (dmax + norm(s.walls[w].point - wall_point_build[w]) > skin) return true;
   return false;

@@ -8,9 +8,13 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <random>
+#include <set>
+#include <tuple>
 #include <vector>
 
 #include "tomodem/core/error.hpp"
+#include "tomodem/dem/simulation.hpp"
 #include "tomodem/geometry/pack.hpp"
 
 using namespace tomodem;
@@ -278,4 +282,96 @@ TEST(Jamming, AdhesiveMicronPowderPacksLoose) {
     EXPECT_GT(r.coordination, 1.5) << "w = " << w;
     EXPECT_LT(r.coordination, 4.0) << "w = " << w;
   }
+}
+
+// The neighbour list's rebuild test measures motion against the cell's affine map
+// (neighbour_list.cpp, rebuild_due): a pair left out at a build cannot touch before the next.
+// 400 spheres (d 0.8-1.2 mm, no overlap at phi 0.2) in a periodic cube of ~11 d, deformed in 120
+// steps by F = diag(1 - e) + shear g (e = 0.0015, g = 0.002; the volume falls to 0.58) plus a
+// random non-affine jitter of up to 0.003 d per step and axis, then expanded in 30 steps. After
+// every step, every pair within r_i + r_j (all pairs, the 27 images) must be listed through
+// its image. The old test, 2 max|x - x0| + sqrt(3) |H - H0| > skin (replayed here on the same
+// motion), rebuilds every ~2 steps at this cell size (the far side of the cell moves by e L per
+// step); the affine one every ~10-20 (r_list e + the jitter): a quarter of the builds is a
+// margin of 2 or more on both counts.
+TEST(Jamming, AffineRebuildTestMissesNoPair) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0, 1);
+  const double d = 1e-3, side = 11 * d;
+  dem::Particles p;
+  std::vector<Vec3> x;
+  std::vector<double> r;
+  while (r.size() < 400) {  // random sequential insertion, periodic minimum image
+    const Vec3 xi{u(rng) * side, u(rng) * side, u(rng) * side};
+    const double ri = d * (0.4 + 0.2 * u(rng));
+    bool free = true;
+    for (std::size_t j = 0; j < x.size() && free; ++j) {
+      Vec3 dx = x[j] - xi;
+      for (int k = 0; k < 3; ++k) dx[k] -= side * std::round(dx[k] / side);
+      free = norm(dx) > ri + r[j];
+    }
+    if (free) x.push_back(xi), r.push_back(ri), p.add(xi, ri, 2500, 0);
+  }
+  dem::ContactModel m;
+  m.normal = dem::NormalLaw::hertz;
+  Material mat;
+  mat.name = "glass";
+  mat.youngs_modulus = 1e8;
+  mat.poisson_ratio = 0.25;
+  mat.density = 2500;
+  m.materials = {mat};
+  m.finalize();
+  dem::Settings set;
+  set.threads = 1;
+  dem::Simulation sim(std::move(p), Cell::box({0, 0, 0}, {side, side, side}, true), m, set);
+  double dsum = 0;
+  for (double ri : r) dsum += 2 * ri;
+  const double skin = 0.1 * dsum / double(r.size());  // the engine's default
+  sim.measure();
+  const long builds0 = sim.engine_state().builds;
+  // The old test replayed on unwrapped copies of the positions (the engine wraps at its builds).
+  std::vector<Vec3> y = sim.particles().x, y0 = y;
+  Mat3 h0 = sim.cell().h;
+  long old_builds = 0, missed = 0, checked = 0;
+  std::uniform_real_distribution<double> jitter(-0.003 * d, 0.003 * d);
+  for (int step = 0; step < 150; ++step) {
+    const double e = step < 120 ? 0.0015 : -0.004, g = step < 120 ? 0.002 : 0;
+    Mat3 f;
+    for (int a = 0; a < 3; ++a) f(a, a) = 1 - e;
+    f(0, 1) = g;
+    const Vec3 o = sim.cell().origin;
+    auto& xs = sim.particles().x;
+    for (std::size_t i = 0; i < xs.size(); ++i) {
+      const Vec3 w{jitter(rng), jitter(rng), jitter(rng)};
+      xs[i] = o + f * (xs[i] - o) + w;
+      y[i] = o + f * (y[i] - o) + w;
+    }
+    sim.cell().h = f * sim.cell().h;
+    double dmax = 0, dh = 0;
+    for (std::size_t i = 0; i < y.size(); ++i) dmax = std::max(dmax, norm(y[i] - y0[i]));
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) dh += std::pow(sim.cell().h(a, b) - h0(a, b), 2);
+    if (2 * dmax + std::sqrt(3 * dh) > skin) ++old_builds, y0 = y, h0 = sim.cell().h;
+    sim.measure();  // rebuilds when due
+    const dem::Simulation::EngineState es = sim.engine_state();
+    std::set<std::tuple<int, int, int>> listed;
+    for (std::size_t i = 0; i + 1 < es.start.size(); ++i)
+      for (int k = es.start[i]; k < es.start[i + 1]; ++k) listed.emplace(int(i), es.j[std::size_t(k)], es.image[std::size_t(k)]);
+    const Mat3& h = sim.cell().h;
+    for (std::size_t i = 0; i < xs.size(); ++i)
+      for (std::size_t j = i + 1; j < xs.size(); ++j)
+        for (int c = 0; c < 27; ++c) {
+          const Vec3 n{double(c / 9 - 1), double(c / 3 % 3 - 1), double(c % 3 - 1)};
+          if (norm(xs[j] + h * n - xs[i]) >= r[i] + r[j]) continue;
+          ++checked;
+          if (!listed.count({int(i), int(j), c})) ++missed;
+        }
+  }
+  const long builds = sim.engine_state().builds - builds0;
+  std::printf("affine rebuild test: %ld builds, old test %ld, %ld touching pairs checked, %ld missed\n", builds,
+              old_builds, checked, missed);
+  EXPECT_GT(checked, 1000);  // the test saw contacts
+  EXPECT_EQ(missed, 0);
+  EXPECT_GE(builds, 3);  // the list did have to follow the motion
+  EXPECT_LT(4 * builds, old_builds);
 }
