@@ -67,8 +67,11 @@ int main(int argc, char** argv) {
     bool no_contact = false;
     app.add_flag("--no-contact", no_contact, "sla: broken faces pass through each other (no compression)");
     app.add_option("--cracks", c.cracks,
-                   "sla: pre-cracks per sample, each with the network moved by 1/cracks of the cell along x and z; "
-                   "K_IC is their mean")->capture_default_str();
+                   "sla: pre-cracks per sample, crack k with the network moved by k/cracks of the cell along x and z "
+                   "(and loaded along z, x, y in turn: --crack-orientations); K_IC is their mean")->capture_default_str();
+    tomodem::cli::add_choice(app, "--crack-orientations", c.crack_orientations, tomodem::mechanics::kCrackOrientationNames,
+                             "sla, --cracks > 1: three (load along z, x, y in turn; needs a cell periodic along all three) "
+                             "| one (every crack along z, as before)");
     app.add_option("--widths", c.widths, "sla: size-effect study, sample widths in mean diameters (>= 3)")->delimiter(',');
     app.add_option("--transits", ex.transits, "explicit: loading time to the reference strain, in elastic-wave transits")
         ->capture_default_str();

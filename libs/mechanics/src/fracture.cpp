@@ -203,17 +203,63 @@ FractureSample make_sample(const Network& net, const CrackOptions& o, const std:
   return s;
 }
 
-FractureSample make_crack_sample(const Network& net, const CrackOptions& o, int k, int cracks, const std::string& file) {
+Network permute_axes(const Network& net, int turns) {
+  const auto old_axis = [turns](int a) { return (a + turns) % 3; };
+  const auto permute = [&](const Vec3& v) {
+    const double c[3] = {v.x, v.y, v.z};
+    return Vec3{c[old_axis(0)], c[old_axis(1)], c[old_axis(2)]};
+  };
+  Network out = net;
+  Packing& p = out.packing;
+  for (auto* column : {&p.particles.position, &p.particles.velocity, &p.particles.angular_velocity})
+    for (Vec3& v : *column) v = permute(v);
+  for (auto* column : {&p.contacts.normal_force, &p.contacts.tangential_force})
+    for (Vec3& v : *column) v = permute(v);
+  const Cell& c = net.packing.cell;
+  p.cell.origin = permute(c.origin);
+  for (int a = 0; a < 3; ++a) {
+    p.cell.periodic[a] = c.periodic[old_axis(a)];
+    for (int b = 0; b < 3; ++b) p.cell.h(a, b) = c.h(old_axis(a), old_axis(b));
+  }
+  for (Image& im : out.image) {
+    const Image old = im;
+    for (int a = 0; a < 3; ++a) im[std::size_t(a)] = old[std::size_t(old_axis(a))];
+  }
+  return out;
+}
+
+const char* crack_load_axis(int k, CrackOrientations orientations) {
+  static const char* const axis[3] = {"z", "x", "y"};  // the old axis that permute_axes(k mod 3) puts along z
+  return orientations == CrackOrientations::three ? axis[k % 3] : "z";
+}
+
+FractureSample make_crack_sample(const Network& net, const CrackOptions& o, int k, int cracks,
+                                 CrackOrientations orientations, const std::string& file) {
   if (k == 0) return make_sample(net, o, file);
   const Cell& cell = net.packing.cell;
-  if (!cell.periodic[0] || !cell.periodic[2])
+  const std::string option = "--cracks " + std::to_string(cracks);
+  if (orientations == CrackOrientations::three) {
+    std::string missing;
+    for (int a = 0; a < 3; ++a)
+      if (!cell.periodic[a]) missing += std::string(missing.empty() ? "" : " ") + "xyz"[a];
+    if (!missing.empty())
+      throw InputError(file, "/cell/periodic", missing + " not periodic",
+                       option + " loads the cracks along z, x and y in turn and moves the network between them: the "
+                       "cell must be periodic along all three (--crack-orientations one, every crack along z, needs "
+                       "x, y and z periodic as well; --cracks 1 needs only y)");
+  } else if (!cell.periodic[0] || !cell.periodic[2]) {
     throw InputError(file, "/cell/periodic", std::string(cell.periodic[0] ? "" : "x ") + (cell.periodic[2] ? "" : "z ") + "not periodic",
-                     "--cracks " + std::to_string(cracks) + " moves the network along x and z between cracks: the cell must be periodic along both");
+                     option + " moves the network along x and z between cracks: the cell must be periodic along both");
+  }
   // A periodic network moved by a fraction of its cell is the same material; make_sample wraps
   // the particles back into the cell (the bond images follow), so the cut faces move with it.
-  Network moved = net;
+  Network moved = orientations == CrackOrientations::three ? permute_axes(net, k % 3) : net;
+  const Cell& c = moved.packing.cell;
+  // Shift k/K (not floor(k/3)/ceil(K/3)): the same places as with one orientation, so the two
+  // modes differ only by the load axis; cracks of one orientation (k, k + 3, ...) still sit 3/K
+  // of the cell apart, which is 1/ceil(K/3) when 3 divides K.
   const double f = double(k) / double(cracks);
-  const Vec3 shift{f * cell.h(0, 0), 0.0, f * cell.h(2, 2)};
+  const Vec3 shift{f * c.h(0, 0), 0.0, f * c.h(2, 2)};
   for (Vec3& x : moved.packing.particles.position) x = x + shift;
   return make_sample(moved, o, file);
 }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -243,11 +244,20 @@ json size_effect_study(const FractureConfig& c, const Network& net, const std::v
 /// the cracks; its uncertainty combines the standard error of the mean from the spread between
 /// cracks with the cracks' own K_IC_error (crack-tip discreteness) propagated to the mean, in
 /// quadrature. Returns the `cracks` object; `K`, `rel_error` get the mean and the combined error.
-json crack_statistics(const std::vector<FractureResult>& runs, double& K, double& rel_error) {
+json crack_statistics(const std::vector<FractureResult>& runs, CrackOrientations orientations, double& K,
+                      double& rel_error) {
   const double n = double(runs.size());
   double sum = 0, method = 0;
   json per = json::array(), per_error = json::array(), per_peak = json::array(), per_broken = json::array();
-  for (const FractureResult& r : runs) {
+  json axes = json::array(), shifts = json::array();
+  std::map<std::string, std::pair<double, int>> by_axis;  // load axis -> (sum of K_IC, cracks)
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    const FractureResult& r = runs[k];
+    const std::string axis = crack_load_axis(int(k), orientations);
+    axes.push_back(axis);
+    shifts.push_back(double(k) / n);
+    by_axis[axis].first += r.K_IC;
+    ++by_axis[axis].second;
     sum += r.K_IC;
     method += std::pow(r.K_IC_error * r.K_IC, 2);
     per.push_back(r.K_IC), per_error.push_back(r.K_IC_error), per_peak.push_back(r.peak_stress);
@@ -260,7 +270,11 @@ json crack_statistics(const std::vector<FractureResult>& runs, double& K, double
   const double method_sem = std::sqrt(method) / n;  // Σ (e_k K_k)² / n² : each crack's error, independent
   K = mean;
   rel_error = std::hypot(sem, method_sem) / mean;
-  return {{"count", runs.size()},          {"K_IC", per},
+  json axis_means = json::object();  // the anisotropy of K_IC (one value with one orientation)
+  for (const auto& [axis, total] : by_axis) axis_means[axis] = total.first / total.second;
+  return {{"count", runs.size()},          {"orientations", to_string(orientations)},
+          {"load_axis", axes},             {"shift", shifts},
+          {"mean_by_load_axis", axis_means}, {"K_IC", per},
           {"K_IC_error", per_error},       {"peak_stress", per_peak},
           {"broken_bonds", per_broken},    {"mean", mean},
           {"sd", sd},                      {"cv", sd / mean},
@@ -475,7 +489,15 @@ std::string run_fracture(const FractureConfig& c) {
   set_failure(laws, p, fo, c.input);
   const FractureSample s = make_sample(net, c.crack, c.input);
   std::vector<FractureSample> more_cracks;  // cracks 1 .. K-1, cut before any run: bad input stops here
-  for (int k = 1; k < c.cracks; ++k) more_cracks.push_back(make_crack_sample(net, c.crack, k, c.cracks, c.input));
+  if (c.cracks > 1 && c.crack_orientations == CrackOrientations::three) {
+    // Each axis becomes the load axis in turn: on a slab the turned samples are of other sizes.
+    const double Lx = p.cell.h(0, 0), Ly = p.cell.h(1, 1), Lz = p.cell.h(2, 2);
+    if (std::max({Lx, Ly, Lz}) > 1.5 * std::min({Lx, Ly, Lz}))
+      warn("--cracks " + std::to_string(c.cracks) + " with three orientations on a " + value_text(Lx) + " x " +
+           value_text(Ly) + " x " + value_text(Lz) + " m cell: the cracks loaded along x and y are samples of other "
+           "width, thickness and height; --crack-orientations one keeps every crack along z");
+  }
+  for (int k = 1; k < c.cracks; ++k) more_cracks.push_back(make_crack_sample(net, c.crack, k, c.cracks, c.crack_orientations, c.input));
   check_widths_fit(c, net, s.mean_diameter);
   if (c.fields.requested()) check_fracture_fields(c.fields, s);  // width and grid, before any solve
   if (want_sla && !sla_uses_pcg(c.sla, long(s.packing.particles.size() - s.removed_particles)))
@@ -521,7 +543,7 @@ std::string run_fracture(const FractureConfig& c) {
   if (c.cracks > 1) {
     crack_runs.insert(crack_runs.begin(), sla);
     double K = 0, error = 0;
-    out["cracks"] = crack_statistics(crack_runs, K, error);
+    out["cracks"] = crack_statistics(crack_runs, c.crack_orientations, K, error);
     out["K_IC"] = K;
     out["K_IC_error"] = error;
     out["G_from_K_IC"] = finite(K * K * (1 - nu * nu) / E);

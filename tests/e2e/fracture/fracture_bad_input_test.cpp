@@ -82,6 +82,8 @@ const std::vector<Case> kCases = {
     {"timestep_fraction_sla", "fracture", B + " --timestep-fraction 2", 2, {"--timestep-fraction", "2"}},
     {"geometry_unknown", "fracture", B + " --geometry middle", 2, {"--geometry", "middle"}},
     {"cracks_zero", "fracture", B + " --cracks 0", 2, {"--cracks", "0"}},
+    {"crack_orientations_unknown", "fracture", B + " --cracks 3 --crack-orientations two", 2,
+     {"--crack-orientations", "two"}},
     {"cracks_explicit", "fracture", B + " --method explicit --cracks 2", 2, {"--cracks", "2", "--method sla or both"}},
     // ---- outputs
     {"map_is_input", "fracture", B + " --map {D}/bonded.h5", 2, {"--map", "bonded.h5"}},

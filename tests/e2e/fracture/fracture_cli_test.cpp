@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -142,18 +143,43 @@ TEST_F(FractureCli, NoBondsAcrossTheCrackPathExit2WithoutOutput) {
   expect_no_output();
 }
 
-// --cracks K on a simple cubic lattice (every bond alike, spacing d, 8 d cell): moving the lattice
-// by 2 d along x and z maps it onto itself, so each of the K = 4 cracks sees the same sample and
-// must give the single-crack K_IC. Tolerance 1e-9: the same systems with the particles numbered
-// differently (round-off of the solve order; the lattice's tied bonds break as one group).
-TEST_F(FractureCli, CracksOnALatticeAllGiveTheSingleCrackValue) {
-  const double d = 2e-6;
+namespace {
+/// The network with its axes turned cyclically, written out case by case (independent of the
+/// tool's permute_axes): turns = 1 puts the old x along z, (x, y, z) -> (y, z, x); turns = 2 puts
+/// the old y along z, (x, y, z) -> (z, x, y). The cells of these tests are boxes at the origin.
+mechanics::Network turned(const mechanics::Network& net, int turns) {
+  const auto turn = [turns](const Vec3& v) {
+    return turns == 0 ? v : turns == 1 ? Vec3{v.y, v.z, v.x} : Vec3{v.z, v.x, v.y};
+  };
+  mechanics::Network out = net;
+  for (Vec3& x : out.packing.particles.position) x = turn(x);
+  const Vec3 L = turn({net.packing.cell.h(0, 0), net.packing.cell.h(1, 1), net.packing.cell.h(2, 2)});
+  out.packing.cell = Cell::box({0, 0, 0}, L, true);
+  for (auto& im : out.image) {
+    const Vec3 t = turn({double(im[0]), double(im[1]), double(im[2])});
+    im = {int32_t(t.x), int32_t(t.y), int32_t(t.z)};
+  }
+  return out;
+}
+
+/// Simple cubic lattice, spacing d, n × n × n sites half a spacing from the cell faces (a site on a
+/// face could wrap to either side after a move), every touching pair bonded.
+mechanics::Network cubic_lattice(int n, double d) {
   mechanics::Network net;
-  net.packing = mechanics::test::lattice("simple_cubic", 8, d, 0.6 * d, mechanics::test::alumina());
-  // Sites half a spacing from the cell faces: a site on a face could wrap to either side after the move.
+  net.packing = mechanics::test::lattice("simple_cubic", n, d, 0.6 * d, mechanics::test::alumina());
   for (Vec3& x : net.packing.particles.position) x = x + Vec3{0.5 * d, 0.5 * d, 0.5 * d};
   mechanics::test::bond_ratio(net, 1.0);
-  const std::string in = network(net), opts = " --a-over-w 0.22 --no-elastic --json " + path("out.json") + " -q";
+  return net;
+}
+}  // namespace
+
+// --cracks K on a simple cubic lattice (every bond alike, spacing d, 8 d cell): a cyclic turn of
+// the axes and a move by 2 d along x and z map the lattice onto itself, so each of the K = 4
+// cracks (loaded along z, x, y, z by default) sees the same sample and must give the single-crack
+// K_IC. Tolerance 1e-9: the same systems with the particles numbered differently (round-off of
+// the solve order; the lattice's tied bonds break as one group).
+TEST_F(FractureCli, CracksOnALatticeAllGiveTheSingleCrackValue) {
+  const std::string in = network(cubic_lattice(8, 2e-6)), opts = " --a-over-w 0.22 --no-elastic --json " + path("out.json") + " -q";
   auto [c1, e1] = run(in + opts);
   ASSERT_EQ(c1, 0) << e1;
   const auto one = json("out.json");
@@ -162,51 +188,116 @@ TEST_F(FractureCli, CracksOnALatticeAllGiveTheSingleCrackValue) {
   const auto four = json("out.json");
   const double K1 = one["K_IC"], e1rel = one["K_IC_error"];
   ASSERT_EQ(four["cracks"]["K_IC"].size(), 4u);
+  EXPECT_EQ(four["cracks"]["orientations"], "three");
+  EXPECT_EQ(four["cracks"]["load_axis"], nlohmann::json({"z", "x", "y", "z"}));
+  EXPECT_EQ(four["cracks"]["shift"], nlohmann::json({0.0, 0.25, 0.5, 0.75}));
   for (double K : four["cracks"]["K_IC"]) EXPECT_NEAR(K / K1, 1.0, 1e-9);
+  for (const char* axis : {"x", "y", "z"}) EXPECT_NEAR(four["cracks"]["mean_by_load_axis"][axis].get<double>() / K1, 1.0, 1e-9);
   EXPECT_NEAR(four["K_IC"].get<double>() / K1, 1.0, 1e-9);
   EXPECT_LT(four["cracks"]["sd"].get<double>(), 1e-9 * K1);
   // No spread: the uncertainty is the method's alone, its relative error / sqrt(4) (docs/fracture.md).
   EXPECT_NEAR(four["K_IC_error"].get<double>() / (e1rel / 2), 1.0, 1e-6);
 }
 
-// --cracks 3 on a random network: crack k is the single-crack test of the network moved by k/3 of
-// the cell along x and z. The test moves the network itself, runs one crack on each moved file and
-// checks the per-crack values (same arithmetic: 1e-12), their mean, sd, standard error and the
-// combined error sqrt(sem² + Σ(e_k K_k)²/K²)/mean from those values.
-TEST_F(FractureCli, CracksAreSingleCrackRunsOnTheMovedNetwork) {
-  const mechanics::Network net = mechanics::test::slab(12, 3, 18, 11);
+// --cracks 3 on a random network (8 d cube, three orientations by default): crack k is the
+// single-crack test of the network with its axes turned k times and moved by k/3 of the turned
+// cell along x and z. The test turns and moves the network itself, runs one crack on each file
+// and checks the per-crack values (same arithmetic: 1e-12), their mean, the means by load axis,
+// sd, standard error and the combined error sqrt(sem² + Σ(e_k K_k)²/K²)/mean from those values.
+TEST_F(FractureCli, CracksAreSingleCrackRunsOnTheTurnedAndMovedNetwork) {
+  const mechanics::Network net = mechanics::test::slab(8, 8, 8, 11);
   const std::string opts = " --a-over-w 0.2 --no-elastic --json " + path("out.json") + " -q";
   auto [c3, e3] = run(network(net) + opts + " --cracks 3");
   ASSERT_EQ(c3, 0) << e3;
   const auto three = json("out.json");
+  EXPECT_EQ(three["cracks"]["load_axis"], nlohmann::json({"z", "x", "y"}));
   std::vector<double> K, e;
   for (int k = 0; k < 3; ++k) {
-    mechanics::Network moved = net;
-    const Vec3 shift{k / 3.0 * net.packing.cell.h(0, 0), 0.0, k / 3.0 * net.packing.cell.h(2, 2)};
+    mechanics::Network moved = turned(net, k);
+    const Vec3 shift{k / 3.0 * moved.packing.cell.h(0, 0), 0.0, k / 3.0 * moved.packing.cell.h(2, 2)};
     for (Vec3& x : moved.packing.particles.position) x = x + shift;
     auto [c, err] = run(network(moved) + opts);
     ASSERT_EQ(c, 0) << err;
     K.push_back(json("out.json")["K_IC"]);
     e.push_back(json("out.json")["K_IC_error"]);
     EXPECT_NEAR(three["cracks"]["K_IC"][k].get<double>() / K.back(), 1.0, 1e-12) << "crack " << k;
+    EXPECT_NEAR(three["cracks"]["mean_by_load_axis"]["zxy"[k] + std::string()].get<double>() / K.back(), 1.0, 1e-12);
   }
   const double mean = (K[0] + K[1] + K[2]) / 3;
   double ss = 0, method = 0;
   for (int k = 0; k < 3; ++k) ss += (K[k] - mean) * (K[k] - mean), method += std::pow(e[k] * K[k], 2);
   const double sd = std::sqrt(ss / 2), sem = sd / std::sqrt(3.0);
-  EXPECT_GT(sd, 0.01 * mean);  // three different places in a random network: the cracks differ
+  EXPECT_GT(sd, 0.01 * mean);  // three different places and axes in a random network: the cracks differ
   EXPECT_NEAR(three["K_IC"].get<double>() / mean, 1.0, 1e-12);
   EXPECT_NEAR(three["cracks"]["sd"].get<double>() / sd, 1.0, 1e-9);
   EXPECT_NEAR(three["cracks"]["sem"].get<double>() / sem, 1.0, 1e-9);
   EXPECT_NEAR(three["K_IC_error"].get<double>() / (std::sqrt(sem * sem + method / 9) / mean), 1.0, 1e-9);
 }
 
-TEST_F(FractureCli, CracksNeedACellPeriodicAlongXAndZ) {
+// --crack-orientations one is the behaviour before the three orientations: crack k is the
+// single-crack test of the network moved by k/3 of the cell along x and z, loaded along z. The
+// same operations on the same numbers, so the values are equal exactly.
+TEST_F(FractureCli, OneOrientationIsTheMovedNetworkAlongZ) {
+  const mechanics::Network net = mechanics::test::slab(12, 3, 18, 11);
+  const std::string opts = " --a-over-w 0.2 --no-elastic --json " + path("out.json") + " -q";
+  auto [c3, e3] = run(network(net) + opts + " --cracks 3 --crack-orientations one");
+  ASSERT_EQ(c3, 0) << e3;
+  const auto three = json("out.json");
+  EXPECT_EQ(three["cracks"]["orientations"], "one");
+  EXPECT_EQ(three["cracks"]["load_axis"], nlohmann::json({"z", "z", "z"}));
+  EXPECT_EQ(three["cracks"]["mean_by_load_axis"].size(), 1u);
+  EXPECT_EQ(three["cracks"]["mean_by_load_axis"]["z"], three["K_IC"]);
+  for (int k = 0; k < 3; ++k) {
+    mechanics::Network moved = net;
+    const Vec3 shift{k / 3.0 * net.packing.cell.h(0, 0), 0.0, k / 3.0 * net.packing.cell.h(2, 2)};
+    for (Vec3& x : moved.packing.particles.position) x = x + shift;
+    auto [c, err] = run(network(moved) + opts);
+    ASSERT_EQ(c, 0) << err;
+    EXPECT_EQ(three["cracks"]["K_IC"][k].get<double>(), json("out.json")["K_IC"].get<double>()) << "crack " << k;
+  }
+}
+
+// An orthotropic lattice: simple cubic (spacing d, so the three samples have the same geometry
+// and the same crack-tip discreteness) with the neck radius of the bonds along x, y, z in the
+// ratio 0.8 : 0.6 : 1. A crack loaded along axis i cuts the bonds along i, one per d²: G_c =
+// Γ π a_i² / d²; the stiffness along i is carried by the same bonds in series, E_i ∝ E_b π a_i² / d²
+// (no Poisson coupling on a cubic lattice under uniaxial load). LEFM K_IC = sqrt(E' G_c) ∝ a_i², so
+// K_z > K_x > K_y, and the tool's mean is the mean of the three. The other bonds' shear stiffness
+// enters E' of an orthotropic solid, so the ratios are not exactly (a_i/a_j)²: only the order is checked.
+TEST_F(FractureCli, OrthotropicLatticeOrdersTheThreeOrientations) {
+  const double d = 2e-6, scale[3] = {0.8, 0.6, 1.0};
+  mechanics::Network net = cubic_lattice(8, d);
+  Packing& p = net.packing;
+  for (std::size_t b = 0; b < p.bonds.size(); ++b) {
+    const Vec3 v = mechanics::bond_vector(p, net.image[b], b);
+    const int axis = std::abs(v.x) > 0.5 * d ? 0 : std::abs(v.y) > 0.5 * d ? 1 : 2;
+    p.bonds.radius[b] = 0.3 * d * scale[axis];  // 0.3 d: pi a^2 < d^2, below any cap at the square Laguerre face
+  }
+  auto [c, err] = run(network(net) + " --a-over-w 0.22 --no-elastic --cracks 3 --json " + path("out.json") + " -q");
+  ASSERT_EQ(c, 0) << err;
+  const auto j = json("out.json");
+  const auto& by = j["cracks"]["mean_by_load_axis"];
+  const double Kx = by["x"], Ky = by["y"], Kz = by["z"];
+  std::printf("K_IC along x %.4g, y %.4g, z %.4g Pa m^0.5: x/z %.3f (a^2 ratio 0.64), y/z %.3f (0.36)\n", Kx, Ky, Kz,
+              Kx / Kz, Ky / Kz);
+  EXPECT_GT(Kz, Kx);
+  EXPECT_GT(Kx, Ky);
+  EXPECT_NEAR(j["K_IC"].get<double>() / ((Kx + Ky + Kz) / 3), 1.0, 1e-12);  // the same three numbers summed
+}
+
+// Several cracks need a cell periodic along every axis: the cracks are cut in networks moved along
+// x and z, and with three orientations each axis becomes z in turn.
+TEST_F(FractureCli, CracksNeedAPeriodicCell) {
   mechanics::Network net = mechanics::test::slab(12, 3, 18, 11);
   net.packing.cell.periodic[0] = false;
-  auto [code, err] = run(network(net) + " --cracks 2 --no-elastic" + outputs());
+  const std::string in = network(net);
+  auto [code, err] = run(in + " --cracks 2 --no-elastic" + outputs());
   EXPECT_EQ(code, 2) << err;
-  EXPECT_NE(err.find("--cracks 2"), std::string::npos) << err;
-  EXPECT_NE(err.find("/cell/periodic"), std::string::npos) << err;
+  for (const char* word : {"--cracks 2", "/cell/periodic", "x not periodic", "along z, x and y", "--crack-orientations one"})
+    EXPECT_NE(err.find(word), std::string::npos) << word << ": " << err;
+  expect_no_output();
+  auto [code1, err1] = run(in + " --cracks 2 --crack-orientations one --no-elastic" + outputs());
+  EXPECT_EQ(code1, 2) << err1;
+  EXPECT_NE(err1.find("x not periodic"), std::string::npos) << err1;
   expect_no_output();
 }

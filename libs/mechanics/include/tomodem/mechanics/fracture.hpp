@@ -26,6 +26,13 @@ inline std::optional<CrackGeometry> parse_crack_geometry(std::string_view name) 
   return value_of(kCrackGeometryNames, name);
 }
 
+/// --cracks K > 1: every crack loaded along z (one), or along z, x, y in turn (three; the network's
+/// axes cyclically permuted, docs/fracture.md#several-cracks-per-sample).
+enum class CrackOrientations : uint8_t { one, three };
+inline constexpr NameTable<CrackOrientations, 2> kCrackOrientationNames = {
+    {{CrackOrientations::one, "one"}, {CrackOrientations::three, "three"}}};
+inline const char* to_string(CrackOrientations o) { return name_of(kCrackOrientationNames, o); }
+
 /// Axes of the test: load along z, crack front along y (periodic), crack growth along x.
 struct CrackOptions {
   CrackGeometry geometry = CrackGeometry::centre;
@@ -58,11 +65,19 @@ struct FractureSample {
 /// crack longer than the sample, no intact bond across the crack path, grips not connected.
 FractureSample make_sample(const Network& net, const CrackOptions& o, const std::string& file = "");
 /// Crack k of `cracks` on the same periodic network (docs/fracture.md#several-cracks-per-sample):
-/// the network moved by k/cracks of the cell along x and along z before the sample is cut, so the
-/// crack plane, its tips, the free faces and the grips lie in other material; k = 0 is
-/// make_sample's. InputError (--cracks) when the cell is not periodic along x and z.
+/// with three orientations the network's axes first cyclically permuted k mod 3 times
+/// (permute_axes: load along z, x, y in turn), then moved by k/cracks of the (permuted) cell along
+/// x and along z before the sample is cut, so the crack plane, its tips, the free faces and the
+/// grips lie in other material; k = 0 is make_sample's. InputError (--cracks) when the cell is not
+/// periodic along x and z (one orientation) or along every axis (three).
 FractureSample make_crack_sample(const Network& net, const CrackOptions& o, int k, int cracks,
-                                 const std::string& file = "");
+                                 CrackOrientations orientations = CrackOrientations::one, const std::string& file = "");
+/// The network with its axes cyclically permuted `turns` times: new axis a is old axis (a + turns)
+/// mod 3 (turns = 1: the load axis z of the test is the old x; 2: the old y). Positions, velocities,
+/// the cell and the bond images; a cyclic permutation keeps the handedness (a rotation).
+Network permute_axes(const Network& net, int turns);
+/// The original axis the test of crack k loads: "z", "x", "y" in turn with three orientations.
+const char* crack_load_axis(int k, CrackOrientations orientations);
 
 /// Geometry factor Y(a/W) of docs/physics.md#fracture-toughness (Tada, Paris & Irwin): centre crack sqrt(sec(π a/W)),
 /// edge notch 1.12 − 0.231 α + 10.55 α² − 21.72 α³ + 30.39 α⁴.
@@ -218,6 +233,7 @@ struct FractureConfig {
   ExplicitFractureOptions explicit_;
   double stop_fraction = 0.5;            ///< K_IC and the peak are fixed by then (docs/fracture.md#stop); 0.2 or 0 for the curve
   int cracks = 1;                        ///< SLA cracks per sample, each moved by 1/cracks of the cell (make_crack_sample)
+  CrackOrientations crack_orientations = CrackOrientations::three;  ///< with cracks > 1: load along z only, or z, x, y
   bool elastic = true;                   ///< compute E, ν of the periodic network (G = K²(1−ν²)/E check)
   std::vector<double> widths;            ///< size-effect study (SLA): sample widths in mean diameters, ≥ 3 (docs/fracture.md#size-effect)
   std::optional<double> youngs_modulus, poisson_ratio, density;  ///< overrides for every phase (unset: file)
