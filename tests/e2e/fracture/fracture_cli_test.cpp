@@ -301,3 +301,16 @@ TEST_F(FractureCli, CracksNeedAPeriodicCell) {
   EXPECT_NE(err1.find("x not periodic"), std::string::npos) << err1;
   expect_no_output();
 }
+
+// Three orientations on a slab (12 x 3 x 18 diameters): the cracks loaded along x and y are
+// samples of other sizes (W = 3 d along x): the run goes on, with a warning naming the option
+// that keeps every crack along z.
+TEST_F(FractureCli, ThreeOrientationsOnASlabWarn) {
+  const std::string in = network(mechanics::test::slab(12, 3, 18, 11));
+  auto [code, err] = run(in + " --a-over-w 0.2 --cracks 2 --no-elastic --json " + path("out.json"));
+  ASSERT_EQ(code, 0) << err;
+  EXPECT_NE(err.find("--crack-orientations one keeps every crack along z"), std::string::npos) << err;
+  auto [code1, err1] = run(in + " --a-over-w 0.2 --cracks 2 --crack-orientations one --no-elastic --json " + path("out.json"));
+  ASSERT_EQ(code1, 0) << err1;
+  EXPECT_EQ(err1.find("--crack-orientations one keeps"), std::string::npos) << err1;
+}
