@@ -54,6 +54,23 @@ json axis_json(const AxisResult& a) {
           {"solver", solver_json(a.solver)},    {"wall_time_s", a.wall_time_s}};
 }
 
+// All three axes (or the tensor's diagonal): their mean is the isotropic estimate, much less
+// scattered between samples than one axis (docs/conduct.md). Its error bounds that of the mean:
+// the mean of the axes' errors, over the mean with --image (sigma over sigma0, relative errors).
+void write_sigma_iso(Summary& out, const json& sigma, const json& err, bool relative_units) {
+  if (sigma.size() != 3) return;
+  double mean = 0, mean_error = 0;
+  for (const char* a : kAxis) {
+    const double s = sigma[a].get<double>(), e = err[a].get<double>();
+    mean += s / 3;
+    mean_error += (relative_units ? e * s : e) / 3;
+  }
+  out["sigma_iso"] = mean;
+  out["sigma_iso_error"] = relative_units ? (mean > 0 ? json(mean_error / mean) : json(nullptr)) : json(mean_error);
+  out.unit("sigma_iso", relative_units ? "relative to sigma0 (the largest conductivity given)" : "S/m");
+  out.unit("sigma_iso_error", relative_units ? "relative" : "S/m");
+}
+
 std::string join(const std::vector<std::string>& v) {
   std::string s;
   for (const auto& x : v) s += (s.empty() ? "" : ",") + x;
@@ -224,6 +241,7 @@ std::string run_image_conduct(const ConductConfig& c) {
   out["sigma_eff"] = sigma;
   out["tortuosity"] = tau;
   out["sigma_eff_error"] = err;
+  write_sigma_iso(out, sigma, err, true);
   out["axes"] = per_axis;
   if (!c.output.empty()) {
     std::ostringstream params;
@@ -370,19 +388,7 @@ void solve_network(const ConductConfig& c, const Network& net, const ConductOpti
   }
   out["sigma_eff"] = sigma;
   out["sigma_eff_error"] = err;
-  // All three axes (or the tensor's diagonal): their mean is the isotropic estimate, much less
-  // scattered between samples than one axis (docs/conduct.md); its error the mean of theirs.
-  if (sigma.size() == 3) {
-    double mean = 0, mean_error = 0;
-    for (const char* a : kAxis) {
-      mean += sigma[a].get<double>() / 3;
-      mean_error += err[a].get<double>() / 3;
-    }
-    out["sigma_iso"] = mean;
-    out["sigma_iso_error"] = mean_error;
-    out.unit("sigma_iso", "S/m");
-    out.unit("sigma_iso_error", "S/m");
-  }
+  write_sigma_iso(out, sigma, err, false);
   out["percolating_fraction"] = perc;
   out["dead_end_fraction"] = dead;
   out["residual"] = residual;
