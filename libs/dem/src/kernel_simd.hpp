@@ -10,6 +10,8 @@
 // minimiser of issue 19) tallies every step. The body is kernel_simd_body.inc (also compiled
 // for AVX2 + FMA in a generic build, kernels.cpp).
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 
 #include "kernel.hpp"
 
