@@ -389,17 +389,25 @@ FireResult minimise_enthalpy(Simulation& sim, const FireOptions& o, const Enthal
     cell.kick(0.5 * dt);
     // Power and norms in mass-weighted coordinates (as minimise_fire), the cell included.
     const FireSums sums = particle_sums(p, rot, threads, parallel);
-    const double power = cell.power() + sums.power, vv = cell.vv() + sums.vv, ff = cell.ff() + sums.ff;
+    const bool apart = e.separate_cell_restart;
+    const double power = sums.power + (apart ? 0 : cell.power()), vv = sums.vv + (apart ? 0 : cell.vv());
+    const double ff = sums.ff + (apart ? 0 : cell.ff());
     const double ww = sums.ww, tt = sums.tt, f2 = sums.f2;
     const long nfree = sums.nfree;
     const double dt_old = dt;
+    // Separate restarts: the cell mixed and stopped on its own power, the particles on theirs.
+    if (apart && cell.power() > 0) {
+      const double cc = cell.ff() > 0 ? alpha * std::sqrt(cell.vv() / cell.ff()) : 0;
+      for (int a = 0; a < cell.n; ++a) cell.v[a] = (1 - alpha) * cell.v[a] + cc * cell.f[a] / cell.m[a];
+    } else if (apart) {
+      cell.stop();
+    }
     if (power > 0) {
       const double cv = ff > 0 ? alpha * std::sqrt(vv / ff) : 0, cw = tt > 0 ? alpha * std::sqrt(ww / tt) : 0;
       const double vmax = o.max_move * rmin / dt;
       mix_particles(p, rot, alpha, cv, cw, vmax, threads, parallel);
-      for (int a = 0; a < cell.n; ++a) {
-        cell.v[a] = (1 - alpha) * cell.v[a] + cv * cell.f[a] / cell.m[a];
-      }
+      if (!apart)
+        for (int a = 0; a < cell.n; ++a) cell.v[a] = (1 - alpha) * cell.v[a] + cv * cell.f[a] / cell.m[a];
       if (++positive > o.n_min) {
         dt = std::min(dt * o.f_inc, dt_max);
         alpha *= o.f_alpha;
