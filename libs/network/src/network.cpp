@@ -187,11 +187,12 @@ void add_contact_edges(const Packing& pk, const NetworkOptions& opt, const std::
   }
 }
 
-/// The dense-network cap: each edge's conductance is at most face_conductance() of the face its
-/// pair shares in the radical tessellation of the whole packing (every phase: a face shrinks
-/// where any neighbour's cell takes space); edges whose pair shares no face (their neck disc lies
-/// inside other particles' cells) are left out.
-void cap_at_faces(const Packing& pk, Network& net) {
+/// The dense-network limit: each edge's conductance is at most that of the face its pair shares
+/// in the radical tessellation of the whole packing (every phase: a face shrinks where any
+/// neighbour's cell takes space): flux_tube_conductance(), or face_conductance() for the old
+/// law; edges whose pair shares no face (their neck disc lies inside other particles' cells) are
+/// left out.
+void cap_at_faces(const Packing& pk, const NetworkOptions& opt, Network& net) {
   const std::size_t m = net.n_edges();
   if (m == 0) return;
   const geometry::LaguerreFaces faces(pk.particles.position, pk.particles.radius, pk.cell);
@@ -214,8 +215,10 @@ void cap_at_faces(const Packing& pk, Network& net) {
       continue;
     }
     double g = net.graph.g[e];
-    const double cap = face_conductance(area, L, net.radius[a], net.radius[b], net.node_conductivity[a],
-                                        net.node_conductivity[b]);
+    const double cap = opt.flux_tube ? flux_tube_conductance(area, net.contact_radius[e], L, net.radius[a], net.radius[b],
+                                                             net.node_conductivity[a], net.node_conductivity[b])
+                                     : face_conductance(area, L, net.radius[a], net.radius[b], net.node_conductivity[a],
+                                                        net.node_conductivity[b]);
     if (cap < g) {
       g = cap;
       ++net.face_capped;
@@ -235,10 +238,41 @@ void cap_at_faces(const Packing& pk, Network& net) {
 
 }  // namespace
 
+namespace {
+/// Distance of centre i to the radical plane of spheres i, j at distance L, clamped to [0, L].
+double radical_distance(double L, double ri, double rj) { return std::clamp((L * L + ri * ri - rj * rj) / (2 * L), 0.0, L); }
+}  // namespace
+
 double face_conductance(double area, double L, double ri, double rj, double si, double sj) {
   if (std::isinf(area)) return HUGE_VAL;
-  const double di = std::clamp((L * L + ri * ri - rj * rj) / (2 * L), 0.0, L);
+  const double di = radical_distance(L, ri, rj);
   return area / (di / si + (L - di) / sj);
+}
+
+double tube_body_resistance(double area, double a, double R, double d, double psi) {
+  const double disc = M_PI * a * a;
+  if (disc >= area) return d / area;  // the neck fills the face: the prism
+  // The solid's section at x from the centre: the sphere's circle π(R² − x²) clipped to A, floored
+  // at the neck (a bond's cylinder where the neck lies beyond the sphere). Beyond x0 (circle = A)
+  // it narrows to the neck at x1; ψ of that narrowing is the constriction's, counted there.
+  const double x1 = std::clamp(std::sqrt(std::max(0.0, R * R - a * a)), 0.0, d);
+  const double x0 = std::clamp(std::sqrt(std::max(0.0, R * R - area / M_PI)), 0.0, x1);
+  const auto sphere = [R](double x) { return std::log((R + x) / (R - x)) / (2 * M_PI * R); };  // ∫dx/π(R²−x²)
+  const double narrowing = sphere(x1) - sphere(x0) + (d - x1) / disc;
+  return x0 / area + (1 - psi) * narrowing + psi * (d - x0) / area;
+}
+
+double flux_tube_conductance(double area, double a, double L, double ri, double rj, double si, double sj) {
+  if (std::isinf(area)) return holm_conductance(a, si, sj);
+  const double di = radical_distance(L, ri, rj);
+  const double psi = tube_constriction(a, std::sqrt(area / M_PI));
+  const double constriction = psi / (4 * a);  // × 1/σ per side
+  return 1 / ((tube_body_resistance(area, a, ri, di, psi) + constriction) / si +
+              (tube_body_resistance(area, a, rj, L - di, psi) + constriction) / sj);
+}
+
+const char* neck_law_name(const NetworkOptions& o) {
+  return !o.face_cap ? "isolated_necks" : o.flux_tube ? "flux_tube" : "face_capped";
 }
 
 Network build_network(const Packing& pk, const NetworkOptions& opt) {
@@ -257,7 +291,7 @@ Network build_network(const Packing& pk, const NetworkOptions& opt) {
   std::unordered_set<int64_t> bonded;
   if (opt.use_bonds) bonded = add_bond_edges(pk, src, add);
   if (opt.use_contacts) add_contact_edges(pk, opt, bonded, net, add);
-  if (opt.face_cap) cap_at_faces(pk, net);
+  if (opt.face_cap) cap_at_faces(pk, opt, net);
   return net;
 }
 

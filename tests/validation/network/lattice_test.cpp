@@ -17,6 +17,13 @@ ConductOptions tight() {
 }
 // Relative tolerance of the criterion; the solves reach 1e-12, so only round-off remains.
 constexpr double kRel = 1e-6;
+// The closed forms below check the solver for a given edge conductance G = 2σa: Holm's law alone
+// (--isolated-necks). The dense-network law is tested against voxel solutions (neck_law_test.cpp).
+NetworkOptions holm_edges() {
+  NetworkOptions o;
+  o.face_cap = false;
+  return o;
+}
 }  // namespace
 
 // σ_eff = G/(2R) for a simple cubic lattice of spacing 2R and edge conductance G, with electrodes
@@ -25,7 +32,7 @@ TEST(Conduct, SimpleCubicLatticeMatchesAnalytic) {
   const double R = 5e-6, a = 1e-6, sigma = 1e4;
   Packing p = test::sc_lattice(7, 6, 5, R, a, false);
   p.materials[0].conductivity = sigma;
-  const Network net = build_network(p, NetworkOptions{});
+  const Network net = build_network(p, holm_edges());
   const double G = 2 * sigma * a;
   for (int axis = 0; axis < 3; ++axis) {
     const AxisResult r = solve_electrodes(net, axis, tight());
@@ -41,7 +48,7 @@ TEST(Conduct, SimpleCubicLatticeMatchesAnalytic) {
 TEST(Conduct, SimpleCubicLatticePeriodicTensor) {
   const double R = 1.0, a = 0.3;
   Packing p = test::sc_lattice(4, 5, 3, R, a, true);
-  const Network net = build_network(p, NetworkOptions{});
+  const Network net = build_network(p, holm_edges());
   const TensorResult t = solve_periodic(net, tight());
   const double s = 2 * a / (2 * R);
   for (int r = 0; r < 3; ++r)
@@ -55,7 +62,7 @@ TEST(Conduct, SimpleCubicLatticeFromOverlapContacts) {
   Packing p = test::sc_lattice(6, 6, 6, 1.0, 0.1, false);
   p.bonds = BondTable{};
   for (auto& r : p.particles.radius) r = 1.05;
-  const Network net = build_network(p, NetworkOptions{});
+  const Network net = build_network(p, holm_edges());
   EXPECT_EQ(net.n_edges(), 3u * 5u * 36u);
   const double a = std::sqrt(1.05 * 1.05 - 1.0), G = 2 * a;
   const AxisResult r = solve_electrodes(net, 2, tight());
@@ -70,7 +77,7 @@ TEST(Conduct, LayeredTwoPhaseSeriesAndParallelBounds) {
   Packing p = test::sc_lattice(8, 4, 4, R, a, true, [](int x, int, int) { return (x / 2) % 2; });
   p.materials[0].conductivity = s1;
   p.materials[1].conductivity = s2;
-  const Network net = build_network(p, NetworkOptions{});
+  const Network net = build_network(p, holm_edges());
   const double l1 = s1 * a / R, l2 = s2 * a / R;
   const double series = 2.0 / (1.0 / l1 + 1.0 / l2), parallel = 0.5 * (l1 + l2);
   const TensorResult t = solve_periodic(net, tight());
@@ -80,7 +87,7 @@ TEST(Conduct, LayeredTwoPhaseSeriesAndParallelBounds) {
   // Electrodes across the layers: 7 edges in series per chain, σ = (n−1)·2R / (2R·Σ 1/G)·…
   Packing q = test::sc_lattice(8, 4, 4, R, a, false, [](int x, int, int) { return (x / 2) % 2; });
   q.materials = p.materials;
-  const Network nq = build_network(q, NetworkOptions{});
+  const Network nq = build_network(q, holm_edges());
   double rsum = 0;
   for (int x = 0; x + 1 < 8; ++x) {
     const double sa = (x / 2) % 2 ? s2 : s1, sb = ((x + 1) / 2) % 2 ? s2 : s1;
@@ -102,7 +109,7 @@ TEST(Conduct, ExtremeContrast1e8) {
   Packing p = test::sc_lattice(8, 4, 4, R, a, true, [](int x, int, int) { return (x / 2) % 2; });
   p.materials[0].conductivity = s1;
   p.materials[1].conductivity = s2;
-  const Network net = build_network(p, NetworkOptions{});
+  const Network net = build_network(p, holm_edges());
   const double l1 = s1 * a / R, l2 = s2 * a / R;
   const double series = 2.0 / (1.0 / l1 + 1.0 / l2), parallel = 0.5 * (l1 + l2);
   ConductOptions o = tight();

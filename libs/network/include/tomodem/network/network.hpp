@@ -3,9 +3,12 @@
 // intact bonds (radius a_b) and contacts (contact radius a) with the Holm constriction
 // conductance (docs/physics.md#resistor-networks):
 //   R_ij = 1/(4 σ_i a) + 1/(4 σ_j a)      (one half-space constriction per side, in series)
-// capped, in dense networks, at the two-point flux of the face the pair shares in the radical
-// (Laguerre) tessellation, A_face / (d_i/σ_i + d_j/σ_j) (docs/conduct.md#neck-conductance).
+// limited, in dense networks, by the flux tube of the face the pair shares in the radical
+// (Laguerre) tessellation: per side the prism d/(σA) in series with the disc's constriction in
+// a tube of the face's area, ψ(a/b)/(4σa) (docs/conduct.md#neck-conductance).
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -32,10 +35,13 @@ struct NetworkOptions {
   /// Floor of the contact radius, as a fraction of R*: touching pairs (overlap ≤ 0 within the
   /// gap tolerance) would otherwise have a = 0 and no conductance.
   double min_contact_ratio = 0.01;
-  /// Dense-network law: each edge's conductance capped at face_conductance() of the pair's
-  /// Laguerre face, edges whose pair shares no face left out; false: every neck as if alone
-  /// (--isolated-necks).
+  /// Dense-network law: each edge's conductance limited by the pair's Laguerre face, edges whose
+  /// pair shares no face left out; false: every neck as if alone (--isolated-necks).
   bool face_cap = true;
+  /// With face_cap: the limit is flux_tube_conductance() (neck_law "flux_tube"); false: the
+  /// face's two-point flux face_conductance() (neck_law "face_capped", the law before issue 18
+  /// item 7, which reaches the solid's σ in cells with pores).
+  bool flux_tube = true;
   std::string source = "";          ///< file name for error messages
 };
 
@@ -56,7 +62,7 @@ struct Network {
   /// Area of the pair's Laguerre face, m² (+inf on the hull of an open cell direction); empty
   /// without the face cap.
   std::vector<double> face_area;
-  std::size_t face_capped = 0;  ///< edges whose conductance is the face's (below Holm's)
+  std::size_t face_capped = 0;  ///< edges whose conductance is the face limit's (below Holm's)
   std::size_t no_face = 0;      ///< contacts and bonds left out: their pair shares no face
   // Geometry
   Cell cell;
@@ -86,6 +92,31 @@ inline double holm_conductance(double a, double s1, double s2) { return 4.0 * a 
 /// [0, L]), the two half-cells in series. Equal phases: σ A/L, exact for a uniform field because
 /// the face is normal to the branch (docs/conduct.md#neck-conductance).
 double face_conductance(double area, double L, double r_i, double r_j, double s_i, double s_j);
+
+/// Constriction factor of a disc of radius a at the end of a semi-infinite circular flux tube of
+/// radius b (Roess 1950; Cooper, Mikic & Yovanovich 1969): the resistance is ψ/(4σa), ψ = (1 − ε)^1.5,
+/// ε = a/b clamped to [0, 1]; ψ = 1 (Holm) for a ≪ b, 0 when the disc fills the tube.
+inline double tube_constriction(double a, double b) {
+  const double e = b > 0 ? std::min(a / b, 1.0) : 1.0;
+  return std::pow(1 - e, 1.5);
+}
+
+/// Resistance × σ of the solid from a centre to the face at distance d (1-D, x along the branch):
+/// the sphere's circle π(R² − x²) clipped to the face area A (the prism d/A where the neck fills
+/// the face). Where the circle narrows from A to the neck disc, the narrowing counts with the
+/// weight 1 − ψ: a constriction ψ = 1 (a ≪ b) already holds the spreading from the neck, the
+/// face's prism (ψ = 0) none of it.
+double tube_body_resistance(double area, double a, double R, double d, double psi);
+
+/// Flux-tube conductance of a neck of radius a across a Laguerre face of area A, S: per side the
+/// solid from the centre to the face (tube_body_resistance) in series with the disc's
+/// constriction in a tube of radius b = √(A/π), ψ(a/b)/(4σa) (Cooper, Mikic & Yovanovich 1969);
+/// the edge takes the smaller of this and Holm's. Face_conductance() when the disc fills the
+/// face; A = +inf (open face): Holm.
+double flux_tube_conductance(double area, double a, double L, double r_i, double r_j, double s_i, double s_j);
+
+/// The summary's name of the law of these options: "isolated_necks", "face_capped" or "flux_tube".
+const char* neck_law_name(const NetworkOptions& options);
 
 /// Builds the network; bad input (unknown phase names, a conducting phase with a non-positive
 /// or non-finite conductivity, no particles, a bond index out of range) is an InputError naming
