@@ -416,7 +416,12 @@ FireResult minimise_enthalpy(Simulation& sim, const FireOptions& o, const Enthal
       dt = std::max(dt * o.f_dec, dt_min);
       alpha = o.alpha_start;
       positive = 0;
-      stop_motion();
+      if (apart) {  // the cell keeps its motion (its own power decides)
+        std::fill(p.v.begin(), p.v.end(), Vec3{});
+        if (rot) std::fill(p.omega.begin(), p.omega.end(), Vec3{});
+      } else {
+        stop_motion();
+      }
     }
     if (dt != dt_old) sim.set_time_step(dt, false);
     if (r.steps % o.check_interval == 0 || r.steps == o.max_steps) {
