@@ -150,8 +150,8 @@ TEST(Jamming, MonodisperseFrictionlessIsostaticAtRandomClosePacking) {
 // benchmark's system at N = 500: Hertz alumina, lognormal σ = 0.3 by volume, 1 MPa ≈ 2.6e-6 E
 // (overlaps ~1e-4 d: close to jamming, where the polish probes unjammed states). Both runs must end
 // in equilibrium at the target (the criteria of the monodisperse test above); the staged one in at
-// most a third of the FIRE steps (an operation count, not a time). Measured: staged 17 720 steps
-// (φ 0.6647), unstaged 105 440 (φ 0.6627: the overshoot to 100 P packs 0.002 denser).
+// most a third of the FIRE steps (an operation count, not a time). Measured: staged 14 480 steps
+// (φ 0.6653), unstaged 138 200 (φ 0.6632: the overshoot to 100 P packs 0.002 denser).
 TEST(Jamming, StagedEnthalpyReachesPressureTargetInFewerSteps) {
   long steps[2] = {0, 0};
   for (int stages : {2, 0}) {

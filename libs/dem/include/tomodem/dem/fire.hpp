@@ -69,9 +69,10 @@ struct EnthalpyOptions {
   /// Stop (not converged) as soon as the contact pressure first reaches the target: the jammed
   /// structure, to be polished at fixed cell.
   bool stop_on_arrival = false;
-  /// FIRE's restart (stop on negative power) for the cell and the particles separately: the
-  /// cell's work P ΔV then cannot keep the joint power positive while the particles climb (the
-  /// stall of a relaxation at a fixed pressure, docs/pack.md). Off: one power over both, as a
+  /// FIRE's restart (stop on negative power) for the cell and the particles separately (a
+  /// particle restart leaves the cell moving): the cell's work P ΔV then cannot keep the joint
+  /// power positive while the particles climb (the stall of a relaxation at a fixed pressure,
+  /// docs/pack.md). Off: one power over both, as a
   /// compression from the gas needs (the cell drives it; with separate restarts the arrival
   /// overshoots and the fixed-cell bracket that follows fails on Jamming.StagedEnthalpy...'s
   /// unstaged run).
