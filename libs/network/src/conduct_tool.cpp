@@ -589,7 +589,7 @@ json voxel_check(const ConductConfig& c, const Packing& pk, const Network& net, 
 std::string parameters_text(const ConductConfig& c) {
   std::ostringstream params;
   params << "phases: [" << join(c.phases) << "]\nbc: " << c.bc << "\naxes: " << c.axes << "\ncontact_radius: "
-         << c.contact_radius << "\nneck_law: " << (c.isolated_necks ? "isolated_necks" : "face_capped")
+         << c.contact_radius << "\nneck_law: " << neck_law_name(network_options(c))
          << "\ngap_tolerance: " << c.gap_tolerance << "\nmin_contact_ratio: " << c.min_contact_ratio
          << "\nelectrode_tolerance: " << c.electrode_tolerance << "\ntolerance: " << c.tolerance
          << "\npreconditioner: " << c.preconditioner << "\n";
@@ -658,7 +658,7 @@ std::string run_conduct(const ConductConfig& c) {
                     {"contacts", net.n_edges() - nb},
                     {"phases", c.phases.empty() ? json("all") : json(c.phases)},
                     {"contact_radius", c.contact_radius}};
-  out["neck_law"] = {{"law", c.isolated_necks ? "isolated_necks" : "face_capped"},
+  out["neck_law"] = {{"law", neck_law_name(no)},
                      {"face_capped_edges", net.face_capped},
                      {"edges_without_face", net.no_face}};
   out["solver"] = {{"method", "conjugate gradient"}, {"preconditioner", c.preconditioner}, {"tolerance", c.tolerance}};
