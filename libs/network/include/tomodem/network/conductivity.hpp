@@ -21,7 +21,7 @@ struct PhaseFractions {
 };
 
 struct ConductOptions {
-  double electrode_tolerance = 0.05;  ///< a particle touches a face when its surface is within tol · r of it
+  double electrode_tolerance = 0.05;  ///< open directions: a particle touches a wall when its surface is within tol · r of it
   double voltage = 1.0;               ///< V between the faces (low face at `voltage`, high face at 0)
   SolverOptions solver;
   bool keep_fields = true;            ///< fill potential / edge_current
@@ -35,7 +35,7 @@ struct AxisResult {
   double current_in = 0, current_out = 0;  ///< A through the low and the high face
   double conservation_error = 0;    ///< |in - out| / max(|in|, |out|)
   double length = 0, area = 0;      ///< m, m²: the sample length and cross-section used in σ = I L / (A ΔV)
-  std::size_t n_low = 0, n_high = 0;       ///< particles touching each face
+  std::size_t n_low = 0, n_high = 0;       ///< particles joined to each plate (open direction: touching each wall)
   std::size_t n_solved = 0;         ///< nodes in the spanning clusters
   SolverReport solver;
   double wall_time_s = 0;
@@ -44,13 +44,17 @@ struct AxisResult {
   std::map<std::string, PhaseFractions> phases;  ///< per conducting phase
   std::vector<double> potential;    ///< V per node, NaN outside the solved clusters
   std::vector<double> edge_current; ///< A per edge, i → j, 0 outside
-  std::vector<int8_t> terminal;     ///< per node: -1, 0 (low face), 1 (high face)
+  std::vector<int8_t> terminal;     ///< per node: -1, 0 (joined to the low plate / wall), 1 (high)
   std::vector<uint8_t> backbone;    ///< per node
 };
 
-/// Electrodes on the two faces of the cell normal to `axis` (0, 1, 2). Edges that cross the
-/// periodic boundary along `axis` are cut. σ = I L /(A ΔV) with L the distance between the mean
-/// centre planes of the two electrode particle sets and A the cell cross-section.
+/// Electrodes on the two faces of the cell normal to `axis` (0, 1, 2); A is the cell cross-section
+/// and σ = I L /(A ΔV). Periodic along `axis`: plates on the faces cut every branch that crosses
+/// them, each node joined to the plate on its side by the share of the edge's resistance on that
+/// side; L is the cell's thickness (a lattice of equal edges gives the periodic σ exactly, any
+/// network at least the periodic σ_kk). Open along `axis`: the particles within
+/// electrode_tolerance of a wall are the electrodes, L is the distance between their mean centre
+/// planes (docs/conduct.md#boundary-conditions).
 AxisResult solve_electrodes(const Network& net, int axis, const ConductOptions& options);
 
 struct TensorResult {
