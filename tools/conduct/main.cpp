@@ -28,14 +28,17 @@ int main(int argc, char** argv) {
     app.add_option("--min-contact-ratio", c.min_contact_ratio, "floor of a/R* for touching contacts (-)")
         ->capture_default_str();
     app.add_option("--electrode-tolerance", c.electrode_tolerance,
-                   "a particle touches a face when its surface is within tol * r of it (-)")
+                   "open cell directions: a particle touches a wall when its surface is within tol * r of it (periodic: plates on the faces) (-)")
         ->capture_default_str();
     app.add_option("--voltage", c.voltage, "potential difference between the faces (V)")->capture_default_str();
     bool no_bonds = false, no_contacts = false;
     app.add_flag("--no-bonds", no_bonds, "ignore /bonds");
     app.add_flag("--no-contacts", no_contacts, "ignore contacts (bonds only)");
-    app.add_flag("--isolated-necks", c.isolated_necks,
-                 "every neck as if alone (Holm): no cap at the Laguerre face (docs/conduct.md#neck-conductance)");
+    app.add_option("--neck-law", c.neck_law,
+                   "neck conductance: flux_tube | face_capped (the old cap at the Laguerre face) | isolated (Holm alone) "
+                   "(docs/conduct.md#neck-conductance)")
+        ->capture_default_str();
+    app.add_flag("--isolated-necks", c.isolated_necks, "alias of --neck-law isolated");
     app.add_option("--tolerance", c.tolerance, "relative residual of the CG solve")->capture_default_str();
     app.add_option("--max-iterations", c.max_iterations, "CG iteration cap (0: automatic)")->capture_default_str();
     app.add_option("--preconditioner", c.preconditioner, "ic | jacobi | amg | petsc (PETSc CG + GAMG, MPI build)")->capture_default_str();

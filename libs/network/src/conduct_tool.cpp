@@ -291,6 +291,10 @@ void check_packing_options(const ConductConfig& c) {
   require_range("--gap-tolerance", c.gap_tolerance, 0, false, 1, false,
                 "gap / R*; a gap wider than the contact radius scale is no contact");
   require_range("--min-contact-ratio", c.min_contact_ratio, 0, false, 1, false, "a / R*");
+  if (c.neck_law != "flux_tube" && c.neck_law != "face_capped" && c.neck_law != "isolated")
+    throw InputError("", "--neck-law", c.neck_law, "expected flux_tube, face_capped or isolated");
+  if (c.isolated_necks && c.neck_law != "flux_tube" && c.neck_law != "isolated")
+    throw InputError("", "--isolated-necks", "", "means --neck-law isolated; it contradicts --neck-law " + c.neck_law);
   require_range("--electrode-tolerance", c.electrode_tolerance, 0, false, 1, false, "of the particle radius");
   require_range("--charge-transfer", c.charge_transfer, 0, false, INFINITY, true, "S/m per metre of TPB");
   if (c.max_iterations < 0)
@@ -326,7 +330,9 @@ NetworkOptions network_options(const ConductConfig& c) {
   no.gap_tolerance = c.gap_tolerance;
   no.contact_radius = parse_contact_radius(c.contact_radius);
   no.min_contact_ratio = c.min_contact_ratio;
-  no.face_cap = !c.isolated_necks;
+  const std::string law = c.isolated_necks ? "isolated" : c.neck_law;
+  no.face_cap = law != "isolated";
+  no.flux_tube = law == "flux_tube";
   no.source = c.input;
   return no;
 }

@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -106,6 +107,50 @@ TEST_F(ConductCli, PeriodicTensor) {
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j)
       EXPECT_NEAR(s["sigma_tensor"][i][j].get<double>(), i == j ? 2000.0 : 0.0, 2000.0 * 1e-6);
+}
+
+// --neck-law selects the neck conductance (docs/conduct.md#neck-conductance). Periodic lattice of
+// touching spheres R = 5 µm with bonds a = 1.1 R: every Laguerre face is the cube's square
+// A = (2R)², d = R per side. Closed forms per edge, σ_eff = G/(2R):
+//   isolated     Holm 2σa                          → σ_eff = σ a/R = 1.1e4 S/m
+//   face_capped  min(2σa, σA/(2R)) = 2σR (binds)   → σ_eff = σ exactly (NetworkOptions::flux_tube
+//                = false: the face's two-point flux caps Holm)
+//   flux_tube    the disc πa² = 3.80 R² does not fill the face 4R²: the body and the tube's
+//                constriction add resistance to d/(σA) per side → strictly below σ.
+// --isolated-necks is the alias of --neck-law isolated; an unknown law or a contradiction exits 2.
+TEST_F(ConductCli, NeckLawOptionSelectsEachLaw) {
+  const std::string in = lattice(true, 5.5e-6);
+  std::map<std::string, nlohmann::json> s;
+  for (const std::string law : {"flux_tube", "face_capped", "isolated"}) {
+    const CliResult r = run(in + " --neck-law " + law + " --bc periodic --json " + path(law + ".json") + " --quiet");
+    ASSERT_EQ(r.code, 0) << law << ": " << r.err;
+    s[law] = summary(path(law + ".json"));
+  }
+  const CliResult alias = run(in + " --isolated-necks --bc periodic --json " + path("alias.json") + " --quiet");
+  ASSERT_EQ(alias.code, 0) << alias.err;
+  EXPECT_EQ(s["flux_tube"]["neck_law"]["law"], "flux_tube");
+  EXPECT_EQ(s["face_capped"]["neck_law"]["law"], "face_capped");
+  EXPECT_EQ(s["isolated"]["neck_law"]["law"], "isolated_necks");
+  EXPECT_EQ(summary(path("alias.json"))["neck_law"]["law"], "isolated_necks");
+  for (const char* ax : {"x", "y", "z"}) {
+    // 1e-6: the solver's default tolerance 1e-10 on a 80-node lattice.
+    EXPECT_NEAR(s["isolated"]["sigma_eff"][ax].get<double>(), 1.1e4, 1.1e4 * 1e-6) << ax;
+    EXPECT_NEAR(summary(path("alias.json"))["sigma_eff"][ax].get<double>(), 1.1e4, 1.1e4 * 1e-6) << ax;
+    EXPECT_NEAR(s["face_capped"]["sigma_eff"][ax].get<double>(), 1e4, 1e4 * 1e-6) << ax;
+    EXPECT_LT(s["flux_tube"]["sigma_eff"][ax].get<double>(), 1e4 * (1 - 1e-3)) << ax;
+    EXPECT_GT(s["flux_tube"]["sigma_eff"][ax].get<double>(), 0.5e4) << ax;
+  }
+  // Every edge of the face-capped run is at its cap (below Holm).
+  EXPECT_EQ(s["face_capped"]["neck_law"]["face_capped_edges"].get<std::size_t>(), s["face_capped"]["network"]["edges"].get<std::size_t>());
+  CliResult bad = run(in + " --neck-law holm --json " + path("bad.json"));
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("--neck-law"), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("holm"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(path("bad.json")));
+  bad = run(in + " --isolated-necks --neck-law face_capped --json " + path("bad.json"));
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("--isolated-necks"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(path("bad.json")));
 }
 
 // The bounds are computed from the packing alone (union volume), not from the network: on the

@@ -15,7 +15,10 @@ struct ConductConfig {
   std::string contact_radius = "geometric";
   double gap_tolerance = 1e-3, min_contact_ratio = 0.01, electrode_tolerance = 0.05, voltage = 1.0;
   bool bonds = true, contacts = true;
-  bool isolated_necks = false;       ///< --isolated-necks: no cap at the Laguerre face (NetworkOptions::face_cap)
+  /// --neck-law: "flux_tube" (default), "face_capped" (NetworkOptions::flux_tube = false, the law
+  /// before issue 18 item 7) or "isolated" (Holm alone, NetworkOptions::face_cap = false).
+  std::string neck_law = "flux_tube";
+  bool isolated_necks = false;       ///< --isolated-necks: an alias of neck_law "isolated"
   double tolerance = 1e-10;
   int max_iterations = 0;
   std::string preconditioner = "ic";
