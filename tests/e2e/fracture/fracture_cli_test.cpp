@@ -162,6 +162,13 @@ mechanics::Network turned(const mechanics::Network& net, int turns) {
   return out;
 }
 
+/// The network moved by k/K of its cell along x and z: where the tool puts its k-th of K cracks.
+mechanics::Network moved(mechanics::Network net, int k, int K) {
+  const Vec3 shift{double(k) / K * net.packing.cell.h(0, 0), 0.0, double(k) / K * net.packing.cell.h(2, 2)};
+  for (Vec3& x : net.packing.particles.position) x = x + shift;
+  return net;
+}
+
 /// Simple cubic lattice, spacing d, n × n × n sites half a spacing from the cell faces (a site on a
 /// face could wrap to either side after a move), every touching pair bonded.
 mechanics::Network cubic_lattice(int n, double d) {
@@ -213,10 +220,7 @@ TEST_F(FractureCli, CracksAreSingleCrackRunsOnTheTurnedAndMovedNetwork) {
   EXPECT_EQ(three["cracks"]["load_axis"], nlohmann::json({"z", "x", "y"}));
   std::vector<double> K, e;
   for (int k = 0; k < 3; ++k) {
-    mechanics::Network moved = turned(net, k);
-    const Vec3 shift{k / 3.0 * moved.packing.cell.h(0, 0), 0.0, k / 3.0 * moved.packing.cell.h(2, 2)};
-    for (Vec3& x : moved.packing.particles.position) x = x + shift;
-    auto [c, err] = run(network(moved) + opts);
+    auto [c, err] = run(network(moved(turned(net, k), k, 3)) + opts);
     ASSERT_EQ(c, 0) << err;
     K.push_back(json("out.json")["K_IC"]);
     e.push_back(json("out.json")["K_IC_error"]);
@@ -248,10 +252,7 @@ TEST_F(FractureCli, OneOrientationIsTheMovedNetworkAlongZ) {
   EXPECT_EQ(three["cracks"]["mean_by_load_axis"].size(), 1u);
   EXPECT_EQ(three["cracks"]["mean_by_load_axis"]["z"], three["K_IC"]);
   for (int k = 0; k < 3; ++k) {
-    mechanics::Network moved = net;
-    const Vec3 shift{k / 3.0 * net.packing.cell.h(0, 0), 0.0, k / 3.0 * net.packing.cell.h(2, 2)};
-    for (Vec3& x : moved.packing.particles.position) x = x + shift;
-    auto [c, err] = run(network(moved) + opts);
+    auto [c, err] = run(network(moved(net, k, 3)) + opts);
     ASSERT_EQ(c, 0) << err;
     EXPECT_EQ(three["cracks"]["K_IC"][k].get<double>(), json("out.json")["K_IC"].get<double>()) << "crack " << k;
   }

@@ -10,6 +10,7 @@
 #include <random>
 #include <utility>
 
+#include "scenes.hpp"
 #include "tomodem/dem/simulation.hpp"
 
 namespace tomodem::dem {
@@ -19,20 +20,7 @@ constexpr double kR = 0.5e-3, kDt = 1.35e-6;
 constexpr int kCells = 6;
 
 ContactModel hertz_mindlin() {
-  ContactModel m;
-  m.normal = NormalLaw::hertz;
-  m.tangential = TangentialLaw::mindlin;
-  Material mat;
-  mat.name = "glass";
-  mat.youngs_modulus = 1e8;
-  mat.poisson_ratio = 0.25;
-  mat.density = 2500;
-  m.materials = {mat};
-  m.finalize();
-  m.pair(0, 0).restitution = 0.5;
-  m.pair(0, 0).friction = 0.5;
-  m.finalize();
-  return m;
+  return testing::model(NormalLaw::hertz, TangentialLaw::mindlin, testing::material(1e8, 0.25, 2500), 0.5, 0.5);
 }
 
 /// kCells³ spheres on a jittered simple cubic lattice in a periodic cube, random velocities of
@@ -114,7 +102,7 @@ TEST(DemHistory, FollowsPairsAcrossRebuildsAndPeriodicFaces) {
   // The two runs differ only by round-off: wraps at other times (x - L is not exact) and other
   // list orders (force sums). 1e-9 is far above that round-off after 400 steps of a jammed state
   // (measured: 5e-13) and far below a lost or misassigned spring (of the order of 1).
-  RecordProperty("worst_relative_difference", testing::PrintToString(worst));
+  RecordProperty("worst_relative_difference", ::testing::PrintToString(worst));
   EXPECT_LE(worst, 1e-9);
 }
 
