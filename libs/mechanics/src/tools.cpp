@@ -324,7 +324,8 @@ double write_isotropic(Summary& out, const ImplicitResult& ir) {
   out["nu_iso"] = finite(nu);
   out["iso_method"] = ir.full_tensor ? "hill" : "axes";
   out["E_iso_error"] = ir.E_error;
-  out["nu_iso_error"] = ir.E_error;  // the relative residual, as nu_error
+  out["nu_iso_error"] = ir.E_error;  // the relative residual, as E_iso_error
+  out.unit("nu_iso_error", "relative");
   out["anisotropy"] = anisotropy;
   out.unit("E_iso", "Pa");
   return E;
@@ -385,6 +386,8 @@ std::string run_young(const YoungConfig& c) {
   out["nu"] = want_implicit ? ir.nu : er.nu;
   out["E_error"] = want_implicit ? ir.E_error : er.E_error;
   out["nu_error"] = want_implicit ? ir.E_error : er.nu_error;  // implicit: the relative residual, as for E
+  // The unit tells the report how to combine it: the explicit test's error of nu is absolute.
+  out.unit("nu_error", want_implicit ? "relative" : "absolute");
   out["C"] = want_implicit ? tensor_json(ir.C, ir.full_tensor) : json(nullptr);
   if (want_implicit && want_explicit) out["explicit_vs_implicit"] = (er.E - ir.E) / ir.E;
   // E against the Hashin–Shtrikman upper bound at the union-volume density (docs/physics.md#bounds).

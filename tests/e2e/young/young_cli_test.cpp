@@ -143,6 +143,13 @@ TEST_F(YoungCli, BothMethodsReportAgreement) {
   EXPECT_TRUE(y["explicit"].contains("inertial_number"));
   EXPECT_TRUE(y["explicit"].contains("unbalanced_force_ratio"));
   EXPECT_TRUE(fs::exists(path("curve.csv")));
+  // nu's errors name their unit, so that the report adds them right (implicit: the relative residual).
+  EXPECT_EQ(y["units"]["nu_error"], "relative");
+  EXPECT_EQ(y["units"]["nu_iso_error"], "relative");
+  ASSERT_EQ(run("tomodem-young", path("b.h5") + " --method explicit --transits 20 --points 3 --threads 1 -q --json " +
+                                     path("e.json")).first, 0);
+  EXPECT_EQ(json("e.json")["units"]["nu_error"], "absolute");
+  EXPECT_EQ(json("e.json")["nu_error"], json("e.json")["explicit"]["nu_error"]);
 }
 
 // A solve stopped by its iteration cap gives numbers, but says so: the summary's converged is
