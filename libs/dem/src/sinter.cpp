@@ -399,7 +399,14 @@ spatial::ClippedSphere sphere_part(double r, const std::vector<spatial::HalfSpac
 /// row of its lower index) and of its sphere, then the particles' terms in id order (the same bits
 /// on any number of ranks). Collective when decomposed; share and dshare are filled for the owned
 /// particles.
-Scan scan(const Simulation& sim, bool per_particle) {
+/// scan()'s per-particle lists, kept between calls so that their storage is reused (allocating
+/// the radical planes of every particle anew was a third of a scan).
+struct ScanWork {
+  std::vector<std::vector<spatial::HalfSpace>> cuts;
+  std::vector<OrderedTerm> terms;
+};
+
+Scan scan(const Simulation& sim, bool per_particle, ScanWork& work) {
   const Simulation::EngineState e = sim.engine_state();
   const Particles& p = sim.particles();
   const ContactModel& model = sim.model();
@@ -408,7 +415,9 @@ Scan scan(const Simulation& sim, bool per_particle) {
   const std::size_t n = p.size();
   Scan sc;
   if (per_particle) sc.share.assign(n, 0.0), sc.dshare.assign(n, 0.0);
-  std::vector<std::vector<spatial::HalfSpace>> cuts(n);
+  std::vector<std::vector<spatial::HalfSpace>>& cuts = work.cuts;
+  if (cuts.size() < n) cuts.resize(n);
+  for (std::size_t i = 0; i < n; ++i) cuts[i].clear();
   // Per particle: lens, a/R, a², R, F_s l, (η_n + ⅔η_t) l², contacts, necks, sphere, union part.
   enum { kLens, kNeck, kArea, kR, kForceL, kModulus, kContacts, kNecks, kSphere, kSolid, kTerms = 12 };
   std::vector<std::array<double, kTerms>> term(n, std::array<double, kTerms>{});
@@ -447,7 +456,8 @@ Scan scan(const Simulation& sim, bool per_particle) {
       }
     }
   // The union, exactly: each sphere clipped to its power cell (triple overlaps counted right).
-  std::vector<OrderedTerm> terms;
+  std::vector<OrderedTerm>& terms = work.terms;
+  terms.clear();
   for (std::size_t i = 0; i < n; ++i) {
     if (!owns(dom, i)) continue;
     const double sphere = 4.0 / 3.0 * M_PI * p.r[i] * p.r[i] * p.r[i];
@@ -470,6 +480,11 @@ Scan scan(const Simulation& sim, bool per_particle) {
   return sc;
 }
 
+Scan scan(const Simulation& sim, bool per_particle) {
+  ScanWork work;
+  return scan(sim, per_particle, work);
+}
+
 double axis_length(const Cell& c, int k) { return norm(c.h.col(k)); }
 
 /// Scaled-mass floor of a particle on which a neck may form during the next step (a rattler of the
@@ -482,9 +497,10 @@ double axis_length(const Cell& c, int k) { return norm(c.h.col(k)); }
 ///    which the sintering force alone pulls the particle from rest by Δh = Δt² F_s(a₀)/m.
 /// So Δt c/m stays at f over the neck's first step too (a young neck grows fast: its quasi-static
 /// approach F_s/η_n ∝ a⁻⁴). m − Δt c(a₁(m))/f increases with m: bisection between Δt c(a₀)/f and
-/// Δt c(a₁(that))/f. Returns max(m_now, floor); m_now at or above the upper end returns at once.
-double fresh_neck_mass(const ContactModel& model, int phase, double R, double a_min, double dt, double f,
-                       double m_now) {
+/// Δt c(a₁(that))/f. Returns the floor (0: no partner phase sinters); the mass is max(m, floor).
+/// It depends on the phase, R, Δt and the pair parameters only: the driver keeps it per particle
+/// until one of them changes (at the radius and step updates, every step of a ramp).
+double fresh_neck_floor(const ContactModel& model, int phase, double R, double a_min, double dt, double f) {
   const bool tangential = model.tangential == TangentialLaw::viscous;
   const double a0 = a_min * R;
   double force = 0;
@@ -505,14 +521,13 @@ double fresh_neck_mass(const ContactModel& model, int phase, double R, double a_
   };
   auto need = [&](double m) { return dt * c_of(std::sqrt(a0 * a0 + 2 * R * dt * dt * force / m)) / f; };
   double lo = dt * c_of(a0) / f;
-  if (!(lo > 0)) return m_now;
+  if (!(lo > 0)) return 0;
   double hi = need(lo);
-  if (m_now >= hi) return m_now;
   for (int it = 0; it < 60 && hi > lo * (1 + 1e-6); ++it) {
     const double mid = std::sqrt(lo * hi);
     (mid >= need(mid) ? hi : lo) = mid;
   }
-  return std::max(m_now, hi);
+  return hi;
 }
 }  // namespace
 
@@ -642,6 +657,12 @@ class SinterRun {
     if (dom_) dom_->refresh_ghost_bodies(p_);
   }
   std::size_t id(std::size_t i) const { return std::size_t(p_.id[i]); }
+  /// scan() of the current state, reused while positions, radii, cell and pair parameters are
+  /// those it saw: the density check after a radius update and the step choice of the next loop
+  /// pass are at the same state (no step between), so the second exact union is not recomputed.
+  const Scan& scan_now();
+  /// Positions, radii or pair parameters changed: the next scan_now() computes.
+  void forget_scan() { scan_valid_ = false; }
 
   Simulation& sim_;
   const SinterSettings& s_;
@@ -661,6 +682,11 @@ class SinterRun {
   // By particle id: the Rayleigh time of the particles of phases with an elastic pair; which
   // particles sinter.
   std::vector<double> rayleigh_, fresh_;
+  /// By particle id: fresh_neck_floor() and the R, Δt and temperature it was computed for.
+  struct FreshFloor {
+    double R = -1, dt = -1, T = -1, mass = 0;
+  };
+  std::vector<FreshFloor> fresh_floor_;
   double r_fresh_max_ = 0;  // the largest radius of a particle that sinters
   // Reference state: each particle's share of the solid volume (by id), density and cell lengths.
   Scan sc_;
@@ -681,7 +707,24 @@ class SinterRun {
   double mass_scale_ = 1;
   double catch_up_ = 1;  // step factor, < 1 while the radius updates lag the strain (grow_radii)
   Progress bar_{"sintering", 1.0};  // stderr, with the time left (core/progress.hpp)
+  // scan_now()'s copy: valid for this step count and temperature until forget_scan().
+  Scan scan_;
+  ScanWork scan_work_;
+  bool scan_valid_ = false;
+  long scan_step_ = -1;
+  double scan_T_ = std::numeric_limits<double>::quiet_NaN();
+  double T_applied_ = std::numeric_limits<double>::quiet_NaN();  // the pair parameters' temperature
 };
+
+const Scan& SinterRun::scan_now() {
+  if (!(scan_valid_ && scan_step_ == sim_.step_count() && scan_T_ == T_applied_)) {
+    scan_ = scan(sim_, true, scan_work_);
+    scan_valid_ = true;
+    scan_step_ = sim_.step_count();
+    scan_T_ = T_applied_;
+  }
+  return scan_;
+}
 
 /// The physical masses by id, before the run scales them.
 void SinterRun::physical_masses() {
@@ -711,11 +754,11 @@ void SinterRun::mark_particles() {
     const double rayleigh = G > 0 ? M_PI * p_.r[i] * std::sqrt(rho / G) / (0.1631 * mat.poisson_ratio + 0.8766) : 0;
     return Vec3{rayleigh, fresh, 0};
   });
-  rayleigh_.resize(n_), fresh_.resize(n_);
+  rayleigh_.resize(n_), fresh_.resize(n_), fresh_floor_.assign(n_, FreshFloor{});
   for (std::size_t k = 0; k < n_; ++k) rayleigh_[k] = c[k].x, fresh_[k] = c[k].y;
 }
 
-/// The largest radius of a particle that sinters (fresh_neck_mass's partner), over every rank.
+/// The largest radius of a particle that sinters (fresh_neck_floor's partner), over every rank.
 void SinterRun::fresh_radius() {
   double r_max = 0;
   for (std::size_t i = 0; i < p_.size(); ++i)
@@ -796,6 +839,7 @@ SinterRow SinterRun::make_row(const Scan& q, double dt_now, double mass_scale, d
 /// at once; it recovers by 1.25 per update that needs no cut. Each
 /// rank grows its own particles; the ghosts take their owners' radii.
 void SinterRun::grow_radii(const Scan& q) {
+  forget_scan();  // the radii change (q stays readable)
   const ContactModel& m = sim_.model();
   const auto sinters = [&](std::size_t i) { return m.pair(p_.phase[i], p_.phase[i]).sinter_delta_b > 0; };
   double dmax = 0;
@@ -851,7 +895,7 @@ void SinterRun::grow_radii(const Scan& q) {
 void SinterRun::choose_step(double t, double T) {
   const bool crosses = t + dt_ > std::min(s_.program.next_boundary(t), t_end_);
   if (!(since_update_ >= s_.update_interval || std::abs(T - T_at_update_) > 1.0 || crosses)) return;
-  sc_ = scan(sim_, s_.conserve_volume);
+  sc_ = scan_now();
   modulus_ = sc_.modulus;
   // Mean-field strain rate of the necks: Σ F_s l / Σ η l² (affine viscous balance), or the
   // cell's measured rate when larger.
@@ -881,13 +925,13 @@ void SinterRun::choose_step(double t, double T) {
 
   if (s_.conserve_volume) {
     grow_radii(sc_);
-    sim_.viscous_sums(visc_);  // overlaps (and contacts) changed with the radii
+    visc_stale_ = true;  // overlaps (and contacts) changed with the radii: run() sums again
   }
 }
 
 /// Mass scaling: m_i ≥ Σ(η_n + 5η_t) Δt / f (viscous limit) and the Rayleigh time of the
 /// elastic pairs ≥ Δt/0.2; physical masses are the floor. Rotational inertia follows.
-/// The floor of a fresh neck (fresh_neck_mass: its tangential rows and its first step's growth)
+/// The floor of a fresh neck (fresh_neck_floor: its tangential rows and its first step's growth)
 /// keeps a contact that forms during the step on a particle with no neck yet (a rattler of the
 /// green packing) stable too: with the normal η_n(a_min r_i) alone as the floor, such a particle
 /// had Δt Σ/m ≈ f (1 + 5η/a_min²) ≈ 1 000 in the step its first neck formed (issue 9's 20 000-
@@ -904,7 +948,12 @@ void SinterRun::scale_masses() {
     if (c > 0) m = std::max(m, c * dt_ / s_.viscous_fraction);
     if (fresh_[k] > 0) {
       const double R = 2 * p_.r[i] * r_fresh_max_ / (p_.r[i] + r_fresh_max_);
-      m = fresh_neck_mass(sim_.model(), p_.phase[i], R, s_.initial_neck, dt_, s_.viscous_fraction, m);
+      FreshFloor& ff = fresh_floor_[k];
+      if (!(ff.R == R && ff.dt == dt_ && ff.T == T_applied_)) {
+        ff = {R, dt_, T_applied_,
+              fresh_neck_floor(sim_.model(), p_.phase[i], R, s_.initial_neck, dt_, s_.viscous_fraction)};
+      }
+      m = std::max(m, ff.mass);
     }
     if (rayleigh_[k] > 0) {
       const double need = dt_ / (0.2 * rayleigh_[k]);
@@ -960,10 +1009,10 @@ bool SinterRun::record_rows() {
   if (!(row_due || check)) return false;
   // Radii brought up to date first, so the density is not late by the update interval.
   if (s_.conserve_volume) {
-    grow_radii(scan(sim_, true));
+    grow_radii(scan_now());
     visc_stale_ = true;
   }
-  const Scan q = scan(sim_, false);
+  const Scan& q = scan_now();
   const double dens = q.solid / sim_.cell().volume();
   note_mismatch(dens);
   const bool reached = s_.target_density > 0 && dens >= s_.target_density;
@@ -971,6 +1020,7 @@ bool SinterRun::record_rows() {
     const SinterRow r = make_row(q, dt_, mass_scale_, rho_last_, t_last_);
     while (next_snap_ < snaps_->densities.size() && dens >= snaps_->densities[next_snap_])
       snaps_->take(sim_, r, next_snap_++);
+    forget_scan();  // (taking a snapshot may rebuild the neighbour list)
   }
   if (row_due || reached) {
     rep_.rows.push_back(make_row(q, dt_, mass_scale_, rho_last_, t_last_));
@@ -1015,12 +1065,13 @@ SinterReport SinterRun::run() {
     const double t = sim_.time();
     const double T = s_.program.temperature(t);
     apply_temperature(sim_, s_.phases, T, s_.initial_neck);
+    T_applied_ = T;
+    choose_step(t, T);  // before the sums: a radius update there makes them stale again
     if (visc_stale_ || T != T_visc_) {
       sim_.viscous_sums(visc_);
       T_visc_ = T;
       visc_stale_ = false;
     }
-    choose_step(t, T);
     ++since_update_;
     scale_masses();
     servo_cell();
@@ -1029,8 +1080,8 @@ SinterReport SinterRun::run() {
     print_progress();
   }
   if (rep_.rows.back().step != sim_.step_count()) {
-    if (s_.conserve_volume) grow_radii(scan(sim_, true));
-    rep_.rows.push_back(make_row(scan(sim_, false), dt_, mass_scale_, rho_last_, t_last_));
+    if (s_.conserve_volume) grow_radii(scan_now());
+    rep_.rows.push_back(make_row(scan_now(), dt_, mass_scale_, rho_last_, t_last_));
     note_mismatch(rep_.rows.back().density);
   }
   rep_.final = rep_.rows.back();

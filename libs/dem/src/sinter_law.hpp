@@ -11,6 +11,7 @@
 // the sintering driver (sinter.cpp). A pair with Δ_b = 0 does not sinter: it falls back to the
 // Hertz law with the scene's restitution (non-sintering inclusions, substrates).
 #include <cmath>
+#include <limits>
 
 #include "laws.hpp"
 
@@ -35,8 +36,14 @@ struct NormalSintering : HertzFamily {
   }
   /// Sintering force π γ_s [4R(1 − cos ψ/2) + a sin ψ/2], N (attractive).
   static double driving_force(const PairParams& p, double a, double R) {
-    const double half = 0.5 * p.sinter_dihedral;
-    return M_PI * p.sinter_gamma * (4 * R * (1 - std::cos(half)) + a * std::sin(half));
+    // cos and sin of ψ/2 are those of the last call while ψ is (one pair type: every call of a
+    // step); they were a third of the force pass's instructions when taken every time.
+    thread_local double psi = std::numeric_limits<double>::quiet_NaN(), cos_half = 0, sin_half = 0;
+    if (!(p.sinter_dihedral == psi)) {
+      psi = p.sinter_dihedral;
+      cos_half = std::cos(0.5 * psi), sin_half = std::sin(0.5 * psi);
+    }
+    return M_PI * p.sinter_gamma * (4 * R * (1 - cos_half) + a * sin_half);
   }
   /// Neck radius of a contact that forms at overlap δ: Coble's a² = 2Rδ, at least a_min.
   static double initial_neck(const PairParams& p, double R, double delta) {
