@@ -1016,7 +1016,9 @@ bool SinterRun::record_rows() {
   const double dens = q.solid / sim_.cell().volume();
   note_mismatch(dens);
   const bool reached = s_.target_density > 0 && dens >= s_.target_density;
-  if (snap_due && check && dens >= snaps_->densities[next_snap_]) {
+  // Any evaluation with the radii up to date may take a snapshot: a curve row can find the last
+  // density reached (and stop the run) between two checks.
+  if (snap_due && dens >= snaps_->densities[next_snap_]) {
     const SinterRow r = make_row(q, dt_, mass_scale_, rho_last_, t_last_);
     while (next_snap_ < snaps_->densities.size() && dens >= snaps_->densities[next_snap_])
       snaps_->take(sim_, r, next_snap_++);

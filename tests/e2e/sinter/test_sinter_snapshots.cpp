@@ -219,6 +219,36 @@ TEST_F(SinterSnapshots, OneRunWritesEachTargetDensityWithItsNecksAsBonds) {
   EXPECT_NEAR(j["relative_density"].get<double>(), j["snapshots"][2]["relative_density"].get<double>(), 1e-12);
 }
 
+// A curve row evaluates the density too, between the checks (every update_interval steps): when a
+// row is the first to find the last snapshot's density, the run stops there and must take the
+// snapshot (it stopped without it and exited 2, "the program ends below the snapshot density",
+// on replica 64 of the study). Rows every ~0.1 s of sintering time (a step is ~1 s) and a check
+// every 50 steps make a row find each density first.
+TEST_F(SinterSnapshots, ARowThatReachesTheLastDensityTakesItsSnapshot) {
+  std::string extra = settings("1.0e5");
+  const std::string accuracy = "accuracy: {strain_per_step: 2.0e-5}";
+  extra.replace(extra.find(accuracy), accuracy.size(),
+                "accuracy: {strain_per_step: 2.0e-5, update_interval: 50}\n  output: {rows: 1000000}");
+  std::ofstream(dir / "rows.yaml") << extra;
+  const std::string cmd = std::string(TOMODEM_BIN_DIR) + "/tomodem-sinter " + (dir / "green.h5").string() +
+                          " --sinter-config " + (dir / "rows.yaml").string() + " --output-dir " + (dir / "out").string() +
+                          " --no-plot --threads 1 -q --snapshots-at 0.55,0.6 > " + (dir / "stdout.txt").string() +
+                          " 2> " + (dir / "stderr.txt").string();
+  const int status = std::system(cmd.c_str());
+  ASSERT_EQ(WEXITSTATUS(status), 0) << slurp(dir / "stderr.txt");
+  const auto j = nlohmann::json::parse(slurp(dir / "stdout.txt"));
+  EXPECT_EQ(j["stop_reason"], "target_density");
+  ASSERT_EQ(j["snapshots"].size(), 2u);
+  const double targets[2] = {0.55, 0.6};
+  for (int k = 0; k < 2; ++k) {
+    // A row is due every step, so the density is seen within one step (< 1e-4 at 2e-5 strain).
+    const double rho = j["snapshots"][std::size_t(k)]["relative_density"].get<double>();
+    EXPECT_GE(rho, targets[k]);
+    EXPECT_LE(rho, targets[k] + 2e-4);
+  }
+  EXPECT_TRUE(fs::exists(dir / "out" / "snapshot-0.6.h5"));
+}
+
 TEST_F(SinterSnapshots, UnreachableOrBadTargetsAreRefusedBeforeAnythingRuns) {
   // A 10 s hold: two free spheres shrink by about 1 %, so the packing reaches about 0.52 from
   // 0.50 (the estimate from above; measured on the study's 500-sphere packing: estimate 0.4724,
