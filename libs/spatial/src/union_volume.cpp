@@ -19,11 +19,43 @@ namespace tomodem::spatial {
 
 namespace {
 
+/// One face of the clipped polyhedron: its corners are verts[begin, begin + size) of the
+/// polyhedron that holds it, in cyclic order (either orientation).
 struct Face {
-  std::vector<Vec3> v;  ///< corners in cyclic order (either orientation)
-  Vec3 n;               ///< unit outward normal
-  double h;             ///< n·x on the face (signed distance from the sphere's centre)
+  std::size_t begin, size;
+  Vec3 n;    ///< unit outward normal
+  double h;  ///< n·x on the face (signed distance from the sphere's centre)
 };
+
+/// The faces share one vertex array, so a cut appends to buffers that keep their capacity.
+struct Polyhedron {
+  std::vector<Face> faces;
+  std::vector<Vec3> verts;
+  void clear() {
+    faces.clear();
+    verts.clear();
+  }
+};
+
+/// A corner of a new face and its polar angle in the face plane about the corners' centroid.
+struct CapCorner {
+  double angle;
+  Vec3 p;
+};
+
+/// Buffers reused across cuts and calls (clip_sphere runs inside OpenMP loops: one per thread);
+/// allocating per face and per cut was about half of clip_sphere's instructions (issue 18).
+struct Scratch {
+  Polyhedron poly, next;
+  std::vector<Vec3> cap;
+  std::vector<CapCorner> corners;
+  std::vector<double> u, v;
+};
+
+Scratch& scratch() {
+  thread_local Scratch s;
+  return s;
+}
 
 Vec3 perpendicular(const Vec3& n) {
   const Vec3 a = std::abs(n.x) < 0.6 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
@@ -32,54 +64,67 @@ Vec3 perpendicular(const Vec3& n) {
 }
 
 /// Convex polyhedron ∩ {n·x ≤ h} (Sutherland–Hodgman per face, the new face from the points on
-/// the plane). tol: distances below it count as on the plane.
-void clip(std::vector<Face>& faces, const Vec3& n, double h, double tol) {
+/// the plane), built in `next` and swapped into `poly`. tol: distances below it count as on the
+/// plane.
+void clip(Polyhedron& poly, Polyhedron& next, std::vector<Vec3>& cap, std::vector<CapCorner>& corners,
+          const Vec3& n, double h, double tol) {
   bool any_out = false, any_in = false;
-  for (const Face& f : faces)
-    for (const Vec3& p : f.v) {
-      const double s = dot(n, p) - h;
-      any_out |= s > tol;
-      any_in |= s < -tol;
-    }
+  for (const Vec3& p : poly.verts) {
+    const double s = dot(n, p) - h;
+    any_out |= s > tol;
+    any_in |= s < -tol;
+  }
   if (!any_out) return;  // nothing cut away
   if (!any_in) {
-    faces.clear();
+    poly.clear();
     return;
   }
-  std::vector<Face> out;
-  std::vector<Vec3> cap;
-  for (const Face& f : faces) {
-    Face g{{}, f.n, f.h};
-    const std::size_t m = f.v.size();
+  next.clear();
+  cap.clear();
+  std::vector<Vec3>& out = next.verts;
+  for (const Face& f : poly.faces) {
+    const Vec3* v = poly.verts.data() + f.begin;
+    const std::size_t m = f.size, begin = out.size();
     for (std::size_t k = 0; k < m; ++k) {
-      const Vec3& p = f.v[k];
-      const Vec3& q = f.v[(k + 1) % m];
+      const Vec3& p = v[k];
+      const Vec3& q = v[(k + 1) % m];
       const double sp = dot(n, p) - h, sq = dot(n, q) - h;
-      if (sp <= tol) g.v.push_back(p);
+      if (sp <= tol) out.push_back(p);
       if (std::abs(sp) <= tol) cap.push_back(p);
       if ((sp < -tol && sq > tol) || (sp > tol && sq < -tol)) {
         const Vec3 x = p + (sp / (sp - sq)) * (q - p);
-        g.v.push_back(x);
+        out.push_back(x);
         cap.push_back(x);
       }
     }
-    if (g.v.size() >= 3) out.push_back(std::move(g));
+    if (out.size() - begin >= 3)
+      next.faces.push_back({begin, out.size() - begin, f.n, f.h});
+    else
+      out.resize(begin);
   }
   if (cap.size() >= 3) {
     Vec3 c;
     for (const Vec3& p : cap) c += p;
     c *= 1.0 / double(cap.size());
     const Vec3 e1 = perpendicular(n), e2 = cross(n, e1);
-    std::vector<std::pair<double, Vec3>> ang;
-    for (const Vec3& p : cap) ang.push_back({std::atan2(dot(p - c, e2), dot(p - c, e1)), p});
-    std::sort(ang.begin(), ang.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-    Face g{{}, n, h};
-    for (const auto& [t, p] : ang)
-      if (g.v.empty() || norm(p - g.v.back()) > tol) g.v.push_back(p);
-    while (g.v.size() > 1 && norm(g.v.front() - g.v.back()) <= tol) g.v.pop_back();
-    if (g.v.size() >= 3) out.push_back(std::move(g));
+    corners.clear();
+    // atan2 keys, not a comparison by half-plane and cross product: each corner cut from an edge
+    // comes twice (once from each face on the edge, equal to round-off), and the order of such a
+    // pair, which decides the copy kept, needs atan2 itself to stay the same (tried: more atan2
+    // calls than one per corner).
+    for (const Vec3& p : cap) corners.push_back({std::atan2(dot(p - c, e2), dot(p - c, e1)), p});
+    std::sort(corners.begin(), corners.end(),
+              [](const CapCorner& a, const CapCorner& b) { return a.angle < b.angle; });
+    const std::size_t begin = out.size();
+    for (const CapCorner& a : corners)
+      if (out.size() == begin || norm(a.p - out.back()) > tol) out.push_back(a.p);
+    while (out.size() - begin > 1 && norm(out[begin] - out.back()) <= tol) out.pop_back();
+    if (out.size() - begin >= 3)
+      next.faces.push_back({begin, out.size() - begin, n, h});
+    else
+      out.resize(begin);
   }
-  faces = std::move(out);
+  std::swap(poly, next);
 }
 
 double cross2(double ax, double ay, double bx, double by) { return ax * by - ay * bx; }
@@ -140,35 +185,41 @@ ClippedSphere clip_sphere(double R, const std::vector<HalfSpace>& cuts) {
     if (c.h <= -R) return out;  // the whole sphere is cut away
   // A box around the ball (its faces outside it), cut by the planes that reach into the ball.
   const double w = 1.5 * R, tol = 1e-12 * R;
-  std::vector<Face> faces;
+  Scratch& S = scratch();
+  Polyhedron& poly = S.poly;
+  poly.clear();
   for (int axis = 0; axis < 3; ++axis)
     for (int s = -1; s <= 1; s += 2) {
       const int a = (axis + 1) % 3, b = (axis + 2) % 3;
-      Face f;
-      f.n = Vec3{};
-      f.n[axis] = s;
-      f.h = w;
+      Vec3 n;
+      n[axis] = s;
+      poly.faces.push_back({poly.verts.size(), 4, n, w});
       const double ca[4] = {-w, w, w, -w}, cb[4] = {-w, -w, w, w};
       for (int k = 0; k < 4; ++k) {
         Vec3 p;
         p[axis] = s * w;
         p[a] = ca[k];
         p[b] = cb[k];
-        f.v.push_back(p);
+        poly.verts.push_back(p);
       }
-      faces.push_back(std::move(f));
     }
   for (const HalfSpace& c : cuts)
-    if (c.h < R) clip(faces, c.n, c.h, tol);
+    if (c.h < R) clip(poly, S.next, S.cap, S.corners, c.n, c.h, tol);
   double vol = 0, hA = 0;
-  for (const Face& f : faces) {
+  std::vector<double>& u = S.u;
+  std::vector<double>& v = S.v;
+  for (const Face& f : poly.faces) {
     const double hh = std::abs(f.h);
     if (hh <= 1e-14 * R) continue;  // a plane through the centre: a flat cone
     const Vec3 nn = f.h > 0 ? f.n : -f.n;  // away from the centre
     const Vec3 e1 = perpendicular(nn), e2 = cross(nn, e1), F = hh * nn;
-    std::vector<double> u, v;
+    u.clear();
+    v.clear();
     double a2 = 0;
-    for (const Vec3& p : f.v) u.push_back(dot(p - F, e1)), v.push_back(dot(p - F, e2));
+    for (std::size_t k = 0; k < f.size; ++k) {
+      const Vec3& p = poly.verts[f.begin + k];
+      u.push_back(dot(p - F, e1)), v.push_back(dot(p - F, e2));
+    }
     const std::size_t m = u.size();
     for (std::size_t k = 0; k < m; ++k) a2 += cross2(u[k], v[k], u[(k + 1) % m], v[(k + 1) % m]);
     double fv = 0, fa = 0;
