@@ -26,6 +26,24 @@ namespace {
 
 enum class Bravais { sc, bcc, fcc };
 
+/// A sphere of the conducting phase at r wrapped into the periodic cube [0, L)³.
+void add_site(Packing& p, Vec3 r, double radius, double L) {
+  for (int k = 0; k < 3; ++k) r[k] -= L * std::floor(r[k] / L);
+  p.particles.position.push_back(r);
+  p.particles.radius.push_back(radius);
+  p.particles.phase.push_back(0);
+}
+
+/// The periodic cube of edge L and one material of conductivity 1.
+Packing periodic_cube(Packing& p, double L) {
+  p.cell = Cell::box({0, 0, 0}, {L, L, L}, true);
+  Material m;
+  m.name = "solid";
+  m.conductivity = 1.0;
+  p.materials = {m};
+  return p;
+}
+
 /// n³ cubic cells of edge c, sites shifted by `offset`, spheres overlapping their nearest neighbours
 /// (radius 0.6 × the nearest-neighbour distance), periodic, σ = 1.
 Packing bravais(Bravais kind, int n, double c, const Vec3& offset) {
@@ -44,18 +62,9 @@ Packing bravais(Bravais kind, int n, double c, const Vec3& offset) {
     for (int y = 0; y < n; ++y)
       for (int z = 0; z < n; ++z)
         for (const Vec3& b : basis) {
-          Vec3 r = (Vec3(x, y, z) + b) * c + offset;
-          for (int k = 0; k < 3; ++k) r[k] -= L * std::floor(r[k] / L);
-          p.particles.position.push_back(r);
-          p.particles.radius.push_back(0.6 * nn);
-          p.particles.phase.push_back(0);
+          add_site(p, (Vec3(x, y, z) + b) * c + offset, 0.6 * nn, L);
         }
-  p.cell = Cell::box({0, 0, 0}, {L, L, L}, true);
-  Material m;
-  m.name = "solid";
-  m.conductivity = 1.0;
-  p.materials = {m};
-  return p;
+  return periodic_cube(p, L);
 }
 
 /// n³ sites of a simple cubic grid of spacing d, each moved by a uniform jitter of ±0.3 d per
@@ -68,18 +77,9 @@ Packing jittered(int n, double d, unsigned seed) {
   for (int x = 0; x < n; ++x)
     for (int y = 0; y < n; ++y)
       for (int z = 0; z < n; ++z) {
-        Vec3 r((x + 0.5) * d + jit(rng), (y + 0.5) * d + jit(rng), (z + 0.5) * d + jit(rng));
-        for (int k = 0; k < 3; ++k) r[k] -= L * std::floor(r[k] / L);
-        p.particles.position.push_back(r);
-        p.particles.radius.push_back(0.62 * d);
-        p.particles.phase.push_back(0);
+        add_site(p, Vec3((x + 0.5) * d + jit(rng), (y + 0.5) * d + jit(rng), (z + 0.5) * d + jit(rng)), 0.62 * d, L);
       }
-  p.cell = Cell::box({0, 0, 0}, {L, L, L}, true);
-  Material m;
-  m.name = "solid";
-  m.conductivity = 1.0;
-  p.materials = {m};
-  return p;
+  return periodic_cube(p, L);
 }
 
 ConductOptions tight() {
