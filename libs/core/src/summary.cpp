@@ -8,6 +8,7 @@
 
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/tool.hpp"
+#include "git_hash.hpp"
 
 namespace tomodem {
 
@@ -70,7 +71,7 @@ std::string Summary::text() {
   j_["wall_time_s"] = process_wall_time_s();
   j_["cpu_time_s"] = process_cpu_time_s();
   j_["peak_rss_bytes"] = peak_rss_bytes();
-  j_["provenance"] = {{"version", TOMODEM_VERSION},      {"git_hash", TOMODEM_GIT_HASH},
+  j_["provenance"] = {{"version", TOMODEM_VERSION},      {"git_hash", git_hash()},
                       {"command_line", command_line()}, {"host", host_name()},
                       {"utc_time", utc_now()}};
   return j_.dump(2) + "\n";

@@ -13,6 +13,7 @@
 
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
+#include "git_hash.hpp"
 
 #ifdef TOMODEM_HAVE_MPI
 // The C API only: core links MPI::MPI_C (the C++ bindings would need MPI::MPI_CXX).
@@ -29,7 +30,7 @@ std::string g_tool = "tomodem";
 }  // namespace
 
 std::string version_string() {
-  return std::string("tomodem ") + TOMODEM_VERSION + " (git " + TOMODEM_GIT_HASH + ")";
+  return std::string("tomodem ") + TOMODEM_VERSION + " (git " + git_hash() + ")";
 }
 
 void set_quiet(bool q) { g_quiet = q; }
