@@ -2,6 +2,7 @@
 // half-width that `tomodem run report` also gives, so the report shows what the runner decided.
 #include "adaptive.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -30,6 +31,7 @@ struct KeyState {
 
 struct GroupState {
   std::size_t n = 0;
+  std::size_t next = 0;  // replicas after the next round, while `because` is ""
   std::string because;  // "" while replicas are still added
   std::vector<KeyState> keys;
 };
@@ -56,6 +58,17 @@ const Value* column(const Row& r, const std::string& key) {
   for (const auto& [k, v] : r)
     if (k == key) return &v;
   return nullptr;
+}
+
+// Replicas the next round adds to an open group: `batch`, or for `projected` half of what the
+// spread so far says is missing (at least one): the spread of a few replicas is uncertain by a
+// factor of 2-3, so going all the way at once could overshoot by as much.
+std::size_t batch(const Adaptive& a, const GroupState& gs) {
+  if (a.batch > 0) return static_cast<std::size_t>(a.batch);
+  std::size_t want = gs.n + 1;
+  for (const auto& k : gs.keys)
+    if (!k.met) want = std::max(want, stats::projected_replicas(k.e, k.target, static_cast<std::size_t>(a.max)));
+  return std::max<std::size_t>(1, (want - gs.n + 1) / 2);
 }
 
 GroupState assess(const Pipeline& p, const ReplicaGroup& g, const RunSummary& s) {
@@ -91,6 +104,7 @@ GroupState assess(const Pipeline& p, const ReplicaGroup& g, const RunSummary& s)
     gs.keys.push_back(ks);
   }
   gs.because = stats::stop_decision(gs.n, static_cast<std::size_t>(a.min), static_cast<std::size_t>(a.max), all_met);
+  gs.next = std::min(gs.n + batch(a, gs), static_cast<std::size_t>(a.max));
   return gs;
 }
 
@@ -105,7 +119,8 @@ std::string percent(double x) {
 std::string progress_line(const ReplicaGroup& g, const GroupState& gs) {
   std::string s = "replicas " + g.id + ": " + std::to_string(gs.n);
   for (const auto& k : gs.keys) s += ", " + k.key + " +-" + percent(k.e.rel_half95()) + " (target " + percent(k.target) + ")";
-  return s + (gs.because.empty() ? ": one more" : ": " + gs.because);
+  if (!gs.because.empty()) return s + ": " + gs.because;
+  return s + (gs.next == gs.n + 1 ? ": one more" : ": " + std::to_string(gs.next - gs.n) + " more");
 }
 
 // The record `${run.replicas}` names: no times in it, so an unchanged decision leaves it
@@ -205,7 +220,7 @@ RunSummary run_adaptive(const Pipeline& p, const RunOptions& o, std::ostream& pr
       GroupState gs = assess(q, g, s);
       if (!o.quiet) progress << progress_line(g, gs) << std::endl;
       if (gs.because.empty()) {
-        lo.replica_counts[g.id] = static_cast<int>(gs.n) + 1;
+        lo.replica_counts[g.id] = static_cast<int>(gs.next);
         more = true;
       }
       states[g.id] = gs;

@@ -402,7 +402,8 @@ void add_case_cells(const RawStep& st, const Scope& vs, std::vector<Cell>& cells
   }
 }
 
-// `replicas: {until: {KEY: target}, min: M, max: X}`; every bad value is refused here, at load.
+// `replicas: {until: {KEY: target}, min: M, max: X, batch: B}`; every bad value is refused here,
+// at load.
 Adaptive adaptive_spec(const RawStep& st, const YAML::Node& r, const Scope& vs) {
   const std::string& f = st.file;
   const std::string field = "steps." + st.name + ".replicas";
@@ -410,8 +411,9 @@ Adaptive adaptive_spec(const RawStep& st, const YAML::Node& r, const Scope& vs) 
   a.step = st.name;
   a.where = at(f, r);
   for (const auto& kv : r)
-    if (kv.first.Scalar() != "until" && kv.first.Scalar() != "min" && kv.first.Scalar() != "max")
-      fail(at(f, kv.first), field + "." + kv.first.Scalar(), "", "unknown key (expected until, min, max)");
+    if (kv.first.Scalar() != "until" && kv.first.Scalar() != "min" && kv.first.Scalar() != "max" &&
+        kv.first.Scalar() != "batch")
+      fail(at(f, kv.first), field + "." + kv.first.Scalar(), "", "unknown key (expected until, min, max, batch)");
   const YAML::Node u = r["until"];
   if (!u || !u.IsMap() || u.size() == 0)
     fail(u ? at(f, u) : a.where, field + ".until", "", "expected a map KEY: target (relative 95 % half-width, 0.02 = 2 %)");
@@ -438,6 +440,14 @@ Adaptive adaptive_spec(const RawStep& st, const YAML::Node& r, const Scope& vs) 
   check_sweep_size(static_cast<double>(hi), at(f, r["max"]), field + ".max", std::to_string(hi));
   a.min = static_cast<int>(lo);
   a.max = static_cast<int>(hi);
+  if (const YAML::Node b = r["batch"]) {
+    const std::string bf = field + ".batch", text = resolve(scalar(b, f, bf), vs, at(f, b), bf);
+    char* end = nullptr;
+    const long long k = std::strtoll(text.c_str(), &end, 10);
+    if (text == "projected") a.batch = 0;
+    else if (!text.empty() && *end == '\0' && k >= 1 && k <= hi) a.batch = static_cast<int>(k);
+    else fail(at(f, b), bf, text, "replicas added per group and round: an integer from 1 to max (" + std::to_string(hi) + "), or projected");
+  }
   return a;
 }
 

@@ -3,6 +3,7 @@
 // JCGM 100:2008 (GUM) G.4 (effective dof of a combined uncertainty, Welch-Satterthwaite).
 #include "tomodem/pipeline/stats.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -141,6 +142,22 @@ std::string stop_decision(std::size_t n, std::size_t min, std::size_t max, bool 
   if (all_targets_met) return "target met";
   if (n >= max) return "max reached";
   return "";
+}
+
+std::size_t projected_replicas(const Estimate& e, double target, std::size_t cap) {
+  if (e.n < 2 || !std::isfinite(e.sd) || e.mean == 0) return std::min(e.n + 1, cap);
+  const auto rel_half = [&](std::size_t n) {
+    const double sem = e.sd / std::sqrt(static_cast<double>(n)), u = std::sqrt(sem * sem + e.tool * e.tool);
+    const double dof = sem > 0 ? std::pow(u, 4) / (std::pow(sem, 4) / static_cast<double>(n - 1)) : kInf;
+    return t_quantile(0.975, dof) * u / std::fabs(e.mean);
+  };
+  std::size_t lo = e.n, hi = cap;  // rel_half(lo) > target (or lo = e.n); find the first n with <=
+  if (hi <= lo || rel_half(hi) > target) return std::max(cap, e.n);
+  while (hi - lo > 1) {
+    const std::size_t mid = lo + (hi - lo) / 2;
+    (rel_half(mid) <= target ? hi : lo) = mid;
+  }
+  return hi;
 }
 
 std::string p_text(double p) {

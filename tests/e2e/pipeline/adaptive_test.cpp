@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <fstream>
@@ -164,6 +165,56 @@ TEST(Adaptive, StopsWhenTheTargetIsMetAndNeverRerunsFinishedReplicas) {
   EXPECT_EQ(runs3.substr(0, runs.size()), runs);
 }
 
+TEST(Adaptive, ProjectedBatchesAddHalfOfWhatTheSpreadSaysIsMissing) {
+  // The rule of `batch: projected` by hand: after each round, the first n' <= 12 with
+  // t sd / sqrt(n') / mean <= target (sd and mean of the replicas so far, table t), and half the
+  // way there (at least one) is added.
+  auto s = adaptive_pipeline();
+  std::string text = kPipeline;
+  const std::string spec0 = "min: 3, max: 12}";
+  text.replace(text.find(spec0), spec0.size(), "min: 3, max: 12, batch: projected}");
+  s.write("p.yaml", text);
+  std::map<char, std::vector<int>> rounds;  // replica counts after each round, by hand
+  std::map<char, std::string> because;
+  for (const char level : {'a', 'b'}) {
+    int n = 3;
+    for (;;) {
+      rounds[level].push_back(n);
+      double sum = 0, ss = 0;
+      for (int r = 0; r < n; ++r) sum += draw_x(level, r);
+      const double mean = sum / n;
+      for (int r = 0; r < n; ++r) ss += (draw_x(level, r) - mean) * (draw_x(level, r) - mean);
+      const double sd = std::sqrt(ss / (n - 1));
+      const auto rel = [&](int m) { return kT975[m - 1] * sd / std::sqrt(double(m)) / mean; };
+      if (rel(n) <= 0.05) { because[level] = "target met"; break; }
+      if (n == 12) { because[level] = "max reached"; break; }
+      int want = 12;
+      for (int m = 12; m > n && rel(m) <= 0.05; --m) want = m;
+      n = std::min(12, n + std::max(1, (want - n + 1) / 2));
+    }
+  }
+  ASSERT_GT(rounds['a'].size(), 1u);
+  ASSERT_LT(rounds['a'].size(), static_cast<std::size_t>(rounds['a'].back() - 2)) << "a batch larger than one must occur";
+  const auto r = run(s, "p.yaml -j 2");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string runs = s.read("runs.txt");
+  const auto rec = nlohmann::json::parse(s.read("p.replicas.json"));
+  for (const auto& g : rec.at("groups")) {
+    const char level = g.at("matrix").at("level").get<std::string>()[0];
+    EXPECT_EQ(g.at("n"), rounds[level].back()) << level;
+    EXPECT_EQ(g.at("stopped_because"), because[level]) << level;
+    EXPECT_EQ(count_lines(runs, std::string("draw ") + level + "-"), rounds[level].back());
+    for (std::size_t k = 0; k + 1 < rounds[level].size(); ++k) {
+      const int added = rounds[level][k + 1] - rounds[level][k];
+      const std::string line = "replicas draw[level=" + std::string(1, level) + "]: " + std::to_string(rounds[level][k]) + ", x";
+      const auto at = r.err.find(line);
+      ASSERT_NE(at, std::string::npos) << line << "\n" << r.err;
+      const std::string tail = r.err.substr(at, r.err.find('\n', at) - at);
+      EXPECT_NE(tail.find(added == 1 ? ": one more" : ": " + std::to_string(added) + " more"), std::string::npos) << tail;
+    }
+  }
+}
+
 TEST(Adaptive, BadUntilInputIsRefusedAtLoadWithFileAndLine) {
   const std::pair<std::string, std::string> cases[] = {
       {"{until: {x: 0}, min: 3, max: 12}", "steps.draw.replicas.until.x"},
@@ -172,6 +223,9 @@ TEST(Adaptive, BadUntilInputIsRefusedAtLoadWithFileAndLine) {
       {"{until: {x: 0.05}, min: 1, max: 4}", "steps.draw.replicas.min"},
       {"{until: {}, min: 3, max: 4}", "steps.draw.replicas.until"},
       {"{until: {x: 0.05}, min: 3}", "steps.draw.replicas.max"},
+      {"{until: {x: 0.05}, min: 3, max: 12, batch: 0}", "steps.draw.replicas.batch"},
+      {"{until: {x: 0.05}, min: 3, max: 12, batch: 13}", "steps.draw.replicas.batch"},
+      {"{until: {x: 0.05}, min: 3, max: 12, batch: half}", "steps.draw.replicas.batch"},
   };
   for (const auto& [spec, field] : cases) {
     auto s = adaptive_pipeline();

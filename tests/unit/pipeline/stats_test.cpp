@@ -103,3 +103,22 @@ TEST(Stats, AdaptiveStopOnFixedSequences) {
   EXPECT_EQ(stop_on(seq, 0.25, 2, 20), std::make_pair(std::size_t{2}, std::string("target met")));  // 0.2491
   EXPECT_EQ(st::stop_decision(2, 3, 20, true), "");  // below min: never stop
 }
+
+TEST(Stats, ProjectedReplicasAgainstAnIndependentComputation) {
+  // Expected counts from scipy.stats.t.ppf(0.975, dof) scanned over n (an independent code):
+  // the first n whose t sd / sqrt(n) / mean (with the tool error in quadrature, Welch-
+  // Satterthwaite dof) is at most the target. (n=3, mean 2, sd 0.1, 5 %) also by the printed
+  // table: n=6 2.571 * 0.1 / sqrt(6) / 2 = 0.0525, n=7 2.447 * 0.1 / sqrt(7) / 2 = 0.0462.
+  const auto est = [](std::size_t n, double mean, double sd, double tool) {
+    st::Estimate e;
+    e.n = n, e.mean = mean, e.sd = sd, e.tool = tool;
+    return e;
+  };
+  EXPECT_EQ(st::projected_replicas(est(3, 2.0, 0.1, 0), 0.05, 100), 7u);
+  EXPECT_EQ(st::projected_replicas(est(5, 1.0, 0.1, 0), 0.02, 1000), 99u);   // rel. half-width 0.019945
+  EXPECT_EQ(st::projected_replicas(est(5, 1.0, 0.1, 0), 0.02, 50), 50u);     // not within the cap
+  EXPECT_EQ(st::projected_replicas(est(5, 10.0, 0.5, 0.05), 0.02, 1000), 34u);  // tool error 0.5 %
+  // A tool error of 1.2 % alone gives 1.96 * 1.2 % = 2.35 % > 2 %: no number of replicas helps.
+  EXPECT_EQ(st::projected_replicas(est(5, 10.0, 0.5, 0.12), 0.02, 1000), 1000u);
+  EXPECT_EQ(st::projected_replicas(est(1, 10.0, std::nan(""), 0), 0.02, 1000), 2u);  // no spread yet
+}

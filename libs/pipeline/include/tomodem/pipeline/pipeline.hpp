@@ -52,14 +52,16 @@ struct LoadOptions {
   bool use_counts = false;
 };
 
-/// `replicas: {until: {KEY: target, ...}, min: M, max: X}` of one step: replicas are added until
-/// the relative 95 % half-width of the mean of every KEY (read from the step's JSON outputs) is
-/// at most its target, or X replicas ran.
+/// `replicas: {until: {KEY: target, ...}, min: M, max: X, batch: B}` of one step: replicas are
+/// added until the relative 95 % half-width of the mean of every KEY (read from the step's JSON
+/// outputs) is at most its target, or X replicas ran; B per group and round (`projected`: half
+/// of what the current spread says is missing).
 struct Adaptive {
   std::string step;
   std::vector<std::pair<std::string, double>> until;
   std::vector<Location> until_where;
   int min = 0, max = 0;
+  int batch = 1;  ///< replicas added per group and round; 0: `projected`
   Location where;
 };
 

@@ -47,6 +47,12 @@ Welch welch(const std::vector<double>& a, const std::vector<double>& b);
 /// else "max reached" when n >= max, else "" again.
 std::string stop_decision(std::size_t n, std::size_t min, std::size_t max, bool all_targets_met);
 
+/// The fewest replicas, more than e.n and at most `cap`, whose 95 % half-width relative to the
+/// mean would be at most `target` if the replicas' sd and the tools' error stayed as they are
+/// (the same Student t and Welch-Satterthwaite dof as estimate()); `cap` when none would be,
+/// e.n + 1 while there is no spread yet (n < 2). The half-width falls with n, so this bisects.
+std::size_t projected_replicas(const Estimate& e, double target, std::size_t cap);
+
 /// "0.002", "0.04", "< 0.0001": a p-value with two significant digits.
 std::string p_text(double p);
 /// "p = 0.045", "p < 0.0001": p_text with its relation, for sentences.
