@@ -66,21 +66,24 @@ for f in families:
             print('| ' + ' | '.join(out) + ' |')
     print()
 
+MIN_REPLICAS = 4  # a CV from fewer (marked †) is shown but decides nothing
 print('## N at which the replica CV meets the target (E, σ 2 %, K_IC 5 %)')
-print('| family | density | property | CV at ' + ' / '.join(str(n) for n in sizes) + ' | below from N | N* = N (CV/target)² from the largest N |')
+print('| family | density | property | CV at ' + ' / '.join(str(n) for n in sizes) + ' | below from N | N* = N (CV/target)² |')
 print('|---|---|---|---|---|---|')
 for f in families:
     for x in dens:
         for p, lab, _, _, target in PROPS:
             if target is None:
                 continue
-            cvs = [(n, cv(cell.get((f, n, x, p)))) for n in sizes if cell.get((f, n, x, p))]
-            # the smallest N from which every measured size is below the target
+            cs = [cell[(f, n, x, p)] for n in sizes if (f, n, x, p) in cell]
+            shown = ' / '.join(f'{100 * cv(c):.1f} %' + ('†' if c['n'] < MIN_REPLICAS else '') for c in cs)
+            # sizes with enough replicas for a CV: the smallest N from which every one is below the
+            # target, and N* from the largest
+            cvs = [(int(float(c['particles'])), cv(c)) for c in cs if c['n'] >= MIN_REPLICAS]
             first = next((str(n) for k, (n, _) in enumerate(cvs) if all(v < target for _, v in cvs[k:])), '—')
             n_big, v_big = cvs[-1]
             nstar = n_big * (v_big / target) ** 2
-            print(f'| {f} | {x:g} | {lab.split(" ")[0]} | ' + ' / '.join(f'{100 * v:.1f} %' for _, v in cvs) +
-                  f' | {first} | {nstar:,.0f} |'.replace(',', ' '))
+            print(f'| {f} | {x:g} | {lab.split(" ")[0]} | {shown} | {first} | {nstar:,.0f} from {n_big} |'.replace(',', ' '))
 print()
 
 print('## K_IC against W/d across the sizes (replica means weighted by 1/sem²)')
