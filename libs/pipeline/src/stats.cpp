@@ -86,6 +86,18 @@ double Estimate::rel_half95() const {
   return half95 / std::fabs(mean);
 }
 
+namespace {
+// sem, u, dof and half95 of `e` from its n, sd and tool error.
+void uncertainty_of_mean(Estimate& e) {
+  const double n = static_cast<double>(e.n);
+  e.sem = e.sd / std::sqrt(n);
+  e.u = std::sqrt(e.sem * e.sem + e.tool * e.tool);
+  // GUM G.4.2 with the tool part's dof infinite: only the replica scatter reduces the dof.
+  e.dof = e.sem > 0 ? std::pow(e.u, 4) / (std::pow(e.sem, 4) / (n - 1)) : kInf;
+  e.half95 = e.u > 0 ? t_quantile(0.975, e.dof) * e.u : 0;
+}
+}  // namespace
+
 Estimate estimate(const std::vector<double>& values, const std::vector<double>& tool_errors) {
   Estimate e;
   e.n = values.size();
@@ -109,11 +121,7 @@ Estimate estimate(const std::vector<double>& values, const std::vector<double>& 
   for (const double x : values) ss += (x - e.mean) * (x - e.mean);
   const double n = static_cast<double>(e.n);
   e.sd = std::sqrt(ss / (n - 1));
-  e.sem = e.sd / std::sqrt(n);
-  e.u = std::sqrt(e.sem * e.sem + e.tool * e.tool);
-  // GUM G.4.2 with the tool part's dof infinite: only the replica scatter reduces the dof.
-  e.dof = e.sem > 0 ? std::pow(e.u, 4) / (std::pow(e.sem, 4) / (n - 1)) : kInf;
-  e.half95 = e.u > 0 ? t_quantile(0.975, e.dof) * e.u : 0;
+  uncertainty_of_mean(e);
   return e;
 }
 
@@ -147,9 +155,10 @@ std::string stop_decision(std::size_t n, std::size_t min, std::size_t max, bool 
 std::size_t projected_replicas(const Estimate& e, double target, std::size_t cap) {
   if (e.n < 2 || !std::isfinite(e.sd) || e.mean == 0) return std::min(e.n + 1, cap);
   const auto rel_half = [&](std::size_t n) {
-    const double sem = e.sd / std::sqrt(static_cast<double>(n)), u = std::sqrt(sem * sem + e.tool * e.tool);
-    const double dof = sem > 0 ? std::pow(u, 4) / (std::pow(sem, 4) / static_cast<double>(n - 1)) : kInf;
-    return t_quantile(0.975, dof) * u / std::fabs(e.mean);
+    Estimate more = e;
+    more.n = n;
+    uncertainty_of_mean(more);
+    return more.rel_half95();
   };
   std::size_t lo = e.n, hi = cap;  // rel_half(lo) > target (or lo = e.n); find the first n with <=
   if (hi <= lo || rel_half(hi) > target) return std::max(cap, e.n);
