@@ -104,7 +104,7 @@ GroupState assess(const Pipeline& p, const ReplicaGroup& g, const RunSummary& s)
     gs.keys.push_back(ks);
   }
   gs.because = stats::stop_decision(gs.n, static_cast<std::size_t>(a.min), static_cast<std::size_t>(a.max), all_met);
-  gs.next = std::min(gs.n + batch(a, gs), static_cast<std::size_t>(a.max));
+  if (gs.because.empty()) gs.next = std::min(gs.n + batch(a, gs), static_cast<std::size_t>(a.max));
   return gs;
 }
 
