@@ -110,7 +110,7 @@ TEST(PackCli, SmallRunWritesPackingAndSummaryKeys) {
   const std::string summary = file_text(js);
   for (const char* key : {"\"n_particles\"", "\"solid_fraction\"", "\"coordination\"", "\"coordination_no_rattlers\"",
                           "\"rattler_fraction\"", "\"wall_time_s\"", "\"z_ij\"", "\"psd_max_cdf_deviation\"",
-                          "\"inertial_number\"", "\"unbalanced_force_ratio\""})
+                          "\"inertial_number\"", "\"unbalanced_force_ratio\"", "\"overlap\"", "\"p99\""})
     EXPECT_NE(summary.find(key), std::string::npos) << key;
   EXPECT_EQ(run("--help").code, 0);
   EXPECT_EQ(run("--version").code, 0);

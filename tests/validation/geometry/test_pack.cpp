@@ -141,3 +141,40 @@ TEST(Pack, AggregatesStayBondedThroughPacking) {
   for (std::size_t k = 0; k < pk.contacts.i.size(); ++k)
     EXPECT_FALSE(bonded.count({std::min(pk.contacts.i[k], pk.contacts.j[k]), std::max(pk.contacts.i[k], pk.contacts.j[k])}));
 }
+
+// The overlap statistics of the summary (the solid-fraction reachability criterion is their
+// 99th percentile, docs/pack.md) against a recount from the written packing's own contacts and
+// radii: mean, the sorted list's element floor(0.99 (n − 1)), and the largest. One phase and no
+// pore formers, so the written contacts are those the packer measured: agreement to round-off.
+// A jammed packing at p = 1e-3 E has overlaps of about a percent of a radius, so the three
+// statistics differ and their order (mean < p99 ≤ max) is a check of its own.
+TEST(Pack, OverlapStatisticsAgainstARecountFromTheContacts) {
+  PackSpec s;
+  s.phases = {phase("ceramic", 1.0, PsdKind::lognormal, 1e-6, 0.2, PsdBasis::number)};
+  s.n_particles = 400;
+  s.target = Target::pressure;
+  s.target_pressure = 1e-3 * s.phases[0].material.youngs_modulus;
+  s.tessellate = false;
+  const auto out = make_packing(s);
+  const auto& r = out.report;
+  const auto& pk = out.packing;
+  std::vector<double> ratio;
+  double mean = 0;
+  for (std::size_t k = 0; k < pk.contacts.size(); ++k) {
+    if (!(pk.contacts.overlap[k] > 0)) continue;
+    ratio.push_back(pk.contacts.overlap[k] / std::min(pk.particles.radius[std::size_t(pk.contacts.i[k])],
+                                                      pk.particles.radius[std::size_t(pk.contacts.j[k])]));
+    mean += ratio.back();
+  }
+  ASSERT_GT(ratio.size(), 500u);
+  mean /= double(ratio.size());
+  std::sort(ratio.begin(), ratio.end());
+  const double p99 = ratio[std::size_t(0.99 * double(ratio.size() - 1))];
+  std::printf("overlaps over %zu contacts: mean %.4f, p99 %.4f, max %.4f of the smaller radius\n", ratio.size(), mean,
+              p99, ratio.back());
+  EXPECT_NEAR(r.overlap_mean, mean, 1e-12 * mean);
+  EXPECT_EQ(r.overlap_p99, p99);
+  EXPECT_EQ(r.overlap_max, ratio.back());
+  EXPECT_LT(r.overlap_mean, r.overlap_p99);
+  EXPECT_LE(r.overlap_p99, r.overlap_max);
+}

@@ -134,6 +134,9 @@ struct PackReport {
   double jamming_solid_fraction = std::numeric_limits<double>::quiet_NaN();
   int minimisations = 0;                ///< FIRE relaxations (quasistatic)
   std::size_t aggregate_bonds = 0;      ///< bonds holding the aggregates (in the output packing)
+  /// Contact overlaps δ/min(r_i, r_j) of the packing as densified (pore formers included):
+  /// mean, 99th percentile (the reachability criterion, ≤ 0.1) and largest.
+  double overlap_mean = 0, overlap_p99 = 0, overlap_max = 0;
 };
 
 struct PackOutput {
