@@ -38,25 +38,27 @@ set mxtics 10
 set logscale y 10
 set format y '10^{%L}'
 set mytics 10
-plot 'error-vs-cpu_fracture_K_IC.dat' index 0 using 1:2 with linespoints linetype 1 title 'family=aggregated, particles=2000.0, density=0.6' noenhanced, \
-     'error-vs-cpu_fracture_K_IC.dat' index 1 using 1:2 with linespoints linetype 2 title 'family=aggregated, particles=2000.0, density=0.8' noenhanced, \
-     'error-vs-cpu_fracture_K_IC.dat' index 2 using 1:2 with linespoints linetype 3 title 'family=aggregated, particles=500.0, density=0.6' noenhanced, \
-     'error-vs-cpu_fracture_K_IC.dat' index 3 using 1:2 with linespoints linetype 4 title 'family=aggregated, particles=500.0, density=0.8' noenhanced, \
-     'error-vs-cpu_fracture_K_IC.dat' index 4 using 1:2 with linespoints linetype 5 title 'family=aggregated, particles=8000.0, density=0.6' noenhanced, \
-     'error-vs-cpu_fracture_K_IC.dat' index 5 using 1:2 with linespoints linetype 6 title 'family=aggregated, particles=8000.0, density=0.8' noenhanced, \
-     'error-vs-cpu_fracture_K_IC.dat' index 6 using 1:2 with linespoints linetype 7 title 'family=homogeneous, particles=2000.0, density=0.6' noenhanced, \
-     'error-vs-cpu_fracture_K_IC.dat' index 7 using 1:2 with linespoints linetype 8 title 'family=homogeneous, particles=2000.0, density=0.8' noenhanced, \
-     'error-vs-cpu_fracture_K_IC.dat' index 8 using 1:2 with linespoints linetype 1 title 'family=homogeneous, particles=32000.0, density=0.6' noenhanced, \
-     'error-vs-cpu_fracture_K_IC.dat' index 9 using 1:2 with linespoints linetype 2 title 'family=homogeneous, particles=32000.0, density=0.8' noenhanced, \
-     'error-vs-cpu_fracture_K_IC.dat' index 10 using 1:2 with linespoints linetype 3 title 'family=homogeneous, particles=500.0, density=0.6' noenhanced, \
-     'error-vs-cpu_fracture_K_IC.dat' index 11 using 1:2 with linespoints linetype 4 title 'family=homogeneous, particles=500.0, density=0.8' noenhanced, \
-     'error-vs-cpu_fracture_K_IC.dat' index 12 using 1:2 with linespoints linetype 5 title 'family=homogeneous, particles=8000.0, density=0.6' noenhanced, \
-     'error-vs-cpu_fracture_K_IC.dat' index 13 using 1:2 with linespoints linetype 6 title 'family=homogeneous, particles=8000.0, density=0.8' noenhanced, \
-     'error-vs-cpu_fracture_K_IC.dat' index 14 using 1:2 with linespoints linetype 7 title 'family=pore-former, particles=2000.0, density=0.6' noenhanced, \
-     'error-vs-cpu_fracture_K_IC.dat' index 15 using 1:2 with linespoints linetype 8 title 'family=pore-former, particles=2000.0, density=0.8' noenhanced, \
-     'error-vs-cpu_fracture_K_IC.dat' index 16 using 1:2 with linespoints linetype 1 title 'family=pore-former, particles=32000.0, density=0.6' noenhanced, \
-     'error-vs-cpu_fracture_K_IC.dat' index 17 using 1:2 with linespoints linetype 2 title 'family=pore-former, particles=32000.0, density=0.8' noenhanced, \
-     'error-vs-cpu_fracture_K_IC.dat' index 18 using 1:2 with linespoints linetype 3 title 'family=pore-former, particles=500.0, density=0.6' noenhanced, \
-     'error-vs-cpu_fracture_K_IC.dat' index 19 using 1:2 with linespoints linetype 4 title 'family=pore-former, particles=500.0, density=0.8' noenhanced, \
-     'error-vs-cpu_fracture_K_IC.dat' index 20 using 1:2 with linespoints linetype 5 title 'family=pore-former, particles=8000.0, density=0.6' noenhanced, \
-     'error-vs-cpu_fracture_K_IC.dat' index 21 using 1:2 with linespoints linetype 6 title 'family=pore-former, particles=8000.0, density=0.8' noenhanced
+plot 'error-vs-cpu_fracture_K_IC.dat' index 0 using 1:2 with linespoints linetype 1 title 'family=homogeneous, particles=500.0, density=0.6' noenhanced, \
+     'error-vs-cpu_fracture_K_IC.dat' index 1 using 1:2 with linespoints linetype 2 title 'family=homogeneous, particles=500.0, density=0.8' noenhanced, \
+     'error-vs-cpu_fracture_K_IC.dat' index 2 using 1:2 with linespoints linetype 3 title 'family=homogeneous, particles=2000.0, density=0.6' noenhanced, \
+     'error-vs-cpu_fracture_K_IC.dat' index 3 using 1:2 with linespoints linetype 4 title 'family=homogeneous, particles=2000.0, density=0.8' noenhanced, \
+     'error-vs-cpu_fracture_K_IC.dat' index 4 using 1:2 with linespoints linetype 5 title 'family=homogeneous, particles=8000.0, density=0.6' noenhanced, \
+     'error-vs-cpu_fracture_K_IC.dat' index 5 using 1:2 with linespoints linetype 6 title 'family=homogeneous, particles=8000.0, density=0.8' noenhanced, \
+     'error-vs-cpu_fracture_K_IC.dat' index 6 using 1:2 with linespoints linetype 7 title 'family=homogeneous, particles=32000.0, density=0.6' noenhanced, \
+     'error-vs-cpu_fracture_K_IC.dat' index 7 using 1:2 with linespoints linetype 8 title 'family=homogeneous, particles=32000.0, density=0.8' noenhanced, \
+     'error-vs-cpu_fracture_K_IC.dat' index 8 using 1:2 with linespoints linetype 1 title 'family=pore-former, particles=500.0, density=0.6' noenhanced, \
+     'error-vs-cpu_fracture_K_IC.dat' index 9 using 1:2 with linespoints linetype 2 title 'family=pore-former, particles=500.0, density=0.8' noenhanced, \
+     'error-vs-cpu_fracture_K_IC.dat' index 10 using 1:2 with linespoints linetype 3 title 'family=pore-former, particles=2000.0, density=0.6' noenhanced, \
+     'error-vs-cpu_fracture_K_IC.dat' index 11 using 1:2 with linespoints linetype 4 title 'family=pore-former, particles=2000.0, density=0.8' noenhanced, \
+     'error-vs-cpu_fracture_K_IC.dat' index 12 using 1:2 with linespoints linetype 5 title 'family=pore-former, particles=8000.0, density=0.6' noenhanced, \
+     'error-vs-cpu_fracture_K_IC.dat' index 13 using 1:2 with linespoints linetype 6 title 'family=pore-former, particles=8000.0, density=0.8' noenhanced, \
+     'error-vs-cpu_fracture_K_IC.dat' index 14 using 1:2 with linespoints linetype 7 title 'family=pore-former, particles=32000.0, density=0.6' noenhanced, \
+     'error-vs-cpu_fracture_K_IC.dat' index 15 using 1:2 with linespoints linetype 8 title 'family=pore-former, particles=32000.0, density=0.8' noenhanced, \
+     'error-vs-cpu_fracture_K_IC.dat' index 16 using 1:2 with linespoints linetype 1 title 'family=aggregated, particles=500.0, density=0.6' noenhanced, \
+     'error-vs-cpu_fracture_K_IC.dat' index 17 using 1:2 with linespoints linetype 2 title 'family=aggregated, particles=500.0, density=0.8' noenhanced, \
+     'error-vs-cpu_fracture_K_IC.dat' index 18 using 1:2 with linespoints linetype 3 title 'family=aggregated, particles=2000.0, density=0.6' noenhanced, \
+     'error-vs-cpu_fracture_K_IC.dat' index 19 using 1:2 with linespoints linetype 4 title 'family=aggregated, particles=2000.0, density=0.8' noenhanced, \
+     'error-vs-cpu_fracture_K_IC.dat' index 20 using 1:2 with linespoints linetype 5 title 'family=aggregated, particles=8000.0, density=0.6' noenhanced, \
+     'error-vs-cpu_fracture_K_IC.dat' index 21 using 1:2 with linespoints linetype 6 title 'family=aggregated, particles=8000.0, density=0.8' noenhanced, \
+     'error-vs-cpu_fracture_K_IC.dat' index 22 using 1:2 with linespoints linetype 7 title 'family=aggregated, particles=32000.0, density=0.6' noenhanced, \
+     'error-vs-cpu_fracture_K_IC.dat' index 23 using 1:2 with linespoints linetype 8 title 'family=aggregated, particles=32000.0, density=0.8' noenhanced
