@@ -215,6 +215,51 @@ long enthalpy_stage_cap(const dem::Simulation& sim) {
   return 20000 + long(2000 * std::cbrt(double(sim.particles().size())));
 }
 
+/// A state to come back to: positions, cell and engine state (list, history, clocks), at rest.
+struct Snapshot {
+  std::vector<Vec3> x;
+  Cell cell;
+  dem::Simulation::EngineState engine;
+  bool set = false;
+  static Snapshot of(const dem::Simulation& sim) { return {sim.particles().x, sim.cell(), sim.engine_state(), true}; }
+  void put_back(dem::Simulation& sim) const {
+    dem::Particles& p = sim.particles();
+    p.x = x;
+    std::fill(p.v.begin(), p.v.end(), Vec3{});
+    if (p.has_rotation()) std::fill(p.omega.begin(), p.omega.end(), Vec3{});
+    sim.cell() = cell;
+    sim.restore(engine);
+  }
+};
+
+}  // namespace
+
+PressureBracket::PressureBracket(double alpha, double target)
+    : alpha_(alpha), target_(target), q_target_(q_of(target)) {}
+
+double PressureBracket::next(double phi, double p, double affine_slope) {
+  const Point pnt{phi, q_of(p), true};
+  (p < target_ ? lo_ : hi_) = pnt;
+  double next;
+  // The secant only where q rose with φ: a rearrangement (clusters, friction) can unload a
+  // packing as it is compressed, and a secant through such a pair of states points backwards
+  // (it sent a bonded-aggregate packing to φ = −1.3, a numerical failure).
+  if (p > 0 && last_.set && last_.q > 0 && std::abs(pnt.phi - last_.phi) > 1e-12 * phi &&
+      (pnt.q - last_.q) / (pnt.phi - last_.phi) > 0)
+    next = phi + (q_target_ - pnt.q) * (pnt.phi - last_.phi) / (pnt.q - last_.q);
+  else if (p > 0) next = phi + (q_target_ - pnt.q) / affine_slope;
+  else next = phi * (1 + probe_), probe_ = std::min(2 * probe_, 0.01);
+  // Below the target the next state is denser, above it looser: anything else (no positive
+  // slope, a division by zero) is a probe step instead.
+  if (!std::isfinite(next) || !(p < target_ ? next > phi : next < phi)) next = phi * (p < target_ ? 1 + probe_ : 1 - probe_);
+  next = std::max(next, 0.5 * phi);
+  if (lo_.set && hi_.set && !(next > lo_.phi && next < hi_.phi)) next = 0.5 * (lo_.phi + hi_.phi);
+  if (p > 0) last_ = pnt;
+  return next;
+}
+
+namespace {
+
 /// Pressure target: the enthalpy H = U + P V minimised over the positions and the cell
 /// (dem::minimise_enthalpy; LAMMPS fix box/relax with FIRE) from the loose insertion.
 /// Staged (frictionless, non-adhesive, unbonded packings; spec.enthalpy_stages = K > 0): the
@@ -279,20 +324,11 @@ QuasiStaticResult enthalpy(dem::Simulation& sim, const PackSpec& spec, double vs
         std::to_string(r.steps) + " steps, phi " + num(phi) + ", p " + num(-r.last.stress_contact.trace() / 3) +
         " Pa, unbalanced " + num(r.last.unbalanced_force_ratio) + cpu_since());
   }
-  const auto q_of = [&](double p) { return p > 0 ? std::pow(p, 1 / (alpha - 1)) : 0.0; };
-  const double qt = q_of(pt);
-  struct Point { double phi = 0, q = 0; bool set = false; };
-  Point lo, hi, last;
+  PressureBracket bracket(alpha, pt);
   // The relaxed state at the upper end of the bracket: a bracket that collapses on a
   // rearrangement (frictional packings) ends there, in equilibrium, rather than on an unjammed
   // state (the tool then reports target_reached: false).
-  struct Snapshot {
-    std::vector<Vec3> x;
-    Cell cell;
-    dem::Simulation::EngineState engine;
-    bool set = false;
-  } upper;
-  double probe = 1e-4;  // relative compression while no relaxed state carries load
+  Snapshot upper;
   for (int k = 0; k < 100 && out.steps < spec.max_steps; ++k) {
     rs.fo.energy_floor = rs.floor0;
     rs.fo.max_steps = spec.max_steps - out.steps;
@@ -308,25 +344,14 @@ QuasiStaticResult enthalpy(dem::Simulation& sim, const PackSpec& spec, double vs
       out.converged = true;
       break;
     }
-    const Point pnt{phi, q_of(p), true};
-    (p < pt ? lo : hi) = pnt;
-    if (p >= pt && f.converged) upper = {sim.particles().x, sim.cell(), sim.engine_state(), true};
-    double next;
-    if (p > 0 && last.set && last.q > 0 && std::abs(pnt.phi - last.phi) > 1e-12 * phi && pnt.q != last.q)
-      next = phi + (qt - pnt.q) * (pnt.phi - last.phi) / (pnt.q - last.q);  // secant
-    else if (p > 0) next = phi + (qt - pnt.q) / affine_q_slope(sim, p, alpha, phi);  // Newton, affine slope
-    else next = phi * (1 + probe), probe = std::min(2 * probe, 0.01);
-    if (lo.set && hi.set && !(next > lo.phi && next < hi.phi)) next = 0.5 * (lo.phi + hi.phi);
-    if (lo.set && hi.set && hi.phi - lo.phi < 1e-12 * phi) break;  // a rearrangement jump at the target
-    if (p > 0) last = pnt;
+    if (p >= pt && f.converged) upper = Snapshot::of(sim);
+    const double next = bracket.next(phi, p, p > 0 ? affine_q_slope(sim, p, alpha, phi) : 0.0);
+    if (bracket.collapsed(phi)) break;  // a rearrangement jump at the target
     phi = std::min(next, phi + max_compression(sim, phi));
     set_solid_fraction(sim, vsolid, phi, clusters);
   }
   if (!out.converged && upper.set) {
-    sim.particles().x = upper.x;
-    sim.cell() = upper.cell;
-    std::fill(sim.particles().v.begin(), sim.particles().v.end(), Vec3{});
-    sim.restore(upper.engine);
+    upper.put_back(sim);
     out.last = sim.measure();
     out.converged = out.last.unbalanced_force_ratio < spec.unbalanced_force_ratio || rs.adhesive;
     say("ended on the last relaxed state above the target: p " + num(out.last.pressure) + " Pa");

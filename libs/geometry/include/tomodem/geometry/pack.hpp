@@ -3,6 +3,7 @@
 // lattice, DEM densification by isotropic compression of a periodic cell to a target solid
 // fraction or pressure, mechanical equilibrium, and the structure of the result.
 #include <cstdint>
+#include <cmath>
 #include <functional>
 #include <limits>
 #include <optional>
@@ -58,6 +59,33 @@ inline std::optional<CellRelax> parse_cell_relax(std::string_view name) { return
 /// stress of a packing at Z = 6, φ = 0.64) for the softest phase at its nominal diameter.
 /// Infinity when no estimate applies (adhesive laws).
 double max_admissible_pressure(const struct PackSpec& spec);
+
+/// The pressure bracket of the quasistatic protocol (densify.cpp), on q = p^(1/(α−1)), which
+/// is linear in φ above jamming: from the relaxed states seen so far, the solid fraction to relax
+/// next. Declared here for its tests.
+class PressureBracket {
+ public:
+  /// alpha: the force law's exponent (2 linear, 5/2 Hertz); target: the pressure, Pa.
+  PressureBracket(double alpha, double target);
+  double q_of(double p) const { return p > 0 ? std::pow(p, 1 / (alpha_ - 1)) : 0.0; }
+  /// The next φ after a relaxed state at `phi` with pressure p ≥ 0; affine_slope: dq/dφ of an
+  /// affine compression of that state (the Newton step where no secant applies). Secant through
+  /// the last two loaded states where q rose with φ, else Newton, else (unloaded) a probe
+  /// compression that doubles up to 1 %; always towards the target, inside the bracket once
+  /// both ends are known, and never below φ/2.
+  double next(double phi, double p, double affine_slope);
+  /// Both ends of the bracket within 1e-12 φ: a rearrangement jump at the target.
+  bool collapsed(double phi) const { return lo_.set && hi_.set && hi_.phi - lo_.phi < 1e-12 * phi; }
+
+ private:
+  struct Point {
+    double phi = 0, q = 0;
+    bool set = false;
+  };
+  double alpha_, target_, q_target_;
+  Point lo_, hi_, last_;
+  double probe_ = 1e-4;  // relative compression while no relaxed state carries load
+};
 
 struct PackSpec {
   std::vector<PhaseSpec> phases;
