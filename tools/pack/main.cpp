@@ -110,7 +110,7 @@ int run(int argc, char** argv) {
   j["minimisations"] = r.minimisations;
   if (std::isfinite(r.jamming_solid_fraction)) j["jamming_solid_fraction"] = r.jamming_solid_fraction;
   else j["jamming_solid_fraction"] = nullptr;
-  j["overlap"] = {{"mean", r.overlap_mean}, {"p99", r.overlap_p99}, {"max", r.overlap_max}};
+  j["overlap"] = {{"mean", r.overlap.mean}, {"p99", r.overlap.p99}, {"max", r.overlap.max}};
   j.unit("overlap", "1 (delta / min(r_i, r_j))");
   j["phases"] = json::array();
   double dev_psd = 0, dev_phase = 0;

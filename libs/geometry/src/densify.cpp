@@ -33,10 +33,6 @@ std::string num(double v) {
 }
 double sphere_volume(double r) { return 4 * kPi / 3 * r * r * r; }
 
-/// Overlap δ/min(r_i, r_j) over the contacts: mean, 99th percentile and largest.
-struct OverlapStats {
-  double mean = 0, p99 = 0, max = 0;
-};
 OverlapStats overlap_stats(const ContactTable& c, const std::vector<double>& radius) {
   OverlapStats o;
   std::vector<double> ratio;
@@ -1039,10 +1035,7 @@ PackOutput make_packing(const PackSpec& spec, const std::function<void(const std
   report_phases(spec, psd, sim.particles(), vsolid, rep);
   Packing& pk = out.packing;
   keep_solids(sim, contacts, spec, pk, rep);
-  const OverlapStats overlaps = overlap_stats(contacts, sim.particles().r);
-  rep.overlap_mean = overlaps.mean;
-  rep.overlap_p99 = overlaps.p99;
-  rep.overlap_max = overlaps.max;
+  rep.overlap = overlap_stats(contacts, sim.particles().r);
   // Coordination of the packing as it was densified (pore formers included: they carried load).
   const ContactStructure cs = contact_structure(n, sim.particles().phase, np, contacts, spec.friction > 0 ? 2 : 4);
   rep.coordination = cs.coordination;

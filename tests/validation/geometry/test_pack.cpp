@@ -172,9 +172,9 @@ TEST(Pack, OverlapStatisticsAgainstARecountFromTheContacts) {
   const double p99 = ratio[std::size_t(0.99 * double(ratio.size() - 1))];
   std::printf("overlaps over %zu contacts: mean %.4f, p99 %.4f, max %.4f of the smaller radius\n", ratio.size(), mean,
               p99, ratio.back());
-  EXPECT_NEAR(r.overlap_mean, mean, 1e-12 * mean);
-  EXPECT_EQ(r.overlap_p99, p99);
-  EXPECT_EQ(r.overlap_max, ratio.back());
-  EXPECT_LT(r.overlap_mean, r.overlap_p99);
-  EXPECT_LE(r.overlap_p99, r.overlap_max);
+  EXPECT_NEAR(r.overlap.mean, mean, 1e-12 * mean);
+  EXPECT_EQ(r.overlap.p99, p99);
+  EXPECT_EQ(r.overlap.max, ratio.back());
+  EXPECT_LT(r.overlap.mean, r.overlap.p99);
+  EXPECT_LE(r.overlap.p99, r.overlap.max);
 }

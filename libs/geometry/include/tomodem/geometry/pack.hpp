@@ -60,6 +60,11 @@ inline std::optional<CellRelax> parse_cell_relax(std::string_view name) { return
 /// Infinity when no estimate applies (adhesive laws).
 double max_admissible_pressure(const struct PackSpec& spec);
 
+/// Overlap δ/min(r_i, r_j) over a packing's contacts: mean, 99th percentile and largest.
+struct OverlapStats {
+  double mean = 0, p99 = 0, max = 0;
+};
+
 /// The pressure bracket of the quasistatic protocol (densify.cpp), on q = p^(1/(α−1)), which
 /// is linear in φ above jamming: from the relaxed states seen so far, the solid fraction to relax
 /// next. Declared here for its tests.
@@ -162,9 +167,9 @@ struct PackReport {
   double jamming_solid_fraction = std::numeric_limits<double>::quiet_NaN();
   int minimisations = 0;                ///< FIRE relaxations (quasistatic)
   std::size_t aggregate_bonds = 0;      ///< bonds holding the aggregates (in the output packing)
-  /// Contact overlaps δ/min(r_i, r_j) of the packing as densified (pore formers included):
-  /// mean, 99th percentile (the reachability criterion, ≤ 0.1) and largest.
-  double overlap_mean = 0, overlap_p99 = 0, overlap_max = 0;
+  /// Contact overlaps of the packing as densified (pore formers included); p99 is the
+  /// reachability criterion (≤ 0.1).
+  OverlapStats overlap;
 };
 
 struct PackOutput {
