@@ -93,6 +93,7 @@ int run(int argc, char** argv) {
   j["pressure"] = r.pressure;
   j["unbalanced_force_ratio"] = r.unbalanced_force_ratio;
   j["equilibrium"] = r.equilibrium;
+  j["unloaded"] = r.unloaded;
   // A pressure target is reached when the packing is in equilibrium within 5 % of it (the
   // densification's own criterion); a run that stops short says so (exit 4), never silently.
   const bool pressure_target = s.target == geometry::Target::pressure;

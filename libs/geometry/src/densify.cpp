@@ -141,7 +141,7 @@ constexpr double kPressureTolerance = 0.01;
 
 struct QuasiStaticResult {
   long steps = 0;
-  bool converged = false;
+  bool converged = false, unloaded = false;
   dem::Measurements last;
 };
 
@@ -332,6 +332,7 @@ QuasiStaticResult enthalpy(dem::Simulation& sim, const PackSpec& spec, double vs
     out.steps += f.steps;
     ++rep.minimisations;
     out.last = f.last;
+    out.unloaded = f.below_floor;
     const double p = f.below_floor ? 0.0 : std::max(f.last.pressure, 0.0);
     bar.update(pressure_progress(p, pt, log_start), "phi " + num(phi) + ", p " + num(p) + " Pa");
     say("relaxed at phi " + num(phi) + ": p " + num(p) + " Pa, Z " + num(f.last.coordination) + ", unbalanced " +
@@ -349,6 +350,7 @@ QuasiStaticResult enthalpy(dem::Simulation& sim, const PackSpec& spec, double vs
   if (!out.converged && upper.set) {
     upper.put_back(sim);
     out.last = sim.measure();
+    out.unloaded = false;
     out.converged = out.last.unbalanced_force_ratio < spec.unbalanced_force_ratio || rs.adhesive;
     say("ended on the last relaxed state above the target: p " + num(out.last.pressure) + " Pa");
   }
@@ -385,6 +387,7 @@ QuasiStaticResult quasistatic(dem::Simulation& sim, const PackSpec& spec, double
     if (overlaps_beyond_limit(sim, r.last)) break;  // the caller refuses the target
   } while (phi < spec.target_solid_fraction && out.steps < spec.max_steps);
   out.converged = r.converged || r.below_floor;
+  out.unloaded = r.below_floor;
   return out;
 }
 
@@ -844,6 +847,7 @@ void DynamicDensification::relax() {
       say_("relax step " + std::to_string(steps) + ": phi " + num(phi_now()) + ", p " + num(m.pressure) + " Pa, unbalanced " + num(m.unbalanced_force_ratio));
     if (m.contacts == 0 || m.unbalanced_force_ratio < spec_.unbalanced_force_ratio) {
       rep_.equilibrium = true;
+      rep_.unloaded = m.contacts == 0;
       break;
     }
     run(kChunk);
@@ -861,6 +865,7 @@ dem::Measurements densify(dem::Simulation& sim, const PackSpec& spec, double vso
     const QuasiStaticResult q = quasistatic(sim, spec, vsolid, dmean, clusters, rep, say);
     if (spec.target == Target::solid_fraction) dyn.refuse_overlap(q.last);
     rep.equilibrium = q.converged;
+    rep.unloaded = q.unloaded;
     rep.steps = q.steps;
     // The cell control is left at rest, as after the dynamic protocol.
     dyn.set_rate(0);

@@ -112,6 +112,8 @@ TEST(PackCli, SmallRunWritesPackingAndSummaryKeys) {
                           "\"rattler_fraction\"", "\"wall_time_s\"", "\"z_ij\"", "\"psd_max_cdf_deviation\"",
                           "\"inertial_number\"", "\"unbalanced_force_ratio\"", "\"overlap\"", "\"p99\""})
     EXPECT_NE(summary.find(key), std::string::npos) << key;
+  // φ = 0.35 is far below jamming: the relaxed packing carries no load and says so.
+  EXPECT_NE(summary.find("\"unloaded\": true"), std::string::npos) << summary;
   EXPECT_EQ(run("--help").code, 0);
   EXPECT_EQ(run("--version").code, 0);
 }
@@ -131,4 +133,5 @@ TEST(PackCli, PressureTargetNotReachedExitsFourAndSaysSo) {
   const CliRun o = run(ok + " -q --no-tessellation -o " + ::testing::TempDir() + "long.h5");
   EXPECT_EQ(o.code, 0) << o.out;
   EXPECT_NE(o.out.find("\"target_reached\": true"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("\"unloaded\": false"), std::string::npos) << o.out;
 }

@@ -151,6 +151,10 @@ struct PackReport {
   double time_step = 0;
   double wall_time_s = 0, densify_time_s = 0, tessellation_time_s = 0;
   bool equilibrium = false;
+  /// The relaxed packing carries no load: the last relaxation ended on the energy floor or with
+  /// no contact (below jamming). Its unbalanced-force ratio compares residual forces with
+  /// contact forces that are themselves ~0, so it does not test equilibrium there.
+  bool unloaded = false;
   std::vector<PhaseReport> phases;
   std::size_t pore_formers_removed = 0;
   std::size_t aggregates = 0;
