@@ -494,7 +494,31 @@ void refuse_unsupported(const SegmentConfig& c, const std::string& format) {
 
 }  // namespace
 
+namespace {
+/// The block planned from --memory alone (for a grains halo of 24) does not hold the grains
+/// halo the radius pass measured; `chunk` is the largest block the budget holds with it.
+struct GrainsReplan {
+  std::size_t chunk;
+  std::string why;
+};
+std::string segment_blocks(const SegmentConfig& cfg, const ReadOptions& ro);
+}  // namespace
+
 std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro) {
+  try {
+    return segment_blocks(cfg, ro);
+  } catch (const GrainsReplan& replan) {
+    // The block size was ours to choose: plan again with the measured halo rather than refuse
+    // (the stages before the radius pass run once more; nothing was written).
+    info(replan.why + "; segmenting again in blocks of " + std::to_string(replan.chunk));
+    SegmentConfig again = cfg;
+    again.chunk = replan.chunk;
+    return segment_blocks(again, ro);
+  }
+}
+
+namespace {
+std::string segment_blocks(const SegmentConfig& cfg, const ReadOptions& ro) {
   using clk = std::chrono::steady_clock;
   auto last = clk::now();
   json times = json::object();
@@ -849,11 +873,23 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
     ghalo = std::size_t(std::ceil(2 * inscribed_max)) + 4;
     done("grains_radius");
     mem = memory_model(D, chunk, halo, phase2, src, ghalo);
-    if (budget > 0 && mem.total() > budget)
+    if (budget > 0 && mem.total() > budget) {
+      // The block the budget holds with this halo (a multiple of 32, at least the halo), so that
+      // the next run is told a value that fits, not only that this one does not.
+      std::size_t fits = 0;
+      for (std::size_t c = 32; c < chunk; c += 32)
+        if (c >= halo && memory_model(D, c, halo, phase2, src, ghalo).total() <= budget) fits = c;
+      if (fits && cfg.chunk == 0)
+        throw GrainsReplan{fits, "grains: a halo of " + std::to_string(ghalo) + " (largest inscribed radius " + num(inscribed_max) +
+                                     " voxels) needs " + bytes_text(mem.total()) + " in blocks of " + std::to_string(chunk) +
+                                     ", above --memory"};
       throw InputError("", "--memory", cfg.as_written.count("--memory") ? cfg.as_written.at("--memory") : cfg.memory_text,
                        "is below what grain separation needs with --chunk " + std::to_string(chunk) + ": " + bytes_text(mem.total()) +
                            " (the solid's largest inscribed radius is " + num(inscribed_max) + " voxels, so a grains halo of " +
-                           std::to_string(ghalo) + "); give a smaller --chunk or more --memory");
+                           std::to_string(ghalo) + "); " +
+                           (fits ? "give --chunk " + std::to_string(fits) + " (the largest block this budget holds with that halo) or more --memory"
+                                 : "give more --memory"));
+    }
     check_memory_request(mem.total(), cfg.input, "--chunk", std::to_string(chunk), "chunked grain separation");
     info("grains: largest inscribed radius " + num(inscribed_max) + " voxels, halo " + std::to_string(ghalo) +
          ", planned memory " + bytes_text(mem.total()));
@@ -1118,5 +1154,7 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
   summary.unit("stage_times_s", "s");
   return summary.text();
 }
+
+}  // namespace
 
 }  // namespace tomodem::image

@@ -182,6 +182,27 @@ TEST(SegmentChunked, GrainsIdenticalToInMemory) {
 }
 
 // A float32 scan takes the two-pass histogram (min/max, then bins): still identical.
+// --grains with --memory alone: the block planned for a grains halo of 24 (64 voxels at 150 MB)
+// does not hold the measured one (34: an inscribed radius of 14.9 voxels, 161 MB); the tool plans
+// again (32 voxels, 105 MB) instead of refusing, and gives what --chunk 32 gives. A --chunk the
+// user chose is not changed (BadInputExit2WithNumbers, 80 MB).
+TEST(SegmentChunked, GrainsBlockPlannedAgainForTheMeasuredHalo) {
+  const fs::path d = tmpdir("replan");
+  const std::string in = (phantom() / "g.raw").string();
+  std::string err;
+  ASSERT_EQ(run_err(bin + "/tomodem-segment " + in + raw_args + iso + " --grains --memory 150MB -o " + (d / "m.h5").string() +
+                        " --json " + (d / "m.json").string(), &err), 0) << err;
+  ASSERT_EQ(run_err(bin + "/tomodem-segment " + in + raw_args + iso + " --grains --chunk 32 -o " + (d / "c.h5").string() +
+                        " --json " + (d / "c.json").string(), &err), 0) << err;
+  const json sm = read_json(d / "m.json");
+  EXPECT_EQ(sm["chunked"]["chunk_vox"], 32);
+  EXPECT_EQ(sm["chunked"]["grains_halo_vox"], 34);
+  EXPECT_LE(sm["chunked"]["planned_memory_bytes"].get<double>(), 150e6);
+  tomodem::h5::File a((d / "m.h5").string(), tomodem::h5::File::Mode::read), b((d / "c.h5").string(), tomodem::h5::File::Mode::read);
+  EXPECT_TRUE(a.read_int32("/grains") == b.read_int32("/grains"));
+  EXPECT_EQ(sm["n_grains"], read_json(d / "c.json")["n_grains"]);
+}
+
 TEST(SegmentChunked, FloatVolumeTwoHistogramPasses) {
   const fs::path d = tmpdir("float");
   std::string err;
