@@ -359,6 +359,15 @@ MemoryModel memory_model(const Dims& d, std::size_t chunk, std::size_t halo, boo
   return m;
 }
 
+/// The largest block edge, a multiple of 32 below `below`, whose plan fits `budget`; 0 if none.
+std::size_t largest_block(const Dims& d, std::size_t halo, bool phase2, const BlockSource& src, std::size_t grains_halo,
+                          double budget, std::size_t below) {
+  std::size_t best = 0;
+  for (std::size_t c = 32; c < below; c += 32)
+    if (memory_model(d, c, halo, phase2, src, grains_halo).total() <= budget) best = c;
+  return best;
+}
+
 // The union-find of block-local labels (global id = the block's offset + local label).
 struct Joins {
   std::vector<int64_t> parent;
@@ -573,8 +582,7 @@ std::string segment_blocks(const SegmentConfig& cfg, const ReadOptions& ro) {
   std::size_t chunk = cfg.chunk;
   const std::size_t biggest = std::max({D.nx, D.ny, D.nz});
   if (chunk == 0) {
-    for (std::size_t c = 32; c <= biggest + 31; c += 32)
-      if (memory_model(D, c, halo, phase2, src, grains_guess).total() <= budget) chunk = c;
+    chunk = largest_block(D, halo, phase2, src, grains_guess, budget, biggest + 32);
     if (chunk == 0) {
       const MemoryModel m = memory_model(D, std::max<std::size_t>(halo, 32), halo, phase2, src, grains_guess);
       throw InputError("", "--memory", cfg.as_written.count("--memory") ? cfg.as_written.at("--memory") : cfg.memory_text,
@@ -876,9 +884,8 @@ std::string segment_blocks(const SegmentConfig& cfg, const ReadOptions& ro) {
     if (budget > 0 && mem.total() > budget) {
       // The block the budget holds with this halo (a multiple of 32, at least the halo), so that
       // the next run is told a value that fits, not only that this one does not.
-      std::size_t fits = 0;
-      for (std::size_t c = 32; c < chunk; c += 32)
-        if (c >= halo && memory_model(D, c, halo, phase2, src, ghalo).total() <= budget) fits = c;
+      std::size_t fits = largest_block(D, halo, phase2, src, ghalo, budget, chunk);
+      if (fits < halo) fits = 0;  // a block must be at least its halo
       if (fits && cfg.chunk == 0)
         throw GrainsReplan{fits, "grains: a halo of " + std::to_string(ghalo) + " (largest inscribed radius " + num(inscribed_max) +
                                      " voxels) needs " + bytes_text(mem.total()) + " in blocks of " + std::to_string(chunk) +
