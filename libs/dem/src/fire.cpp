@@ -286,15 +286,16 @@ FireResult minimise_fire(Simulation& sim, const FireOptions& o) {
       }
       bool balanced = o.force_tolerance > 0 ? f2 < o.force_tolerance * o.force_tolerance * double(nfree)
                                             : r.last.unbalanced_force_ratio < o.unbalanced_force_ratio;
-      if (balanced && o.force_tolerance == 0) {
+      if (balanced) {
         // Balanced means at rest: the dashpots of the moving particles carry part of the force
         // (right after a "converged" check the ratio at rest was up to 8× the criterion, bonded
-        // aggregates at 0.7 MPa). The ratio is measured again with the particles stopped; if it
-        // fails, the run goes on with the velocities it had.
+        // aggregates at 0.7 MPa). The criterion is measured again with the particles stopped; if
+        // it fails, the run goes on with the velocities it had.
         const std::vector<Vec3> v = p.v, w = rot ? p.omega : std::vector<Vec3>{};
         stop_motion();
         const Measurements at_rest = sim.measure();
-        balanced = at_rest.unbalanced_force_ratio < o.unbalanced_force_ratio;
+        balanced = o.force_tolerance > 0 ? at_rest.net_force_rms < o.force_tolerance
+                                         : at_rest.unbalanced_force_ratio < o.unbalanced_force_ratio;
         if (balanced) r.last = at_rest;
         else {
           p.v = v;

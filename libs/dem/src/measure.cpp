@@ -116,12 +116,13 @@ Measurements measurements_from(const SimState& s, const Tally& tl, const EnergyA
   m.contacts = tl.contacts;
   m.wall_contacts = tl.wall_contacts;
   m.coordination = 2.0 * double(tl.contacts) / double(p.size());
-  double fres = 0;
+  double fres = 0, f2 = 0;
   long nfree = 0;
   for (std::size_t i = 0; i < p.size(); ++i)
-    if (p.motion[i] == Motion::free) fres += norm(p.f[i]), ++nfree;
+    if (p.motion[i] == Motion::free) fres += norm(p.f[i]), f2 += norm2(p.f[i]), ++nfree;
   const long nc = tl.contacts + tl.wall_contacts;
   m.unbalanced_force_ratio = (nc > 0 && nfree > 0) ? (fres / nfree) / (tl.sum_contact_force / nc) : 0;
+  m.net_force_rms = nfree > 0 ? std::sqrt(f2 / double(nfree)) : 0;
   m.inertial_number = inertial_number(s, m.pressure);
   m.max_overlap_ratio = tl.max_overlap_ratio;
   for (const auto& w : s.walls) m.wall_forces.push_back(w.force);

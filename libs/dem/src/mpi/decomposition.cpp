@@ -816,8 +816,9 @@ Measurements Domain::measure(const SimState& s, const Tally& tl, const EnergyAcc
   m.step = s.nstep;
   m.time = s.t;
   m.volume = measurement_volume(s);  // every rank holds the cell and the walls
-  // Owned particles' sums: kinetic stress (9), kinetic energy, Σ|F|, free count, count, Σd, mass, volume.
-  double v[17] = {};
+  // Owned particles' sums: kinetic stress (9), kinetic energy, Σ|F|, free count, count, Σd, mass,
+  // volume, Σ|F|².
+  double v[18] = {};
   for (std::size_t i = 0; i < p.size(); ++i) {
     if (ghost[i]) continue;
     v[13] += 1, v[14] += 2 * p.r[i], v[15] += p.m[i], v[16] += 4.0 / 3.0 * M_PI * p.r[i] * p.r[i] * p.r[i];
@@ -829,8 +830,9 @@ Measurements Domain::measure(const SimState& s, const Tally& tl, const EnergyAcc
     if (p.has_rotation()) v[9] += 0.5 * p.inertia(i) * norm2(p.omega[i]);
     v[10] += norm(p.f[i]);
     v[11] += 1;
+    v[17] += norm2(p.f[i]);
   }
-  sum(v, 17);
+  sum(v, 18);
   Mat3 sc = tl.virial, kin;
   sc *= -1.0 / m.volume;
   for (int a = 0; a < 3; ++a)
@@ -851,6 +853,7 @@ Measurements Domain::measure(const SimState& s, const Tally& tl, const EnergyAcc
   m.coordination = 2.0 * double(tl.contacts) / v[13];
   const long nc = tl.contacts + tl.wall_contacts;
   m.unbalanced_force_ratio = (nc > 0 && v[11] > 0) ? (v[10] / v[11]) / (tl.sum_contact_force / double(nc)) : 0;
+  m.net_force_rms = v[11] > 0 ? std::sqrt(v[17] / v[11]) : 0;
   if (s.deforming() && m.pressure > 0) {
     double rate = 0;
     for (int a = 0; a < 3; ++a) rate = std::max(rate, std::abs(s.control.velocity_gradient(a, a)));

@@ -79,6 +79,7 @@ struct Measurements {
   long wall_contacts = 0;
   double coordination = 0;         ///< 2 contacts / N (walls not counted)
   double unbalanced_force_ratio = 0;  ///< mean |ΣF_i| / mean |F_contact|
+  double net_force_rms = 0;        ///< root mean square of |ΣF_i| over the free particles, N
   double inertial_number = 0;      ///< |ε̇| d sqrt(ρ/p) under cell deformation, else 0
   double max_overlap_ratio = 0;    ///< max δ / min(R_i, R_j)
   std::vector<Vec3> wall_forces;   ///< N, per wall
