@@ -504,27 +504,10 @@ void refuse_unsupported(const SegmentConfig& c, const std::string& format) {
 }  // namespace
 
 namespace {
-/// The block planned from --memory alone (for a grains halo of 24) does not hold the grains
-/// halo the radius pass measured; `chunk` is the largest block the budget holds with it.
-struct GrainsReplan {
-  std::size_t chunk;
-  std::string why;
-};
 std::string segment_blocks(const SegmentConfig& cfg, const ReadOptions& ro);
 }  // namespace
 
-std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro) {
-  try {
-    return segment_blocks(cfg, ro);
-  } catch (const GrainsReplan& replan) {
-    // The block size was ours to choose: plan again with the measured halo rather than refuse
-    // (the stages before the radius pass run once more; nothing was written).
-    info(replan.why + "; segmenting again in blocks of " + std::to_string(replan.chunk));
-    SegmentConfig again = cfg;
-    again.chunk = replan.chunk;
-    return segment_blocks(again, ro);
-  }
-}
+std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro) { return segment_blocks(cfg, ro); }
 
 namespace {
 std::string segment_blocks(const SegmentConfig& cfg, const ReadOptions& ro) {
@@ -607,7 +590,8 @@ std::string segment_blocks(const SegmentConfig& cfg, const ReadOptions& ro) {
                          " for one block with its halo of " + std::to_string(halo) + "); give a smaller --chunk or more --memory");
   check_memory_request(mem.total(), cfg.input, "--chunk", std::to_string(chunk),
                        "a chunked run of a " + std::to_string(D.nx) + "x" + std::to_string(D.ny) + "x" + std::to_string(D.nz) + " volume");
-  const Grid3 G(D, chunk);
+  Grid3 G(D, chunk);  // re-planned once the grains halo is measured (2b)
+  std::size_t replanned_from = 0;
   info("chunked: " + std::to_string(G.count()) + " blocks of " + std::to_string(chunk) + " voxels per side, halo " +
        std::to_string(halo) + ", planned memory " + bytes_text(mem.total()));
 
@@ -701,6 +685,81 @@ std::string segment_blocks(const SegmentConfig& cfg, const ReadOptions& ro) {
   });
   std::size_t n_pore = D.count() - solid.count();
   done("threshold");
+
+  // 2b. Grains (--grains): the largest inscribed radius, right after the solid is known, so that
+  // a block planned from --memory alone can be re-planned for the measured halo before any
+  // stage runs on the block grid (the bits do not depend on it).
+  GrainOptions go;
+  go.h = cfg.h;
+  const auto solid_block = [&](const Box& outer, Mask& m) {
+    m.dims = outer.dims();
+    m.spacing = sp;
+    m.origin = {0, 0, 0};
+    m.v.resize(m.dims.count());
+    std::size_t i = 0;
+    for (std::size_t z = outer.lo[2]; z < outer.hi[2]; ++z)
+      for (std::size_t y = outer.lo[1]; y < outer.hi[1]; ++y)
+        for (std::size_t x = outer.lo[0]; x < outer.hi[0]; ++x, ++i) m.v[i] = solid.get(x, y, z);
+  };
+  const auto whole = [&](const Box& b) { return b.n(0) == D.nx && b.n(1) == D.ny && b.n(2) == D.nz; };
+  double inscribed_max = 0;  // the largest distance to a pore (finest voxels)
+  std::size_t ghalo = 0;
+  std::vector<uint64_t> peak_at;   // marker voxels (x-fastest global index), ascending
+  std::vector<int32_t> peak_id;    // their marker ids, 1..n by first voxel
+  int n_grains = 0;
+  if (cfg.grains) {
+    Mask m;
+    for (std::size_t k = 0; k < G.count(); ++k) {
+      const Box core = G.core(k);
+      // A core voxel's distance d found in the block is at least the true one, and exact when
+      // the ball of radius d fits in the block (its nearest pore is then inside).
+      for (std::size_t H = std::max<std::size_t>(halo, 8);; H *= 2) {
+        const Box outer = core.grown({H, H, H}, D);
+        solid_block(outer, m);
+        const auto d2 = distance_squared(m);
+        float mx = 0;
+        for_core(outer, core, [&](std::size_t i, std::size_t, std::size_t, std::size_t) { mx = std::max(mx, d2[i]); });
+        if (whole(outer) || std::sqrt(double(mx)) + 1 <= double(H)) {
+          inscribed_max = std::max(inscribed_max, std::sqrt(double(mx)));
+          break;
+        }
+        if (H > 2 * chunk)
+          throw InputError("", "--chunk", std::to_string(chunk),
+                           "is too small for grain separation: the solid holds a ball of radius above " + std::to_string(H - 1) +
+                               " voxels, and the distance map needs a halo wider than that; give a larger --chunk");
+      }
+    }
+    ghalo = std::size_t(std::ceil(2 * inscribed_max)) + 4;
+    done("grains_radius");
+    mem = memory_model(D, chunk, halo, phase2, src, ghalo);
+    if (budget > 0 && mem.total() > budget) {
+      // The block the budget holds with this halo (a multiple of 32, at least the halo): the
+      // tool's own choice is re-planned with it; a --chunk the user gave is refused, naming it.
+      std::size_t fits = largest_block(D, halo, phase2, src, ghalo, budget, chunk);
+      if (fits < halo) fits = 0;  // a block must be at least its halo
+      if (fits && cfg.chunk == 0) {
+        info("grains: a halo of " + std::to_string(ghalo) + " (largest inscribed radius " + num(inscribed_max) + " voxels) needs " +
+             bytes_text(mem.total()) + " in blocks of " + std::to_string(chunk) + ", above --memory; blocks of " +
+             std::to_string(fits) + " from here on");
+        replanned_from = chunk;
+        chunk = fits;
+        G = Grid3(D, chunk);
+        mem = memory_model(D, chunk, halo, phase2, src, ghalo);
+      }
+    }
+    if (budget > 0 && mem.total() > budget) {
+      const std::size_t fits = largest_block(D, halo, phase2, src, ghalo, budget, chunk);
+      throw InputError("", "--memory", cfg.as_written.count("--memory") ? cfg.as_written.at("--memory") : cfg.memory_text,
+                       "is below what grain separation needs with --chunk " + std::to_string(chunk) + ": " + bytes_text(mem.total()) +
+                           " (the solid's largest inscribed radius is " + num(inscribed_max) + " voxels, so a grains halo of " +
+                           std::to_string(ghalo) + "); " +
+                           (fits >= halo ? "give --chunk " + std::to_string(fits) + " (the largest block this budget holds with that halo) or more --memory"
+                                 : "give more --memory"));
+    }
+    check_memory_request(mem.total(), cfg.input, "--chunk", std::to_string(chunk), "chunked grain separation");
+    info("grains: largest inscribed radius " + num(inscribed_max) + " voxels, halo " + std::to_string(ghalo) +
+         ", planned memory " + bytes_text(mem.total()));
+  }
 
   // Specific surface of the solid: faces between unlike neighbours, counted by words.
   double fx = 0, fy = 0, fz = 0;
@@ -836,70 +895,10 @@ std::string segment_blocks(const SegmentConfig& cfg, const ReadOptions& ro) {
   std::vector<uint64_t>().swap(total);
   done("labels");
 
-  // 4b. Grains (--grains): the largest inscribed radius, the markers numbered over the volume;
-  // the watershed runs block by block with the outputs (5).
-  GrainOptions go;
-  go.h = cfg.h;
-  const auto solid_block = [&](const Box& outer, Mask& m) {
-    m.dims = outer.dims();
-    m.spacing = sp;
-    m.origin = {0, 0, 0};
-    m.v.resize(m.dims.count());
-    std::size_t i = 0;
-    for (std::size_t z = outer.lo[2]; z < outer.hi[2]; ++z)
-      for (std::size_t y = outer.lo[1]; y < outer.hi[1]; ++y)
-        for (std::size_t x = outer.lo[0]; x < outer.hi[0]; ++x, ++i) m.v[i] = solid.get(x, y, z);
-  };
-  const auto whole = [&](const Box& b) { return b.n(0) == D.nx && b.n(1) == D.ny && b.n(2) == D.nz; };
-  double inscribed_max = 0;  // the largest distance to a pore (finest voxels)
-  std::size_t ghalo = 0;
-  std::vector<uint64_t> peak_at;   // marker voxels (x-fastest global index), ascending
-  std::vector<int32_t> peak_id;    // their marker ids, 1..n by first voxel
-  int n_grains = 0;
+  // 4b. Grains (--grains): the markers, numbered over the volume; the watershed runs block by
+  // block with the outputs (5).
   if (cfg.grains) {
     Mask m;
-    for (std::size_t k = 0; k < G.count(); ++k) {
-      const Box core = G.core(k);
-      // A core voxel's distance d found in the block is at least the true one, and exact when
-      // the ball of radius d fits in the block (its nearest pore is then inside).
-      for (std::size_t H = std::max<std::size_t>(halo, 8);; H *= 2) {
-        const Box outer = core.grown({H, H, H}, D);
-        solid_block(outer, m);
-        const auto d2 = distance_squared(m);
-        float mx = 0;
-        for_core(outer, core, [&](std::size_t i, std::size_t, std::size_t, std::size_t) { mx = std::max(mx, d2[i]); });
-        if (whole(outer) || std::sqrt(double(mx)) + 1 <= double(H)) {
-          inscribed_max = std::max(inscribed_max, std::sqrt(double(mx)));
-          break;
-        }
-        if (H > 2 * chunk)
-          throw InputError("", "--chunk", std::to_string(chunk),
-                           "is too small for grain separation: the solid holds a ball of radius above " + std::to_string(H - 1) +
-                               " voxels, and the distance map needs a halo wider than that; give a larger --chunk");
-      }
-    }
-    ghalo = std::size_t(std::ceil(2 * inscribed_max)) + 4;
-    done("grains_radius");
-    mem = memory_model(D, chunk, halo, phase2, src, ghalo);
-    if (budget > 0 && mem.total() > budget) {
-      // The block the budget holds with this halo (a multiple of 32, at least the halo), so that
-      // the next run is told a value that fits, not only that this one does not.
-      std::size_t fits = largest_block(D, halo, phase2, src, ghalo, budget, chunk);
-      if (fits < halo) fits = 0;  // a block must be at least its halo
-      if (fits && cfg.chunk == 0)
-        throw GrainsReplan{fits, "grains: a halo of " + std::to_string(ghalo) + " (largest inscribed radius " + num(inscribed_max) +
-                                     " voxels) needs " + bytes_text(mem.total()) + " in blocks of " + std::to_string(chunk) +
-                                     ", above --memory"};
-      throw InputError("", "--memory", cfg.as_written.count("--memory") ? cfg.as_written.at("--memory") : cfg.memory_text,
-                       "is below what grain separation needs with --chunk " + std::to_string(chunk) + ": " + bytes_text(mem.total()) +
-                           " (the solid's largest inscribed radius is " + num(inscribed_max) + " voxels, so a grains halo of " +
-                           std::to_string(ghalo) + "); " +
-                           (fits ? "give --chunk " + std::to_string(fits) + " (the largest block this budget holds with that halo) or more --memory"
-                                 : "give more --memory"));
-    }
-    check_memory_request(mem.total(), cfg.input, "--chunk", std::to_string(chunk), "chunked grain separation");
-    info("grains: largest inscribed radius " + num(inscribed_max) + " voxels, halo " + std::to_string(ghalo) +
-         ", planned memory " + bytes_text(mem.total()));
     // Marker voxels of each core, from its block with the grains halo.
     const std::array<std::size_t, 3> gh{ghalo, ghalo, ghalo};
     for (std::size_t k = 0; k < G.count(); ++k) {
@@ -1156,6 +1155,8 @@ std::string segment_blocks(const SegmentConfig& cfg, const ReadOptions& ro) {
     summary["chunked"]["grains_blocks_widened"] = widened;
     summary["chunked"]["grains_widest_halo_vox"] = widest;
     summary["chunked"]["grains_reaching_halo_edge"] = std::count(at_edge.begin(), at_edge.end(), char(1));
+    // The block --memory gave before the grains halo was measured (null: it held the halo).
+    summary["chunked"]["grains_replanned_from_chunk_vox"] = replanned_from ? json(replanned_from) : json(nullptr);
   }
   summary["stage_times_s"] = times;
   summary.unit("stage_times_s", "s");

@@ -196,6 +196,8 @@ TEST(SegmentChunked, GrainsBlockPlannedAgainForTheMeasuredHalo) {
                         " --json " + (d / "c.json").string(), &err), 0) << err;
   const json sm = read_json(d / "m.json");
   EXPECT_EQ(sm["chunked"]["chunk_vox"], 32);
+  EXPECT_EQ(sm["chunked"]["grains_replanned_from_chunk_vox"], 64);  // planned for a halo of 24
+  EXPECT_EQ(read_json(d / "c.json")["chunked"]["grains_replanned_from_chunk_vox"], nullptr);
   EXPECT_EQ(sm["chunked"]["grains_halo_vox"], 34);
   EXPECT_LE(sm["chunked"]["planned_memory_bytes"].get<double>(), 150e6);
   tomodem::h5::File a((d / "m.h5").string(), tomodem::h5::File::Mode::read), b((d / "c.h5").string(), tomodem::h5::File::Mode::read);
