@@ -749,8 +749,12 @@ std::string segment_blocks(const SegmentConfig& cfg, const ReadOptions& ro) {
     }
     if (budget > 0 && mem.total() > budget) {
       const std::size_t fits = largest_block(D, halo, phase2, src, ghalo, budget, chunk);
+      // The tool's own block is refused only when the smallest block does not fit either.
+      const std::size_t smallest = std::min(std::max<std::size_t>(halo, 32), chunk);
+      const std::string block = cfg.chunk ? "--chunk " + std::to_string(chunk) : "the smallest block (" + std::to_string(smallest) + " voxels per side)";
+      if (!cfg.chunk) mem = memory_model(D, smallest, halo, phase2, src, ghalo);
       throw InputError("", "--memory", cfg.as_written.count("--memory") ? cfg.as_written.at("--memory") : cfg.memory_text,
-                       "is below what grain separation needs with --chunk " + std::to_string(chunk) + ": " + bytes_text(mem.total()) +
+                       "is below what grain separation needs with " + block + ": " + bytes_text(mem.total()) +
                            " (the solid's largest inscribed radius is " + num(inscribed_max) + " voxels, so a grains halo of " +
                            std::to_string(ghalo) + "); " +
                            (fits >= halo ? "give --chunk " + std::to_string(fits) + " (the largest block this budget holds with that halo) or more --memory"

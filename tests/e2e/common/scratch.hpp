@@ -20,8 +20,12 @@ inline int run_err(const std::string& cmd, std::string* err) {
   const std::string ef =
       (std::filesystem::temp_directory_path() / ("tomodem-stderr-" + std::to_string(::getpid()) + ".txt")).string();
   const int r = std::system((cmd + " >/dev/null 2>" + ef).c_str());
-  std::ifstream in(ef);
-  err->assign(std::istreambuf_iterator<char>(in), {});
+  {
+    std::ifstream in(ef);
+    err->assign(std::istreambuf_iterator<char>(in), {});
+  }
+  std::error_code ec;
+  std::filesystem::remove(ef, ec);  // one file per test process was left in /tmp
   return WIFEXITED(r) ? WEXITSTATUS(r) : -1;
 }
 

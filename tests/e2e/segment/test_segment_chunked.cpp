@@ -234,6 +234,9 @@ TEST(SegmentChunked, BadInputExit2WithNumbers) {
       {raw_args + iso + " --memory lots", "'--memory': value 'lots': expected a size"},
       {raw_args + iso + " --chunk 16 --grains --memory 80MB",
        "'--memory': value '80MB': is below what grain separation needs with --chunk 16: 88.2 MB (the solid's largest inscribed radius is 14.86"},
+      // The tool's own block: refused only when the smallest block cannot hold the grains halo.
+      {raw_args + iso + " --grains --memory 86MB",
+       "'--memory': value '86MB': is below what grain separation needs with the smallest block (32 voxels per side): 105 MB"},
       {raw_args + iso + " --chunk 16 --min-island 10", "'--min-island': value '10'"},
       {raw_args + iso + " --chunk 16 --filter gaussian", "'--filter': value 'gaussian'"},
       {raw_args + iso + " --chunk 16 --method hysteresis --levels 1,2", "'--method': value 'hysteresis'"},
