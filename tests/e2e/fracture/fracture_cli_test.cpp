@@ -238,6 +238,34 @@ TEST_F(FractureCli, CracksAreSingleCrackRunsOnTheTurnedAndMovedNetwork) {
   EXPECT_NEAR(three["K_IC_error"].get<double>() / (std::sqrt(sem * sem + method / 9) / mean), 1.0, 1e-9);
 }
 
+// --method both --cracks 3: the explicit test runs on every crack, and the two methods are
+// compared crack by crack. Each crack's pair must be the single-crack `--method both` run of the
+// turned and moved network (the same runs: 1e-9), and the summary's mean and standard error of
+// the paired differences are recomputed here from those runs.
+TEST_F(FractureCli, BothMethodsAreComparedCrackByCrack) {
+  const mechanics::Network net = mechanics::test::slab(8, 8, 8, 11);
+  const std::string opts = " --a-over-w 0.2 --no-elastic --method both --no-energy --json " + path("out.json") + " -q";
+  auto [c3, e3] = run(network(net) + opts + " --cracks 3");
+  ASSERT_EQ(c3, 0) << e3;
+  const auto three = json("out.json");
+  ASSERT_EQ(three["cracks"]["explicit_vs_sla"].size(), 3u);
+  EXPECT_EQ(three["cracks"]["explicit_vs_sla"][0], three["explicit_vs_sla"]);  // crack 0 is the top-level pair
+  std::vector<double> d;
+  for (int k = 0; k < 3; ++k) {
+    auto [c, err] = run(network(moved(turned(net, k), k, 3)) + opts);
+    ASSERT_EQ(c, 0) << err;
+    const auto one = json("out.json");
+    d.push_back(one["explicit_vs_sla"]);
+    EXPECT_NEAR(three["cracks"]["explicit_vs_sla"][k].get<double>(), d.back(), 1e-9) << "crack " << k;
+    EXPECT_NEAR(three["cracks"]["explicit_K_IC"][k].get<double>() / one["explicit"]["K_IC"].get<double>(), 1.0, 1e-9);
+  }
+  const double mean = (d[0] + d[1] + d[2]) / 3;
+  double ss = 0;
+  for (double x : d) ss += (x - mean) * (x - mean);
+  EXPECT_NEAR(three["cracks"]["explicit_vs_sla_mean"].get<double>(), mean, 1e-12);
+  EXPECT_NEAR(three["cracks"]["explicit_vs_sla_sem"].get<double>(), std::sqrt(ss / 2 / 3), 1e-12);
+}
+
 // --crack-orientations one is the behaviour before the three orientations: crack k is the
 // single-crack test of the network moved by k/3 of the cell along x and z, loaded along z. The
 // same operations on the same numbers, so the values are equal exactly.
