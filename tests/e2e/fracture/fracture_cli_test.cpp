@@ -169,6 +169,14 @@ mechanics::Network moved(mechanics::Network net, int k, int K) {
   return net;
 }
 
+/// Mean and sample standard deviation (n − 1) of three or more values, as the summary computes them.
+std::pair<double, double> mean_sd(const std::vector<double>& v) {
+  double mean = 0, ss = 0;
+  for (double x : v) mean += x / double(v.size());
+  for (double x : v) ss += (x - mean) * (x - mean);
+  return {mean, std::sqrt(ss / double(v.size() - 1))};
+}
+
 /// Simple cubic lattice, spacing d, n × n × n sites half a spacing from the cell faces (a site on a
 /// face could wrap to either side after a move), every touching pair bonded.
 mechanics::Network cubic_lattice(int n, double d) {
@@ -211,14 +219,17 @@ TEST_F(FractureCli, CracksOnALatticeAllGiveTheSingleCrackValue) {
 // cell along x and z. The test turns and moves the network itself, runs one crack on each file
 // and checks the per-crack values (same arithmetic: 1e-12), their mean, the means by load axis,
 // sd, standard error and the combined error sqrt(sem² + Σ(e_k K_k)²/K²)/mean from those values.
+// With --method both the explicit test runs on every crack too and the methods are compared
+// crack by crack: each pair must be the single-crack run's (1e-9), and the mean and standard
+// error of the paired differences are recomputed from those runs.
 TEST_F(FractureCli, CracksAreSingleCrackRunsOnTheTurnedAndMovedNetwork) {
   const mechanics::Network net = mechanics::test::slab(8, 8, 8, 11);
-  const std::string opts = " --a-over-w 0.2 --no-elastic --json " + path("out.json") + " -q";
+  const std::string opts = " --a-over-w 0.2 --no-elastic --method both --no-energy --json " + path("out.json") + " -q";
   auto [c3, e3] = run(network(net) + opts + " --cracks 3");
   ASSERT_EQ(c3, 0) << e3;
   const auto three = json("out.json");
   EXPECT_EQ(three["cracks"]["load_axis"], nlohmann::json({"z", "x", "y"}));
-  std::vector<double> K, e;
+  std::vector<double> K, e, d;
   for (int k = 0; k < 3; ++k) {
     auto [c, err] = run(network(moved(turned(net, k), k, 3)) + opts);
     ASSERT_EQ(c, 0) << err;
@@ -226,44 +237,24 @@ TEST_F(FractureCli, CracksAreSingleCrackRunsOnTheTurnedAndMovedNetwork) {
     e.push_back(json("out.json")["K_IC_error"]);
     EXPECT_NEAR(three["cracks"]["K_IC"][k].get<double>() / K.back(), 1.0, 1e-12) << "crack " << k;
     EXPECT_NEAR(three["cracks"]["mean_by_load_axis"]["zxy"[k] + std::string()].get<double>() / K.back(), 1.0, 1e-12);
-  }
-  const double mean = (K[0] + K[1] + K[2]) / 3;
-  double ss = 0, method = 0;
-  for (int k = 0; k < 3; ++k) ss += (K[k] - mean) * (K[k] - mean), method += std::pow(e[k] * K[k], 2);
-  const double sd = std::sqrt(ss / 2), sem = sd / std::sqrt(3.0);
-  EXPECT_GT(sd, 0.01 * mean);  // three different places and axes in a random network: the cracks differ
-  EXPECT_NEAR(three["K_IC"].get<double>() / mean, 1.0, 1e-12);
-  EXPECT_NEAR(three["cracks"]["sd"].get<double>() / sd, 1.0, 1e-9);
-  EXPECT_NEAR(three["cracks"]["sem"].get<double>() / sem, 1.0, 1e-9);
-  EXPECT_NEAR(three["K_IC_error"].get<double>() / (std::sqrt(sem * sem + method / 9) / mean), 1.0, 1e-9);
-}
-
-// --method both --cracks 3: the explicit test runs on every crack, and the two methods are
-// compared crack by crack. Each crack's pair must be the single-crack `--method both` run of the
-// turned and moved network (the same runs: 1e-9), and the summary's mean and standard error of
-// the paired differences are recomputed here from those runs.
-TEST_F(FractureCli, BothMethodsAreComparedCrackByCrack) {
-  const mechanics::Network net = mechanics::test::slab(8, 8, 8, 11);
-  const std::string opts = " --a-over-w 0.2 --no-elastic --method both --no-energy --json " + path("out.json") + " -q";
-  auto [c3, e3] = run(network(net) + opts + " --cracks 3");
-  ASSERT_EQ(c3, 0) << e3;
-  const auto three = json("out.json");
-  ASSERT_EQ(three["cracks"]["explicit_vs_sla"].size(), 3u);
-  EXPECT_EQ(three["cracks"]["explicit_vs_sla"][0], three["explicit_vs_sla"]);  // crack 0 is the top-level pair
-  std::vector<double> d;
-  for (int k = 0; k < 3; ++k) {
-    auto [c, err] = run(network(moved(turned(net, k), k, 3)) + opts);
-    ASSERT_EQ(c, 0) << err;
     const auto one = json("out.json");
     d.push_back(one["explicit_vs_sla"]);
     EXPECT_NEAR(three["cracks"]["explicit_vs_sla"][k].get<double>(), d.back(), 1e-9) << "crack " << k;
     EXPECT_NEAR(three["cracks"]["explicit_K_IC"][k].get<double>() / one["explicit"]["K_IC"].get<double>(), 1.0, 1e-9);
   }
-  const double mean = (d[0] + d[1] + d[2]) / 3;
-  double ss = 0;
-  for (double x : d) ss += (x - mean) * (x - mean);
-  EXPECT_NEAR(three["cracks"]["explicit_vs_sla_mean"].get<double>(), mean, 1e-12);
-  EXPECT_NEAR(three["cracks"]["explicit_vs_sla_sem"].get<double>(), std::sqrt(ss / 2 / 3), 1e-12);
+  EXPECT_EQ(three["cracks"]["explicit_vs_sla"][0], three["explicit_vs_sla"]);  // crack 0 is the top-level pair
+  const auto [dmean, dsd] = mean_sd(d);
+  EXPECT_NEAR(three["cracks"]["explicit_vs_sla_mean"].get<double>(), dmean, 1e-12);
+  EXPECT_NEAR(three["cracks"]["explicit_vs_sla_sem"].get<double>(), dsd / std::sqrt(3.0), 1e-12);
+  const auto [mean, sd] = mean_sd(K);
+  double method = 0;
+  for (int k = 0; k < 3; ++k) method += std::pow(e[k] * K[k], 2);
+  const double sem = sd / std::sqrt(3.0);
+  EXPECT_GT(sd, 0.01 * mean);  // three different places and axes in a random network: the cracks differ
+  EXPECT_NEAR(three["K_IC"].get<double>() / mean, 1.0, 1e-12);
+  EXPECT_NEAR(three["cracks"]["sd"].get<double>() / sd, 1.0, 1e-9);
+  EXPECT_NEAR(three["cracks"]["sem"].get<double>() / sem, 1.0, 1e-9);
+  EXPECT_NEAR(three["K_IC_error"].get<double>() / (std::sqrt(sem * sem + method / 9) / mean), 1.0, 1e-9);
 }
 
 // --crack-orientations one is the behaviour before the three orientations: crack k is the
