@@ -503,14 +503,7 @@ void refuse_unsupported(const SegmentConfig& c, const std::string& format) {
 
 }  // namespace
 
-namespace {
-std::string segment_blocks(const SegmentConfig& cfg, const ReadOptions& ro);
-}  // namespace
-
-std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro) { return segment_blocks(cfg, ro); }
-
-namespace {
-std::string segment_blocks(const SegmentConfig& cfg, const ReadOptions& ro) {
+std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro) {
   using clk = std::chrono::steady_clock;
   auto last = clk::now();
   json times = json::object();
@@ -745,20 +738,18 @@ std::string segment_blocks(const SegmentConfig& cfg, const ReadOptions& ro) {
         chunk = fits;
         G = Grid3(D, chunk);
         mem = memory_model(D, chunk, halo, phase2, src, ghalo);
+      } else {
+        // The tool's own block is refused only when the smallest block does not fit either.
+        const std::size_t smallest = std::min(std::max<std::size_t>(halo, 32), chunk);
+        const std::string block = cfg.chunk ? "--chunk " + std::to_string(chunk) : "the smallest block (" + std::to_string(smallest) + " voxels per side)";
+        if (!cfg.chunk) mem = memory_model(D, smallest, halo, phase2, src, ghalo);
+        throw InputError("", "--memory", cfg.as_written.count("--memory") ? cfg.as_written.at("--memory") : cfg.memory_text,
+                         "is below what grain separation needs with " + block + ": " + bytes_text(mem.total()) +
+                             " (the solid's largest inscribed radius is " + num(inscribed_max) + " voxels, so a grains halo of " +
+                             std::to_string(ghalo) + "); " +
+                             (fits ? "give --chunk " + std::to_string(fits) + " (the largest block this budget holds with that halo) or more --memory"
+                                   : "give more --memory"));
       }
-    }
-    if (budget > 0 && mem.total() > budget) {
-      const std::size_t fits = largest_block(D, halo, phase2, src, ghalo, budget, chunk);
-      // The tool's own block is refused only when the smallest block does not fit either.
-      const std::size_t smallest = std::min(std::max<std::size_t>(halo, 32), chunk);
-      const std::string block = cfg.chunk ? "--chunk " + std::to_string(chunk) : "the smallest block (" + std::to_string(smallest) + " voxels per side)";
-      if (!cfg.chunk) mem = memory_model(D, smallest, halo, phase2, src, ghalo);
-      throw InputError("", "--memory", cfg.as_written.count("--memory") ? cfg.as_written.at("--memory") : cfg.memory_text,
-                       "is below what grain separation needs with " + block + ": " + bytes_text(mem.total()) +
-                           " (the solid's largest inscribed radius is " + num(inscribed_max) + " voxels, so a grains halo of " +
-                           std::to_string(ghalo) + "); " +
-                           (fits >= halo ? "give --chunk " + std::to_string(fits) + " (the largest block this budget holds with that halo) or more --memory"
-                                 : "give more --memory"));
     }
     check_memory_request(mem.total(), cfg.input, "--chunk", std::to_string(chunk), "chunked grain separation");
     info("grains: largest inscribed radius " + num(inscribed_max) + " voxels, halo " + std::to_string(ghalo) +
@@ -1166,7 +1157,5 @@ std::string segment_blocks(const SegmentConfig& cfg, const ReadOptions& ro) {
   summary.unit("stage_times_s", "s");
   return summary.text();
 }
-
-}  // namespace
 
 }  // namespace tomodem::image

@@ -240,6 +240,23 @@ json size_effect_study(const FractureConfig& c, const Network& net, const std::v
   return out;
 }
 
+/// Mean, sample standard deviation (n − 1) and standard error of the mean of values (no spread
+/// for a single value).
+struct MeanSem {
+  double mean = 0, sd = 0, sem = 0;
+};
+MeanSem mean_sem(const std::vector<double>& v) {
+  const double n = double(v.size());
+  MeanSem m;
+  for (double x : v) m.mean += x;
+  m.mean /= n;
+  double ss = 0;
+  for (double x : v) ss += (x - m.mean) * (x - m.mean);
+  m.sd = v.size() > 1 ? std::sqrt(ss / (n - 1)) : 0.0;
+  m.sem = m.sd / std::sqrt(n);
+  return m;
+}
+
 /// Several cracks per sample (docs/fracture.md#several-cracks-per-sample): K_IC is the mean over
 /// the cracks; its uncertainty combines the standard error of the mean from the spread between
 /// cracks with the cracks' own K_IC_error (crack-tip discreteness) propagated to the mean, in
@@ -247,7 +264,8 @@ json size_effect_study(const FractureConfig& c, const Network& net, const std::v
 json crack_statistics(const std::vector<FractureResult>& runs, CrackOrientations orientations, double& K,
                       double& rel_error) {
   const double n = double(runs.size());
-  double sum = 0, method = 0;
+  double method = 0;
+  std::vector<double> values;
   json per = json::array(), per_error = json::array(), per_peak = json::array(), per_broken = json::array();
   json axes = json::array(), shifts = json::array();
   std::map<std::string, std::pair<double, int>> by_axis;  // load axis -> (sum of K_IC, cracks)
@@ -258,15 +276,12 @@ json crack_statistics(const std::vector<FractureResult>& runs, CrackOrientations
     shifts.push_back(double(k) / n);
     by_axis[axis].first += r.K_IC;
     ++by_axis[axis].second;
-    sum += r.K_IC;
+    values.push_back(r.K_IC);
     method += std::pow(r.K_IC_error * r.K_IC, 2);
     per.push_back(r.K_IC), per_error.push_back(r.K_IC_error), per_peak.push_back(r.peak_stress);
     per_broken.push_back(r.events.size());
   }
-  const double mean = sum / n;
-  double ss = 0;
-  for (const FractureResult& r : runs) ss += std::pow(r.K_IC - mean, 2);
-  const double sd = runs.size() > 1 ? std::sqrt(ss / (n - 1)) : 0.0, sem = sd / std::sqrt(n);
+  const auto [mean, sd, sem] = mean_sem(values);
   const double method_sem = std::sqrt(method) / n;  // Σ (e_k K_k)² / n² : each crack's error, independent
   K = mean;
   rel_error = std::hypot(sem, method_sem) / mean;
@@ -562,18 +577,15 @@ std::string run_fracture(const FractureConfig& c) {
     // Paired differences K_expl/K_SLA − 1 per crack: their mean and standard error.
     crack_explicit.insert(crack_explicit.begin(), ex);
     std::vector<double> kx, d;
-    double mean = 0;
     for (std::size_t k = 0; k < crack_runs.size(); ++k) {
       kx.push_back(crack_explicit[k].K_IC);
       d.push_back(crack_explicit[k].K_IC / crack_runs[k].K_IC - 1);
-      mean += d.back() / double(crack_runs.size());
     }
-    double ss = 0;
-    for (double x : d) ss += (x - mean) * (x - mean);
+    const MeanSem paired = mean_sem(d);
     out["cracks"]["explicit_K_IC"] = kx;
     out["cracks"]["explicit_vs_sla"] = d;
-    out["cracks"]["explicit_vs_sla_mean"] = mean;
-    out["cracks"]["explicit_vs_sla_sem"] = std::sqrt(ss / double(d.size() - 1) / double(d.size()));
+    out["cracks"]["explicit_vs_sla_mean"] = paired.mean;
+    out["cracks"]["explicit_vs_sla_sem"] = paired.sem;
   }
   if (!c.widths.empty()) out["size_effect"] = size_effect_study(c, net, laws, fo, s.mean_diameter);
   write_fracture_outputs(c, s, sla, ex, primary, out);
