@@ -12,6 +12,7 @@
 #include <ctime>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "../../validation/fracture/samples.hpp"
 #include "../measure.hpp"
@@ -207,6 +208,47 @@ TEST(FractureBench, SlaPcgTwentyThousandAndExplicit) {
   std::printf("explicit 2e4 (%.0f transits): K_IC %.4e, %ld steps, %.1f s wall, %.1f s CPU, ratio to SLA %.4f, load %.1f\n",
               eo.transits, b.K_IC, b.steps, b.wall_time_s, cpu_seconds() - c0, b.K_IC / a.K_IC, load_average());
   EXPECT_NEAR(b.K_IC / a.K_IC, 1.0, 0.02);
+}
+
+// 2×10^4 particles, four cracks (docs/fracture.md#several-cracks-per-sample: the network moved by
+// a quarter of the cell along x and z for each): the explicit test against the PCG SLA crack by
+// crack. One crack's tip discreteness (K_IC_error, 3.4 % here) is as large as the gap the issue
+// bounds (2 %); the mean of the paired differences K_expl/K_SLA − 1 over four cracks has it
+// averaged down by about 2 (issue 19, item 1). TOMODEM_BENCH_CRACKS: another crack count.
+TEST(FractureBench, ExplicitAgainstSlaCrackByCrackTwentyThousand) {
+  omp_set_num_threads(2);
+  const Network net = slab(60, 8, 60, 51);
+  FailureOptions f;
+  const auto laws = lefm_laws(net.packing, f);
+  const int cracks = std::getenv("TOMODEM_BENCH_CRACKS") ? std::max(2, std::atoi(std::getenv("TOMODEM_BENCH_CRACKS"))) : 4;
+  CrackOptions c;
+  c.a_over_w = 0.1875;
+  ExplicitFractureOptions eo;
+  eo.stop_fraction = 0.5;
+  eo.track_energy = false;
+  eo.threads = 2;
+  eo.transits = 100;
+  std::vector<double> d;
+  for (int k = 0; k < cracks; ++k) {
+    const FractureSample s = make_crack_sample(net, c, k, cracks);
+    double c0 = cpu_seconds();
+    const FractureResult a = run_sla(s, laws, f, pcg_options());
+    const double sla_cpu = cpu_seconds() - c0;
+    c0 = cpu_seconds();
+    const FractureResult b = run_explicit_fracture(s, laws, f, eo);
+    d.push_back(b.K_IC / a.K_IC - 1);
+    std::printf("crack %d of %d: SLA K_IC %.4e +- %.1f%% (%.1f s CPU), explicit %.4e (%ld steps, %.1f s CPU), "
+                "explicit/SLA - 1 = %+.4f, load %.1f, peak RSS %.0f MB\n",
+                k + 1, cracks, a.K_IC, 100 * a.K_IC_error, sla_cpu, b.K_IC, b.steps, cpu_seconds() - c0, d.back(),
+                load_average(), peak_rss_mb());
+    std::fflush(stdout);
+  }
+  double mean = 0, ss = 0;
+  for (double x : d) mean += x / double(d.size());
+  for (double x : d) ss += (x - mean) * (x - mean);
+  const double sem = std::sqrt(ss / double(d.size() - 1) / double(d.size()));
+  std::printf("explicit/SLA - 1 over %d cracks: mean %+.4f, standard error %.4f\n", cracks, mean, sem);
+  EXPECT_LT(std::abs(mean), 0.02);
 }
 
 // 10^5 particles: the PCG SLA on two threads, median of three (issue 19: under 10 minutes).
