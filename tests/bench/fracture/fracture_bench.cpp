@@ -210,17 +210,19 @@ TEST(FractureBench, SlaPcgTwentyThousandAndExplicit) {
   EXPECT_NEAR(b.K_IC / a.K_IC, 1.0, 0.02);
 }
 
-// 2×10^4 particles, four cracks (docs/fracture.md#several-cracks-per-sample: the network moved by
-// a quarter of the cell along x and z for each): the explicit test against the PCG SLA crack by
+// 2×10^4 particles, 16 cracks (docs/fracture.md#several-cracks-per-sample: the network moved by
+// k/16 of the cell along x and z for crack k): the explicit test against the PCG SLA crack by
 // crack. One crack's tip discreteness (K_IC_error, 3.4 % here) is as large as the gap the issue
-// bounds (2 %); the mean of the paired differences K_expl/K_SLA − 1 over four cracks has it
-// averaged down by about 2 (issue 19, item 1). TOMODEM_BENCH_CRACKS: another crack count.
+// bounds (2 %), and the paired differences K_expl/K_SLA − 1 scatter by about 3 % between cracks;
+// their mean over 16 cracks has a standard error of about 0.8 %, so the issue's 2 % (item 1) is
+// asserted at two standard errors: |mean| + 2 sem < 2 %. About 22 min on two idle cores.
+// TOMODEM_BENCH_CRACKS: another crack count.
 TEST(FractureBench, ExplicitAgainstSlaCrackByCrackTwentyThousand) {
   omp_set_num_threads(2);
   const Network net = slab(60, 8, 60, 51);
   FailureOptions f;
   const auto laws = lefm_laws(net.packing, f);
-  const int cracks = std::getenv("TOMODEM_BENCH_CRACKS") ? std::max(2, std::atoi(std::getenv("TOMODEM_BENCH_CRACKS"))) : 4;
+  const int cracks = std::getenv("TOMODEM_BENCH_CRACKS") ? std::max(2, std::atoi(std::getenv("TOMODEM_BENCH_CRACKS"))) : 16;
   CrackOptions c;
   c.a_over_w = 0.1875;
   ExplicitFractureOptions eo;
@@ -248,7 +250,7 @@ TEST(FractureBench, ExplicitAgainstSlaCrackByCrackTwentyThousand) {
   for (double x : d) ss += (x - mean) * (x - mean);
   const double sem = std::sqrt(ss / double(d.size() - 1) / double(d.size()));
   std::printf("explicit/SLA - 1 over %d cracks: mean %+.4f, standard error %.4f\n", cracks, mean, sem);
-  EXPECT_LT(std::abs(mean), 0.02);
+  EXPECT_LT(std::abs(mean) + 2 * sem, 0.02);
 }
 
 // 10^5 particles: the PCG SLA on two threads, median of three (issue 19: under 10 minutes).
