@@ -20,6 +20,18 @@
 
 namespace tomodem::mechanics {
 
+MeanSem mean_sem(const std::vector<double>& v) {
+  const double n = double(v.size());
+  MeanSem m;
+  for (double x : v) m.mean += x;
+  m.mean /= n;
+  double ss = 0;
+  for (double x : v) ss += (x - m.mean) * (x - m.mean);
+  m.sd = v.size() > 1 ? std::sqrt(ss / (n - 1)) : 0.0;
+  m.sem = m.sd / std::sqrt(n);
+  return m;
+}
+
 using json = nlohmann::json;
 
 namespace {
@@ -238,23 +250,6 @@ json size_effect_study(const FractureConfig& c, const Network& net, const std::v
   out["samples"] = rows;
   out["height_over_width"] = aspect;
   return out;
-}
-
-/// Mean, sample standard deviation (n − 1) and standard error of the mean of values (no spread
-/// for a single value).
-struct MeanSem {
-  double mean = 0, sd = 0, sem = 0;
-};
-MeanSem mean_sem(const std::vector<double>& v) {
-  const double n = double(v.size());
-  MeanSem m;
-  for (double x : v) m.mean += x;
-  m.mean /= n;
-  double ss = 0;
-  for (double x : v) ss += (x - m.mean) * (x - m.mean);
-  m.sd = v.size() > 1 ? std::sqrt(ss / (n - 1)) : 0.0;
-  m.sem = m.sd / std::sqrt(n);
-  return m;
 }
 
 /// Several cracks per sample (docs/fracture.md#several-cracks-per-sample): K_IC is the mean over

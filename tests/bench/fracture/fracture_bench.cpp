@@ -245,11 +245,8 @@ TEST(FractureBench, ExplicitAgainstSlaCrackByCrackTwentyThousand) {
                 load_average(), peak_rss_mb());
     std::fflush(stdout);
   }
-  double mean = 0, ss = 0;
-  for (double x : d) mean += x / double(d.size());
-  for (double x : d) ss += (x - mean) * (x - mean);
-  const double sem = std::sqrt(ss / double(d.size() - 1) / double(d.size()));
-  std::printf("explicit/SLA - 1 over %d cracks: mean %+.4f, standard error %.4f\n", cracks, mean, sem);
+  const auto [mean, sd, sem] = mean_sem(d);
+  std::printf("explicit/SLA - 1 over %d cracks: mean %+.4f, sd %.4f, standard error %.4f\n", cracks, mean, sd, sem);
   EXPECT_LT(std::abs(mean) + 2 * sem, 0.02);
 }
 

@@ -169,7 +169,8 @@ mechanics::Network moved(mechanics::Network net, int k, int K) {
   return net;
 }
 
-/// Mean and sample standard deviation (n − 1) of three or more values, as the summary computes them.
+/// Mean and sample standard deviation (n − 1) of three or more values, as the summary computes them
+/// (written out here, not mechanics::mean_sem, so the test checks the tool against its own arithmetic).
 std::pair<double, double> mean_sd(const std::vector<double>& v) {
   double mean = 0, ss = 0;
   for (double x : v) mean += x / double(v.size());

@@ -222,6 +222,13 @@ FractureResult run_explicit_fracture(const FractureSample& s, const std::vector<
 /// K_IC, its error estimate, the crack area and the peak from a finished curve (shared by both methods).
 void finish_result(const FractureSample& s, FractureResult& r, double dynamic_error);
 
+/// Mean, sample standard deviation (n − 1) and standard error of the mean of values (no spread
+/// for a single value): the statistics of K_IC over cracks and of paired explicit/SLA differences.
+struct MeanSem {
+  double mean = 0, sd = 0, sem = 0;
+};
+MeanSem mean_sem(const std::vector<double>& v);
+
 /// The tool's configuration (mirrors tomodem-young's).
 struct FractureConfig {
   std::string input, json, curve_csv, plot, map;
