@@ -180,6 +180,32 @@ class ScaledMasses {
 /// Power and norms over the free particles (fixed or prescribed ones keep their velocity), in
 /// mass-weighted coordinates (u = √m v, g = F/√m): the mixing turns v towards M⁻¹F, the
 /// preconditioned descent direction, and reduces to Bitzek's rule for equal masses.
+/// The step cap of both minimisers (FireOptions::adaptive_step_cap): no particle moves more than
+/// `cap` in a step. Adaptive, it is kGrowth times the largest step since the last check, between
+/// full / kRange and full, and the masses' floor follows it. Near its minimum a jammed packing
+/// moves slowly, and the floor of a full-speed collision made its particles 4-6x heavier than
+/// their contacts need (Hertz alumina at 1 MPa, overlaps ~6e-4 r). A packing that speeds up
+/// reaches its cap, which then grows kGrowth-fold per check: no collision is faster than the
+/// floor assumes. A loose packing moves at the cap: unchanged. Measured on 12 seeds
+/// (docs/benchmarks.md): 10 ran faster, median CPU ratio 0.69. A range of 100 stalled more
+/// often; spring laws only got slower (their floor does not depend on the speed).
+struct StepCap {
+  static constexpr double kGrowth = 4, kRange = 10;
+  double full, cap;
+  bool adaptive;
+  double largest = 0;  // since the last check
+  StepCap(double full_step, bool adaptive_) : full(full_step), cap(full_step), adaptive(adaptive_) {}
+  void observe(double v2max, double dt) { largest = std::max(largest, std::sqrt(v2max) * dt); }
+  /// At a check, before the masses' update.
+  void check(ScaledMasses& masses) {
+    if (adaptive) {
+      cap = std::clamp(kGrowth * largest, full / kRange, full);
+      masses.set_collision_step(cap);
+    }
+    largest = 0;
+  }
+};
+
 struct FireSums {
   double power = 0, vv = 0, ff = 0, ww = 0, tt = 0, f2 = 0;
   long nfree = 0;
@@ -259,6 +285,7 @@ FireResult minimise_fire(Simulation& sim, const FireOptions& o) {
   // Scaled masses: the step's limit is the network's (kept by the masses), not the Rayleigh time.
   ScaledMasses masses(sim, dt_max, o.max_move, rmin);
   const bool scaled = o.scale_masses && masses.update(sim.measure());  // stiffness of the start state
+  StepCap step(o.max_move * rmin, o.adaptive_step_cap && o.scale_masses && masses.floor_follows_speed());
   double dt = std::min(o.dt_start * crit, dt_max);
   sim.set_time_step(dt, !scaled);
   const auto stop_motion = [&] {
@@ -276,13 +303,13 @@ FireResult minimise_fire(Simulation& sim, const FireOptions& o) {
     const FireSums sums = fire_sums(sim, rot, threads, parallel);
     const double power = sums.power, vv = sums.vv, ff = sums.ff, ww = sums.ww, tt = sums.tt, f2 = sums.f2;
     const long nfree = sums.nfree;
+    step.observe(sums.v2max, dt);
     const double dt_old = dt;
     if (power > 0) {
       // Translation and rotation are mixed separately (their norms have different units). No
-      // particle moves more than max_move of the smallest radius in a step.
+      // particle moves more than the step cap in a step.
       const double cv = ff > 0 ? alpha * std::sqrt(vv / ff) : 0, cw = tt > 0 ? alpha * std::sqrt(ww / tt) : 0;
-      const double vmax = o.max_move * rmin / dt;
-      mix_particles(p, rot, alpha, cv, cw, vmax, threads, parallel);
+      mix_particles(p, rot, alpha, cv, cw, step.cap / dt, threads, parallel);
       if (++positive > o.n_min) {
         dt = std::min(dt * o.f_inc, dt_max);
         alpha *= o.f_alpha;
@@ -322,7 +349,10 @@ FireResult minimise_fire(Simulation& sim, const FireOptions& o) {
         r.converged = true;
         break;
       }
-      if (scaled) masses.update(r.last);
+      if (scaled) {
+        step.check(masses);
+        masses.update(r.last);
+      }
     }
   }
   stop_motion();
@@ -394,22 +424,8 @@ FireResult minimise_enthalpy(Simulation& sim, const FireOptions& o, const Enthal
   cell.n = e.diagonal ? 3 : 1;
   cell.pressure = e.pressure;
   // A contact's overlap changes by Δε l ≤ Δε 2 r_max: capped as a particle's move.
-  // The speed cap follows the motion (EnthalpyOptions::adaptive_step_cap): at every check it is
-  // kCapGrowth times the largest step a particle took since the last, between max_move r_min /
-  // kCapRange and max_move r_min, and the mass floor and the cell's strain cap follow it. Near
-  // its minimum a jammed packing moves slowly, and the floor of a full-speed collision made its
-  // particles 4-6x heavier than their contacts need (Hertz alumina at 1 MPa, overlaps ~6e-4 r).
-  // A packing that speeds up reaches its cap, which then grows kCapGrowth-fold per check: no
-  // collision is faster than the floor assumes. A loose packing moves at the cap: unchanged.
-  // Measured on 12 seeds (docs/benchmarks.md): 10 ran faster, median CPU ratio 0.69. Counting
-  // the cell's own strain rate as a step kept the cap up and gained nothing.
-  // Only where the floor depends on the speed: with a spring law a lower cap would only slow the
-  // packing down (harmonic spheres at p d/k = 1e-6 then ran out of steps).
-  constexpr double kCapGrowth = 4, kCapRange = 10;
-  const bool adaptive = e.adaptive_step_cap && masses.floor_follows_speed();
-  const double full_step = o.max_move * rmin;
-  double step_cap = full_step, largest_step = 0;  // largest_step: since the last check
-  cell.max_strain = step_cap / (2 * rmax);
+  StepCap step(o.max_move * rmin, o.adaptive_step_cap && masses.floor_follows_speed());
+  cell.max_strain = step.cap / (2 * rmax);
   Measurements m = sim.measure();
   masses.update(m);  // false (physical masses) while no contact carries load: the floor is then used at the first check
   cell.update_masses(masses, sim.stiffness_sums(), p, mscale);
@@ -441,7 +457,7 @@ FireResult minimise_enthalpy(Simulation& sim, const FireOptions& o, const Enthal
     const double ff = sums.ff + (apart ? 0 : cell.ff());
     const double ww = sums.ww, tt = sums.tt, f2 = sums.f2;
     const long nfree = sums.nfree;
-    largest_step = std::max(largest_step, std::sqrt(sums.v2max) * dt);
+    step.observe(sums.v2max, dt);
     const double dt_old = dt;
     // Separate restarts: the cell mixed and stopped on its own power, the particles on theirs.
     if (apart && cell.power() > 0) {
@@ -452,7 +468,7 @@ FireResult minimise_enthalpy(Simulation& sim, const FireOptions& o, const Enthal
     }
     if (power > 0) {
       const double cv = ff > 0 ? alpha * std::sqrt(vv / ff) : 0, cw = tt > 0 ? alpha * std::sqrt(ww / tt) : 0;
-      mix_particles(p, rot, alpha, cv, cw, step_cap / dt, threads, parallel);
+      mix_particles(p, rot, alpha, cv, cw, step.cap / dt, threads, parallel);
       if (!apart)
         for (int a = 0; a < cell.n; ++a) cell.v[a] = (1 - alpha) * cell.v[a] + cv * cell.f[a] / cell.m[a];
       if (++positive > o.n_min) {
@@ -486,12 +502,8 @@ FireResult minimise_enthalpy(Simulation& sim, const FireOptions& o, const Enthal
         r.converged = true;
         break;
       }
-      if (adaptive) {
-        step_cap = std::clamp(kCapGrowth * largest_step, full_step / kCapRange, full_step);
-        masses.set_collision_step(step_cap);
-        cell.max_strain = step_cap / (2 * rmax);
-      }
-      largest_step = 0;
+      step.check(masses);
+      cell.max_strain = step.cap / (2 * rmax);
       masses.update(r.last);
       cell.update_masses(masses, sim.stiffness_sums(), p, mscale);
     }

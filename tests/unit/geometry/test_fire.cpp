@@ -170,7 +170,7 @@ TEST(Fire, EnthalpyMinimumOfAHertzLatticeWithTheStepCapFollowingTheMotion) {
   // 1e-6 E (overlaps of 1e-4 d, as a ceramic powder at 1 MPa) must end on the lattice whose
   // pressure is P: p = (1/3V) Σ f l = 8 f (d − δ) / a³ with f = (4/3) E* √R* δ^{3/2}, R* = d/4,
   // a = √2 (d − δ). Near the minimum the particles move slowly; with the speed cap and the mass
-  // floor following the motion (EnthalpyOptions::adaptive_step_cap) their masses come from their
+  // floor following the motion (FireOptions::adaptive_step_cap) their masses come from their
   // own twelve contacts instead of the floor of a full-speed collision (2.7× stiffer here), so the
   // same minimum is reached in fewer FIRE steps (an operation count; the run is deterministic).
   const double d = 1e-6, delta = 1e-4 * d, E_star = 4e11 / (2 * (1 - 0.2 * 0.2));
@@ -187,7 +187,7 @@ TEST(Fire, EnthalpyMinimumOfAHertzLatticeWithTheStepCapFollowingTheMotion) {
     dem::EnthalpyOptions e;
     e.pressure = P;
     e.pressure_tolerance = 1e-7;
-    e.adaptive_step_cap = adaptive;
+    o.adaptive_step_cap = adaptive;
     const dem::FireResult r = dem::minimise_enthalpy(sim, o, e);
     ASSERT_TRUE(r.converged) << "adaptive " << adaptive << ": " << r.steps << " steps, ratio "
                              << r.last.unbalanced_force_ratio;

@@ -39,6 +39,11 @@ struct FireOptions {
   /// neighbours faster than the masses (updated every check_interval steps) allow for; the cap
   /// never binds near a minimum, where the steps are small.
   double max_move = 0.02;
+  /// The cap (max_move) and the floor of the scaled masses follow the motion: at every check 4×
+  /// the largest step since the last, between max_move r_min / 10 and max_move r_min
+  /// (docs/pack.md); scaled masses and Hertz-family normal laws only (a spring law's floor does
+  /// not depend on the speed). Off: the fixed cap and the floor of a full-speed collision.
+  bool adaptive_step_cap = true;
   int check_interval = 20;  ///< steps between measurements (one extra force pass each)
 };
 
@@ -77,11 +82,6 @@ struct EnthalpyOptions {
   /// overshoots and the fixed-cell bracket that follows fails on Jamming.StagedEnthalpy...'s
   /// unstaged run).
   bool separate_cell_restart = false;
-  /// The speed cap (no particle moves more than this per step) and the mass floor follow the
-  /// motion: at every check 4× the largest step since the last, between max_move r_min / 10 and
-  /// max_move r_min (docs/pack.md); Hertz-family normal laws only (a spring law's floor does not
-  /// depend on the speed). Off: the fixed cap and the floor of a full-speed collision.
-  bool adaptive_step_cap = true;
 };
 
 /// Minimises the enthalpy at target pressure from the current state: converged when the
