@@ -177,18 +177,16 @@ class ScaledMasses {
   std::unordered_map<int64_t, GatheredBody> physical_;  // decomposed: the physical masses by id
 #endif
 };
-/// Power and norms over the free particles (fixed or prescribed ones keep their velocity), in
-/// mass-weighted coordinates (u = √m v, g = F/√m): the mixing turns v towards M⁻¹F, the
-/// preconditioned descent direction, and reduces to Bitzek's rule for equal masses.
 /// The step cap of both minimisers (FireOptions::adaptive_step_cap): no particle moves more than
 /// `cap` in a step. Adaptive, it is kGrowth times the largest step since the last check, between
 /// full / kRange and full, and the masses' floor follows it. Near its minimum a jammed packing
 /// moves slowly, and the floor of a full-speed collision made its particles 4-6x heavier than
 /// their contacts need (Hertz alumina at 1 MPa, overlaps ~6e-4 r). A packing that speeds up
 /// reaches its cap, which then grows kGrowth-fold per check: no collision is faster than the
-/// floor assumes. A loose packing moves at the cap: unchanged. Measured on 12 seeds
-/// (docs/benchmarks.md): 10 ran faster, median CPU ratio 0.69. A range of 100 stalled more
-/// often; spring laws only got slower (their floor does not depend on the speed).
+/// floor assumes. A loose packing moves at the cap: unchanged. Measured (docs/benchmarks.md):
+/// pressure targets, 10 of 12 seeds faster; solid-fraction targets, 12 of 16; median CPU ratio
+/// 0.69 both. A range of 100 stalled more often; spring laws only got slower (their floor does
+/// not depend on the speed).
 struct StepCap {
   static constexpr double kGrowth = 4, kRange = 10;
   double full, cap;
@@ -206,6 +204,9 @@ struct StepCap {
   }
 };
 
+/// Power and norms over the free particles (fixed or prescribed ones keep their velocity), in
+/// mass-weighted coordinates (u = √m v, g = F/√m): the mixing turns v towards M⁻¹F, the
+/// preconditioned descent direction, and reduces to Bitzek's rule for equal masses.
 struct FireSums {
   double power = 0, vv = 0, ff = 0, ww = 0, tt = 0, f2 = 0;
   long nfree = 0;
