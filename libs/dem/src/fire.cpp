@@ -286,7 +286,7 @@ FireResult minimise_fire(Simulation& sim, const FireOptions& o) {
   // Scaled masses: the step's limit is the network's (kept by the masses), not the Rayleigh time.
   ScaledMasses masses(sim, dt_max, o.max_move, rmin);
   const bool scaled = o.scale_masses && masses.update(sim.measure());  // stiffness of the start state
-  StepCap step(o.max_move * rmin, o.adaptive_step_cap && o.scale_masses && masses.floor_follows_speed());
+  StepCap step(o.max_move * rmin, o.adaptive_step_cap && masses.floor_follows_speed());  // checked only when scaled
   double dt = std::min(o.dt_start * crit, dt_max);
   sim.set_time_step(dt, !scaled);
   const auto stop_motion = [&] {

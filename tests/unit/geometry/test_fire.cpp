@@ -110,11 +110,10 @@ TEST(Fire, RefusesADeformingCell) {
 
 namespace {
 /// Compressed FCC crystal of Hertz spheres, half of them (at random) `ratio` times lighter,
-/// disturbed by up to `jitter` (default 0.02 d) along each axis.
-dem::Simulation light_and_heavy_fcc(double a, double d, double ratio, uint64_t seed, double jitter = -1) {
+/// disturbed by up to `jitter` along each axis.
+dem::Simulation light_and_heavy_fcc(double a, double d, double ratio, uint64_t seed, double jitter) {
   std::vector<Vec3> x = dem::lattice_sites(dem::LatticeKind::fcc, 4, a);
   std::mt19937_64 rng(seed);
-  if (jitter < 0) jitter = 0.02 * d;
   std::uniform_real_distribution<double> u(-jitter, jitter);
   std::bernoulli_distribution light(0.5);
   Material heavy;
@@ -146,7 +145,7 @@ TEST(Fire, StiffnessScaledMassesReachTheSameMinimumWhateverTheDensities) {
   const double d = 1e-6, delta = 2e-3 * d, a = std::sqrt(2.0) * (d - delta);
   const double E_star = 4e11 / (2 * (1 - 0.2 * 0.2));
   const auto relax = [&](double ratio, bool scaled) {
-    dem::Simulation sim = light_and_heavy_fcc(a, d, ratio, 11);
+    dem::Simulation sim = light_and_heavy_fcc(a, d, ratio, 11, 0.02 * d);
     const std::vector<double> m0 = sim.particles().m;
     dem::FireOptions o;
     o.unbalanced_force_ratio = 1e-9;

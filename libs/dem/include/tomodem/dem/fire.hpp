@@ -36,8 +36,8 @@ struct FireOptions {
   bool scale_masses = true;
   /// Largest move of any particle in one step, fraction of the smallest radius (as LAMMPS's
   /// min_modify dmax): in an unjammed packing the mixing can send a particle into its
-  /// neighbours faster than the masses (updated every check_interval steps) allow for; the cap
-  /// never binds near a minimum, where the steps are small.
+  /// neighbours faster than the masses (updated every check_interval steps) allow for. With
+  /// adaptive_step_cap it is the largest cap, not the one always in force.
   double max_move = 0.02;
   /// The cap (max_move) and the floor of the scaled masses follow the motion: at every check 4×
   /// the largest step since the last, between max_move r_min / 10 and max_move r_min
