@@ -21,11 +21,6 @@ namespace tomodem::carve {
 namespace {
 using spatial::kPi;
 using spatial::sphere_volume;
-std::string num(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
 double seconds_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
@@ -83,7 +78,7 @@ MappedPores::MappedPores(const Macropores& pores, const Mapping& m, const Cell& 
   if (!(li.x > 0 && li.y > 0 && li.z > 0)) throw InputError("", "macropores", "", "the image has an empty bounding box");
   scale_ = m.scale;
   if (m.fit) scale_ = std::min({lc.x / li.x, lc.y / li.y, lc.z / li.z});
-  if (!(scale_ > 0) || !std::isfinite(scale_)) throw InputError("", "--scale", num(scale_), "must be > 0");
+  if (!(scale_ > 0) || !std::isfinite(scale_)) throw InputError("", "--scale", value_text(scale_), "must be > 0");
   hinv_ = cell.h.inverse();
   rot_ = rotation(m.rotation_deg);
   rot_t_ = rot_.transpose();
@@ -236,7 +231,7 @@ double relax(Packing& p, long steps, int threads, const std::string& file) {
     throw InputError(file, "/materials", std::to_string(nph), "relaxation needs one material per phase");
   for (const auto& m : p.materials)
     if (!(m.youngs_modulus > 0 && m.density > 0 && m.poisson_ratio > -1 && m.poisson_ratio < 0.5))
-      throw InputError(file, "/materials/" + m.name, num(m.youngs_modulus),
+      throw InputError(file, "/materials/" + m.name, value_text(m.youngs_modulus),
                        "relaxation needs youngs_modulus > 0, density > 0 and -1 < poisson_ratio < 0.5");
   dem::ContactModel model;
   model.normal = dem::NormalLaw::hertz;
@@ -267,9 +262,9 @@ double relax(Packing& p, long steps, int threads, const std::string& file) {
 void check_options(const Packing& in, const Options& opt) {
   const std::string& pf = opt.packing_file;
   if (in.particles.size() == 0) throw InputError(pf, "/particles", "0", "the packing has no particle");
-  if (!(opt.fraction >= 0 && opt.fraction < 1)) throw InputError("", "--fraction", num(opt.fraction), "must lie in [0, 1)");
+  if (!(opt.fraction >= 0 && opt.fraction < 1)) throw InputError("", "--fraction", value_text(opt.fraction), "must lie in [0, 1)");
   if (opt.samples_per_diameter < 2) throw InputError("", "--samples", std::to_string(opt.samples_per_diameter), "must be >= 2");
-  if (!(opt.contact_gap >= 0)) throw InputError("", "--gap-tolerance", num(opt.contact_gap), "must be >= 0");
+  if (!(opt.contact_gap >= 0)) throw InputError("", "--gap-tolerance", value_text(opt.contact_gap), "must be >= 0");
 }
 
 /// The image must overlap the packing (tiling always does).
@@ -304,7 +299,7 @@ void integrate_target(const Packing& in, const MappedPores& mp, const Box& cb, c
   rep.solid_fraction_before = vsolid / V;
   rep.outside_margin = opt.outside_margin > 0 ? opt.outside_margin : 2 * rmax;
   if (rep.outside_margin > 0.9 * mp.band()) {
-    warn("the outside margin " + num(rep.outside_margin) + " m exceeds the distance band of the image (" + num(mp.band()) +
+    warn("the outside margin " + value_text(rep.outside_margin) + " m exceeds the distance band of the image (" + value_text(mp.band()) +
          " m in the packing): using 0.9 of the band");
     rep.outside_margin = 0.9 * mp.band();
   }
@@ -340,7 +335,7 @@ void integrate_target(const Packing& in, const MappedPores& mp, const Box& cb, c
     throw InputError(pores.describe(), "mapping", "macroporosity 0",
                      "no macropore of the mapped image lies inside the packing's cell: nothing to carve");
   if (rep.image_coverage < 0.999 && !opt.mapping.tile)
-    warn("the mapped image covers " + num(100 * rep.image_coverage) + " % of the packing's cell; the rest stays solid (--tile repeats the image)");
+    warn("the mapped image covers " + value_text(100 * rep.image_coverage) + " % of the packing's cell; the rest stays solid (--tile repeats the image)");
 }
 
 /// Which particles go: inside the pores, and the cut ones by the cut policy and rule.

@@ -10,7 +10,6 @@
 #include <cmath>
 #include <numeric>
 #include <random>
-#include <sstream>
 
 #include "tomodem/spatial/grid.hpp"
 #include "tomodem/core/progress.hpp"
@@ -26,11 +25,6 @@ namespace tomodem::geometry {
 
 namespace {
 constexpr double kPi = 3.14159265358979323846;
-std::string num(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
 double sphere_volume(double r) { return 4 * kPi / 3 * r * r * r; }
 
 OverlapStats overlap_stats(const ContactTable& c, const std::vector<double>& radius) {
@@ -282,14 +276,14 @@ QuasiStaticResult enthalpy(dem::Simulation& sim, const PackSpec& spec, double vs
   // The top stage stays below a tenth of the admissible pressure (overlaps of about 1 % of d).
   const double pmax = max_admissible_pressure(spec);
   while (stages > 0 && pt * std::pow(kStageFactor, stages) > 0.1 * pmax) --stages;
-  say("enthalpy minimisation (FIRE, cell as a degree of freedom) to pressure " + num(pt) + " Pa" +
-      (stages > 0 ? " from " + num(pt * std::pow(kStageFactor, stages)) + " Pa in " + std::to_string(stages + 1) + " stages" : ""));
-  Progress bar("pressure target " + num(pt) + " Pa", 1.0);
+  say("enthalpy minimisation (FIRE, cell as a degree of freedom) to pressure " + value_text(pt) + " Pa" +
+      (stages > 0 ? " from " + value_text(pt * std::pow(kStageFactor, stages)) + " Pa in " + std::to_string(stages + 1) + " stages" : ""));
+  Progress bar("pressure target " + value_text(pt) + " Pa", 1.0);
   double log_start = 0;
   dem::EnthalpyOptions eo;
   eo.diagonal = spec.cell_relax == CellRelax::diagonal;
   eo.report = [&](long steps, double p) {
-    bar.update(pressure_progress(p, pt, log_start), "step " + std::to_string(steps) + ", p " + num(p) + " Pa");
+    bar.update(pressure_progress(p, pt, log_start), "step " + std::to_string(steps) + ", p " + value_text(p) + " Pa");
   };
   dem::FireOptions fo = rs.fo;
   double phi = vsolid / sim.cell().volume();
@@ -299,7 +293,7 @@ QuasiStaticResult enthalpy(dem::Simulation& sim, const PackSpec& spec, double vs
     const std::clock_t c = std::clock();
     const double s = double(c - c0) / CLOCKS_PER_SEC;
     c0 = c;
-    return ", " + num(s) + " s CPU";
+    return ", " + value_text(s) + " s CPU";
   };
   for (int k = stages; k >= 0 && out.steps < spec.max_steps; --k) {
     const bool last_stage = k == 0;
@@ -316,9 +310,9 @@ QuasiStaticResult enthalpy(dem::Simulation& sim, const PackSpec& spec, double vs
     out.last = r.last;
     ++rep.minimisations;
     phi = vsolid / sim.cell().volume();
-    say("enthalpy FIRE at " + num(eo.pressure) + " Pa: " + (r.converged ? "converged" : "stopped") + " after " +
-        std::to_string(r.steps) + " steps, phi " + num(phi) + ", p " + num(-r.last.stress_contact.trace() / 3) +
-        " Pa, unbalanced " + num(r.last.unbalanced_force_ratio) + cpu_since());
+    say("enthalpy FIRE at " + value_text(eo.pressure) + " Pa: " + (r.converged ? "converged" : "stopped") + " after " +
+        std::to_string(r.steps) + " steps, phi " + value_text(phi) + ", p " + value_text(-r.last.stress_contact.trace() / 3) +
+        " Pa, unbalanced " + value_text(r.last.unbalanced_force_ratio) + cpu_since());
   }
   PressureBracket bracket(alpha, pt);
   // The relaxed state at the upper end of the bracket: a bracket that collapses on a
@@ -334,9 +328,9 @@ QuasiStaticResult enthalpy(dem::Simulation& sim, const PackSpec& spec, double vs
     out.last = f.last;
     out.unloaded = f.below_floor;
     const double p = f.below_floor ? 0.0 : std::max(f.last.pressure, 0.0);
-    bar.update(pressure_progress(p, pt, log_start), "phi " + num(phi) + ", p " + num(p) + " Pa");
-    say("relaxed at phi " + num(phi) + ": p " + num(p) + " Pa, Z " + num(f.last.coordination) + ", unbalanced " +
-        num(f.last.unbalanced_force_ratio) + ", " + std::to_string(f.steps) + " steps" + cpu_since());
+    bar.update(pressure_progress(p, pt, log_start), "phi " + value_text(phi) + ", p " + value_text(p) + " Pa");
+    say("relaxed at phi " + value_text(phi) + ": p " + value_text(p) + " Pa, Z " + value_text(f.last.coordination) + ", unbalanced " +
+        value_text(f.last.unbalanced_force_ratio) + ", " + std::to_string(f.steps) + " steps" + cpu_since());
     if (f.converged && std::abs(p / pt - 1) < kPressureTolerance) {
       out.converged = true;
       break;
@@ -352,7 +346,7 @@ QuasiStaticResult enthalpy(dem::Simulation& sim, const PackSpec& spec, double vs
     out.last = sim.measure();
     out.unloaded = false;
     out.converged = out.last.unbalanced_force_ratio < spec.unbalanced_force_ratio || rs.adhesive;
-    say("ended on the last relaxed state above the target: p " + num(out.last.pressure) + " Pa");
+    say("ended on the last relaxed state above the target: p " + value_text(out.last.pressure) + " Pa");
   }
   return out;
 }
@@ -375,15 +369,15 @@ QuasiStaticResult quasistatic(dem::Simulation& sim, const PackSpec& spec, double
     out.last = r.last;
     return r;
   };
-  say("compress-relax to solid fraction " + num(spec.target_solid_fraction));
+  say("compress-relax to solid fraction " + value_text(spec.target_solid_fraction));
   dem::FireResult r;
   do {
     phi = std::min(spec.target_solid_fraction, phi + max_compression(sim, phi));
     if (spec.target_solid_fraction - phi < 1e-9 * phi) phi = spec.target_solid_fraction;  // not a round-off step
     set_solid_fraction(sim, vsolid, phi, clusters);
     r = relax(floor0);
-    say("relaxed at phi " + num(phi) + ": p " + num(r.below_floor ? 0.0 : r.last.pressure) + " Pa, Z " +
-        num(r.last.coordination) + ", " + std::to_string(r.steps) + " steps");
+    say("relaxed at phi " + value_text(phi) + ": p " + value_text(r.below_floor ? 0.0 : r.last.pressure) + " Pa, Z " +
+        value_text(r.last.coordination) + ", " + std::to_string(r.steps) + " steps");
     if (overlaps_beyond_limit(sim, r.last)) break;  // the caller refuses the target
   } while (phi < spec.target_solid_fraction && out.steps < spec.max_steps);
   out.converged = r.converged || r.below_floor;
@@ -489,7 +483,7 @@ void validate(const PackSpec& s) {
     const auto& ph = s.phases[p];
     const std::string field = "phases[" + std::to_string(p) + "]";
     if (!(ph.volume_fraction >= 0 && ph.volume_fraction <= 1))
-      throw InputError(f, field + ".volume_fraction", num(ph.volume_fraction), "must lie in [0, 1]");
+      throw InputError(f, field + ".volume_fraction", value_text(ph.volume_fraction), "must lie in [0, 1]");
     sum += ph.volume_fraction;
     ph.psd.validate(f, field + ".size_distribution");
     // The same material check as a tomodem-dem scene's (dem::material_problem).
@@ -497,61 +491,61 @@ void validate(const PackSpec& s) {
     if (!bad.key.empty()) throw InputError(f, field + ".material." + bad.key, bad.value, bad.why);
     if (ph.aggregate_size < 1) throw InputError(f, field + ".aggregate_size", std::to_string(ph.aggregate_size), "must be >= 1");
     if (ph.aggregate_size > 1 && !(ph.material.youngs_modulus > 0))
-      throw InputError(f, field + ".material.youngs_modulus", num(ph.material.youngs_modulus),
+      throw InputError(f, field + ".material.youngs_modulus", value_text(ph.material.youngs_modulus),
                        "aggregates are bonded (bond stiffness from E): must be > 0");
   }
   if (std::abs(sum - 1) > 1e-6)
-    throw InputError(f, "phases[*].volume_fraction", num(sum), "volume fractions must add up to 1");
+    throw InputError(f, "phases[*].volume_fraction", value_text(sum), "volume fractions must add up to 1");
   if (s.n_particles < 1) throw InputError(f, "particles", std::to_string(s.n_particles), "must be >= 1");
   check_particle_memory(s.n_particles, f, "particles", std::to_string(s.n_particles));
   if (s.threads < 1) throw InputError(f, "threads", std::to_string(s.threads), "must be >= 1");
-  if (!(s.restitution > 0 && s.restitution <= 1)) throw InputError(f, "contact.restitution", num(s.restitution), "must lie in (0, 1]");
+  if (!(s.restitution > 0 && s.restitution <= 1)) throw InputError(f, "contact.restitution", value_text(s.restitution), "must lie in (0, 1]");
   if (!(s.work_of_adhesion >= 0 && std::isfinite(s.work_of_adhesion)))
-    throw InputError(f, "contact.work_of_adhesion", num(s.work_of_adhesion), "must be >= 0 (J/m^2)");
+    throw InputError(f, "contact.work_of_adhesion", value_text(s.work_of_adhesion), "must be >= 0 (J/m^2)");
   if (!(s.normal_stiffness >= 0 && std::isfinite(s.normal_stiffness)))
-    throw InputError(f, "contact.normal_stiffness", num(s.normal_stiffness), "must be >= 0 (N/m)");
-  if (!(s.local_damping >= 0 && s.local_damping < 1)) throw InputError(f, "protocol.local_damping", num(s.local_damping), "must lie in [0, 1)");
+    throw InputError(f, "contact.normal_stiffness", value_text(s.normal_stiffness), "must be >= 0 (N/m)");
+  if (!(s.local_damping >= 0 && s.local_damping < 1)) throw InputError(f, "protocol.local_damping", value_text(s.local_damping), "must lie in [0, 1)");
   if (!(s.timestep_fraction > 0 && s.timestep_fraction <= 1))
-    throw InputError(f, "protocol.timestep_fraction", num(s.timestep_fraction), "must lie in (0, 1]");
+    throw InputError(f, "protocol.timestep_fraction", value_text(s.timestep_fraction), "must lie in (0, 1]");
   if (!(s.unbalanced_force_ratio > 0 && s.unbalanced_force_ratio < 1))
-    throw InputError(f, "protocol.unbalanced_force_ratio", num(s.unbalanced_force_ratio), "must lie in (0, 1)");
-  if (!(s.strain_rate >= 0 && std::isfinite(s.strain_rate))) throw InputError(f, "protocol.strain_rate", num(s.strain_rate), "must be >= 0 (1/s)");
+    throw InputError(f, "protocol.unbalanced_force_ratio", value_text(s.unbalanced_force_ratio), "must lie in (0, 1)");
+  if (!(s.strain_rate >= 0 && std::isfinite(s.strain_rate))) throw InputError(f, "protocol.strain_rate", value_text(s.strain_rate), "must be >= 0 (1/s)");
   if (!(s.final_strain_rate >= 0 && std::isfinite(s.final_strain_rate)))
-    throw InputError(f, "protocol.final_strain_rate", num(s.final_strain_rate), "must be >= 0 (1/s)");
+    throw InputError(f, "protocol.final_strain_rate", value_text(s.final_strain_rate), "must be >= 0 (1/s)");
   if (s.max_steps < 1) throw InputError(f, "protocol.max_steps", std::to_string(s.max_steps), "must be >= 1");
   if (!(s.initial_solid_fraction > 0 && s.initial_solid_fraction < 0.4))
-    throw InputError(f, "initial_solid_fraction", num(s.initial_solid_fraction),
+    throw InputError(f, "initial_solid_fraction", value_text(s.initial_solid_fraction),
                      "must lie in (0, 0.4): random sequential insertion jams near 0.38");
   if (s.target == Target::pressure && !(s.target_pressure > 0) && s.arrangement == Arrangement::random)
-    throw InputError(f, "target.pressure", num(s.target_pressure), "must be > 0 (Pa)");
+    throw InputError(f, "target.pressure", value_text(s.target_pressure), "must be > 0 (Pa)");
   if (s.target == Target::pressure && s.arrangement == Arrangement::random) {
     const double pmax = max_admissible_pressure(s);
     if (s.target_pressure > pmax)
-      throw InputError(f, "target.pressure", num(s.target_pressure),
-                       "above " + num(pmax) + " Pa, the pressure at which the mean contact overlap reaches 10 % of a radius "
+      throw InputError(f, "target.pressure", value_text(s.target_pressure),
+                       "above " + value_text(pmax) + " Pa, the pressure at which the mean contact overlap reaches 10 % of a radius "
                        "(p = Z phi f(delta)/(pi d^2) at Z = 6, phi = 0.64)");
   }
   if (s.target == Target::solid_fraction) {
     const double phi = s.target_solid_fraction;
-    if (!(phi > 0 && phi < 1)) throw InputError(f, "target.solid_fraction", num(phi), "must lie in (0, 1)");
+    if (!(phi > 0 && phi < 1)) throw InputError(f, "target.solid_fraction", value_text(phi), "must lie in (0, 1)");
     // Bounds no packing of the distribution can pass: a single size cannot exceed the FCC
     // (Kepler) density; a lattice cannot exceed its touching density.
     bool mono = s.phases.size() == 1 && s.phases[0].psd.kind == PsdKind::monodisperse;
     if (s.arrangement != Arrangement::random) {
       if (phi > lattice_max_fraction(s.arrangement) + 1e-12)
-        throw InputError(f, "target.solid_fraction", num(phi),
-                         "above the touching density " + num(lattice_max_fraction(s.arrangement)) + " of a " + to_string(s.arrangement) + " lattice");
+        throw InputError(f, "target.solid_fraction", value_text(phi),
+                         "above the touching density " + value_text(lattice_max_fraction(s.arrangement)) + " of a " + to_string(s.arrangement) + " lattice");
     } else if (mono && phi > kPi / (3 * std::sqrt(2.0))) {
-      throw InputError(f, "target.solid_fraction", num(phi), "above the densest packing of equal spheres (0.7405, FCC)");
+      throw InputError(f, "target.solid_fraction", value_text(phi), "above the densest packing of equal spheres (0.7405, FCC)");
     } else if (phi <= s.initial_solid_fraction) {
-      throw InputError(f, "target.solid_fraction", num(phi),
-                       "must exceed initial_solid_fraction " + num(s.initial_solid_fraction) + " (compression only)");
+      throw InputError(f, "target.solid_fraction", value_text(phi),
+                       "must exceed initial_solid_fraction " + value_text(s.initial_solid_fraction) + " (compression only)");
     }
   }
   if (s.arrangement != Arrangement::random && (s.phases.size() != 1 || s.phases[0].psd.kind != PsdKind::monodisperse))
     throw InputError(f, "arrangement", to_string(s.arrangement), "lattices need one monodisperse phase");
-  if (!(s.friction >= 0 && std::isfinite(s.friction))) throw InputError(f, "contact.friction", num(s.friction), "must be >= 0");
-  if (!(s.rolling_friction >= 0)) throw InputError(f, "contact.rolling_friction", num(s.rolling_friction), "must be >= 0");
+  if (!(s.friction >= 0 && std::isfinite(s.friction))) throw InputError(f, "contact.friction", value_text(s.friction), "must be >= 0");
+  if (!(s.rolling_friction >= 0)) throw InputError(f, "contact.rolling_friction", value_text(s.rolling_friction), "must be >= 0");
 }
 
 namespace {
@@ -636,7 +630,7 @@ Inserted insert_particles(const PackSpec& spec, const std::vector<SizeDistributi
   for (double r : in.radius) vs += sphere_volume(r);
   const double L = std::cbrt(vs / spec.initial_solid_fraction);
   in.cell = Cell::box({0, 0, 0}, {L, L, L}, true);
-  say("inserting " + std::to_string(in.radius.size()) + " particles at solid fraction " + num(spec.initial_solid_fraction));
+  say("inserting " + std::to_string(in.radius.size()) + " particles at solid fraction " + value_text(spec.initial_solid_fraction));
   in.pos = insert_random(in.radius, in.clusters, offsets, in.cell, spec.seed);
   renumber_spatially(in);
   return in;
@@ -683,7 +677,7 @@ dem::ContactModel contact_model(const PackSpec& spec, double dmean) {
         const double E = std::max(spec.phases[std::size_t(a)].material.youngs_modulus, 0.0);
         pp.k_n = spec.normal_stiffness > 0 ? spec.normal_stiffness : E * dmean;
         if (!(pp.k_n > 0))
-          throw InputError(spec.source, "contact.normal_stiffness", num(spec.normal_stiffness),
+          throw InputError(spec.source, "contact.normal_stiffness", value_text(spec.normal_stiffness),
                            "the linear law needs normal_stiffness or the phases' youngs_modulus");
       }
       if (spec.work_of_adhesion > 0) pp.work_of_adhesion = spec.work_of_adhesion;
@@ -739,11 +733,11 @@ class DynamicDensification {
   void refuse_overlap(const dem::Measurements& mm) const {
     OverlapStats o;
     if (overlaps_beyond_limit(sim_, mm, &o))
-      throw InputError(spec_.source, "target.solid_fraction", num(spec_.target_solid_fraction),
-                       "not reachable for this size distribution: the packing jammed at solid fraction " + num(phi_now()) +
-                           "; 1 % of the contacts overlap by more than " + num(100 * o.p99) + "% of a radius (limit " +
-                           num(100 * kOverlapLimit) + "%), the largest by " + num(100 * o.max) + "% (limit " +
-                           num(100 * kSingleOverlapLimit) + "%)");
+      throw InputError(spec_.source, "target.solid_fraction", value_text(spec_.target_solid_fraction),
+                       "not reachable for this size distribution: the packing jammed at solid fraction " + value_text(phi_now()) +
+                           "; 1 % of the contacts overlap by more than " + value_text(100 * o.p99) + "% of a radius (limit " +
+                           value_text(100 * kOverlapLimit) + "%), the largest by " + value_text(100 * o.max) + "% (limit " +
+                           value_text(100 * kSingleOverlapLimit) + "%)");
   }
   void compress_to_pressure();
   void compress_to_fraction();
@@ -768,7 +762,7 @@ class DynamicDensification {
 
 void DynamicDensification::compress_to_pressure() {
   // 1. fast isotropic compression until the contact pressure reaches a fraction of the target
-  say_("compressing at strain rate " + num(rate_fast_) + " 1/s to pressure " + num(spec_.target_pressure) + " Pa");
+  say_("compressing at strain rate " + value_text(rate_fast_) + " 1/s to pressure " + value_text(spec_.target_pressure) + " Pa");
   set_rate(rate_fast_);
   int above = 0;  // consecutive measurements above the target: a jammed network, not a collision
   while (steps < spec_.max_steps) {
@@ -776,11 +770,11 @@ void DynamicDensification::compress_to_pressure() {
     m = sim_.measure();
     above = -m.stress_contact.trace() / 3 > 0.2 * spec_.target_pressure ? above + 1 : 0;
     if (above >= 3) break;
-    if (steps % 5000 == 0) say_("step " + std::to_string(steps) + ": phi " + num(phi_now()) + ", p " + num(m.pressure) + " Pa");
+    if (steps % 5000 == 0) say_("step " + std::to_string(steps) + ": phi " + value_text(phi_now()) + ", p " + value_text(m.pressure) + " Pa");
   }
   // 2. stress servo (all three normal components) at a slow rate cap to the target pressure,
   //    until the pressure is within 5 % and the unbalanced-force ratio below 10× the criterion.
-  say_("servo to " + num(spec_.target_pressure) + " Pa from solid fraction " + num(phi_now()));
+  say_("servo to " + value_text(spec_.target_pressure) + " Pa from solid fraction " + value_text(phi_now()));
   auto& ctl = sim_.cell_control();
   for (int a = 0; a < 3; ++a) {
     ctl.velocity_gradient(a, a) = 0;
@@ -789,17 +783,17 @@ void DynamicDensification::compress_to_pressure() {
   }
   ctl.max_strain_rate = rate_slow_;
   long settled = 0;
-  Progress bar("pressure target " + num(spec_.target_pressure) + " Pa", 1.0);
+  Progress bar("pressure target " + value_text(spec_.target_pressure) + " Pa", 1.0);
   double log_start = 0;
   while (steps < spec_.max_steps) {
     run(kChunk);
     m = sim_.measure();
     bar.update(pressure_progress(m.pressure, spec_.target_pressure, log_start),
-               "phi " + num(phi_now()) + ", p " + num(m.pressure) + " Pa");
+               "phi " + value_text(phi_now()) + ", p " + value_text(m.pressure) + " Pa");
     rep_.inertial_number = std::max(rep_.inertial_number, m.inertial_number);
     if (steps % 5000 == 0)
-      say_("step " + std::to_string(steps) + ": phi " + num(phi_now()) + ", p " + num(m.pressure) + " Pa, Z " +
-           num(m.coordination) + ", unbalanced " + num(m.unbalanced_force_ratio));
+      say_("step " + std::to_string(steps) + ": phi " + value_text(phi_now()) + ", p " + value_text(m.pressure) + " Pa, Z " +
+           value_text(m.coordination) + ", unbalanced " + value_text(m.unbalanced_force_ratio));
     const bool close = std::abs(m.pressure / spec_.target_pressure - 1) < 0.05;
     settled = close && m.unbalanced_force_ratio < 10 * spec_.unbalanced_force_ratio ? settled + 1 : 0;
     if (settled >= 4) break;
@@ -808,7 +802,7 @@ void DynamicDensification::compress_to_pressure() {
 
 void DynamicDensification::compress_to_fraction() {
   const double target_v = vsolid_ / spec_.target_solid_fraction;
-  say_("compressing to solid fraction " + num(spec_.target_solid_fraction));
+  say_("compressing to solid fraction " + value_text(spec_.target_solid_fraction));
   // Fast to within 0.02 of the target fraction, then slow; the last chunk lands on it.
   for (int stage = 0; stage < 2; ++stage) {
     const double rate = stage == 0 ? rate_fast_ : rate_slow_;
@@ -839,12 +833,12 @@ void DynamicDensification::compress_to_fraction() {
 void DynamicDensification::relax() {
   // 3. relaxation at fixed cell to mechanical equilibrium (dynamic protocol and lattices)
   set_rate(0);
-  say_("relaxing to unbalanced-force ratio " + num(spec_.unbalanced_force_ratio));
+  say_("relaxing to unbalanced-force ratio " + value_text(spec_.unbalanced_force_ratio));
   while (steps < spec_.max_steps) {
     m = sim_.measure();
     if (spec_.target == Target::solid_fraction) refuse_overlap(m);
     if (steps % 5000 == 0)
-      say_("relax step " + std::to_string(steps) + ": phi " + num(phi_now()) + ", p " + num(m.pressure) + " Pa, unbalanced " + num(m.unbalanced_force_ratio));
+      say_("relax step " + std::to_string(steps) + ": phi " + value_text(phi_now()) + ", p " + value_text(m.pressure) + " Pa, unbalanced " + value_text(m.unbalanced_force_ratio));
     if (m.contacts == 0 || m.unbalanced_force_ratio < spec_.unbalanced_force_ratio) {
       rep_.equilibrium = true;
       rep_.unloaded = m.contacts == 0;

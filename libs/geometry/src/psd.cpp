@@ -14,11 +14,6 @@ namespace tomodem::geometry {
 namespace {
 constexpr double kPi = 3.14159265358979323846;
 double phi(double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); }
-std::string num(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
 constexpr int kGrid = 4096;  // points of the number CDF of continuous and tabulated kinds
 }  // namespace
 
@@ -183,7 +178,7 @@ std::vector<double> SizeDistribution::sample(std::size_t n, uint64_t seed) const
 
 void SizeDistribution::validate(const std::string& where, const std::string& field) const {
   const auto bad = [&](const std::string& key, double v, const std::string& why) {
-    throw InputError(where, field + "." + key, num(v), why);
+    throw InputError(where, field + "." + key, value_text(v), why);
   };
   if (kind != PsdKind::tabulated && !(diameter > 0)) bad("diameter", diameter, "must be > 0 (metres)");
   if (kind == PsdKind::normal || kind == PsdKind::lognormal) {
@@ -191,7 +186,7 @@ void SizeDistribution::validate(const std::string& where, const std::string& fie
     if (!(truncation > 0)) bad("truncation", truncation, "must be > 0 (in standard deviations)");
   }
   if (kind == PsdKind::normal && !(d_min() > 0))
-    bad("sigma", sigma, "the normal distribution cut at mean - " + num(truncation) + " sigma reaches d <= 0; lower sigma or truncation");
+    bad("sigma", sigma, "the normal distribution cut at mean - " + value_text(truncation) + " sigma reaches d <= 0; lower sigma or truncation");
   if (kind == PsdKind::bimodal) {
     if (!(diameter2 > 0)) bad("diameter2", diameter2, "must be > 0 (metres)");
     if (!(fraction2 >= 0 && fraction2 <= 1)) bad("fraction2", fraction2, "must lie in [0, 1]");
@@ -255,7 +250,7 @@ SizeDistribution read_psd_csv(const std::string& path, PsdBasis basis) {
   }
   if (psd.table_d.size() < 2) throw InputError(path, "rows", std::to_string(psd.table_d.size()), "need at least two rows");
   if (std::abs(psd.table_cdf.back() - 1) > 1e-6)
-    throw InputError(path, "last row cumulative_fraction", num(psd.table_cdf.back()), "must be 1");
+    throw InputError(path, "last row cumulative_fraction", value_text(psd.table_cdf.back()), "must be 1");
   psd.table_cdf.back() = 1;
   return psd;
 }

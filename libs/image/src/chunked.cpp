@@ -36,7 +36,6 @@
 #include <map>
 #include <memory>
 #include <numeric>
-#include <sstream>
 
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/h5.hpp"
@@ -52,12 +51,6 @@ namespace {
 
 using json = nlohmann::json;
 namespace fs = std::filesystem;
-
-std::string num(double x) {
-  std::ostringstream s;
-  s << x;
-  return s.str();
-}
 
 // A box of voxels [lo, hi) per axis (x, y, z).
 struct Box {
@@ -491,8 +484,8 @@ void refuse_unsupported(const SegmentConfig& c, const std::string& format) {
   if (c.filter != ImageFilter::median && c.filter != ImageFilter::none)
     throw InputError("", "--filter", to_string(c.filter), why + "; use median or none");
   if (c.method == ThresholdMethod::hysteresis) throw InputError("", "--method", "hysteresis", why);
-  if (c.open_r > 0) throw InputError("", "--open", num(c.open_r), why);
-  if (c.close_r > 0) throw InputError("", "--close", num(c.close_r), why);
+  if (c.open_r > 0) throw InputError("", "--open", value_text(c.open_r), why);
+  if (c.close_r > 0) throw InputError("", "--close", value_text(c.close_r), why);
   if (c.min_island > 1) throw InputError("", "--min-island", std::to_string(c.min_island), why);
   if (!c.mha.empty()) throw InputError("", "--mha", c.mha, why + "; -o labels.h5 is written block by block");
   if (!c.vdb.empty()) throw InputError("", "--vdb", c.vdb, why);
@@ -540,7 +533,7 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
     const double L = parse_length("--filter-radius", cfg.filter_radius_text);
     radius = L < 0 ? -L : L / finest;
     if (!(radius >= 1 && radius <= 10))
-      throw InputError("", "--filter-radius", cfg.filter_radius_text, "is " + num(radius) + " voxels of the finest axis here; must be in [1, 10]");
+      throw InputError("", "--filter-radius", cfg.filter_radius_text, "is " + value_text(radius) + " voxels of the finest axis here; must be in [1, 10]");
     fr = radii_for_length(geom, radius);
   }
   const double Lm = parse_length("--macropore-radius", cfg.macro_radius_text);
@@ -572,7 +565,7 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
   if (chunk < halo)
     throw InputError("", "--chunk", std::to_string(chunk),
                      "is below the halo of " + std::to_string(halo) + " voxels (median box radius " + std::to_string(fhalo) +
-                         ", macropores 2r + 2 = " + std::to_string(mhalo) + " at r = " + num(macro_r) +
+                         ", macropores 2r + 2 = " + std::to_string(mhalo) + " at r = " + value_text(macro_r) +
                          " voxels): a block would be mostly halo; give --chunk >= " + std::to_string(halo));
   chunk = std::min(chunk, biggest);
   MemoryModel mem = memory_model(D, chunk, halo, phase2, src, grains_guess);
@@ -623,7 +616,7 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
     });
   });
   if (!(src.vmax > src.vmin))
-    throw InputError(cfg.input, "volume", num(src.vmin), "constant volume (every voxel has this value): nothing to segment");
+    throw InputError(cfg.input, "volume", value_text(src.vmin), "constant volume (every voxel has this value): nothing to segment");
   GreyHistogram h256 = empty_histogram(lo, hi, 256), h1024 = empty_histogram(lo, hi, 1024), h4096 = empty_histogram(lo, hi, 4096);
   const auto add = [&](float x, double n) {
     h256.h[std::size_t(h256.bin(x))] += n;
@@ -731,7 +724,7 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
       std::size_t fits = largest_block(D, halo, phase2, src, ghalo, budget, chunk);
       if (fits < halo) fits = 0;  // a block must be at least its halo
       if (fits && cfg.chunk == 0) {
-        info("grains: a halo of " + std::to_string(ghalo) + " (largest inscribed radius " + num(inscribed_max) + " voxels) needs " +
+        info("grains: a halo of " + std::to_string(ghalo) + " (largest inscribed radius " + value_text(inscribed_max) + " voxels) needs " +
              bytes_text(mem.total()) + " in blocks of " + std::to_string(chunk) + ", above --memory; blocks of " +
              std::to_string(fits) + " from here on");
         replanned_from = chunk;
@@ -745,14 +738,14 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
         if (!cfg.chunk) mem = memory_model(D, smallest, halo, phase2, src, ghalo);
         throw InputError("", "--memory", cfg.as_written.count("--memory") ? cfg.as_written.at("--memory") : cfg.memory_text,
                          "is below what grain separation needs with " + block + ": " + bytes_text(mem.total()) +
-                             " (the solid's largest inscribed radius is " + num(inscribed_max) + " voxels, so a grains halo of " +
+                             " (the solid's largest inscribed radius is " + value_text(inscribed_max) + " voxels, so a grains halo of " +
                              std::to_string(ghalo) + "); " +
                              (fits ? "give --chunk " + std::to_string(fits) + " (the largest block this budget holds with that halo) or more --memory"
                                    : "give more --memory"));
       }
     }
     check_memory_request(mem.total(), cfg.input, "--chunk", std::to_string(chunk), "chunked grain separation");
-    info("grains: largest inscribed radius " + num(inscribed_max) + " voxels, halo " + std::to_string(ghalo) +
+    info("grains: largest inscribed radius " + value_text(inscribed_max) + " voxels, halo " + std::to_string(ghalo) +
          ", planned memory " + bytes_text(mem.total()));
   }
 

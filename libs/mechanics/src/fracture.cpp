@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstdio>
 #include <numeric>
 
 #include "tomodem/core/error.hpp"
@@ -16,14 +15,6 @@
 #include "tomodem/spatial/grid.hpp"
 
 namespace tomodem::mechanics {
-
-namespace {
-std::string num(double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, "%.6g", v);
-  return b;
-}
-}  // namespace
 
 namespace {
 /// Refuses a packing the sample cannot be cut from: no bonds, fewer than two particles, a cell that
@@ -37,13 +28,13 @@ std::array<double, 3> check_cell(const Packing& p, const std::string& file) {
   for (int a = 0; a < 3; ++a)
     for (int b = 0; b < 3; ++b)
       if (a != b && std::abs(h(a, b)) > 1e-12 * scale)
-        throw InputError(file, "/cell/h", num(h(a, b)), "the fracture sample is cut from an orthogonal (box) cell");
+        throw InputError(file, "/cell/h", value_text(h(a, b)), "the fracture sample is cut from an orthogonal (box) cell");
   if (!p.cell.periodic[1])
     throw InputError(file, "/cell/periodic", "y not periodic",
                      "the crack front runs along y, which must be periodic (plane strain)");
   const std::array<double, 3> L = {h(0, 0), h(1, 1), h(2, 2)};
   for (int k = 0; k < 3; ++k)
-    if (!(L[k] > 0)) throw InputError(file, "/cell/h", num(L[k]), "cell lengths must be positive");
+    if (!(L[k] > 0)) throw InputError(file, "/cell/h", value_text(L[k]), "cell lengths must be positive");
   return L;
 }
 
@@ -59,17 +50,17 @@ void wrap_into_cell(FractureSample& s) {
 /// than the sample, grips that leave no room, a crack plane outside the grips.
 void place_crack(FractureSample& s, const CrackOptions& o, double zmin, double zmax, double grip,
                  const std::string& file) {
-  if (!(o.a_over_w > 0)) throw InputError("", "--a-over-w", num(o.a_over_w), "the crack length must be > 0");
+  if (!(o.a_over_w > 0)) throw InputError("", "--a-over-w", value_text(o.a_over_w), "the crack length must be > 0");
   s.a = o.a_over_w * s.W;
   const double total = o.geometry == CrackGeometry::centre ? 2 * s.a : s.a;
   if (total >= s.W)
-    throw InputError("", "--a-over-w", num(o.a_over_w),
-                     "the crack (" + num(total) + " m) is longer than the sample width W = " + num(s.W) + " m");
+    throw InputError("", "--a-over-w", value_text(o.a_over_w),
+                     "the crack (" + value_text(total) + " m) is longer than the sample width W = " + value_text(s.W) + " m");
   if (!(s.H > 2 * grip))
-    throw InputError(file, "/particles/position", "height " + num(s.H) + " m",
-                     "the sample is too short for two grip layers of " + num(grip) + " m");
+    throw InputError(file, "/particles/position", "height " + value_text(s.H) + " m",
+                     "the sample is too short for two grip layers of " + value_text(grip) + " m");
   if (!(std::abs(o.plane_offset) < 0.5 - grip / s.H))
-    throw InputError("", "--crack-offset", num(o.plane_offset), "the crack plane must lie between the grips");
+    throw InputError("", "--crack-offset", value_text(o.plane_offset), "the crack plane must lie between the grips");
   s.crack_z = 0.5 * (zmin + zmax) + o.plane_offset * s.H;
   const double x0 = s.packing.cell.origin.x;
   if (o.geometry == CrackGeometry::centre) {
@@ -189,17 +180,17 @@ FractureSample make_sample(const Network& net, const CrackOptions& o, const std:
   const bool spans = keep_gripped(s);
   count_ligament(s);
   if (s.ligament_bonds == 0)
-    throw InputError(file, "/bonds", "0 intact bonds cross z = " + num(s.crack_z) + " m outside the crack",
+    throw InputError(file, "/bonds", "0 intact bonds cross z = " + value_text(s.crack_z) + " m outside the crack",
                      "no bonds across the crack path: nothing holds the two halves together");
   if (!spans)
-    throw InputError(file, "/bonds", "grips at z < " + num(zmin + grip) + " and z > " + num(zmax - grip) + " m",
+    throw InputError(file, "/bonds", "grips at z < " + value_text(zmin + grip) + " and z > " + value_text(zmax - grip) + " m",
                      "the grips are not connected by intact bonds (no load path)");
   for (std::size_t i = 0; i < n; ++i) {
     s.bottom_grip += s.role[i] == ParticleRole::bottom;
     s.top_grip += s.role[i] == ParticleRole::top;
   }
   if (s.precrack_bonds == 0)
-    warn("the crack region holds no bond: the pre-crack is shorter than the bond spacing (" + num(s.a) + " m)");
+    warn("the crack region holds no bond: the pre-crack is shorter than the bond spacing (" + value_text(s.a) + " m)");
   return s;
 }
 
@@ -317,7 +308,7 @@ void set_failure(std::vector<dem::BondLaw>& laws, const Packing& p, const Failur
     for (std::size_t k = 0; k < n; ++k)
       if (bonded[k] && !(p.materials[k].surface_energy > 0))
         throw InputError(file, "/materials/" + std::to_string(k) + " (" + p.materials[k].name + ")@surface_energy_J_per_m2",
-                         num(p.materials[k].surface_energy),
+                         value_text(p.materials[k].surface_energy),
                          "the " + c.key + " criterion needs the fracture energy Γ = 2γ_s: give --fracture-energy or a "
                          "surface energy > 0 for every material of a bonded particle");
   const std::vector<dem::BondSetting> settings = failure_settings(f);

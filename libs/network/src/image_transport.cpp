@@ -8,7 +8,6 @@
 #include <filesystem>
 #include <limits>
 #include <fstream>
-#include <sstream>
 
 #include "image_multigrid.hpp"
 #include "tomodem/linalg/amg.hpp"
@@ -25,12 +24,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 const char* kAxis[3] = {"x", "y", "z"};
-
-std::string num(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
 
 // TOMODEM_IMAGE_DEBUG=1: the resident and peak memory after each stage of a solve (how the
 // bytes per voxel of image_transport_bytes_per_voxel were measured).
@@ -74,7 +67,7 @@ LabelImage read_label_image(const std::string& path, const std::string& dataset)
     if (sp.size() != 3) throw InputError(path, dataset + "@spacing", std::to_string(sp.size()) + " values", "expected x, y, z (m)");
     for (int k = 0; k < 3; ++k) {
       if (!(std::isfinite(sp[k]) && sp[k] > 0))
-        throw InputError(path, dataset + "@spacing", num(sp[k]),
+        throw InputError(path, dataset + "@spacing", value_text(sp[k]),
                          std::string("the ") + kAxis[k] + " voxel size must be finite and > 0 (m)");
       im.spacing[k] = sp[k] * unit;
     }

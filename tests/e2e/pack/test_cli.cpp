@@ -114,6 +114,8 @@ TEST(PackCli, SmallRunWritesPackingAndSummaryKeys) {
     EXPECT_NE(summary.find(key), std::string::npos) << key;
   // φ = 0.35 is far below jamming: the relaxed packing carries no load and says so.
   EXPECT_NE(summary.find("\"unloaded\": true"), std::string::npos) << summary;
+  // The criterion asked for (the default) is in the summary beside the ratio reached.
+  EXPECT_NE(summary.find("\"unbalanced_force_criterion\": 0.0001"), std::string::npos) << summary;
   EXPECT_EQ(run("--help").code, 0);
   EXPECT_EQ(run("--version").code, 0);
 }
@@ -127,7 +129,8 @@ TEST(PackCli, PressureTargetNotReachedExitsFourAndSaysSo) {
   const CliRun r = run(cfg + " -q --no-tessellation -o " + out + " --json " + js);
   EXPECT_EQ(r.code, 4) << r.out;
   EXPECT_NE(file_text(js).find("\"target_reached\": false"), std::string::npos) << file_text(js);
-  EXPECT_NE(r.out.find("was not reached"), std::string::npos) << r.out;
+  // The numbers as the user wrote them (not std::to_string's "100.000000").
+  EXPECT_NE(r.out.find("the target pressure 100 Pa was not reached"), std::string::npos) << r.out;
   EXPECT_TRUE(fs::exists(out));
   const auto ok = config("long.yaml", kOne, "target: {pressure: 100}\n");
   const CliRun o = run(ok + " -q --no-tessellation -o " + ::testing::TempDir() + "long.h5");

@@ -1,0 +1,119 @@
+#!/usr/bin/env python3
+"""The error of a jammed packing against its run time (docs/pack.md, "Criterion against run time").
+
+Packs the pressure-target bench input (Hertz alumina, lognormal sigma = 0.3 by volume, 1 MPa)
+once per seed and per equilibrium criterion (protocol.unbalanced_force_ratio) and compares each
+packing with the same seed's packing at the tightest criterion: what a looser criterion saves in
+steps and CPU, what it changes in solid fraction, coordination and pressure, and how that change
+compares with the scatter between seeds (the sample-to-sample error a user has anyway).
+
+usage: criterion_sweep.py [--tool build/bin/tomodem-pack] [--particles 10000] [--seeds 12]
+                          [--criteria 1e-2,1e-3,1e-4] [--jobs 2] [--out DIR]
+Each run uses one thread; --jobs runs go side by side. Prints a markdown table; DIR keeps every
+run's JSON summary and log (a temporary folder when --out is not given); a run whose summary is
+already in DIR is not run again, so a sweep can be resumed or extended by another criterion.
+"""
+import argparse
+import concurrent.futures
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+
+CONFIG = """particles: {n}
+initial_solid_fraction: 0.3
+phases:
+  - name: alumina
+    material: {{youngs_modulus: 3.8e11, poisson_ratio: 0.22, density: 3950}}
+    size_distribution: {{kind: lognormal, diameter: 1.0e-6, sigma: 0.3, basis: volume}}
+contact: {{normal: hertz}}
+target: {{pressure: 1.0e6}}
+protocol: {{unbalanced_force_ratio: {c}}}
+output: {{packing: packing.h5, tessellation: false}}
+"""
+
+
+def run(tool, out, n, seed, c):
+    tag = f"n{n}_c{c}_s{seed}"
+    cfg = os.path.join(out, f"n{n}_c{c}.yaml")
+    summary = os.path.join(out, tag + ".json")
+    if os.path.exists(summary):  # a sweep resumed in the same DIR
+        with open(summary) as f:
+            return c, seed, json.load(f), 0
+    with open(os.path.join(out, tag + ".log"), "w") as log:
+        rc = subprocess.call([tool, cfg, "--seed", str(seed), "--threads", "1", "-q",
+                              "-o", os.path.join(out, tag + ".h5"), "--json", summary],
+                             stdout=log, stderr=subprocess.STDOUT)
+    if rc != 0 or not os.path.exists(summary):
+        return c, seed, None, rc
+    with open(summary) as f:
+        return c, seed, json.load(f), rc
+
+
+def median(xs):
+    return statistics.median(xs) if xs else float("nan")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--tool", default="build/bin/tomodem-pack")
+    ap.add_argument("--particles", type=int, default=10000)
+    ap.add_argument("--seeds", type=int, default=12)
+    ap.add_argument("--criteria", default="1e-2,1e-3,1e-4")
+    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--out")
+    a = ap.parse_args()
+    def refuse(why):
+        print("criterion_sweep.py: " + why, file=sys.stderr)
+        sys.exit(2)
+    try:
+        criteria = [float(c) for c in a.criteria.split(",")]
+    except ValueError:
+        refuse(f"--criteria {a.criteria!r}: expected numbers separated by commas (1e-2,1e-3,1e-4)")
+    if any(not c > 0 for c in criteria):
+        refuse(f"--criteria {a.criteria!r}: every unbalanced-force ratio must be > 0")
+    if a.seeds < 2 or len(set(criteria)) < 2:
+        refuse("needs at least 2 seeds and 2 different criteria (a reference and one to compare)")
+    if not (os.path.isfile(a.tool) and os.access(a.tool, os.X_OK)):
+        refuse(f"--tool {a.tool}: not an executable file (build tomodem-pack first)")
+    out = a.out or tempfile.mkdtemp(prefix="tomodem-criterion.")
+    os.makedirs(out, exist_ok=True)
+    for c in criteria:
+        with open(os.path.join(out, f"n{a.particles}_c{c:g}.yaml"), "w") as f:
+            f.write(CONFIG.format(n=a.particles, c=f"{c:g}"))
+    jobs = [(a.tool, out, a.particles, s, f"{c:g}") for s in range(1, a.seeds + 1) for c in criteria]
+    res = {}
+    with concurrent.futures.ThreadPoolExecutor(a.jobs) as pool:
+        for c, seed, js, rc in pool.map(lambda j: run(*j), jobs):
+            if js is None:
+                print(f"criterion {c}, seed {seed}: tomodem-pack failed (exit {rc}), see {out}", file=sys.stderr)
+            res[(float(c), seed)] = js
+    ref = min(criteria)
+    seeds = [s for s in range(1, a.seeds + 1) if res.get((ref, s))]
+    refs = [res[(ref, s)] for s in seeds]
+    if len(refs) < 2:
+        sys.exit(f"criterion_sweep.py: fewer than two reference runs finished (see {out})")
+    spread_phi = statistics.stdev(r["solid_fraction"] for r in refs)
+    spread_z = statistics.stdev(r["coordination_no_rattlers"] for r in refs)
+    print(f"N = {a.particles}, seeds 1-{a.seeds}, one thread per run, {a.jobs} side by side; reference: "
+          f"criterion {ref:g}; scatter between seeds at the reference (standard deviation): "
+          f"solid fraction {spread_phi:.2e}, Z without rattlers {spread_z:.3f}; runs in {out}\n")
+    print("| criterion | runs in equilibrium | median steps | median CPU s | median abs(dphi) | max abs(dphi) "
+          "| median abs(dZ_nr) | max abs(dZ_nr) | max abs(p/P - 1) |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for c in sorted(criteria, reverse=True):
+        runs = [(s, res.get((c, s))) for s in seeds]
+        ok = [(s, r) for s, r in runs if r]
+        dphi = [abs(r["solid_fraction"] - res[(ref, s)]["solid_fraction"]) for s, r in ok]
+        dz = [abs(r["coordination_no_rattlers"] - res[(ref, s)]["coordination_no_rattlers"]) for s, r in ok]
+        dp = [abs(r["pressure"] / r["target_pressure"] - 1) for _, r in ok]
+        eq = sum(1 for _, r in ok if r["equilibrium"] and r["target_reached"])
+        print(f"| {c:g} | {eq} of {len(runs)} | {median([r['steps'] for _, r in ok]):.0f} "
+              f"| {median([r['cpu_time_s'] for _, r in ok]):.1f} | {median(dphi):.1e} | {max(dphi):.1e} "
+              f"| {median(dz):.3f} | {max(dz):.3f} | {max(dp):.1e} |")
+
+
+if __name__ == "__main__":
+    main()
