@@ -21,7 +21,7 @@ int run(int argc, char** argv) {
   CLI::App app{"tomodem-pack: generate and densify a periodic sphere packing; prints a JSON summary"};
   std::string config, out;
   long particles = 0, seed = -1;
-  double pressure = 0, phi = 0, friction = -1;
+  double pressure = 0, phi = 0, friction = -1, criterion = 0;
   bool no_tess = false;
   cli::Common common;
   app.add_option("config", config, "packing config (YAML, see docs/pack.md)");
@@ -33,6 +33,8 @@ int run(int argc, char** argv) {
   app.add_option("--target-pressure", pressure, "override the target: pressure, Pa")->check(CLI::PositiveNumber);
   app.add_option("--target-solid-fraction", phi, "override the target: solid fraction");
   app.add_option("--friction", friction, "override the Coulomb friction coefficient")->check(CLI::NonNegativeNumber);
+  app.add_option("--unbalanced-force-ratio", criterion,
+                 "override protocol.unbalanced_force_ratio, the equilibrium criterion (mean |net force| / mean |contact force|)");
   app.add_flag("--no-tessellation", no_tess, "skip the Laguerre tessellation");
   cli::add_quiet(app, common.quiet);
   cli::add_version(app, "tomodem-pack");
@@ -49,14 +51,17 @@ int run(int argc, char** argv) {
   if (pressure > 0) s.target = geometry::Target::pressure, s.target_pressure = pressure;
   if (app.count("--target-solid-fraction")) s.target = geometry::Target::solid_fraction, s.target_solid_fraction = phi;
   if (friction >= 0) s.friction = friction;
+  if (app.count("--unbalanced-force-ratio")) s.unbalanced_force_ratio = criterion;
   if (no_tess) s.tessellate = false;
   // Command-line values the checks below do not cover by name: finite, and in range.
   if (app.count("--target-pressure") && !(std::isfinite(pressure) && pressure > 0))
-    throw InputError("", "--target-pressure", std::to_string(pressure), "must be a positive finite pressure (Pa)");
+    throw InputError("", "--target-pressure", value_text(pressure), "must be a positive finite pressure (Pa)");
   if (app.count("--target-solid-fraction") && !(phi > 0 && phi < 1))
-    throw InputError("", "--target-solid-fraction", std::to_string(phi), "must lie in (0, 1)");
+    throw InputError("", "--target-solid-fraction", value_text(phi), "must lie in (0, 1)");
   if (app.count("--friction") && !(std::isfinite(friction) && friction >= 0))
-    throw InputError("", "--friction", std::to_string(friction), "must be a finite number >= 0");
+    throw InputError("", "--friction", value_text(friction), "must be a finite number >= 0");
+  if (app.count("--unbalanced-force-ratio") && !(criterion > 0 && criterion < 1))
+    throw InputError("", "--unbalanced-force-ratio", value_text(criterion), "must lie in (0, 1)");
   if (app.count("--particles")) geometry::check_particle_memory(std::size_t(particles), "", "--particles", std::to_string(particles));
   if (out.empty()) out = cfg.packing;
   // Never write over an input (the config, its tables), nor two outputs onto one file.

@@ -1,14 +1,16 @@
 #!/usr/bin/env python3
-"""The error of a jammed packing against its run time (docs/pack.md, "Criterion against run time").
+"""The error of a jammed packing against its run time (docs/pack.md, "The criterion against the run time").
 
-Packs the pressure-target bench input (Hertz alumina, lognormal sigma = 0.3 by volume, 1 MPa)
-once per seed and per equilibrium criterion (protocol.unbalanced_force_ratio) and compares each
+Packs a config (default: the pressure-target bench input, Hertz alumina, lognormal sigma = 0.3 by
+volume, 1 MPa) once per seed and per equilibrium criterion (tomodem-pack --seed and
+--unbalanced-force-ratio, which override the config) and compares each
 packing with the same seed's packing at the tightest criterion: what a looser criterion saves in
 steps and CPU, what it changes in solid fraction, coordination and pressure, and how that change
 compares with the scatter between seeds (the sample-to-sample error a user has anyway).
 
-usage: criterion_sweep.py [--tool build/bin/tomodem-pack] [--particles 10000] [--seeds 12]
-                          [--criteria 1e-2,1e-3,1e-4] [--jobs 2] [--out DIR]
+usage: criterion_sweep.py [--tool build/bin/tomodem-pack] [--config FILE] [--particles N]
+                          [--seeds 12] [--criteria 1e-2,1e-3,1e-4] [--jobs 2] [--out DIR]
+--particles overrides the config's count (the bench input has 10 000).
 Each run uses one thread; --jobs runs go side by side. Prints a markdown table; DIR keeps every
 run's JSON summary and log (a temporary folder when --out is not given); a run whose summary is
 already in DIR is not run again, so a sweep can be resumed or extended by another criterion.
@@ -30,26 +32,28 @@ phases:
     size_distribution: {{kind: lognormal, diameter: 1.0e-6, sigma: 0.3, basis: volume}}
 contact: {{normal: hertz}}
 target: {{pressure: 1.0e6}}
-protocol: {{unbalanced_force_ratio: {c}}}
 output: {{packing: packing.h5, tessellation: false}}
 """
 
 
-def run(tool, out, n, seed, c):
-    tag = f"n{n}_c{c}_s{seed}"
-    cfg = os.path.join(out, f"n{n}_c{c}.yaml")
+def run(tool, cfg, out, particles, seed, c):
+    tag = f"c{c}_s{seed}"
     summary = os.path.join(out, tag + ".json")
     if os.path.exists(summary):  # a sweep resumed in the same DIR
         with open(summary) as f:
             return c, seed, json.load(f), 0
     with open(os.path.join(out, tag + ".log"), "w") as log:
-        rc = subprocess.call([tool, cfg, "--seed", str(seed), "--threads", "1", "-q",
-                              "-o", os.path.join(out, tag + ".h5"), "--json", summary],
+        rc = subprocess.call([tool, cfg, "--seed", str(seed), "--unbalanced-force-ratio", c, "--threads", "1", "-q",
+                              "-o", os.path.join(out, tag + ".h5"), "--json", summary]
+                             + (["--particles", str(particles)] if particles else []),
                              stdout=log, stderr=subprocess.STDOUT)
     if rc != 0 or not os.path.exists(summary):
         return c, seed, None, rc
     with open(summary) as f:
-        return c, seed, json.load(f), rc
+        js = json.load(f)
+    if js.get("unbalanced_force_criterion") != float(c):  # the override must have reached the run
+        sys.exit(f"criterion_sweep.py: {summary} was packed at criterion {js.get('unbalanced_force_criterion')}, not {c}")
+    return c, seed, js, rc
 
 
 def median(xs):
@@ -59,7 +63,8 @@ def median(xs):
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--tool", default="build/bin/tomodem-pack")
-    ap.add_argument("--particles", type=int, default=10000)
+    ap.add_argument("--config", help="a tomodem-pack config (default: the bench input)")
+    ap.add_argument("--particles", type=int, help="override the config's particle count")
     ap.add_argument("--seeds", type=int, default=12)
     ap.add_argument("--criteria", default="1e-2,1e-3,1e-4")
     ap.add_argument("--jobs", type=int, default=2)
@@ -80,10 +85,14 @@ def main():
         refuse(f"--tool {a.tool}: not an executable file (build tomodem-pack first)")
     out = a.out or tempfile.mkdtemp(prefix="tomodem-criterion.")
     os.makedirs(out, exist_ok=True)
-    for c in criteria:
-        with open(os.path.join(out, f"n{a.particles}_c{c:g}.yaml"), "w") as f:
-            f.write(CONFIG.format(n=a.particles, c=f"{c:g}"))
-    jobs = [(a.tool, out, a.particles, s, f"{c:g}") for s in range(1, a.seeds + 1) for c in criteria]
+    cfg = a.config
+    if cfg is None:
+        cfg = os.path.join(out, "bench_input.yaml")
+        with open(cfg, "w") as f:
+            f.write(CONFIG.format(n=10000))
+    elif not os.path.isfile(cfg):
+        refuse(f"--config {cfg}: no such file")
+    jobs = [(a.tool, cfg, out, a.particles, s, f"{c:g}") for s in range(1, a.seeds + 1) for c in criteria]
     res = {}
     with concurrent.futures.ThreadPoolExecutor(a.jobs) as pool:
         for c, seed, js, rc in pool.map(lambda j: run(*j), jobs):
@@ -97,7 +106,7 @@ def main():
         sys.exit(f"criterion_sweep.py: fewer than two reference runs finished (see {out})")
     spread_phi = statistics.stdev(r["solid_fraction"] for r in refs)
     spread_z = statistics.stdev(r["coordination_no_rattlers"] for r in refs)
-    print(f"N = {a.particles}, seeds 1-{a.seeds}, one thread per run, {a.jobs} side by side; reference: "
+    print(f"{os.path.basename(cfg)}, N = {refs[0]['n_particles']}, seeds 1-{a.seeds}, one thread per run, {a.jobs} side by side; reference: "
           f"criterion {ref:g}; scatter between seeds at the reference (standard deviation): "
           f"solid fraction {spread_phi:.2e}, Z without rattlers {spread_z:.3f}; runs in {out}\n")
     print("| criterion | runs in equilibrium | median steps | median CPU s | median abs(dphi) | max abs(dphi) "
