@@ -54,14 +54,10 @@ int run(int argc, char** argv) {
   if (app.count("--unbalanced-force-ratio")) s.unbalanced_force_ratio = criterion;
   if (no_tess) s.tessellate = false;
   // Command-line values the checks below do not cover by name: finite, and in range.
-  if (app.count("--target-pressure") && !(std::isfinite(pressure) && pressure > 0))
-    throw InputError("", "--target-pressure", value_text(pressure), "must be a positive finite pressure (Pa)");
-  if (app.count("--target-solid-fraction") && !(phi > 0 && phi < 1))
-    throw InputError("", "--target-solid-fraction", value_text(phi), "must lie in (0, 1)");
-  if (app.count("--friction") && !(std::isfinite(friction) && friction >= 0))
-    throw InputError("", "--friction", value_text(friction), "must be a finite number >= 0");
-  if (app.count("--unbalanced-force-ratio") && !(criterion > 0 && criterion < 1))
-    throw InputError("", "--unbalanced-force-ratio", value_text(criterion), "must lie in (0, 1)");
+  if (app.count("--target-pressure")) require_positive("--target-pressure", pressure, "Pa");
+  if (app.count("--target-solid-fraction")) require_range("--target-solid-fraction", phi, 0, true, 1, true);
+  if (app.count("--friction")) require_non_negative("--friction", friction);
+  if (app.count("--unbalanced-force-ratio")) require_range("--unbalanced-force-ratio", criterion, 0, true, 1, true);
   if (app.count("--particles")) geometry::check_particle_memory(std::size_t(particles), "", "--particles", std::to_string(particles));
   if (out.empty()) out = cfg.packing;
   // Never write over an input (the config, its tables), nor two outputs onto one file.
