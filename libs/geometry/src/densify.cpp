@@ -295,6 +295,7 @@ QuasiStaticResult enthalpy(dem::Simulation& sim, const PackSpec& spec, double vs
     c0 = c;
     return ", " + value_text(s) + " s CPU";
   };
+  long builds_before = 0;  // neighbour-list builds before the stage (the log's "list builds")
   for (int k = stages; k >= 0 && out.steps < spec.max_steps; --k) {
     const bool last_stage = k == 0;
     eo.pressure = pt * std::pow(kStageFactor, k);
@@ -312,7 +313,8 @@ QuasiStaticResult enthalpy(dem::Simulation& sim, const PackSpec& spec, double vs
     phi = vsolid / sim.cell().volume();
     say("enthalpy FIRE at " + value_text(eo.pressure) + " Pa: " + (r.converged ? "converged" : "stopped") + " after " +
         std::to_string(r.steps) + " steps, phi " + value_text(phi) + ", p " + value_text(-r.last.stress_contact.trace() / 3) +
-        " Pa, unbalanced " + value_text(r.last.unbalanced_force_ratio) + cpu_since());
+        " Pa, unbalanced " + value_text(r.last.unbalanced_force_ratio) + ", list builds " + std::to_string(r.last.neighbor_rebuilds - builds_before) + cpu_since());
+    builds_before = r.last.neighbor_rebuilds;
   }
   PressureBracket bracket(alpha, pt);
   // The relaxed state at the upper end of the bracket: a bracket that collapses on a

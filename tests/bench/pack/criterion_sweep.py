@@ -13,12 +13,16 @@ usage: criterion_sweep.py [--tool build/bin/tomodem-pack] [--config FILE] [--par
 --particles overrides the config's count (the bench input has 10 000).
 Each run uses one thread; --jobs runs go side by side. Prints a markdown table; DIR keeps every
 run's JSON summary and log (a temporary folder when --out is not given); a run whose summary is
-already in DIR is not run again, so a sweep can be resumed or extended by another criterion.
+already in DIR is not run again, so a sweep can be resumed or extended by another criterion. A
+summary written by another build (its provenance git hash is not the one --tool --version
+prints) is refused with exit 2: results of two builds are not mixed in one table. A build from
+a modified tree ("+dirty") cannot be told from another build of the same commit.
 """
 import argparse
 import concurrent.futures
 import json
 import os
+import re
 import statistics
 import subprocess
 import sys
@@ -36,12 +40,32 @@ output: {{packing: packing.h5, tessellation: false}}
 """
 
 
-def run(tool, cfg, out, particles, seed, c):
+class Refused(Exception):
+    """Bad input found by a run (exit 2)."""
+
+
+def build_of(tool):
+    """The git hash the tool was built from, as its --version prints it ("... (git 1a2b3c4d5e6f)")."""
+    try:
+        text = subprocess.run([tool, "--version"], capture_output=True, text=True, timeout=60).stdout
+    except (OSError, subprocess.SubprocessError) as e:
+        return None, str(e)
+    m = re.search(r"\(git ([^)]+)\)", text)
+    first = text.strip().splitlines()[0] if text.strip() else ""
+    return (m.group(1), None) if m else (None, f"no git hash in its --version output {first!r}")
+
+
+def run(tool, build, cfg, out, particles, seed, c):
     tag = f"c{c}_s{seed}"
     summary = os.path.join(out, tag + ".json")
     if os.path.exists(summary):  # a sweep resumed in the same DIR
         with open(summary) as f:
-            return c, seed, json.load(f), 0
+            js = json.load(f)
+        written_by = js.get("provenance", {}).get("git_hash")
+        if written_by != build:
+            raise Refused(f"{summary} was written by tomodem-pack of git {written_by}, --tool {tool} is git {build}: "
+                          "use another --out (results of two builds are not mixed)")
+        return c, seed, js, 0
     with open(os.path.join(out, tag + ".log"), "w") as log:
         rc = subprocess.call([tool, cfg, "--seed", str(seed), "--unbalanced-force-ratio", c, "--threads", "1", "-q",
                               "-o", os.path.join(out, tag + ".h5"), "--json", summary]
@@ -83,6 +107,9 @@ def main():
         refuse("needs at least 2 seeds and 2 different criteria (a reference and one to compare)")
     if not (os.path.isfile(a.tool) and os.access(a.tool, os.X_OK)):
         refuse(f"--tool {a.tool}: not an executable file (build tomodem-pack first)")
+    build, why = build_of(a.tool)
+    if build is None:
+        refuse(f"--tool {a.tool}: cannot tell which build it is ({why})")
     out = a.out or tempfile.mkdtemp(prefix="tomodem-criterion.")
     os.makedirs(out, exist_ok=True)
     cfg = a.config
@@ -92,13 +119,16 @@ def main():
             f.write(CONFIG.format(n=10000))
     elif not os.path.isfile(cfg):
         refuse(f"--config {cfg}: no such file")
-    jobs = [(a.tool, cfg, out, a.particles, s, f"{c:g}") for s in range(1, a.seeds + 1) for c in criteria]
+    jobs = [(a.tool, build, cfg, out, a.particles, s, f"{c:g}") for s in range(1, a.seeds + 1) for c in criteria]
     res = {}
-    with concurrent.futures.ThreadPoolExecutor(a.jobs) as pool:
-        for c, seed, js, rc in pool.map(lambda j: run(*j), jobs):
-            if js is None:
-                print(f"criterion {c}, seed {seed}: tomodem-pack failed (exit {rc}), see {out}", file=sys.stderr)
-            res[(float(c), seed)] = js
+    try:
+        with concurrent.futures.ThreadPoolExecutor(a.jobs) as pool:
+            for c, seed, js, rc in pool.map(lambda j: run(*j), jobs):
+                if js is None:
+                    print(f"criterion {c}, seed {seed}: tomodem-pack failed (exit {rc}), see {out}", file=sys.stderr)
+                res[(float(c), seed)] = js
+    except Refused as e:
+        refuse(str(e))
     ref = min(criteria)
     seeds = [s for s in range(1, a.seeds + 1) if res.get((ref, s))]
     refs = [res[(ref, s)] for s in seeds]
