@@ -313,7 +313,8 @@ QuasiStaticResult enthalpy(dem::Simulation& sim, const PackSpec& spec, double vs
     phi = vsolid / sim.cell().volume();
     say("enthalpy FIRE at " + value_text(eo.pressure) + " Pa: " + (r.converged ? "converged" : "stopped") + " after " +
         std::to_string(r.steps) + " steps, phi " + value_text(phi) + ", p " + value_text(-r.last.stress_contact.trace() / 3) +
-        " Pa, unbalanced " + value_text(r.last.unbalanced_force_ratio) + ", list builds " + std::to_string(r.last.neighbor_rebuilds - builds_before) + cpu_since());
+        " Pa, unbalanced " + value_text(r.last.unbalanced_force_ratio) + ", list builds " +
+        std::to_string(r.last.neighbor_rebuilds - builds_before) + cpu_since());
     builds_before = r.last.neighbor_rebuilds;
   }
   PressureBracket bracket(alpha, pt);

@@ -40,10 +40,6 @@ output: {{packing: packing.h5, tessellation: false}}
 """
 
 
-class Refused(Exception):
-    """Bad input found by a run (exit 2)."""
-
-
 def build_of(tool):
     """The git hash the tool was built from, as its --version prints it ("... (git 1a2b3c4d5e6f)")."""
     try:
@@ -55,17 +51,16 @@ def build_of(tool):
     return (m.group(1), None) if m else (None, f"no git hash in its --version output {first!r}")
 
 
-def run(tool, build, cfg, out, particles, seed, c):
+def summary_path(out, seed, c):
+    return os.path.join(out, f"c{c}_s{seed}.json")
+
+
+def run(tool, cfg, out, particles, seed, c):
     tag = f"c{c}_s{seed}"
-    summary = os.path.join(out, tag + ".json")
-    if os.path.exists(summary):  # a sweep resumed in the same DIR
+    summary = summary_path(out, seed, c)
+    if os.path.exists(summary):  # a sweep resumed in the same DIR (its build checked in main)
         with open(summary) as f:
-            js = json.load(f)
-        written_by = js.get("provenance", {}).get("git_hash")
-        if written_by != build:
-            raise Refused(f"{summary} was written by tomodem-pack of git {written_by}, --tool {tool} is git {build}: "
-                          "use another --out (results of two builds are not mixed)")
-        return c, seed, js, 0
+            return c, seed, json.load(f), 0
     with open(os.path.join(out, tag + ".log"), "w") as log:
         rc = subprocess.call([tool, cfg, "--seed", str(seed), "--unbalanced-force-ratio", c, "--threads", "1", "-q",
                               "-o", os.path.join(out, tag + ".h5"), "--json", summary]
@@ -119,16 +114,22 @@ def main():
             f.write(CONFIG.format(n=10000))
     elif not os.path.isfile(cfg):
         refuse(f"--config {cfg}: no such file")
-    jobs = [(a.tool, build, cfg, out, a.particles, s, f"{c:g}") for s in range(1, a.seeds + 1) for c in criteria]
+    jobs = [(a.tool, cfg, out, a.particles, s, f"{c:g}") for s in range(1, a.seeds + 1) for c in criteria]
+    # Summaries already in DIR must come from this build, checked before any run starts.
+    for *_, s, c in jobs:
+        summary = summary_path(out, s, c)
+        if os.path.exists(summary):
+            with open(summary) as f:
+                written_by = json.load(f).get("provenance", {}).get("git_hash")
+            if written_by != build:
+                refuse(f"{summary} was written by tomodem-pack of git {written_by}, --tool {a.tool} is git {build}: "
+                       "use another --out (results of two builds are not mixed)")
     res = {}
-    try:
-        with concurrent.futures.ThreadPoolExecutor(a.jobs) as pool:
-            for c, seed, js, rc in pool.map(lambda j: run(*j), jobs):
-                if js is None:
-                    print(f"criterion {c}, seed {seed}: tomodem-pack failed (exit {rc}), see {out}", file=sys.stderr)
-                res[(float(c), seed)] = js
-    except Refused as e:
-        refuse(str(e))
+    with concurrent.futures.ThreadPoolExecutor(a.jobs) as pool:
+        for c, seed, js, rc in pool.map(lambda j: run(*j), jobs):
+            if js is None:
+                print(f"criterion {c}, seed {seed}: tomodem-pack failed (exit {rc}), see {out}", file=sys.stderr)
+            res[(float(c), seed)] = js
     ref = min(criteria)
     seeds = [s for s in range(1, a.seeds + 1) if res.get((ref, s))]
     refs = [res[(ref, s)] for s in seeds]
