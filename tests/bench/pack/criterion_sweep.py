@@ -15,7 +15,8 @@ Each run uses one thread; --jobs runs go side by side. Prints a markdown table; 
 run's JSON summary and log (a temporary folder when --out is not given); a run whose summary is
 already in DIR is not run again, so a sweep can be resumed or extended by another criterion. A
 summary written by another build (its provenance git hash is not the one --tool --version
-prints) is refused with exit 2: results of two builds are not mixed in one table. A build from
+prints), or a file there that is not a summary, is refused with exit 2 before anything is
+written or run: results of two builds are not mixed in one table. A build from
 a modified tree ("+dirty") cannot be told from another build of the same commit.
 """
 import argparse
@@ -105,25 +106,30 @@ def main():
     build, why = build_of(a.tool)
     if build is None:
         refuse(f"--tool {a.tool}: cannot tell which build it is ({why})")
+    if a.config is not None and not os.path.isfile(a.config):
+        refuse(f"--config {a.config}: no such file")
     out = a.out or tempfile.mkdtemp(prefix="tomodem-criterion.")
     os.makedirs(out, exist_ok=True)
+    # Summaries already in DIR must come from this build: checked before anything is written or run.
+    for s in range(1, a.seeds + 1):
+        for c in criteria:
+            summary = summary_path(out, s, f"{c:g}")
+            if not os.path.exists(summary):
+                continue
+            try:
+                with open(summary) as f:
+                    written_by = json.load(f).get("provenance", {}).get("git_hash")
+            except (OSError, ValueError, AttributeError) as e:
+                refuse(f"{summary}: not a tomodem-pack summary ({e}); use another --out or remove it")
+            if written_by != build:
+                refuse(f"{summary} was written by tomodem-pack of git {written_by}, --tool {a.tool} is git {build}: "
+                       "use another --out (results of two builds are not mixed)")
     cfg = a.config
     if cfg is None:
         cfg = os.path.join(out, "bench_input.yaml")
         with open(cfg, "w") as f:
             f.write(CONFIG.format(n=10000))
-    elif not os.path.isfile(cfg):
-        refuse(f"--config {cfg}: no such file")
     jobs = [(a.tool, cfg, out, a.particles, s, f"{c:g}") for s in range(1, a.seeds + 1) for c in criteria]
-    # Summaries already in DIR must come from this build, checked before any run starts.
-    for *_, s, c in jobs:
-        summary = summary_path(out, s, c)
-        if os.path.exists(summary):
-            with open(summary) as f:
-                written_by = json.load(f).get("provenance", {}).get("git_hash")
-            if written_by != build:
-                refuse(f"{summary} was written by tomodem-pack of git {written_by}, --tool {a.tool} is git {build}: "
-                       "use another --out (results of two builds are not mixed)")
     res = {}
     with concurrent.futures.ThreadPoolExecutor(a.jobs) as pool:
         for c, seed, js, rc in pool.map(lambda j: run(*j), jobs):
