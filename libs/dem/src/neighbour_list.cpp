@@ -4,6 +4,11 @@
 
 #include <algorithm>
 #include <cmath>
+#if TOMODEM_HAVE_MPI
+#include <cstring>
+
+#include "tomodem/dem/decomposition.hpp"
+#endif
 
 namespace tomodem::dem {
 
@@ -30,6 +35,61 @@ double smallest_singular_value(const Mat3& f) {
     lmin = q + 2 * p * std::cos(phi + 2 * 3.14159265358979323846 / 3);  // the smallest root
   }
   return std::sqrt(std::max(0.0, 1 + lmin)) - 1e-12;
+}
+
+/// The two largest of a set of squared displacements: a pair's relative displacement is at most
+/// |u_i| + |u_j| ≤ largest + second largest, tighter than twice the largest when one particle
+/// runs ahead of the rest (a rattler, a particle at the step cap among slower ones).
+struct LargestTwo {
+  double first = 0, second = 0;
+  void add(double v) {
+    if (v > first) second = first, first = v;
+    else if (v > second) second = v;
+  }
+  void merge(const LargestTwo& o) {
+    add(o.first);
+    add(o.second);
+  }
+  /// |u_i| + |u_j| bound from squared values.
+  double pair_bound() const { return std::sqrt(first) + std::sqrt(second); }
+};
+#pragma omp declare reduction(largest_two : LargestTwo : omp_out.merge(omp_in))
+
+/// The two largest over the owned particles of every rank (the serial run's pair): every rank
+/// then takes the serial run's rebuild decision. Serial: as given. Collective when decomposed.
+LargestTwo whole_sample(const SimState& s, const LargestTwo& local) {
+#if TOMODEM_HAVE_MPI
+  if (s.domain) {
+    std::vector<char> mine(sizeof local);
+    std::memcpy(mine.data(), &local, sizeof local);
+    const std::vector<char> all = s.domain->all_bytes(mine);
+    LargestTwo total;
+    for (std::size_t o = 0; o + sizeof local <= all.size(); o += sizeof local) {
+      LargestTwo rank;
+      std::memcpy(&rank, all.data() + o, sizeof local);
+      total.merge(rank);
+    }
+    return total;
+  }
+#endif
+  (void)s;
+  return local;
+}
+bool is_decomposed(const SimState& s) {
+#if TOMODEM_HAVE_MPI
+  return s.domain != nullptr;
+#else
+  (void)s;
+  return false;
+#endif
+}
+/// Whether particle i's motion counts towards the two largest: not a ghost (its owner counts it).
+bool owned(const SimState& s, long i) {
+#if TOMODEM_HAVE_MPI
+  if (s.domain) return !s.domain->ghost[std::size_t(i)];
+#endif
+  (void)s, (void)i;
+  return true;
 }
 
 /// Whether two matrices are equal element by element (exactly: a cell that has not moved).
@@ -386,41 +446,46 @@ void NeighbourList::reindex(const SimState& s) {
 /// build (o the cell origin; positions are not wrapped between builds, so x − x⁰ is the motion),
 /// a pair seen through image n had d⁰ = x⁰_j + H₀n − x⁰_i and now has
 ///   d = x_j + H n − x_i = F d⁰ + (u_j − u_i)   (H n = F H₀ n),
-/// so |d| ≥ s_min(F) |d⁰| − 2 max|u|. A pair left out at the build had |d⁰| ≥ r_list =
-/// 2 r_max + reach + skin; it can touch now (|d| < 2 r_max + reach = r_list − skin) only if
-///   r_list (1 − s_min) + 2 max|u| > skin,
+/// so |d| ≥ s_min(F) |d⁰| − (u₁ + u₂), u₁ ≥ u₂ the two largest |u| (|u_j − u_i| ≤ |u_i| + |u_j|).
+/// A pair left out at the build had |d⁰| ≥ r_list = 2 r_max + reach + skin; it can touch now
+/// (|d| < 2 r_max + reach = r_list − skin) only if
+///   r_list (1 − s_min) + u₁ + u₂ > skin,
 /// which is when the list is rebuilt (1 − s_min clamped at 0: an expansion is not counted as a
 /// gain). A homogeneous compression costs r_list ε instead of the old test's √3 |ΔH| ≈ √3 ε L:
 /// a rebuild every ~skin/(r_list ε) of strain whatever the cell's size (docs/pack.md).
 /// Walls: a particle's raw motion max|x − x⁰| against the wall's.
 bool NeighbourList::rebuild_due(const SimState& s) const {
-  if (need_build) return true;
+  // Decomposed, every rank must reach the collective whole_sample below.
+  if (need_build && !is_decomposed(s)) return true;
   const Particles& p = s.p;
   const long n = long(p.size());
   if (same_matrix(s.cell.h, h_build)) {
-    // Cell as at the build (F = I, u = x − x⁰): the test is 2 max|x − x⁰| > skin, without the
-    // affine term and the radii that F ≠ I needs (66 → ~20 instructions per particle per step).
-    double dmax2 = 0;
-#pragma omp parallel for num_threads(s.threads) if (s.threads > 1) schedule(static) reduction(max : dmax2)
-    for (long i = 0; i < n; ++i) dmax2 = std::max(dmax2, norm2(p.x[i] - x_build[i]));
-    const double dmax = std::sqrt(dmax2);
-    if (2 * dmax > skin) return true;
+    // Cell as at the build (F = I, u = x − x⁰): the test is u₁ + u₂ > skin, without the affine
+    // term and the radii that F ≠ I needs.
+    LargestTwo d2;
+#pragma omp parallel for num_threads(s.threads) if (s.threads > 1) schedule(static) reduction(largest_two : d2)
+    for (long i = 0; i < n; ++i)
+      if (owned(s, i)) d2.add(norm2(p.x[i] - x_build[i]));
+    const double dmax = std::sqrt(d2.first);  // this rank's: the walls' test, as before
+    if (whole_sample(s, d2).pair_bound() > skin || need_build) return true;
     for (std::size_t w = 0; w < s.walls.size(); ++w)
       if (dmax + norm(s.walls[w].point - wall_point_build[w]) > skin) return true;
     return false;
   }
   const Mat3 f = s.cell.h * h_build.inverse();
   const Vec3 o = s.cell.origin;
-  double umax2 = 0, dmax2 = 0, rmax = 0;
-#pragma omp parallel for num_threads(s.threads) if (s.threads > 1) schedule(static) reduction(max : umax2, dmax2, rmax)
+  LargestTwo u2;
+  double dmax2 = 0, rmax = 0;
+#pragma omp parallel for num_threads(s.threads) if (s.threads > 1) schedule(static) reduction(largest_two : u2) reduction(max : dmax2, rmax)
   for (long i = 0; i < n; ++i) {
     const Vec3 dx = p.x[i] - x_build[i];
-    umax2 = std::max(umax2, norm2(dx - (f * (x_build[i] - o) - (x_build[i] - o))));
+    if (owned(s, i)) u2.add(norm2(dx - (f * (x_build[i] - o) - (x_build[i] - o))));
     dmax2 = std::max(dmax2, norm2(dx));
     rmax = std::max(rmax, p.r[i]);
   }
   const double r_list = 2 * rmax + reach_max + skin;
-  if (r_list * std::max(0.0, 1 - smallest_singular_value(f)) + 2 * std::sqrt(umax2) > skin) return true;
+  if (r_list * std::max(0.0, 1 - smallest_singular_value(f)) + whole_sample(s, u2).pair_bound() > skin || need_build)
+    return true;
   const double dmax = std::sqrt(dmax2);
   for (std::size_t w = 0; w < s.walls.size(); ++w)
     if (dmax + norm(s.walls[w].point - wall_point_build[w]) > skin) return true;

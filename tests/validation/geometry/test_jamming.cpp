@@ -370,3 +370,41 @@ TEST(Jamming, AffineRebuildTestMissesNoPair) {
   EXPECT_GE(builds, 3);  // the list did have to follow the motion
   EXPECT_LT(4 * builds, old_builds);
 }
+
+// The rebuild test bounds a pair's relative motion by the two largest displacements since the
+// build (|u_j − u_i| ≤ |u_i| + |u_j| ≤ u₁ + u₂), not twice the largest: one particle running
+// ahead of the rest no longer rebuilds the list twice as often. 27 spheres (d = 1 mm, 1.5 mm
+// apart, skin 0.1 d) in a periodic cube; A moves 0.02 mm a step straight at its neighbour B,
+// C 0.002 mm a step, the rest stay: u₁ + u₂ = 0.022 k mm passes the skin at k = 5 (6 builds in
+// 30 steps), 2 u₁ = 0.04 k at k = 3 (10). A reaches B at step 25 and must be listed from then on.
+TEST(Jamming, RebuildTestBoundsPairsByTheTwoFastestParticles) {
+  const double d = 1e-3, a = 1.5e-3;
+  dem::Particles p;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      for (int k = 0; k < 3; ++k) p.add(Vec3{(i + 0.5) * a, (j + 0.5) * a, (k + 0.5) * a}, d / 2, 2500, 0);
+  const dem::ContactModel m = dem::testing::model(dem::NormalLaw::hertz, dem::TangentialLaw::mindlin,
+                                                  dem::testing::material(1e8, 0.25, 2500), 0.5);
+  dem::Settings set;
+  set.threads = 1;
+  dem::Simulation sim(std::move(p), Cell::box({0, 0, 0}, {3 * a, 3 * a, 3 * a}, true), m, set);
+  sim.measure();
+  const long builds0 = sim.engine_state().builds;
+  const std::size_t A = 0, B = 9, C = 13;  // B: one lattice step from A along x; C: the centre
+  ASSERT_NEAR(sim.particles().x[B].x - sim.particles().x[A].x, a, 1e-12);
+  long touching_steps = 0;
+  for (int step = 1; step <= 30; ++step) {
+    sim.particles().x[A].x += 0.02 * d;
+    sim.particles().x[C].y += 0.002 * d;
+    sim.measure();
+    const auto& x = sim.particles().x;
+    if (norm(x[B] - x[A]) >= d) continue;
+    ++touching_steps;
+    const dem::Simulation::EngineState es = sim.engine_state();
+    bool listed = false;
+    for (int q = es.start[A]; q < es.start[A + 1]; ++q) listed = listed || (es.j[std::size_t(q)] == int(B) && es.image[std::size_t(q)] == 13);  // 13: the centre image
+    EXPECT_TRUE(listed) << "step " << step << ": A and B touch but are not listed";
+  }
+  EXPECT_GE(touching_steps, 5);  // steps 26-30, and 25 where the sum of the steps rounds below d
+  EXPECT_EQ(sim.engine_state().builds - builds0, 6);  // twice the largest: 10
+}
