@@ -34,6 +34,12 @@ ForceJob ForceLoop::job(const SimState& s, NeighbourList& nl) {
   jb.pairs = s.model.pairs.data();
   jb.n_phases = s.model.n_phases;
   jb.dt = s.dt;
+  if (s.kern.vectorised) {  // filled with the forces' zeroing in compute()
+    sphere.resize(p.size());
+    for (int c = 0; c < 27; ++c) shift4[c] = PackedSphere{nl.shift[c].x, nl.shift[c].y, nl.shift[c].z, 0};
+    jb.sphere = sphere.data();
+    jb.shift4 = shift4;
+  }
   return jb;
 }
 
@@ -71,6 +77,7 @@ void ForceLoop::compute(SimState& s, NeighbourList& nl, bool tally, Vec3* pair_f
   if (tally) stiffness.resize(n);
   prepare_buffers(threads, n, rot, tally);
   const long reduce_from = (have_bonds || threads == 1) ? 0 : split[1];
+  PackedSphere* packed = s.kern.vectorised ? sphere.data() : nullptr;
 #pragma omp parallel num_threads(threads) if (threads > 1)
   {
     const int tid = omp_get_thread_num();
@@ -79,6 +86,7 @@ void ForceLoop::compute(SimState& s, NeighbourList& nl, bool tally, Vec3* pair_f
       p.f[i] = Vec3{};
       if (rot) p.torque[i] = Vec3{};
       if (tally) stiffness[i] = 0;
+      if (packed) packed[i] = PackedSphere{p.x[i].x, p.x[i].y, p.x[i].z, p.r[i]};
     }
     Vec3* f = tid > 0 ? fbuf[tid].data() : p.f.data();
     Vec3* tq = rot ? (tid > 0 ? tbuf[tid].data() : p.torque.data()) : nullptr;

@@ -19,6 +19,8 @@ class ForceLoop {
 
  private:
   std::vector<Vec3> u;  // absolute velocities when the cell deforms
+  std::vector<PackedSphere> sphere;  // x and r packed for the four-wide loops (ForceJob::sphere)
+  PackedSphere shift4[27] = {};
   std::vector<std::vector<Vec3>> fbuf, tbuf;
   std::vector<std::vector<double>> sbuf;
   std::vector<std::vector<BondEvent>> event_buf;

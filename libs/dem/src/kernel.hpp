@@ -11,6 +11,12 @@
 
 namespace tomodem::dem {
 
+/// A particle's position and radius in one 32-byte record: the four-wide loop's distance test
+/// reads one aligned vector per particle instead of four scattered doubles (kernel_simd_body.inc).
+struct alignas(32) PackedSphere {
+  double x, y, z, r;
+};
+
 /// Read-only view of the state a force pass needs, plus the half neighbour list (i < j).
 struct ForceJob {
   const Vec3* x;          ///< positions
@@ -32,6 +38,9 @@ struct ForceJob {
   int n_phases;
   double dt;
   Vec3* pair_force = nullptr;  ///< tally passes only: force on j from i per list entry, if not null
+  /// Four-wide loops only: x and r of every particle packed, and the 27 image shifts (r = 0).
+  const PackedSphere* sphere = nullptr;
+  const PackedSphere* shift4 = nullptr;
 };
 
 /// One wall's view for the wall pass.

@@ -42,9 +42,9 @@ double smallest_singular_value(const Mat3& f) {
 /// runs ahead of the rest (a rattler, a particle at the step cap among slower ones).
 struct LargestTwo {
   double first = 0, second = 0;
-  void add(double v) {
-    if (v > first) second = first, first = v;
-    else if (v > second) second = v;
+  void add(double v) {  // branch-free: the rebuild test runs it for every particle every step
+    second = std::max(second, std::min(v, first));
+    first = std::max(first, v);
   }
   void merge(const LargestTwo& o) {
     add(o.first);

@@ -14,7 +14,8 @@ namespace tomodem::dem::testing {
 /// 517 pairs (the last group of four has spare lanes) of two phases: the first 256 mostly
 /// touching, the rest mostly apart (both block paths of the loop). With `spin`, random angular
 /// velocities; with `springs`, stored tangential springs (3 per contact, half of them zero, some
-/// beyond the Coulomb cone).
+/// beyond the Coulomb cone). A third of the pairs meet across a periodic image (j stored one
+/// image shift away, as a neighbour list stores a pair across the cell's faces).
 struct RandomPairs {
   static constexpr int kPairs = 517;
   ContactModel m;
@@ -23,6 +24,8 @@ struct RandomPairs {
   std::vector<int32_t> phase, start, owner, jj;
   std::vector<uint8_t> img;
   Vec3 shift[27] = {}, vshift[27] = {};
+  std::vector<PackedSphere> sphere;  // ForceJob::sphere and shift4, filled by job()
+  PackedSphere shift4[27] = {};
 
   /// mu_same, mu_cross: the friction of equal and unequal phases.
   RandomPairs(uint64_t seed, TangentialLaw tangential, bool spin, bool springs, double mu_same = 0, double mu_cross = 0) {
@@ -39,6 +42,11 @@ struct RandomPairs {
       }
     m.finalize();
     const std::size_t np = 2 * std::size_t(kPairs);
+    for (int c = 0; c < 27; ++c) {  // a cubic cell of edge 60 m holds every pair
+      const Vec3 n{double(c / 9 - 1), double(c / 3 % 3 - 1), double(c % 3 - 1)};
+      shift[c] = 60.0 * n;
+      vshift[c] = 0.05 * n;
+    }
     x.resize(np), v.resize(np), r.resize(np), mass.resize(np), phase.resize(np), start.resize(np + 1);
     if (spin) w.resize(np);
     for (int k = 0; k < kPairs; ++k) {
@@ -57,10 +65,13 @@ struct RandomPairs {
       dir = (1 / norm(dir)) * dir;
       x[i] = {0.1 * k, 0, 0};
       x[j] = x[i] + (r[i] + r[j] - overlap) * dir;
+      const int image = k % 3 == 2 ? int(u01(rng) * 26.999) : 13;  // 13: the centre image
+      x[j] = x[j] - shift[image];
+      v[j] = v[j] - vshift[image];
       start[i] = k, start[j] = k + 1;
       owner.push_back(int32_t(i));
       jj.push_back(int32_t(j));
-      img.push_back(13);  // the centre image
+      img.push_back(uint8_t(image));
     }
     start[np] = kPairs;
     if (springs) {
@@ -74,6 +85,11 @@ struct RandomPairs {
                 start.data(), owner.data(), jj.data(), img.data(), h, nullptr, h ? 3 : 0, shift, vshift,
                 m.pairs.data(), 2, 1e-6};
     jb.pair_force = pair_force;
+    sphere.resize(x.size());
+    for (std::size_t q = 0; q < x.size(); ++q) sphere[q] = PackedSphere{x[q].x, x[q].y, x[q].z, r[q]};
+    for (int c = 0; c < 27; ++c) shift4[c] = PackedSphere{shift[c].x, shift[c].y, shift[c].z, 0};
+    jb.sphere = sphere.data();
+    jb.shift4 = shift4;
     return jb;
   }
   int n() const { return int(x.size()); }

@@ -201,7 +201,7 @@ TEST(LawRegistry, VectorisedHertzMindlinEqualsScalarLawsOnRandomContacts) {
     const std::size_t i = 2 * std::size_t(k);
     if (norm(f0[i]) > 0) ++touching;
     // Slipping: |F_t| on the cone μ F_el, F_el = (4/3) E* sqrt(R*) δ^{3/2} (the elastic part).
-    const Vec3 d = x[i + 1] - x[i];
+    const Vec3 d = x[i + 1] + s.shift[s.img[k]] - x[i];
     const Vec3 n = (1 / norm(d)) * d;
     const double delta = r[i] + r[i + 1] - norm(d), rstar = r[i] * r[i + 1] / (r[i] + r[i + 1]);
     const PairParams& pp = s.m.pair(s.phase[i], s.phase[i + 1]);
