@@ -6,7 +6,6 @@
 #include "tomodem/core/error.hpp"
 #include "tomodem/dem/law_registry.hpp"
 #if TOMODEM_HAVE_MPI
-#include <cstring>
 #include <unordered_map>
 
 #include "tomodem/dem/decomposition.hpp"
@@ -27,18 +26,12 @@ struct GatheredBody {
 template <class Keep>
 std::vector<GatheredBody> gather_bodies(DomainHooks& d, const Particles& p, Keep keep) {
   const bool rot = p.has_rotation();
-  std::vector<char> mine;
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    if (d.ghost[i] || !keep(i)) continue;
-    const GatheredBody b{p.id[i], p.f[i], p.v[i], rot ? p.torque[i] : Vec3{}, rot ? p.omega[i] : Vec3{},
-                         p.m[i], p.inv_m[i], rot ? p.inv_I[i] : 0.0};
-    const std::size_t o = mine.size();
-    mine.resize(o + sizeof b);
-    std::memcpy(mine.data() + o, &b, sizeof b);
-  }
-  const std::vector<char> all = d.all_bytes(mine);
-  std::vector<GatheredBody> out(all.size() / sizeof(GatheredBody));
-  if (!out.empty()) std::memcpy(out.data(), all.data(), out.size() * sizeof(GatheredBody));
+  std::vector<GatheredBody> mine;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    if (!d.ghost[i] && keep(i))
+      mine.push_back(GatheredBody{p.id[i], p.f[i], p.v[i], rot ? p.torque[i] : Vec3{}, rot ? p.omega[i] : Vec3{},
+                                  p.m[i], p.inv_m[i], rot ? p.inv_I[i] : 0.0});
+  std::vector<GatheredBody> out = d.all_records(mine);
   std::sort(out.begin(), out.end(), [](const GatheredBody& a, const GatheredBody& b) { return a.id < b.id; });
   return out;
 }

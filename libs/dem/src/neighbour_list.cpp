@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #if TOMODEM_HAVE_MPI
-#include <cstring>
 
 #include "tomodem/dem/decomposition.hpp"
 #endif
@@ -60,15 +59,8 @@ struct LargestTwo {
 LargestTwo whole_sample(const SimState& s, const LargestTwo& local) {
 #if TOMODEM_HAVE_MPI
   if (s.domain) {
-    std::vector<char> mine(sizeof local);
-    std::memcpy(mine.data(), &local, sizeof local);
-    const std::vector<char> all = s.domain->all_bytes(mine);
     LargestTwo total;
-    for (std::size_t o = 0; o + sizeof local <= all.size(); o += sizeof local) {
-      LargestTwo rank;
-      std::memcpy(&rank, all.data() + o, sizeof local);
-      total.merge(rank);
-    }
+    for (const LargestTwo& rank : s.domain->all_records(std::vector<LargestTwo>{local})) total.merge(rank);
     return total;
   }
 #endif
@@ -83,13 +75,13 @@ bool is_decomposed(const SimState& s) {
   return false;
 #endif
 }
-/// Whether particle i's motion counts towards the two largest: not a ghost (its owner counts it).
-bool owned(const SimState& s, long i) {
+/// The ghost flags when decomposed (a ghost's motion is counted by its owner), else null.
+const uint8_t* ghost_flags(const SimState& s) {
 #if TOMODEM_HAVE_MPI
-  if (s.domain) return !s.domain->ghost[std::size_t(i)];
+  if (s.domain) return s.domain->ghost.data();
 #endif
-  (void)s, (void)i;
-  return true;
+  (void)s;
+  return nullptr;
 }
 
 /// Whether two matrices are equal element by element (exactly: a cell that has not moved).
@@ -463,9 +455,10 @@ bool NeighbourList::rebuild_due(const SimState& s) const {
     // Cell as at the build (F = I, u = x − x⁰): the test is u₁ + u₂ > skin, without the affine
     // term and the radii that F ≠ I needs.
     LargestTwo d2;
+    const uint8_t* ghost = ghost_flags(s);
 #pragma omp parallel for num_threads(s.threads) if (s.threads > 1) schedule(static) reduction(largest_two : d2)
     for (long i = 0; i < n; ++i)
-      if (owned(s, i)) d2.add(norm2(p.x[i] - x_build[i]));
+      if (!ghost || !ghost[i]) d2.add(norm2(p.x[i] - x_build[i]));
     const double dmax = std::sqrt(d2.first);  // this rank's: the walls' test, as before
     if (whole_sample(s, d2).pair_bound() > skin || need_build) return true;
     for (std::size_t w = 0; w < s.walls.size(); ++w)
@@ -476,10 +469,11 @@ bool NeighbourList::rebuild_due(const SimState& s) const {
   const Vec3 o = s.cell.origin;
   LargestTwo u2;
   double dmax2 = 0, rmax = 0;
+  const uint8_t* ghost = ghost_flags(s);
 #pragma omp parallel for num_threads(s.threads) if (s.threads > 1) schedule(static) reduction(largest_two : u2) reduction(max : dmax2, rmax)
   for (long i = 0; i < n; ++i) {
     const Vec3 dx = p.x[i] - x_build[i];
-    if (owned(s, i)) u2.add(norm2(dx - (f * (x_build[i] - o) - (x_build[i] - o))));
+    if (!ghost || !ghost[i]) u2.add(norm2(dx - (f * (x_build[i] - o) - (x_build[i] - o))));
     dmax2 = std::max(dmax2, norm2(dx));
     rmax = std::max(rmax, p.r[i]);
   }

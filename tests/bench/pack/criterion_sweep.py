@@ -52,19 +52,19 @@ def build_of(tool):
     return (m.group(1), None) if m else (None, f"no git hash in its --version output {first!r}")
 
 
-def summary_path(out, seed, c):
-    return os.path.join(out, f"c{c}_s{seed}.json")
+def run_file(out, seed, c, ext):
+    """The file of one packing (criterion c, seed) in DIR: its summary (.json), log or packing."""
+    return os.path.join(out, f"c{c}_s{seed}{ext}")
 
 
 def run(tool, cfg, out, particles, seed, c):
-    tag = f"c{c}_s{seed}"
-    summary = summary_path(out, seed, c)
+    summary = run_file(out, seed, c, ".json")
     if os.path.exists(summary):  # a sweep resumed in the same DIR (its build checked in main)
         with open(summary) as f:
             return c, seed, json.load(f), 0
-    with open(os.path.join(out, tag + ".log"), "w") as log:
+    with open(run_file(out, seed, c, ".log"), "w") as log:
         rc = subprocess.call([tool, cfg, "--seed", str(seed), "--unbalanced-force-ratio", c, "--threads", "1", "-q",
-                              "-o", os.path.join(out, tag + ".h5"), "--json", summary]
+                              "-o", run_file(out, seed, c, ".h5"), "--json", summary]
                              + (["--particles", str(particles)] if particles else []),
                              stdout=log, stderr=subprocess.STDOUT)
     if rc != 0 or not os.path.exists(summary):
@@ -113,7 +113,7 @@ def main():
     # Summaries already in DIR must come from this build: checked before anything is written or run.
     for s in range(1, a.seeds + 1):
         for c in criteria:
-            summary = summary_path(out, s, f"{c:g}")
+            summary = run_file(out, s, f"{c:g}", ".json")
             if not os.path.exists(summary):
                 continue
             try:

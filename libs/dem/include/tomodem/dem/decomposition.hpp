@@ -13,6 +13,8 @@
 // trajectory bit for bit.
 #include <array>
 #include <cstdint>
+#include <cstring>
+#include <type_traits>
 #include <vector>
 
 #include "tomodem/core/packing.hpp"
@@ -71,6 +73,17 @@ class DomainHooks {
   virtual std::vector<Vec3> ordered_sum(const std::vector<OrderedTerm>& terms, int groups) = 0;
   /// Every rank's bytes, concatenated in rank order, on every rank (FIRE's sums). Collective.
   virtual std::vector<char> all_bytes(const std::vector<char>& mine) = 0;
+  /// all_bytes for records of a trivially copyable type: every rank's, in rank order. Collective.
+  template <class T>
+  std::vector<T> all_records(const std::vector<T>& mine) {
+    static_assert(std::is_trivially_copyable_v<T>, "records travel as their bytes");
+    std::vector<char> bytes(mine.size() * sizeof(T));
+    if (!bytes.empty()) std::memcpy(bytes.data(), mine.data(), bytes.size());
+    const std::vector<char> all = all_bytes(bytes);
+    std::vector<T> out(all.size() / sizeof(T));
+    if (!out.empty()) std::memcpy(out.data(), all.data(), out.size() * sizeof(T));
+    return out;
+  }
   /// The measurement of the whole cell from the rank's tally (already reduced) and owned particles.
   virtual Measurements measure(const SimState& s, const Tally& tally, const EnergyAccount& energy) = 0;
 };
