@@ -77,7 +77,7 @@ void ForceLoop::compute(SimState& s, NeighbourList& nl, bool tally, Vec3* pair_f
   if (tally) stiffness.resize(n);
   prepare_buffers(threads, n, rot, tally);
   const long reduce_from = (have_bonds || threads == 1) ? 0 : split[1];
-  PackedSphere* packed = s.kern.vectorised ? sphere.data() : nullptr;
+  PackedSphere* packed = jb.sphere ? sphere.data() : nullptr;  // job() sized it for the four-wide loops
 #pragma omp parallel num_threads(threads) if (threads > 1)
   {
     const int tid = omp_get_thread_num();

@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #if TOMODEM_HAVE_MPI
-
 #include "tomodem/dem/decomposition.hpp"
 #endif
 
@@ -67,15 +66,7 @@ LargestTwo whole_sample(const SimState& s, const LargestTwo& local) {
   (void)s;
   return local;
 }
-bool is_decomposed(const SimState& s) {
-#if TOMODEM_HAVE_MPI
-  return s.domain != nullptr;
-#else
-  (void)s;
-  return false;
-#endif
-}
-/// The ghost flags when decomposed (a ghost's motion is counted by its owner), else null.
+/// The ghost flags when decomposed (a ghost's motion is counted by its owner), else null: serial.
 const uint8_t* ghost_flags(const SimState& s) {
 #if TOMODEM_HAVE_MPI
   if (s.domain) return s.domain->ghost.data();
@@ -333,7 +324,7 @@ void NeighbourList::build(SimState& s) {
 void NeighbourList::canonical_rows(const SimState& s, std::vector<int32_t>& st, std::vector<int32_t>& jj,
                                    std::vector<uint8_t>& im) const {
   const std::size_t n = s.p.size();
-  const uint8_t* ghost = s.domain ? s.domain->ghost.data() : nullptr;
+  const uint8_t* ghost = ghost_flags(s);
   std::vector<std::pair<int32_t, uint8_t>> row;
   std::size_t out = 0;
   int32_t begin = st[0];
@@ -447,15 +438,15 @@ void NeighbourList::reindex(const SimState& s) {
 /// a rebuild every ~skin/(r_list ε) of strain whatever the cell's size (docs/pack.md).
 /// Walls: a particle's raw motion max|x − x⁰| against the wall's.
 bool NeighbourList::rebuild_due(const SimState& s) const {
+  const uint8_t* ghost = ghost_flags(s);
   // Decomposed, every rank must reach the collective whole_sample below.
-  if (need_build && !is_decomposed(s)) return true;
+  if (need_build && !ghost) return true;
   const Particles& p = s.p;
   const long n = long(p.size());
   if (same_matrix(s.cell.h, h_build)) {
     // Cell as at the build (F = I, u = x − x⁰): the test is u₁ + u₂ > skin, without the affine
     // term and the radii that F ≠ I needs.
     LargestTwo d2;
-    const uint8_t* ghost = ghost_flags(s);
 #pragma omp parallel for num_threads(s.threads) if (s.threads > 1) schedule(static) reduction(largest_two : d2)
     for (long i = 0; i < n; ++i)
       if (!ghost || !ghost[i]) d2.add(norm2(p.x[i] - x_build[i]));
@@ -469,7 +460,6 @@ bool NeighbourList::rebuild_due(const SimState& s) const {
   const Vec3 o = s.cell.origin;
   LargestTwo u2;
   double dmax2 = 0, rmax = 0;
-  const uint8_t* ghost = ghost_flags(s);
 #pragma omp parallel for num_threads(s.threads) if (s.threads > 1) schedule(static) reduction(largest_two : u2) reduction(max : dmax2, rmax)
   for (long i = 0; i < n; ++i) {
     const Vec3 dx = p.x[i] - x_build[i];
