@@ -46,6 +46,7 @@ void measurement_keys(Summary& j, const dem::Measurements& m, bool energy) {
   j["unbalanced_force_ratio"] = m.unbalanced_force_ratio;
   j["inertial_number"] = m.inertial_number;
   j["neighbor_rebuilds"] = m.neighbor_rebuilds;
+  j["pair_tests"] = m.pair_tests;
   j["wall_forces"] = json::array();
   for (const auto& f : m.wall_forces) j["wall_forces"].push_back({f.x, f.y, f.z});
   for (const auto& [k, u] : std::vector<std::pair<const char*, const char*>>{

@@ -78,6 +78,8 @@ void ForceLoop::compute(SimState& s, NeighbourList& nl, bool tally, Vec3* pair_f
   prepare_buffers(threads, n, rot, tally);
   const long reduce_from = (have_bonds || threads == 1) ? 0 : split[1];
   PackedSphere* packed = jb.sphere ? sphere.data() : nullptr;  // job() sized it for the four-wide loops
+  const bool banded = s.set.pair_bands && bands.prepare(s, nl, packed != nullptr, tally);
+  pair_tests += banded ? bands.tested() : long(nl.nj.size());
 #pragma omp parallel num_threads(threads) if (threads > 1)
   {
     const int tid = omp_get_thread_num();
@@ -103,7 +105,12 @@ void ForceLoop::compute(SimState& s, NeighbourList& nl, bool tally, Vec3* pair_f
       }
     } else
 #endif
-    s.kern.pair[tally](jb, split[tid], split[tid + 1], f, tq, &tallies[tid], st);
+    if (banded) {
+      s.kern.pair[0](bands.job(jb, tid), split[tid], split[tid + 1], f, tq, &tallies[tid], st);
+      bands.forget_apart(nl, tid, s.stride);
+    } else {
+      s.kern.pair[tally](jb, split[tid], split[tid + 1], f, tq, &tallies[tid], st);
+    }
     if (have_bonds) {
 #if TOMODEM_HAVE_MPI
       if (s.domain) {

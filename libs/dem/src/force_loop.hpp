@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "neighbour_list.hpp"
+#include "pair_bands.hpp"
 #include "sim_state.hpp"
 
 namespace tomodem::dem {
@@ -12,6 +13,7 @@ class ForceLoop {
  public:
   Tally last;                     // tally of the last tally pass
   std::vector<double> stiffness;  // per-particle Σ S_c of the last tally pass
+  long pair_tests = 0;            // distance tests of listed pairs, all passes
 
   /// Forces and torques at the current state over a current list. With `tally`, also the
   /// virial, energies and per-particle stiffness (into `last`, `stiffness`).
@@ -24,6 +26,7 @@ class ForceLoop {
   std::vector<std::vector<Vec3>> fbuf, tbuf;
   std::vector<std::vector<double>> sbuf;
   std::vector<std::vector<BondEvent>> event_buf;
+  PairBands bands;
 
   ForceJob job(const SimState& s, NeighbourList& nl);
   void prepare_buffers(int threads, std::size_t n, bool rot, bool tally);

@@ -41,6 +41,15 @@ struct ForceJob {
   /// Four-wide loops only: x and r of every particle packed, and the 27 image shifts (r = 0).
   const PackedSphere* sphere = nullptr;
   const PackedSphere* shift4 = nullptr;
+  /// Four-wide loops, passes without tallies: the list entries to test, in this order, instead
+  /// of all of [start[i_begin], start[i_end]) (pair_bands.hpp); null: all of them. owner, j and
+  /// img are then indexed by position in this order, hist by list entry.
+  const int32_t* tested = nullptr;
+  int n_tested = 0;
+  /// With `tested`: the loop leaves the springs of pairs apart alone and records the positions
+  /// of the pairs in contact here, their count in *n_contacts (PairBands::forget_apart).
+  int32_t* contacts = nullptr;
+  int* n_contacts = nullptr;
 };
 
 /// One wall's view for the wall pass.

@@ -35,24 +35,6 @@ double smallest_singular_value(const Mat3& f) {
   return std::sqrt(std::max(0.0, 1 + lmin)) - 1e-12;
 }
 
-/// The two largest of a set of squared displacements: a pair's relative displacement is at most
-/// |u_i| + |u_j| ≤ largest + second largest, tighter than twice the largest when one particle
-/// runs ahead of the rest (a rattler, a particle at the step cap among slower ones).
-struct LargestTwo {
-  double first = 0, second = 0;
-  void add(double v) {  // branch-free: the rebuild test runs it for every particle every step
-    second = std::max(second, std::min(v, first));
-    first = std::max(first, v);
-  }
-  void merge(const LargestTwo& o) {
-    add(o.first);
-    add(o.second);
-  }
-  /// |u_i| + |u_j| bound from squared values.
-  double pair_bound() const { return std::sqrt(first) + std::sqrt(second); }
-};
-#pragma omp declare reduction(largest_two : LargestTwo : omp_out.merge(omp_in))
-
 /// The two largest over the owned particles of every rank (the serial run's pair): every rank
 /// then takes the serial run's rebuild decision. Serial: as given. Collective when decomposed.
 LargestTwo whole_sample(const SimState& s, const LargestTwo& local) {
@@ -315,6 +297,9 @@ void NeighbourList::build(SimState& s) {
   h_build = s.cell.h;
   need_build = false;
   ++builds;
+  ++generation;
+  skin_used = 0;
+  moved_known_ = false;
 }
 
 #if TOMODEM_HAVE_MPI
@@ -422,6 +407,7 @@ void NeighbourList::partition_threads(const SimState& s) {
 void NeighbourList::reindex(const SimState& s) {
   partition_threads(s);
   fill_owner();
+  ++generation;
 }
 
 /// Rebuild test against the affine map of the cell. With F = H H₀⁻¹ (H₀ the cell at the
@@ -434,11 +420,14 @@ void NeighbourList::reindex(const SimState& s) {
 /// (|d| < 2 r_max + reach = r_list − skin) only if
 ///   r_list (1 − s_min) + u₁ + u₂ > skin,
 /// which is when the list is rebuilt (1 − s_min clamped at 0: an expansion is not counted as a
-/// gain). A homogeneous compression costs r_list ε instead of the old test's √3 |ΔH| ≈ √3 ε L:
+/// gain). The left side is skin_used: by the same argument a listed pair whose gap
+/// |d⁰| − r_i − r_j − reach was at least skin_used at the build cannot touch now. A homogeneous compression costs r_list ε instead of the old test's √3 |ΔH| ≈ √3 ε L:
 /// a rebuild every ~skin/(r_list ε) of strain whatever the cell's size (docs/pack.md).
 /// Walls: a particle's raw motion max|x − x⁰| against the wall's.
-bool NeighbourList::rebuild_due(const SimState& s) const {
+bool NeighbourList::rebuild_due(const SimState& s) {
   const uint8_t* ghost = ghost_flags(s);
+  const bool moved_known = moved_known_;
+  moved_known_ = false;  // for this call only
   // Decomposed, every rank must reach the collective whole_sample below.
   if (need_build && !ghost) return true;
   const Particles& p = s.p;
@@ -447,11 +436,16 @@ bool NeighbourList::rebuild_due(const SimState& s) const {
     // Cell as at the build (F = I, u = x − x⁰): the test is u₁ + u₂ > skin, without the affine
     // term and the radii that F ≠ I needs.
     LargestTwo d2;
+    if (moved_known && !ghost) {
+      d2 = moved_;
+    } else {
 #pragma omp parallel for num_threads(s.threads) if (s.threads > 1) schedule(static) reduction(largest_two : d2)
-    for (long i = 0; i < n; ++i)
-      if (!ghost || !ghost[i]) d2.add(norm2(p.x[i] - x_build[i]));
+      for (long i = 0; i < n; ++i)
+        if (!ghost || !ghost[i]) d2.add(norm2(p.x[i] - x_build[i]));
+    }
     const double dmax = std::sqrt(d2.first);  // this rank's: the walls' test, as before
-    if (whole_sample(s, d2).pair_bound() > skin || need_build) return true;
+    skin_used = whole_sample(s, d2).pair_bound();
+    if (skin_used > skin || need_build) return true;
     for (std::size_t w = 0; w < s.walls.size(); ++w)
       if (dmax + norm(s.walls[w].point - wall_point_build[w]) > skin) return true;
     return false;
@@ -468,8 +462,8 @@ bool NeighbourList::rebuild_due(const SimState& s) const {
     rmax = std::max(rmax, p.r[i]);
   }
   const double r_list = 2 * rmax + reach_max + skin;
-  if (r_list * std::max(0.0, 1 - smallest_singular_value(f)) + whole_sample(s, u2).pair_bound() > skin || need_build)
-    return true;
+  skin_used = r_list * std::max(0.0, 1 - smallest_singular_value(f)) + whole_sample(s, u2).pair_bound();
+  if (skin_used > skin || need_build) return true;
   const double dmax = std::sqrt(dmax2);
   for (std::size_t w = 0; w < s.walls.size(); ++w)
     if (dmax + norm(s.walls[w].point - wall_point_build[w]) > skin) return true;

@@ -1,13 +1,34 @@
 #pragma once
 // The half neighbour list (CSR) with its per-pair history, the wall candidates, and when to
 // rebuild them (Verlet skin). The search itself is spatial::Grid.
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "sim_state.hpp"
 #include "tomodem/spatial/grid.hpp"
 
 namespace tomodem::dem {
+
+/// The two largest of a set of squared displacements: a pair's relative displacement is at most
+/// |u_i| + |u_j| ≤ largest + second largest, tighter than twice the largest when one particle
+/// runs ahead of the rest (a rattler, a particle at the step cap among slower ones).
+struct LargestTwo {
+  double first = 0, second = 0;
+  void add(double v) {  // branch-free: the rebuild test runs it for every particle every step
+    second = std::max(second, std::min(v, first));
+    first = std::max(first, v);
+  }
+  void merge(const LargestTwo& o) {
+    add(o.first);
+    add(o.second);
+  }
+  /// |u_i| + |u_j| bound from squared values.
+  double pair_bound() const { return std::sqrt(first) + std::sqrt(second); }
+};
+#pragma omp declare reduction(largest_two : LargestTwo : omp_out.merge(omp_in))
 
 /// One wall's candidates (particles within reach) with their per-particle history.
 struct WallData {
@@ -28,6 +49,13 @@ class NeighbourList {
   std::vector<WallData> wall_data;
   bool need_build = true;
   long builds = 0;
+  /// Counts every change of the list's pairs or thread split (build, reindex): what is derived
+  /// from the list (the four-wide loops' bands, ForceLoop) is rebuilt when it differs.
+  long generation = 0;
+  /// How far the list's pairs may have closed since the build (the rebuild test's bound, m): a
+  /// listed pair whose gap at the build was wider cannot touch now. Set by rebuild_due, 0 after
+  /// a build, +inf when not known.
+  double skin_used = std::numeric_limits<double>::infinity();
   double skin = 0, reach_max = 0;
   Vec3 shift[27], vshift[27];
   std::vector<int> split;               // particles of each thread, by pair count
@@ -35,8 +63,12 @@ class NeighbourList {
 
   /// Skin (Settings::skin or 0.1 × mean diameter) and the largest adhesive reach.
   void init(const SimState& s);
-  /// Whether a particle, the cell or a wall moved far enough to miss a pair.
-  bool rebuild_due(const SimState& s) const;
+  /// Whether a particle, the cell or a wall moved far enough to miss a pair; records skin_used.
+  bool rebuild_due(const SimState& s);
+  /// The displacements since the build, measured by the integrator as it moved the particles
+  /// (serial run, fixed cell): the next rebuild_due uses them instead of reading the positions
+  /// again. Valid for that one call only.
+  void moved(const LargestTwo& d2) { moved_ = d2, moved_known_ = true; }
   /// Wraps the positions into the cell (bond images follow) and rebuilds the list, keeping the
   /// history of the pairs that stay.
   void build(SimState& s);
@@ -65,6 +97,8 @@ class NeighbourList {
   /// during build() only.
   std::vector<spatial::Image> wrapped;
   std::size_t pair_capacity_hint = 0;  ///< pairs in the last list (+N), to reserve the next one
+  LargestTwo moved_;
+  bool moved_known_ = false;
 
   struct KeptHistory;
   int image_after_wrap(std::size_t i, int j, int code) const;

@@ -176,18 +176,27 @@ struct Simulation::Impl : SimState {
     const Vec3* const torque = p.torque.data();
     const double* const inv_I = p.inv_I.data();
     const bool rot = p.has_rotation();
-#pragma omp parallel for num_threads(threads) if (threads > 1) schedule(static)
+    // The rebuild test's displacements since the build, while the positions are at hand (serial
+    // runs: decomposed, the ghosts are refreshed before the test).
+    const Vec3* x_build = nl.x_build.size() == p.size() ? nl.x_build.data() : nullptr;
+#if TOMODEM_HAVE_MPI
+    if (domain) x_build = nullptr;
+#endif
+    LargestTwo d2;
+#pragma omp parallel for num_threads(threads) if (threads > 1) schedule(static) reduction(largest_two : d2)
     for (long i = 0; i < n; ++i) {
       const Vec3 dv = (h * inv_m[i]) * f[i];
       v[i] += dv;
       v[i] += dv;
       x[i] += step * v[i];
+      if (x_build) d2.add(norm2(x[i] - x_build[i]));
       if (rot) {
         const Vec3 dw = (h * inv_I[i]) * torque[i];
         omega[i] += dw;
         omega[i] += dw;
       }
     }
+    if (x_build) nl.moved(d2);
     for (auto& w : walls) w.point += step * w.velocity;  // as drift() moves them
   }
 
@@ -223,6 +232,7 @@ struct Simulation::Impl : SimState {
     Measurements m = measurements_from(*this, forces.last, energy);
 #endif
     m.neighbor_rebuilds = nl.builds;
+    m.pair_tests = forces.pair_tests;
     // Restore.
     if (!scratch_list) nl.restore_history(history, *this);
     nl.wall_data = wd;
