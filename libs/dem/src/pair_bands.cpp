@@ -7,6 +7,9 @@
 #include <cstring>
 
 #include "tomodem/spatial/image.hpp"
+#if TOMODEM_HAVE_MPI
+#include "tomodem/dem/decomposition.hpp"
+#endif
 
 namespace tomodem::dem {
 
@@ -32,8 +35,14 @@ void PairBands::make(const SimState& s, const NeighbourList& nl) {
   const std::size_t pairs = nl.nj.size();
   width_ = nl.skin / kBands;
   std::vector<uint8_t> band(pairs);
-  long in_band0 = 0;
-#pragma omp parallel for num_threads(threads) if (threads > 1) schedule(static) reduction(+ : in_band0)
+  // Pairs and those in band 0, over the rows of owned particles (each pair is in one rank's
+  // owned row) and summed over the ranks: every rank takes the serial run's decision below.
+  const uint8_t* ghost = nullptr;
+#if TOMODEM_HAVE_MPI
+  if (s.domain) ghost = s.domain->ghost.data();
+#endif
+  double owned = 0, in_band0 = 0;
+#pragma omp parallel for num_threads(threads) if (threads > 1) schedule(static) reduction(+ : owned, in_band0)
   for (long k = 0; k < long(pairs); ++k) {
     int b = 0;
     if (!has_history(nl, s.stride, std::size_t(k))) {
@@ -43,11 +52,18 @@ void PairBands::make(const SimState& s, const NeighbourList& nl) {
       b = gap < width_ ? 0 : int(std::min(double(kBands - 1), gap / width_));
     }
     band[std::size_t(k)] = uint8_t(b);
-    in_band0 += b == 0;
+    if (!ghost || !ghost[nl.owner[std::size_t(k)]]) owned += 1, in_band0 += b == 0;
   }
+#if TOMODEM_HAVE_MPI
+  if (s.domain) {
+    double counts[2] = {owned, in_band0};
+    s.domain->sum(counts, 2);
+    owned = counts[0], in_band0 = counts[1];
+  }
+#endif
   // Where most pairs are in band 0 (dense packings: nearly all in contact) the bands would save
   // little and cost the copies and the watch lists (the dense scene 9 % slower): not used.
-  on_ = 2 * in_band0 <= long(pairs);
+  on_ = 2 * in_band0 <= owned;
   if (!on_) {
     for (auto* v : {&pair_, &owner_, &j_}) std::vector<int32_t>().swap(*v);
     std::vector<uint8_t>().swap(img_);
