@@ -18,6 +18,8 @@ class ForceLoop {
   /// Forces and torques at the current state over a current list. With `tally`, also the
   /// virial, energies and per-particle stiffness (into `last`, `stiffness`).
   void compute(SimState& s, NeighbourList& nl, bool tally, Vec3* pair_force = nullptr);
+  /// The neighbour list is about to be rebuilt: what was derived from it is freed.
+  void list_changes() { bands.release(); }
 
  private:
   std::vector<Vec3> u;  // absolute velocities when the cell deforms

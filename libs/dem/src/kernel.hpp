@@ -46,10 +46,10 @@ struct ForceJob {
   /// img are then indexed by position in this order, hist by list entry.
   const int32_t* tested = nullptr;
   int n_tested = 0;
-  /// With `tested`: the loop leaves the springs of pairs apart alone and records the positions
-  /// of the pairs in contact here, their count in *n_contacts (PairBands::forget_apart).
-  int32_t* contacts = nullptr;
-  int* n_contacts = nullptr;
+  /// With `tested`: the loop leaves the springs of pairs apart alone and appends the positions
+  /// of the pairs in contact here, in increasing order (PairBands::forget_apart); null for laws
+  /// without history.
+  std::vector<int32_t>* contacts = nullptr;
 };
 
 /// One wall's view for the wall pass.

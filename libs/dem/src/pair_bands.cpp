@@ -64,14 +64,7 @@ void PairBands::make(const SimState& s, const NeighbourList& nl) {
   // Where most pairs are in band 0 (dense packings: nearly all in contact) the bands would save
   // little and cost the copies and the watch lists (the dense scene 9 % slower): not used.
   on_ = 2 * in_band0 <= owned;
-  if (!on_) {
-    for (auto* v : {&pair_, &owner_, &j_}) std::vector<int32_t>().swap(*v);
-    std::vector<uint8_t>().swap(img_);
-    std::vector<uint8_t>().swap(watched_);
-    watch_.clear();
-    contacts_.clear();
-    return;
-  }
+  if (!on_) return free_arrays();
   pair_.resize(pairs);
   owner_.resize(pairs);
   j_.resize(pairs);
@@ -93,15 +86,27 @@ void PairBands::make(const SimState& s, const NeighbourList& nl) {
   }
 }
 
+void PairBands::free_arrays() {
+  for (auto* v : {&pair_, &owner_, &j_}) std::vector<int32_t>().swap(*v);
+  std::vector<uint8_t>().swap(img_);
+  watch_.clear();
+  contacts_.clear();
+}
+
+void PairBands::release() {
+  free_arrays();
+  on_ = false;
+  generation_ = -1;
+}
+
 void PairBands::watch_set_history(const SimState& s, const NeighbourList& nl) {
   const int threads = int(begin_.size() / (kBands + 1));
-  watched_.assign(pair_.size(), 0);
   watch_.resize(std::size_t(threads));
   for (int t = 0; t < threads; ++t) {
     std::vector<int32_t>& w = watch_[std::size_t(t)];
     w.clear();
     for (int32_t p = first(t)[0]; p < first(t)[due_]; ++p)
-      if (has_history(nl, s.stride, std::size_t(pair_[std::size_t(p)]))) w.push_back(p), watched_[std::size_t(p)] = 1;
+      if (has_history(nl, s.stride, std::size_t(pair_[std::size_t(p)]))) w.push_back(p);
   }
   history_unknown_ = false;
 }
@@ -119,11 +124,8 @@ bool PairBands::prepare(const SimState& s, const NeighbourList& nl, bool vectori
     return false;
   }
   if (history_unknown_) watch_set_history(s, nl);
-  const int threads = int(begin_.size() / (kBands + 1));
-  contacts_.resize(std::size_t(threads));
-  n_contacts_.assign(std::size_t(threads), 0);
-  if (s.stride > 0)  // laws with history record their contacts
-    for (int t = 0; t < threads; ++t) contacts_[std::size_t(t)].resize(std::size_t(first(t)[due_] - first(t)[0]));
+  contacts_.resize(begin_.size() / (kBands + 1));
+  for (auto& c : contacts_) c.clear();
   return true;
 }
 
@@ -141,30 +143,24 @@ ForceJob PairBands::job(const ForceJob& all, int t) {
   mine.owner = owner_.data() + p0;
   mine.j = j_.data() + p0;
   mine.img = img_.data() + p0;
-  mine.contacts = contacts_[std::size_t(t)].empty() ? nullptr : contacts_[std::size_t(t)].data();
-  mine.n_contacts = &n_contacts_[std::size_t(t)];
+  mine.contacts = all.hist_stride > 0 ? &contacts_[std::size_t(t)] : nullptr;  // laws with history
   return mine;
 }
 
 void PairBands::forget_apart(NeighbourList& nl, int t, int stride) {
   if (stride == 0) return;
   const int32_t p0 = first(t)[0];
-  const std::vector<int32_t>& in_contact = contacts_[std::size_t(t)];
-  const int n = n_contacts_[std::size_t(t)];
   std::vector<int32_t>& w = watch_[std::size_t(t)];
-  for (int c = 0; c < n; ++c) watched_[std::size_t(p0 + in_contact[std::size_t(c)])] |= 2;
-  for (const int32_t p : w)
-    if (watched_[std::size_t(p)] == 1) {  // watched and apart in this pass
-      const auto k = std::size_t(pair_[std::size_t(p)]);
-      std::fill_n(&nl.hist[k * std::size_t(stride)], stride, 0.0);
-      watched_[std::size_t(p)] = 0;
-    }
-  w.clear();
-  for (int c = 0; c < n; ++c) {
-    const int32_t p = p0 + in_contact[std::size_t(c)];
-    watched_[std::size_t(p)] = 1;
-    w.push_back(p);
+  std::vector<int32_t>& in_contact = contacts_[std::size_t(t)];
+  // Both lists ascend: one merge finds the watched positions not in contact now.
+  std::size_t c = 0;
+  for (const int32_t p : w) {
+    while (c < in_contact.size() && p0 + in_contact[c] < p) ++c;
+    if (c < in_contact.size() && p0 + in_contact[c] == p) continue;
+    std::fill_n(&nl.hist[std::size_t(pair_[std::size_t(p)]) * std::size_t(stride)], stride, 0.0);
   }
+  w.clear();
+  for (const int32_t q : in_contact) w.push_back(p0 + q);
 }
 
 }  // namespace tomodem::dem

@@ -38,6 +38,8 @@ class PairBands {
   /// After thread `t`'s banded pass: the springs of the watched pairs not in contact are
   /// forgotten, and the pairs in contact are watched.
   void forget_apart(NeighbourList& nl, int t, int stride);
+  /// Frees the bands (the list is about to be rebuilt; the next pass makes them anew).
+  void release();
 
  private:
   long generation_ = -1;         // NeighbourList::generation these bands were made for
@@ -48,13 +50,13 @@ class PairBands {
   std::vector<int32_t> begin_;   // [t (kBands + 1) + b]: band b of thread t in pair_
   double width_ = 0;             // skin / kBands, m
   int due_ = 1;                  // bands tested
-  std::vector<uint8_t> watched_;               // per position: 1 if in its thread's watch list
-  std::vector<std::vector<int32_t>> watch_;    // per thread: positions whose history may be set
-  std::vector<std::vector<int32_t>> contacts_; // per thread: positions in contact, this pass
-  std::vector<int> n_contacts_;
+  // Per thread, in increasing position order: the positions whose history may be set, and
+  // those in contact in this pass (the loop records them in the order it tests).
+  std::vector<std::vector<int32_t>> watch_, contacts_;
   bool history_unknown_ = true;  // a pass that was not banded ran since the watch lists were made
 
   void make(const SimState& s, const NeighbourList& nl);
+  void free_arrays();
   void watch_set_history(const SimState& s, const NeighbourList& nl);
   const int32_t* first(int t) const { return &begin_[std::size_t(t) * (kBands + 1)]; }
 };

@@ -52,13 +52,20 @@ struct Simulation::Impl : SimState {
       domain->forward(*this);
       if (domain->any(nl.rebuild_due(*this))) {
         domain->before_build(*this, nl);
-        nl.build(*this);
+        build_list();
         domain->after_build(*this, nl);
       }
       return;
     }
 #endif
-    if (nl.rebuild_due(*this)) nl.build(*this);
+    if (nl.rebuild_due(*this)) build_list();
+  }
+
+  /// A new neighbour list; what the force pass derived from the old one is freed first (peak
+  /// memory: one list and its derived arrays, not two).
+  void build_list() {
+    forces.list_changes();
+    nl.build(*this);
   }
 
   /// Forces at the current state, the list rebuilt first when due.
@@ -323,7 +330,7 @@ void Simulation::attach_domain(std::unique_ptr<DomainHooks> d) {
   // The build that installs the decomposition is not one the trajectory asked for: the count
   // of rebuilds stays the serial run's (a list that was valid would not have been rebuilt).
   const long builds = s.nl.builds + (valid_list ? 0 : 1);
-  s.nl.build(s);
+  s.build_list();
   s.nl.builds = builds;
   s.domain->after_build(s, s.nl);
 }
