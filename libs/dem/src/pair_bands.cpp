@@ -116,9 +116,11 @@ bool PairBands::prepare(const SimState& s, const NeighbourList& nl, bool vectori
   // Every pass raises the bands due, tally passes too: what they tested must stay tested.
   if (generation_ != nl.generation) make(s, nl);
   if (!on_ || pair_.size() != nl.nj.size()) return false;
-  // Band b holds gaps of at least b · width; the margin of 1e-9 of that covers the rounding of
-  // both the gaps and skin_used. Not known (+inf, NaN): every band.
-  while (due_ < kBands && !(nl.skin_used < due_ * width_ * (1 - 1e-9))) ++due_;
+  // Band b holds gaps of at least b · width. A band opens 1e-6 of the skin early: that covers
+  // the rounding of the gaps, of skin_used and of the loop's own distance test (a few ulps of
+  // the coordinates, below 1e-6 of the skin unless the cell is a million skins wide). Not known
+  // (+inf, NaN): every band.
+  while (due_ < kBands && !(nl.skin_used < due_ * width_ - 1e-6 * nl.skin)) ++due_;
   if (tally) {
     history_unknown_ = true;
     return false;
