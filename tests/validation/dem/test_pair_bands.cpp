@@ -16,7 +16,7 @@ namespace {
 // 10 % of a diameter apart (φ ≈ 0.55), random velocities of ~1 m/s and spins, Hertz–Mindlin with
 // friction, skin 0.2 d: collisions start and end all the time, springs are set and forgotten,
 // and the list is rebuilt every ~150 steps.
-Simulation gas(bool bands) {
+Simulation gas(bool bands, int threads = 1) {
   const double d = 1e-3, rho = 2500, a = 1.1 * d * std::sqrt(2.0);  // cube edge: neighbours 1.1 d apart
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> u(-1, 1);
@@ -36,6 +36,7 @@ Simulation gas(bool bands) {
   Settings s;
   s.skin = 0.2 * d;
   s.pair_bands = bands;
+  s.threads = threads;
   Simulation sim(std::move(p), Cell::box({0, 0, 0}, {n * a, n * a, n * a}, true), m, s);
   sim.set_time_step(1.35e-6);
   return sim;
@@ -79,6 +80,9 @@ void expect_same_run(Simulation banded, Simulation every, long min_saved_percent
 // Scene A-gas saves 33 % of the tests (the gaps of its listed pairs spread evenly over the skin);
 // this smaller gas starts on a lattice and saves less, but well over 15 %.
 TEST(PairBands, BandedRunEqualsTestingEveryPair) { expect_same_run(gas(true), gas(false), 15); }
+
+// Two threads: each thread's pairs are banded and watched apart.
+TEST(PairBands, BandedRunEqualsTestingEveryPairOnTwoThreads) { expect_same_run(gas(true, 2), gas(false, 2), 15); }
 
 // A dense packing (every listed pair in contact) is not banded: as many tests as without bands.
 TEST(PairBands, DensePackingTestsEveryPair) {
