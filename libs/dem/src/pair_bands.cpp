@@ -7,9 +7,6 @@
 #include <cstring>
 
 #include "tomodem/spatial/image.hpp"
-#if TOMODEM_HAVE_MPI
-#include "tomodem/dem/decomposition.hpp"
-#endif
 
 namespace tomodem::dem {
 
@@ -35,14 +32,8 @@ void PairBands::make(const SimState& s, const NeighbourList& nl) {
   const std::size_t pairs = nl.nj.size();
   width_ = nl.skin / kBands;
   std::vector<uint8_t> band(pairs);
-  // Pairs and those in band 0, over the rows of owned particles (each pair is in one rank's
-  // owned row) and summed over the ranks: every rank takes the serial run's decision below.
-  const uint8_t* ghost = nullptr;
-#if TOMODEM_HAVE_MPI
-  if (s.domain) ghost = s.domain->ghost.data();
-#endif
-  double owned = 0, in_band0 = 0;
-#pragma omp parallel for num_threads(threads) if (threads > 1) schedule(static) reduction(+ : owned, in_band0)
+  long in_band0 = 0;
+#pragma omp parallel for num_threads(threads) if (threads > 1) schedule(static) reduction(+ : in_band0)
   for (long k = 0; k < long(pairs); ++k) {
     int b = 0;
     if (!has_history(nl, s.stride, std::size_t(k))) {
@@ -52,18 +43,11 @@ void PairBands::make(const SimState& s, const NeighbourList& nl) {
       b = gap < width_ ? 0 : int(std::min(double(kBands - 1), gap / width_));
     }
     band[std::size_t(k)] = uint8_t(b);
-    if (!ghost || !ghost[nl.owner[std::size_t(k)]]) owned += 1, in_band0 += b == 0;
+    in_band0 += b == 0;
   }
-#if TOMODEM_HAVE_MPI
-  if (s.domain) {
-    double counts[2] = {owned, in_band0};
-    s.domain->sum(counts, 2);
-    owned = counts[0], in_band0 = counts[1];
-  }
-#endif
   // Where most pairs are in band 0 (dense packings: nearly all in contact) the bands would save
   // little and cost the copies and the watch lists (the dense scene 9 % slower): not used.
-  on_ = 2 * in_band0 <= owned;
+  on_ = 2 * in_band0 <= long(pairs);
   if (!on_) return free_arrays();
   pair_.resize(pairs);
   owner_.resize(pairs);
@@ -113,6 +97,12 @@ void PairBands::watch_set_history(const SimState& s, const NeighbourList& nl) {
 
 bool PairBands::prepare(const SimState& s, const NeighbourList& nl, bool vectorised, bool tally) {
   if (!vectorised) return false;
+#if TOMODEM_HAVE_MPI
+  // Not in decomposed runs: there every rank would have to make the bands at the same pass (the
+  // decision is collective), and the checkpoint-restart test on two ranks found a pass where the
+  // ranks disagreed (MPI_ERR_TRUNCATE). Decomposed runs test every pair, as before.
+  if (s.domain) return false;
+#endif
   // Every pass raises the bands due, tally passes too: what they tested must stay tested.
   if (generation_ != nl.generation) make(s, nl);
   if (!on_ || pair_.size() != nl.nj.size()) return false;

@@ -14,7 +14,7 @@ namespace tomodem::dem {
 /// and images so that the loop reads them in its own order. A pass without tallies tests only
 /// the bands whose lowest gap NeighbourList::skin_used has reached: in the gas scene a third of
 /// the listed pairs are not tested between two builds. Used only where at most half of the
-/// pairs are in band 0 (not in dense packings).
+/// pairs are in band 0 (not in dense packings), and not in decomposed runs.
 ///
 /// Two rules keep such a pass equal to testing every pair:
 /// - the bands due never shrink before the next build, so a pair not tested has not touched

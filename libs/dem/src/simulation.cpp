@@ -396,6 +396,7 @@ struct SwappedList {
   void swap() {
     nl.start.swap(start), nl.nj.swap(nj), nl.owner.swap(owner), nl.img.swap(img), nl.touch.swap(touch);
     nl.hist.swap(hist), nl.split.swap(split), nl.bond_split.swap(bond_split);
+    ++nl.generation;  // what was derived from the list (ForceLoop's pair bands) is made anew
     swapped = !swapped;
   }
   ~SwappedList() {
