@@ -456,6 +456,7 @@ ContactTable Simulation::contacts() {
   // next one): freed, so that the table below and the caller's copies do not stack on them.
   ForceLoop released;
   released.last = s.forces.last;
+  released.pair_tests = s.forces.pair_tests;
   released.stiffness.swap(s.forces.stiffness);
   s.forces = std::move(released);
   ContactTable ct;
