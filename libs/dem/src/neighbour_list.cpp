@@ -190,13 +190,16 @@ NeighbourList::KeptHistory NeighbourList::keep_history(const SimState& s) const 
   return kept;
 }
 
+bool NeighbourList::carries_history(std::size_t k, int stride) const {
+  if (!touch.empty() && touch[k]) return true;
+  for (std::size_t q = k * std::size_t(stride); q < (k + 1) * std::size_t(stride); ++q)
+    if (hist[q] != 0 || std::signbit(hist[q])) return true;
+  return false;
+}
+
 NeighbourList::SavedHistory NeighbourList::save_history(const SimState& s) const {
   const std::size_t stride = std::size_t(s.stride), pairs = nj.size();
-  auto carries = [&](std::size_t q) {
-    bool set = !touch.empty() && touch[q];
-    for (std::size_t k = 0; k < stride; ++k) set = set || hist[q * stride + k] != 0 || std::signbit(hist[q * stride + k]);
-    return set;
-  };
+  auto carries = [&](std::size_t q) { return carries_history(q, s.stride); };
   std::size_t count = 0;
   for (std::size_t q = 0; q < pairs; ++q) count += carries(q);
   SavedHistory saved;
@@ -421,8 +424,9 @@ void NeighbourList::reindex(const SimState& s) {
 ///   r_list (1 − s_min) + u₁ + u₂ > skin,
 /// which is when the list is rebuilt (1 − s_min clamped at 0: an expansion is not counted as a
 /// gain). The left side is skin_used: by the same argument a listed pair whose gap
-/// |d⁰| − r_i − r_j − reach was at least skin_used at the build cannot touch now. A homogeneous compression costs r_list ε instead of the old test's √3 |ΔH| ≈ √3 ε L:
-/// a rebuild every ~skin/(r_list ε) of strain whatever the cell's size (docs/pack.md).
+/// |d⁰| − r_i − r_j − reach was at least skin_used at the build cannot touch now. A homogeneous
+/// compression costs r_list ε instead of the old test's √3 |ΔH| ≈ √3 ε L: a rebuild every
+/// ~skin/(r_list ε) of strain whatever the cell's size (docs/pack.md).
 /// Walls: a particle's raw motion max|x − x⁰| against the wall's.
 bool NeighbourList::rebuild_due(const SimState& s) {
   const uint8_t* ghost = ghost_flags(s);

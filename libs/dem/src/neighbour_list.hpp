@@ -88,6 +88,8 @@ class NeighbourList {
     std::vector<uint8_t> touch;
   };
   SavedHistory save_history(const SimState& s) const;
+  /// Whether list entry k carries history: its contact flag or a spring bit set (-0.0 counts).
+  bool carries_history(std::size_t k, int stride) const;
   /// Puts back saved history into the same list (not rebuilt since).
   void restore_history(const SavedHistory& saved, const SimState& s);
 

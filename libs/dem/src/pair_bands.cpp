@@ -4,25 +4,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 
 #include "tomodem/spatial/image.hpp"
 
 namespace tomodem::dem {
 
-namespace {
-/// Whether list entry k carries history: a contact flag, or a spring bit (-0.0 counts, as in
-/// the loops' forgetting).
-bool has_history(const NeighbourList& nl, int stride, std::size_t k) {
-  if (!nl.touch.empty() && nl.touch[k]) return true;
-  for (int q = 0; q < stride; ++q) {
-    uint64_t bits;
-    std::memcpy(&bits, &nl.hist[k * std::size_t(stride) + std::size_t(q)], sizeof bits);
-    if (bits) return true;
-  }
-  return false;
-}
-}  // namespace
 
 void PairBands::make(const SimState& s, const NeighbourList& nl) {
   generation_ = nl.generation;
@@ -36,7 +22,7 @@ void PairBands::make(const SimState& s, const NeighbourList& nl) {
 #pragma omp parallel for num_threads(threads) if (threads > 1) schedule(static) reduction(+ : in_band0)
   for (long k = 0; k < long(pairs); ++k) {
     int b = 0;
-    if (!has_history(nl, s.stride, std::size_t(k))) {
+    if (!nl.carries_history(std::size_t(k), s.stride)) {
       const auto i = std::size_t(nl.owner[std::size_t(k)]), j = std::size_t(nl.nj[std::size_t(k)]);
       const Vec3 d = nl.x_build[j] + nl.h_build * spatial::image_vector(nl.img[std::size_t(k)]) - nl.x_build[i];
       const double gap = norm(d) - s.p.r[i] - s.p.r[j] - nl.reach_max;
@@ -90,7 +76,7 @@ void PairBands::watch_set_history(const SimState& s, const NeighbourList& nl) {
     std::vector<int32_t>& w = watch_[std::size_t(t)];
     w.clear();
     for (int32_t p = first(t)[0]; p < first(t)[due_]; ++p)
-      if (has_history(nl, s.stride, std::size_t(pair_[std::size_t(p)]))) w.push_back(p);
+      if (nl.carries_history(std::size_t(pair_[std::size_t(p)]), s.stride)) w.push_back(p);
   }
   history_unknown_ = false;
 }
