@@ -134,3 +134,18 @@ TEST(PairBands, HeadOnPairTouchesOnTheStepTheBoundAllows) {
   EXPECT_EQ(banded.restitution, every.restitution);
   EXPECT_LT(mb.pair_tests, me.pair_tests);
 }
+
+// pair_tests counts the distance tests of the whole run: the contact table, which frees the
+// force pass's buffers (and rebuilds the loop's state), keeps the count and adds its own pass.
+TEST(PairBands, ContactTableKeepsTheCountOfPairTests) {
+  Simulation sim = gas(true);
+  sim.run(200);
+  const long before = sim.measure().pair_tests;
+  ASSERT_GT(before, 0);
+  const ContactTable table = sim.contacts();
+  EXPECT_FALSE(table.i.empty());
+  const long after = sim.measure().pair_tests;
+  EXPECT_GT(after, before);
+  sim.run(100);
+  EXPECT_GT(sim.measure().pair_tests, after);
+}
