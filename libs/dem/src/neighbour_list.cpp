@@ -176,9 +176,7 @@ NeighbourList::KeptHistory NeighbourList::keep_history(const SimState& s) const 
   for (std::size_t i = 0; i < n; ++i) {
     for (int q = start[i]; q < start[i + 1]; ++q) {
       const double* h = &hist[std::size_t(q) * stride];
-      bool carries = touch_flag && touch[q];
-      for (int k = 0; k < stride; ++k) carries = carries || h[k] != 0;
-      const int code = carries ? image_after_wrap(i, nj[q], img[q]) : -1;
+      const int code = carries_history(std::size_t(q), stride) ? image_after_wrap(i, nj[q], img[q]) : -1;
       if (code < 0) continue;
       kept.j.push_back(nj[q]);
       kept.img.push_back(uint8_t(code));
@@ -199,9 +197,8 @@ bool NeighbourList::carries_history(std::size_t k, int stride) const {
 
 NeighbourList::SavedHistory NeighbourList::save_history(const SimState& s) const {
   const std::size_t stride = std::size_t(s.stride), pairs = nj.size();
-  auto carries = [&](std::size_t q) { return carries_history(q, s.stride); };
   std::size_t count = 0;
-  for (std::size_t q = 0; q < pairs; ++q) count += carries(q);
+  for (std::size_t q = 0; q < pairs; ++q) count += carries_history(q, s.stride);
   SavedHistory saved;
   // An index costs 4 B a pair: a dense packing, where nearly every listed pair touches, is cheaper
   // copied whole.
@@ -215,7 +212,7 @@ NeighbourList::SavedHistory NeighbourList::save_history(const SimState& s) const
   saved.hist.reserve(count * stride);
   saved.touch.reserve(touch.empty() ? 0 : count);
   for (std::size_t q = 0; q < pairs; ++q) {
-    if (!carries(q)) continue;
+    if (!carries_history(q, s.stride)) continue;
     saved.pair.push_back(int32_t(q));
     saved.hist.insert(saved.hist.end(), hist.begin() + std::ptrdiff_t(q * stride), hist.begin() + std::ptrdiff_t((q + 1) * stride));
     if (!touch.empty()) saved.touch.push_back(touch[q]);

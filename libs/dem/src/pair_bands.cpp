@@ -9,7 +9,6 @@
 
 namespace tomodem::dem {
 
-
 void PairBands::make(const SimState& s, const NeighbourList& nl) {
   generation_ = nl.generation;
   due_ = 1;
