@@ -20,7 +20,8 @@
 //   h-maxima and the watershed are not local operations in general (a plateau or a flood can run
 //   along a ridge of the distance map farther than any halo): a grain whose id reaches the halo's
 //   inner edge is counted in the summary (chunked.grains_reaching_halo_edge), where blocks may
-//   disagree. The tests compare the grains with the in-memory path's (tests/e2e/segment).
+//   disagree, and so are the solid voxels no marker in their widest block reaches
+//   (chunked.solid_voxels_without_grain, 0 in memory: every solid component holds a marker). The tests compare the grains with the in-memory path's (tests/e2e/segment).
 #include <hdf5.h>
 #include <fcntl.h>
 #include <unistd.h>
@@ -984,7 +985,7 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
     found.erase(std::unique(found.begin(), found.end()), found.end());
     return found;
   };
-  std::size_t widened = 0, widest = ghalo;
+  std::size_t widened = 0, widest = ghalo, solid_without_grain = 0;
   const auto grains_pass = [&] {
     // The widest halo a block may take: what the budget (or twice the plan) allows.
     const double limit = budget > 0 ? budget : 2 * mem.total();
@@ -1013,8 +1014,12 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
           }
         L = watershed_from_markers(m, markers, go);
         const auto far = reaching_edge(outer, core, L);
-        if (far.empty() || whole(outer) || 2 * H > cap) {
+        // Solid of the core that no marker in the block reaches: its grain's marker lies farther.
+        std::size_t unreached = 0;
+        for_core(outer, core, [&](std::size_t i, std::size_t, std::size_t, std::size_t) { unreached += m.v[i] && !L.v[i]; });
+        if ((far.empty() && !unreached) || whole(outer) || 2 * H > cap) {
           for (auto id : far) at_edge[std::size_t(id)] = 1;
+          solid_without_grain += unreached;
           widest = std::max(widest, H);
           break;
         }
@@ -1143,6 +1148,7 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
     summary["chunked"]["grains_blocks_widened"] = widened;
     summary["chunked"]["grains_widest_halo_vox"] = widest;
     summary["chunked"]["grains_reaching_halo_edge"] = std::count(at_edge.begin(), at_edge.end(), char(1));
+    summary["chunked"]["solid_voxels_without_grain"] = solid_without_grain;
     // The block --memory gave before the grains halo was measured (null: it held the halo).
     summary["chunked"]["grains_replanned_from_chunk_vox"] = replanned_from ? json(replanned_from) : json(nullptr);
   }

@@ -1,12 +1,13 @@
-// ITK grey-level morphology: hysteresis by reconstruction, Maurer distance, h-maxima, watershed.
+// ITK grey-level morphology: hysteresis by reconstruction, Maurer distance, h-maxima; the
+// watershed of the grains is flood.cpp's.
 #include <itkHMaximaImageFilter.h>
-#include <itkMorphologicalWatershedFromMarkersImageFilter.h>
 #include <itkReconstructionByDilationImageFilter.h>
 #include <itkRegionalMaximaImageFilter.h>
 #include <itkSignedMaurerDistanceMapImageFilter.h>
 
 #include <algorithm>
 
+#include "flood.hpp"
 #include "itk_image.hpp"
 #include "tomodem/core/progress.hpp"
 #include "tomodem/core/error.hpp"
@@ -72,27 +73,10 @@ Mask peaks_of(FI* d, const Mask& solid, const GrainOptions& opt, Progress* bar) 
   return peaks;
 }
 
-// Watershed of -distance from the markers; the pore space is cut away afterwards.
+// Watershed of -distance from the markers, restricted to the solid (flood.cpp).
 Labels flood(const FI* d, const Mask& solid, const Labels& markers, const GrainOptions& opt, Progress* bar) {
-  auto neg = FI::New();
-  neg->SetRegions(d->GetLargestPossibleRegion());
-  neg->Allocate();
-  const std::size_t N = solid.v.size();
-  for (std::size_t i = 0; i < N; ++i) neg->GetBufferPointer()[i] = -d->GetBufferPointer()[i];
-  auto ws = itk::MorphologicalWatershedFromMarkersImageFilter<FI, LI>::New();
-  ws->SetInput(neg);
-  ws->SetMarkerImage(itkb::to_voxel_image<int32_t>(markers));
-  ws->SetMarkWatershedLine(false);
-  ws->SetFullyConnected(opt.connectivity == 26);
-  if (bar)
-    ws->AddObserver(itk::ProgressEvent(), [&](const itk::EventObject&) {
-      bar->update(0.5 + 0.5 * ws->GetProgress(), "watershed");
-    });
-  ws->Update();
-  Labels out = itkb::from_voxel_image<int32_t>(ws->GetOutput(), solid);
-  for (std::size_t i = 0; i < N; ++i)
-    if (!solid.v[i]) out.v[i] = 0;
-  return out;
+  if (bar) bar->update(0.5, "watershed");
+  return flood_from_markers(d->GetBufferPointer(), solid, markers, opt.connectivity);
 }
 
 }  // namespace

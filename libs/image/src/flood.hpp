@@ -1,0 +1,14 @@
+#pragma once
+// The marker-controlled watershed of the grains (own code, used by morph_itk.cpp).
+#include "tomodem/image/volume.hpp"
+
+namespace tomodem::image {
+
+/// Floods `solid` from the labelled `markers` (> 0), the highest `height` first: Meyer's flooding
+/// with a hierarchical queue, one first-in-first-out queue per distinct height. A voxel takes the
+/// label of the voxel that reaches it first; the voxels of one height are taken in the order they
+/// were reached, the markers first in raster order. Pore voxels stay 0, and so do solid voxels
+/// no marker reaches through the solid. `connectivity` is 6 or 26.
+Labels flood_from_markers(const float* height, const Mask& solid, const Labels& markers, int connectivity);
+
+}  // namespace tomodem::image
