@@ -20,8 +20,8 @@
 //   h-maxima and the watershed are not local operations in general (a plateau or a flood can run
 //   along a ridge of the distance map farther than any halo): a grain whose id reaches the halo's
 //   inner edge is counted in the summary (chunked.grains_reaching_halo_edge), where blocks may
-//   disagree, and so are the solid voxels no marker in their widest block reaches
-//   (chunked.solid_voxels_without_grain, 0 in memory: every solid component holds a marker). The tests compare the grains with the in-memory path's (tests/e2e/segment).
+//   disagree. Solid that no marker reaches keeps grain 0 (specks without a marker of their own,
+//   or a grain whose marker lies beyond the widest halo; grains.solid_voxels_without_grain). The tests compare the grains with the in-memory path's (tests/e2e/segment).
 #include <hdf5.h>
 #include <fcntl.h>
 #include <unistd.h>
@@ -952,14 +952,15 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
   std::vector<char> at_edge(std::size_t(n_grains) + 1, 0);
   // A grain of the core whose voxels reach the block's outer edge (a face that is not the
   // volume's) through voxels of the same id may be cut otherwise with more of the volume in view:
-  // its id in the core is not certain. Returns those ids.
-  const auto reaching_edge = [&](const Box& outer, const Box& core, const Labels& L) {
+  // its id in the core is not certain. Returns those ids, and 0 when solid of the core that no
+  // marker reached (label 0) reaches the edge the same way: its marker may lie beyond.
+  const auto reaching_edge = [&](const Box& outer, const Box& core, const Mask& m, const Labels& L) {
     const std::size_t nx = outer.n(0), ny = outer.n(1), nz = outer.n(2);
     std::vector<uint8_t> seen(L.v.size(), 0);
     std::vector<std::size_t> stack;
     std::vector<int32_t> found;
     for_core(outer, core, [&](std::size_t i, std::size_t, std::size_t, std::size_t) {
-      if (L.v[i] && !seen[i]) {
+      if ((L.v[i] || m.v[i]) && !seen[i]) {
         seen[i] = 1;
         stack.push_back(i);
       }
@@ -975,7 +976,7 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
         for (std::size_t b = y ? y - 1 : 0; b <= std::min(y + 1, ny - 1); ++b)
           for (std::size_t a = x ? x - 1 : 0; a <= std::min(x + 1, nx - 1); ++a) {
             const std::size_t q = (c * ny + b) * nx + a;
-            if (!seen[q] && L.v[q] == L.v[i]) {
+            if (!seen[q] && L.v[q] == L.v[i] && (L.v[i] || m.v[q])) {
               seen[q] = 1;
               stack.push_back(q);
             }
@@ -1013,13 +1014,11 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
                   peak_id[std::size_t(it - peak_at.begin())];
           }
         L = watershed_from_markers(m, markers, go);
-        const auto far = reaching_edge(outer, core, L);
-        // Solid of the core that no marker in the block reaches: its grain's marker lies farther.
-        std::size_t unreached = 0;
-        for_core(outer, core, [&](std::size_t i, std::size_t, std::size_t, std::size_t) { unreached += m.v[i] && !L.v[i]; });
-        if ((far.empty() && !unreached) || whole(outer) || 2 * H > cap) {
-          for (auto id : far) at_edge[std::size_t(id)] = 1;
-          solid_without_grain += unreached;
+        const auto far = reaching_edge(outer, core, m, L);
+        if (far.empty() || whole(outer) || 2 * H > cap) {
+          for (auto id : far)
+            if (id > 0) at_edge[std::size_t(id)] = 1;
+          for_core(outer, core, [&](std::size_t i, std::size_t, std::size_t, std::size_t) { solid_without_grain += m.v[i] && !L.v[i]; });
           widest = std::max(widest, H);
           break;
         }
@@ -1133,7 +1132,7 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
       R.volume_m3 = c * vox;
       R.equivalent_diameter_m = std::cbrt(6.0 * R.volume_m3 / M_PI);
     }
-    Packing packing = grains_packing(grain_regs, inscribed, n_phase2, D, sp, vg.origin, phase2, cfg.h, summary);
+    Packing packing = grains_packing(grain_regs, inscribed, n_phase2, D, sp, vg.origin, phase2, cfg.h, solid_without_grain, summary);
     summary.n_particles(packing.particles.size());
     write_grains_packing(cfg, packing, summary);
   }
@@ -1148,7 +1147,6 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
     summary["chunked"]["grains_blocks_widened"] = widened;
     summary["chunked"]["grains_widest_halo_vox"] = widest;
     summary["chunked"]["grains_reaching_halo_edge"] = std::count(at_edge.begin(), at_edge.end(), char(1));
-    summary["chunked"]["solid_voxels_without_grain"] = solid_without_grain;
     // The block --memory gave before the grains halo was measured (null: it held the halo).
     summary["chunked"]["grains_replanned_from_chunk_vox"] = replanned_from ? json(replanned_from) : json(nullptr);
   }

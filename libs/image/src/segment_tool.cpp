@@ -370,13 +370,16 @@ Packing separate_grains(const SegmentConfig& cfg, const Mask& solid, const Mask&
   const auto d2 = distance_squared(solid);
   std::vector<float> inscribed(std::size_t(n) + 1, 0.0f);
   std::vector<std::size_t> n_phase2(std::size_t(n) + 1, 0);
+  std::size_t unassigned = 0;
   for (std::size_t i = 0; i < d2.size(); ++i) {
     const auto k = std::size_t(grains.v[i]);
+    unassigned += solid.v[i] && !k;
     if (!k) continue;
     inscribed[k] = std::max(inscribed[k], d2[i]);
     if (phases.v[i] == 3) ++n_phase2[k];
   }
-  return grains_packing(regions(grains, n), inscribed, n_phase2, solid.dims, solid.spacing, solid.origin, two_phases, cfg.h, summary);
+  return grains_packing(regions(grains, n), inscribed, n_phase2, solid.dims, solid.spacing, solid.origin, two_phases, cfg.h, unassigned,
+                        summary);
 }
 
 // Everything computed: the outputs now, each atomically.
@@ -573,7 +576,7 @@ void write_grains_packing(const SegmentConfig& cfg, Packing& packing, Summary& s
 // majority (the in-memory and the chunked path).
 Packing grains_packing(const std::vector<Region>& g, const std::vector<float>& inscribed_d2, const std::vector<std::size_t>& n_phase2,
                        const Dims& dims, const std::array<double, 3>& sp, const std::array<double, 3>& origin, bool two_phases,
-                       double h, Summary& summary) {
+                       double h, std::size_t unassigned, Summary& summary) {
   const double finest = std::min({sp[0], sp[1], sp[2]});
   std::vector<double> vols;
   for (const auto& r : g) vols.push_back(double(r.voxels));
@@ -603,6 +606,7 @@ Packing grains_packing(const std::vector<Region>& g, const std::vector<float>& i
   summary["n_grains"] = packing.particles.size();
   summary["grains"] = {{"h_vox", h}, {"median_voxels", med}, {"cut_by_surface", cut},
                        {"over_segmentation_suspects", over}, {"under_segmentation_suspects", under},
+                       {"solid_voxels_without_grain", unassigned},
                        {"rules", "over: volume < 0.2 x median; under: volume > 2 x the ball of its largest inscribed radius"}};
   return packing;
 }

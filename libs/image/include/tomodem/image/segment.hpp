@@ -108,10 +108,12 @@ void macropore_summary(const std::vector<Region>& regs, Summary& summary);
 /// The grains as a packing: one sphere of each grain's volume at its centroid, phase 1 where the
 /// second solid phase holds most of its voxels; and the summary's `n_grains` and `grains` keys.
 /// Indexed by label: `inscribed_d2`, the grain's largest squared distance to the pores (finest
-/// voxels², distance_squared); `n_phase2`, its voxels of the second solid phase.
+/// voxels², distance_squared); `n_phase2`, its voxels of the second solid phase. `unassigned`:
+/// the solid voxels no marker reached (grain 0: specks without a marker of their own).
 Packing grains_packing(const std::vector<Region>& grains, const std::vector<float>& inscribed_d2,
                        const std::vector<std::size_t>& n_phase2, const Dims& dims, const std::array<double, 3>& spacing,
-                       const std::array<double, 3>& origin, bool two_phases, double h, Summary& summary);
+                       const std::array<double, 3>& origin, bool two_phases, double h, std::size_t unassigned,
+                       Summary& summary);
 
 /// Interface area between m != 0 and m == 0 per unit total volume (1/m): face count × 2/3,
 /// the mean-projection correction of voxel faces for isotropic surfaces (Lang et al. 2001).
