@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <limits>
 #include <unordered_set>
@@ -16,6 +17,115 @@
 
 namespace tomodem::image {
 namespace {
+
+// The 6 or 26 neighbours of a voxel in a fixed order (z, then y, then x), so that what is done
+// in that order does not depend on how the volume is cut into blocks.
+class Neighbours {
+ public:
+  Neighbours(const Dims& d, int connectivity) : nx_(d.nx), ny_(d.ny), nz_(d.nz) {
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int taxi = std::abs(dx) + std::abs(dy) + std::abs(dz);
+          if (taxi == 0 || (connectivity == 6 && taxi > 1)) continue;
+          steps_.push_back({dx, dy, dz, (std::ptrdiff_t(dz) * std::ptrdiff_t(ny_) + dy) * std::ptrdiff_t(nx_) + dx});
+        }
+  }
+  // g(j) for every neighbour j of voxel i inside the volume.
+  template <class G>
+  void each(std::size_t i, G&& g) const {
+    const std::size_t x = i % nx_, y = i / nx_ % ny_, z = i / (nx_ * ny_);
+    if (x > 0 && x + 1 < nx_ && y > 0 && y + 1 < ny_ && z > 0 && z + 1 < nz_) {
+      for (const Step& s : steps_) g(std::size_t(std::ptrdiff_t(i) + s.offset));
+      return;
+    }
+    for (const Step& s : steps_)
+      if (std::size_t(std::ptrdiff_t(x) + s.dx) < nx_ && std::size_t(std::ptrdiff_t(y) + s.dy) < ny_ &&
+          std::size_t(std::ptrdiff_t(z) + s.dz) < nz_)
+        g(std::size_t(std::ptrdiff_t(i) + s.offset));
+  }
+
+ private:
+  struct Step {
+    int dx, dy, dz;
+    std::ptrdiff_t offset;
+  };
+  std::size_t nx_, ny_, nz_;
+  std::vector<Step> steps_;
+};
+
+// Reconstruction by dilation of g under f (6-connected), in place: Vincent's hybrid algorithm
+// (IEEE Trans. Image Processing 2, 1993): a raster and an anti-raster scan, then a FIFO queue for
+// what the scans could not carry. The result is unique, so ITK's is the same.
+void reconstruct_by_dilation(std::vector<float>& g, const float* f, const Dims& d) {
+  const std::size_t nx = d.nx, ny = d.ny, nz = d.nz, sy = nx, sz = nx * ny;
+  for (std::size_t z = 0, i = 0; z < nz; ++z)
+    for (std::size_t y = 0; y < ny; ++y)
+      for (std::size_t x = 0; x < nx; ++x, ++i) {
+        float v = g[i];
+        if (x) v = std::max(v, g[i - 1]);
+        if (y) v = std::max(v, g[i - sy]);
+        if (z) v = std::max(v, g[i - sz]);
+        g[i] = std::min(v, f[i]);
+      }
+  std::deque<std::size_t> fifo;
+  // Whether neighbour q could still rise from v.
+  const auto below = [&](std::size_t q, float v) { return g[q] < v && g[q] < f[q]; };
+  for (std::size_t z = nz, i = d.count(); z-- > 0;)
+    for (std::size_t y = ny; y-- > 0;)
+      for (std::size_t x = nx; x-- > 0;) {
+        --i;
+        float v = g[i];
+        if (x + 1 < nx) v = std::max(v, g[i + 1]);
+        if (y + 1 < ny) v = std::max(v, g[i + sy]);
+        if (z + 1 < nz) v = std::max(v, g[i + sz]);
+        g[i] = v = std::min(v, f[i]);
+        if ((x + 1 < nx && below(i + 1, v)) || (y + 1 < ny && below(i + sy, v)) || (z + 1 < nz && below(i + sz, v)))
+          fifo.push_back(i);
+      }
+  const Neighbours nb(d, 6);
+  while (!fifo.empty()) {
+    const std::size_t p = fifo.front();
+    fifo.pop_front();
+    nb.each(p, [&](std::size_t q) {
+      if (g[q] < g[p] && g[q] != f[q]) {
+        g[q] = std::min(g[p], f[q]);
+        fifo.push_back(q);
+      }
+    });
+  }
+}
+
+// The regional maxima of g (0/1): the plateaus (connected sets of one value) with no greater
+// neighbour; a flat image is one maximum. Neighbours outside the volume do not count.
+std::vector<uint8_t> regional_maxima(const std::vector<float>& g, const Dims& d, int connectivity) {
+  const std::size_t N = g.size();
+  const Neighbours nb(d, connectivity);
+  std::vector<uint8_t> top(N, 1);
+  for (std::size_t i = 0; i < N; ++i)
+    nb.each(i, [&](std::size_t j) { top[i] &= !(g[j] > g[i]); });
+  // A plateau that touches a greater value anywhere is no maximum: spread that through it.
+  std::vector<std::size_t> stack;
+  for (std::size_t i = 0; i < N; ++i) {
+    if (!top[i]) continue;
+    bool on_spoiled_plateau = false;
+    nb.each(i, [&](std::size_t j) { on_spoiled_plateau |= !top[j] && g[j] == g[i]; });
+    if (!on_spoiled_plateau) continue;
+    top[i] = 0;
+    stack.push_back(i);
+    while (!stack.empty()) {
+      const std::size_t p = stack.back();
+      stack.pop_back();
+      nb.each(p, [&](std::size_t q) {
+        if (top[q] && g[q] == g[p]) {
+          top[q] = 0;
+          stack.push_back(q);
+        }
+      });
+    }
+  }
+  return top;
+}
 
 // The distinct heights of the solid voxels, highest first (a few hundred on a distance map).
 std::vector<float> heights_of(const float* h, const Mask& solid) {
@@ -34,7 +144,7 @@ Labels flood(const float* h, const Mask& solid, const Labels& markers, int conne
   const auto level = [&](float v) {
     return std::size_t(std::lower_bound(levels.begin(), levels.end(), v, std::greater<float>()) - levels.begin());
   };
-  const std::size_t nx = solid.dims.nx, ny = solid.dims.ny, nz = solid.dims.nz, N = solid.v.size();
+  const std::size_t N = solid.v.size();
   // -1 marks the pores, so one read of a neighbour's label tells whether it is free.
   Labels out;
   out.copy_geometry(solid);
@@ -46,36 +156,27 @@ Labels flood(const float* h, const Mask& solid, const Labels& markers, int conne
       out.v[i] = markers.v[i];
       queue[level(h[i])].push_back(Index(i));
     }
-  // The neighbours in a fixed order (z, then y, then x), so the result does not depend on how
-  // the volume is cut into blocks.
-  struct Step {
-    int dx, dy, dz;
-    std::ptrdiff_t offset;
-  };
-  std::vector<Step> steps;
-  for (int dz = -1; dz <= 1; ++dz)
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dx = -1; dx <= 1; ++dx) {
-        const int taxi = std::abs(dx) + std::abs(dy) + std::abs(dz);
-        if (taxi == 0 || (connectivity == 6 && taxi > 1)) continue;
-        steps.push_back({dx, dy, dz, (std::ptrdiff_t(dz) * std::ptrdiff_t(ny) + dy) * std::ptrdiff_t(nx) + dx});
-      }
+  const Neighbours nb(solid.dims, connectivity);
+  const std::ptrdiff_t sy = std::ptrdiff_t(solid.dims.nx), sz = sy * std::ptrdiff_t(solid.dims.ny);
+  const std::size_t kAhead = 8;  // pops ahead whose neighbour rows are fetched: the reads are the flood's cost
   for (std::size_t cur = 0; cur < queue.size(); ++cur) {
     std::vector<Index>& q = queue[cur];  // grows while it is taken: voxels reached at this height
     for (std::size_t head = 0; head < q.size(); ++head) {
+      if (head + kAhead < q.size()) {
+        const std::size_t k = q[head + kAhead];
+        for (std::ptrdiff_t dz : {-sz, std::ptrdiff_t(0), sz})
+          for (std::ptrdiff_t dy : {-sy, std::ptrdiff_t(0), sy}) {
+            const std::ptrdiff_t r = std::ptrdiff_t(k) + dz + dy;
+            if (r >= 1 && r + 1 < std::ptrdiff_t(N)) __builtin_prefetch(&out.v[std::size_t(r)], 1);
+          }
+      }
       const std::size_t i = q[head];
       const int32_t label = out.v[i];
-      const std::size_t x = i % nx, y = i / nx % ny, z = i / (nx * ny);
-      const bool interior = x > 0 && x + 1 < nx && y > 0 && y + 1 < ny && z > 0 && z + 1 < nz;
-      for (const Step& s : steps) {
-        if (!interior && (std::size_t(std::ptrdiff_t(x) + s.dx) >= nx || std::size_t(std::ptrdiff_t(y) + s.dy) >= ny ||
-                          std::size_t(std::ptrdiff_t(z) + s.dz) >= nz))
-          continue;
-        const std::size_t j = std::size_t(std::ptrdiff_t(i) + s.offset);
-        if (out.v[j]) continue;
+      nb.each(i, [&](std::size_t j) {
+        if (out.v[j]) return;
         out.v[j] = label;
         queue[std::max(cur, level(h[j]))].push_back(Index(j));
-      }
+      });
     }
     std::vector<Index>().swap(q);
   }
@@ -84,6 +185,20 @@ Labels flood(const float* h, const Mask& solid, const Labels& markers, int conne
 }
 
 }  // namespace
+
+Mask grain_markers(const float* height, const Mask& solid, double h, int connectivity) {
+  const std::size_t N = solid.v.size();
+  // ITK's HMaximaImageFilter: the height is a pixel value (float), the shift done in double.
+  const double shift = double(float(h));
+  std::vector<float> g(N);
+  for (std::size_t i = 0; i < N; ++i) g[i] = float(double(height[i]) - shift);
+  reconstruct_by_dilation(g, height, solid.dims);
+  Mask out;
+  out.copy_geometry(solid);
+  out.v = regional_maxima(g, solid.dims, connectivity);
+  for (std::size_t i = 0; i < N; ++i) out.v[i] = out.v[i] && solid.v[i];
+  return out;
+}
 
 Labels flood_from_markers(const float* height, const Mask& solid, const Labels& markers, int connectivity) {
   if (solid.v.size() <= std::numeric_limits<uint32_t>::max()) return flood<uint32_t>(height, solid, markers, connectivity);

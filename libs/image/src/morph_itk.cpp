@@ -1,8 +1,6 @@
-// ITK grey-level morphology: hysteresis by reconstruction, Maurer distance, h-maxima; the
-// watershed of the grains is flood.cpp's.
-#include <itkHMaximaImageFilter.h>
+// ITK grey-level morphology: hysteresis by reconstruction, the Maurer distance of the grains
+// (their markers and watershed are flood.cpp's).
 #include <itkReconstructionByDilationImageFilter.h>
-#include <itkRegionalMaximaImageFilter.h>
 #include <itkSignedMaurerDistanceMapImageFilter.h>
 
 #include <algorithm>
@@ -52,25 +50,10 @@ FI::Pointer solid_distance(const Mask& solid) {
   return d;
 }
 
-// The h-maxima's regional maxima of the distance, inside the solid (0/1).
+// The h-maxima's regional maxima of the distance, inside the solid (0/1; flood.cpp).
 Mask peaks_of(FI* d, const Mask& solid, const GrainOptions& opt, Progress* bar) {
-  auto hmax = itk::HMaximaImageFilter<FI, FI>::New();
-  hmax->SetInput(d);
-  hmax->SetHeight(opt.h);
-  auto maxima = itk::RegionalMaximaImageFilter<FI, UI>::New();
-  maxima->SetInput(hmax->GetOutput());
-  maxima->SetFullyConnected(opt.connectivity == 26);
-  maxima->SetFlatIsMaxima(true);
-  maxima->SetForegroundValue(1);
-  maxima->SetBackgroundValue(0);
-  if (bar)
-    maxima->AddObserver(itk::ProgressEvent(), [&](const itk::EventObject&) {
-      bar->update(0.5 * maxima->GetProgress(), "distance map and maxima");
-    });
-  maxima->Update();
-  Mask peaks = itkb::from_voxel_image<uint8_t>(maxima->GetOutput(), solid);
-  for (std::size_t i = 0; i < peaks.v.size(); ++i) peaks.v[i] = peaks.v[i] && solid.v[i];
-  return peaks;
+  if (bar) bar->update(0.25, "maxima");
+  return grain_markers(d->GetBufferPointer(), solid, opt.h, opt.connectivity);
 }
 
 // Watershed of -distance from the markers, restricted to the solid (flood.cpp).

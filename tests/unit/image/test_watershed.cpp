@@ -1,10 +1,13 @@
-// The grains' watershed (flood.cpp, through watershed_from_markers) against an independent
-// implementation of the same flooding, ITK's MorphologicalWatershedFromMarkers (what tomodem used
-// before, issue 19), and against geometry: two equal balls part on their bisecting plane.
+// The grains' markers and watershed (flood.cpp, through grain_peaks and watershed_from_markers)
+// against independent implementations of the same operations, ITK's HMaximaImageFilter,
+// RegionalMaximaImageFilter and MorphologicalWatershedFromMarkers (what tomodem used before,
+// issue 19), and against geometry: two equal balls part on their bisecting plane.
 #include <gtest/gtest.h>
 
 #include <itkImage.h>
+#include <itkHMaximaImageFilter.h>
 #include <itkMorphologicalWatershedFromMarkersImageFilter.h>
+#include <itkRegionalMaximaImageFilter.h>
 #include <itkSignedMaurerDistanceMapImageFilter.h>
 
 #include <algorithm>
@@ -29,10 +32,10 @@ typename itk::Image<P, 3>::Pointer to_itk(const Grid<T>& g) {
   return img;
 }
 
-// ITK's route: the signed Maurer distance (inside positive), the whole volume flooded on
-// -distance from the markers (pores last), the pores cut away.
-Labels itk_watershed(const Mask& solid, const Labels& markers, int connectivity) {
-  using FI = itk::Image<float, 3>;
+using FI = itk::Image<float, 3>;
+
+// The signed Maurer distance (inside positive), as morph_itk.cpp computes it (isotropic voxels).
+FI::Pointer itk_distance(const Mask& solid) {
   auto dist = itk::SignedMaurerDistanceMapImageFilter<itk::Image<uint8_t, 3>, FI>::New();
   dist->SetInput(to_itk<uint8_t>(solid));
   dist->SetInsideIsPositive(true);
@@ -40,10 +43,36 @@ Labels itk_watershed(const Mask& solid, const Labels& markers, int connectivity)
   dist->SetUseImageSpacing(true);
   dist->SetBackgroundValue(0);
   dist->Update();
+  return dist->GetOutput();
+}
+
+// ITK's markers: the regional maxima of the h-maxima transform of the distance, in the solid.
+Mask itk_peaks(const Mask& solid, double h, int connectivity) {
+  auto hmax = itk::HMaximaImageFilter<FI, FI>::New();
+  hmax->SetInput(itk_distance(solid));
+  hmax->SetHeight(float(h));
+  auto maxima = itk::RegionalMaximaImageFilter<FI, itk::Image<uint8_t, 3>>::New();
+  maxima->SetInput(hmax->GetOutput());
+  maxima->SetFullyConnected(connectivity == 26);
+  maxima->SetFlatIsMaxima(true);
+  maxima->SetForegroundValue(1);
+  maxima->SetBackgroundValue(0);
+  maxima->Update();
+  Mask out;
+  out.copy_geometry(solid);
+  out.v.assign(maxima->GetOutput()->GetBufferPointer(), maxima->GetOutput()->GetBufferPointer() + solid.v.size());
+  for (std::size_t i = 0; i < solid.v.size(); ++i) out.v[i] = out.v[i] && solid.v[i];
+  return out;
+}
+
+// ITK's watershed: the whole volume flooded on -distance from the markers (pores last), the
+// pores cut away.
+Labels itk_watershed(const Mask& solid, const Labels& markers, int connectivity) {
+  const FI::Pointer d = itk_distance(solid);
   auto neg = FI::New();
-  neg->SetRegions(dist->GetOutput()->GetLargestPossibleRegion());
+  neg->SetRegions(d->GetLargestPossibleRegion());
   neg->Allocate();
-  for (std::size_t i = 0; i < solid.v.size(); ++i) neg->GetBufferPointer()[i] = -dist->GetOutput()->GetBufferPointer()[i];
+  for (std::size_t i = 0; i < solid.v.size(); ++i) neg->GetBufferPointer()[i] = -d->GetBufferPointer()[i];
   auto ws = itk::MorphologicalWatershedFromMarkersImageFilter<FI, itk::Image<int32_t, 3>>::New();
   ws->SetInput(neg);
   ws->SetMarkerImage(to_itk<int32_t>(markers));
@@ -73,6 +102,28 @@ Mask packing_solid(uint64_t seed) {
 }
 
 }  // namespace
+
+// The h-maxima transform and the regional maxima are defined without ties (a reconstruction and
+// the plateaus with no greater neighbour): the same marker voxels as ITK's, for heights below,
+// at and above the voxel size and both connectivities of the maxima.
+TEST(Watershed, SameMarkersAsItksHMaximaAndRegionalMaxima) {
+  for (uint64_t seed : {1, 2})
+    for (double h : {0.5, 1.0, 2.5})
+      for (int connectivity : {26, 6}) {
+        const Mask solid = packing_solid(seed);
+        GrainOptions go;
+        go.h = h;
+        go.connectivity = connectivity;
+        const Mask ours = grain_peaks(solid, go), itk = itk_peaks(solid, h, connectivity);
+        std::size_t differ = 0, peaks = 0;
+        for (std::size_t i = 0; i < solid.v.size(); ++i) {
+          differ += ours.v[i] != itk.v[i];
+          peaks += itk.v[i];
+        }
+        EXPECT_GT(peaks, 20u);
+        EXPECT_EQ(differ, 0u) << "seed " << seed << ", h " << h << ", " << connectivity << "-connected, of " << peaks << " marker voxels";
+      }
+}
 
 // Both floods take the highest distance first and, within one height, the voxels in the order
 // they were reached, the markers in raster order: the same labels voxel for voxel (ties
