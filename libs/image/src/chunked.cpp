@@ -333,8 +333,9 @@ struct MemoryModel {
   double fixed = 0, per_block = 0;
   double total() const { return fixed + per_block; }
 };
-// Grains (grains_halo > 0): the ITK distance map, h-maxima, markers and watershed of one block
-// with its halo, 40 bytes per voxel (measured, docs/segment.md); the stages run one after the other.
+// Grains (grains_halo > 0): the ITK distance map, markers and watershed of one block with its
+// halo, 40 bytes per voxel (measured with ITK's h-maxima and watershed, docs/segment.md; the own
+// ones need less); the stages run one after the other.
 constexpr double kGrainsBytesPerBlockVoxel = 40;
 MemoryModel memory_model(const Dims& d, std::size_t chunk, std::size_t halo, bool phase2, const BlockSource& src,
                          std::size_t grains_halo = 0) {
