@@ -1,6 +1,7 @@
 #!/bin/sh
 # Out-of-core tomodem-segment benchmark (issue 19 item 5; docs/segment.md "Volumes larger than
-# memory", numbers in docs/benchmarks.md). Not run by ctest: minutes of CPU and GBs of disk.
+# memory", numbers in docs/benchmarks.md). ctest -L bench runs the 512^3 comparison with grains
+# (bench_segment_chunked_grains512, ~4 min, 1 GB of disk); 2048^3 is run by hand.
 #
 #   chunked_bench.sh BUILD_DIR WORK_DIR N MEMORY [compare]
 #
