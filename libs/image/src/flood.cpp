@@ -1,14 +1,15 @@
-// Marker-controlled watershed by a hierarchical queue (Meyer's flooding; Beucher & Meyer 1993).
-// ITK's MorphologicalWatershedFromMarkers did this before: it floods the pores too and walks the
-// volume with neighbourhood iterators, 90 % of the chunked grains run at 1024^3
-// (docs/benchmarks.md, "tomodem-segment"). Here one first-in-first-out queue per distinct height
-// makes every push and pop O(1), and the queue of a height is taken in the order its voxels were
-// reached, which keeps the neighbour reads close together in memory.
+// The grains' markers (h-maxima's regional maxima) and their watershed on a distance map.
+// ITK's HMaxima, RegionalMaxima and MorphologicalWatershedFromMarkers did this before, with the
+// same results: they walk the volume with neighbourhood iterators and the watershed floods the
+// pores too, 90 % of the chunked grains run at 1024^3 (docs/benchmarks.md, "tomodem-segment").
+// Here the h-maxima transform is two scans and a queue, the maxima one pass and a spread, and the
+// watershed a hierarchical queue: one first-in-first-out queue per distinct height makes every
+// push and pop O(1), and the queue of a height is taken in the order its voxels were reached.
 #include "flood.hpp"
 
 #include <algorithm>
-#include <array>
 #include <cstdint>
+#include <cstdlib>
 #include <deque>
 #include <functional>
 #include <limits>
@@ -167,7 +168,7 @@ Labels flood(const float* h, const Mask& solid, const Labels& markers, int conne
         for (std::ptrdiff_t dz : {-sz, std::ptrdiff_t(0), sz})
           for (std::ptrdiff_t dy : {-sy, std::ptrdiff_t(0), sy}) {
             const std::ptrdiff_t r = std::ptrdiff_t(k) + dz + dy;
-            if (r >= 1 && r + 1 < std::ptrdiff_t(N)) __builtin_prefetch(&out.v[std::size_t(r)], 1);
+            if (r >= 0 && r < std::ptrdiff_t(N)) __builtin_prefetch(&out.v[std::size_t(r)], 1);
           }
       }
       const std::size_t i = q[head];

@@ -151,12 +151,13 @@ void check_segment_options(const SegmentConfig& c) {
 
 // Memory per voxel of the volume after --roi/--downsample: peak RSS above the bare process for a
 // 128^3 phantom on one thread, plus 10-20 %: 10 B/voxel measured for the default pipeline (grey,
-// masks, distance map, macropore labels), 16 with a Gaussian filter, 42 with --grains, 27 with
-// --vdb, 58 with all three. The reader's own buffers (HDF5: 8 B/voxel) are counted by read_volume.
+// masks, distance map, macropore labels), 16 with a Gaussian filter, 22 with --grains (2026-12-05,
+// own markers and flood; 42 with ITK's), 27 with --vdb. The reader's own buffers (HDF5: 8 B/voxel)
+// are counted by read_volume.
 double segment_bytes_per_voxel(const SegmentConfig& c) {
   double b = 12;
   if (c.filter == ImageFilter::gaussian || c.filter == ImageFilter::cad || c.filter == ImageFilter::nlm) b += 8;  // ITK images in and out
-  if (c.grains) b += 32;                                                        // Maurer distance, markers, watershed, labels
+  if (c.grains) b += 14;                                                        // Maurer distance, markers, flood, labels
   if (!c.vdb.empty()) b += 18;                                                  // smoothed indicator, fog and level-set grids
   return b;
 }
