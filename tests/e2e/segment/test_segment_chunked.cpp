@@ -181,6 +181,35 @@ TEST(SegmentChunked, GrainsIdenticalToInMemory) {
   }
 }
 
+// A cone along x has one distance maximum, near its thick end: one marker, one grain. A block at
+// the thin end sees no marker within the grains halo, so its solid is reached by none; it is
+// widened until the marker is in view, and the grain is the in-memory one.
+TEST(SegmentChunked, GrainsBlockWidenedUntilItsMarkerIsInView) {
+  const fs::path d = tmpdir("cone");
+  const std::size_t nx = 64, ny = 24, nz = 24;
+  std::vector<uint16_t> v(nx * ny * nz);
+  for (std::size_t z = 0; z < nz; ++z)
+    for (std::size_t y = 0; y < ny; ++y)
+      for (std::size_t x = 0; x < nx; ++x) {
+        const double r = 2 + 7 * (double(x) - 2) / 59, dy = double(y) - 11.5, dz = double(z) - 11.5;
+        v[(z * ny + y) * nx + x] = x >= 2 && x <= 61 && dy * dy + dz * dz <= r * r ? 30000 : 10000;
+      }
+  std::ofstream(d / "cone.raw", std::ios::binary).write(reinterpret_cast<const char*>(v.data()), std::streamsize(v.size() * 2));
+  const std::string args = (d / "cone.raw").string() + " --raw-dims 64,24,24 --raw-type uint16 --spacing 10um --filter none --threads 1 -q --grains";
+  std::string err;
+  ASSERT_EQ(run_err(bin + "/tomodem-segment " + args + " -o " + (d / "m.h5").string() + " --json " + (d / "m.json").string(), &err), 0) << err;
+  ASSERT_EQ(run_err(bin + "/tomodem-segment " + args + " --chunk 16 -o " + (d / "c.h5").string() + " --json " + (d / "c.json").string(), &err), 0)
+      << err;
+  const json sm = read_json(d / "m.json"), sc = read_json(d / "c.json");
+  EXPECT_EQ(sm["n_grains"], 1);
+  EXPECT_EQ(sc["n_grains"], 1);
+  EXPECT_EQ(sm["grains"]["solid_voxels_without_grain"], 0);
+  EXPECT_EQ(sc["grains"]["solid_voxels_without_grain"], 0);
+  EXPECT_GT(sc["chunked"]["grains_blocks_widened"].get<int>(), 0);
+  tomodem::h5::File a((d / "m.h5").string(), tomodem::h5::File::Mode::read), b((d / "c.h5").string(), tomodem::h5::File::Mode::read);
+  EXPECT_TRUE(a.read_int32("/grains") == b.read_int32("/grains"));
+}
+
 // A float32 scan takes the two-pass histogram (min/max, then bins): still identical.
 // --grains with --memory alone: the block planned for a grains halo of 24 (64 voxels at 150 MB)
 // does not hold the measured one (34: an inscribed radius of 14.9 voxels, 161 MB); the tool plans
