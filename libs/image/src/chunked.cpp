@@ -21,7 +21,8 @@
 //   along a ridge of the distance map farther than any halo): a grain whose id reaches the halo's
 //   inner edge is counted in the summary (chunked.grains_reaching_halo_edge), where blocks may
 //   disagree. Solid that no marker reaches keeps grain 0 (specks without a marker of their own,
-//   or a grain whose marker lies beyond the widest halo; grains.solid_voxels_without_grain). The tests compare the grains with the in-memory path's (tests/e2e/segment).
+//   or a grain whose marker lies beyond the widest halo; grains.solid_voxels_without_grain).
+//   The tests compare the grains with the in-memory path's (tests/e2e/segment).
 #include <hdf5.h>
 #include <fcntl.h>
 #include <unistd.h>

@@ -15,7 +15,6 @@ namespace tomodem::image {
 
 using FI = itk::Image<float, 3>;
 using UI = itk::Image<uint8_t, 3>;
-using LI = itk::Image<int32_t, 3>;
 
 Mask hysteresis(const Volume& v, double low, double high) {
   if (!(low <= high)) throw InputError("", "--levels", std::to_string(low) + "," + std::to_string(high), "need low <= high");
