@@ -115,6 +115,71 @@ std::array<int, 3> radii_for_length(const Volume& v, double r_vox) {
   return r;
 }
 
+std::array<int, 3> gaussian_radii(const Volume& v, double sigma_vox) {
+  const double finest = std::min({v.spacing[0], v.spacing[1], v.spacing[2]});
+  std::array<int, 3> r{};
+  for (std::size_t a = 0; a < 3; ++a) r[a] = int(std::ceil(4 * sigma_vox * finest / v.spacing[a] - 1e-9));
+  return r;
+}
+
+void gaussian_inplace(Volume& v, double sigma_vox) {
+  if (!(sigma_vox > 0)) throw InputError("", "--sigma", std::to_string(sigma_vox), "must be > 0 (voxels)");
+  const double finest = std::min({v.spacing[0], v.spacing[1], v.spacing[2]});
+  const std::array<int, 3> radii = gaussian_radii(v, sigma_vox);
+  const std::array<std::size_t, 3> n{v.dims.nx, v.dims.ny, v.dims.nz};
+  const std::size_t nx = n[0], ny = n[1], nz = n[2];
+  for (std::size_t a = 0; a < 3; ++a) {
+    const int r = radii[a];
+    if (n[a] < 2 || r < 1) continue;  // one sample, or a kernel narrower than a voxel: unchanged
+    const double s = sigma_vox * finest / v.spacing[a];
+    std::vector<double> w(std::size_t(2 * r + 1));
+    for (int k = -r; k <= r; ++k) w[std::size_t(k + r)] = std::exp(-0.5 * k * k / (s * s));
+    const double sum = std::accumulate(w.begin(), w.end(), 0.0);
+    for (auto& x : w) x /= sum;
+    const auto at = [&](long i) { return std::size_t(std::clamp<long>(i, 0, long(n[a]) - 1)); };
+    if (a == 0) {
+      // Rows along x: each copied with r replicated values at both ends.
+#pragma omp parallel
+      {
+        std::vector<double> row(nx + 2 * std::size_t(r));
+#pragma omp for schedule(static)
+        for (long yz = 0; yz < long(ny * nz); ++yz) {
+          float* p = &v.v[std::size_t(yz) * nx];
+          for (long i = -r; i < long(nx) + r; ++i) row[std::size_t(i + r)] = p[at(i)];
+          for (std::size_t x = 0; x < nx; ++x) {
+            double acc = 0;
+            for (std::size_t k = 0; k < w.size(); ++k) acc += w[k] * row[x + k];
+            p[x] = float(acc);
+          }
+        }
+      }
+      continue;
+    }
+    // Along y (within a plane) or z (within an xz slab): whole rows of x at a time, so the reads
+    // are contiguous; `lines` rows of nx floats, `stride` floats apart, for each of `outer` starts.
+    const std::size_t lines = n[a], stride = a == 1 ? nx : nx * ny, outer = a == 1 ? nz : ny, step = a == 1 ? nx * ny : nx;
+#pragma omp parallel
+    {
+      std::vector<float> in(lines * nx);
+      std::vector<double> acc(nx);
+#pragma omp for schedule(static)
+      for (long o = 0; o < long(outer); ++o) {
+        float* base = &v.v[std::size_t(o) * step];
+        for (std::size_t l = 0; l < lines; ++l) std::copy_n(base + l * stride, nx, &in[l * nx]);
+        for (std::size_t l = 0; l < lines; ++l) {
+          std::fill(acc.begin(), acc.end(), 0.0);
+          for (int k = -r; k <= r; ++k) {
+            const double wk = w[std::size_t(k + r)];
+            const float* src = &in[at(long(l) + k) * nx];
+            for (std::size_t x = 0; x < nx; ++x) acc[x] += wk * src[x];
+          }
+          for (std::size_t x = 0; x < nx; ++x) base[l * stride + x] = float(acc[x]);
+        }
+      }
+    }
+  }
+}
+
 void median_inplace(Volume& v, int r, bool generic) { median_inplace(v, std::array<int, 3>{r, r, r}, generic); }
 
 void median_inplace(Volume& v, const std::array<int, 3>& radii, bool generic) {

@@ -4,9 +4,12 @@
 // other array is one block with its halo. Each stage gives the in-memory path's result exactly:
 // - median: a block with a halo of the box radius gives its core exactly (borders are replicated
 //   only at the volume's faces, which are the block's faces there);
+// - Gaussian: separable, the axes one after the other over the whole block; a halo of the
+//   kernel's radius gives its core exactly (each pass reads only values computed exactly);
 // - thresholds: the histograms are sums of whole counts, the same chunk by chunk; the filtered
 //   values of an integer scan of <= 16 bits are its own values (a median selects one), so one
-//   pass counts every value and builds each histogram; other types take a min/max pass first;
+//   pass counts every value and builds each histogram; other types, and Gaussian-filtered
+//   values, take a min/max pass first;
 // - macropores: a voxel depends on the pores within 2r + 2 voxels (segment.hpp, macropore_mask);
 // - labels: each block's core labelled on its own, the labels joined across block faces by
 //   union-find (6-connectivity), numbered by their first voxel in x-fastest order and filtered by
@@ -484,8 +487,8 @@ void refuse_unsupported(const SegmentConfig& c, const std::string& format) {
   const std::string why = "is not available with --chunk/--memory (the chunked path, docs/segment.md \"Volumes larger than memory\")";
   if (format != "raw" && format != "h5")
     throw InputError(c.input, "format", format, "the chunked path reads raw files only (--raw-dims) or HDF5 datasets (--dataset), by block; " + why);
-  if (c.filter != ImageFilter::median && c.filter != ImageFilter::none)
-    throw InputError("", "--filter", to_string(c.filter), why + "; use median or none");
+  if (c.filter != ImageFilter::median && c.filter != ImageFilter::gaussian && c.filter != ImageFilter::none)
+    throw InputError("", "--filter", to_string(c.filter), why + "; use median, gaussian or none");
   if (c.method == ThresholdMethod::hysteresis) throw InputError("", "--method", "hysteresis", why);
   if (c.open_r > 0) throw InputError("", "--open", value_text(c.open_r), why);
   if (c.close_r > 0) throw InputError("", "--close", value_text(c.close_r), why);
@@ -529,9 +532,15 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
   const auto& sp = vg.spacing;
   const double finest = std::min({sp[0], sp[1], sp[2]});
 
-  // Halos: the median's box, and 2r + 2 for the macropores (segment.hpp, macropore_mask).
+  // Halos: the median's box or the Gaussian's kernel, and 2r + 2 for the macropores (segment.hpp,
+  // macropore_mask).
   std::array<int, 3> fr{0, 0, 0};
-  double radius = 0;
+  double radius = 0, sigma = 0;
+  if (cfg.filter == ImageFilter::gaussian) {
+    const double L = parse_length("--sigma", cfg.sigma_text);
+    sigma = L < 0 ? -L : L / finest;
+    fr = gaussian_radii(geom, sigma);
+  }
   if (cfg.filter == ImageFilter::median) {
     const double L = parse_length("--filter-radius", cfg.filter_radius_text);
     radius = L < 0 ? -L : L / finest;
@@ -567,7 +576,8 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
   }
   if (chunk < halo)
     throw InputError("", "--chunk", std::to_string(chunk),
-                     "is below the halo of " + std::to_string(halo) + " voxels (median box radius " + std::to_string(fhalo) +
+                     "is below the halo of " + std::to_string(halo) + " voxels (" +
+                         (cfg.filter == ImageFilter::gaussian ? "Gaussian kernel radius " : "median box radius ") + std::to_string(fhalo) +
                          ", macropores 2r + 2 = " + std::to_string(mhalo) + " at r = " + value_text(macro_r) +
                          " voxels): a block would be mostly halo; give --chunk >= " + std::to_string(halo));
   chunk = std::min(chunk, biggest);
@@ -593,6 +603,7 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
       const Box core = G.core(k), outer = core.grown(fh, D);
       src.read(outer, b);
       if (cfg.filter == ImageFilter::median) median_inplace(b, fr);
+      if (cfg.filter == ImageFilter::gaussian) gaussian_inplace(b, sigma);
       f(b, outer, core);
     }
   };
@@ -604,10 +615,11 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
       }
   };
 
-  // 1. Histograms of the filtered values (one pass for <= 16-bit integers, else min/max first).
+  // 1. Histograms of the filtered values (one pass for <= 16-bit integers, whose median or
+  // unfiltered values are their own; else, and after a Gaussian, min/max first).
   float lo = std::numeric_limits<float>::max(), hi = std::numeric_limits<float>::lowest();
   std::vector<uint64_t> counts;
-  const bool exact = src.small_integers();
+  const bool exact = src.small_integers() && cfg.filter != ImageFilter::gaussian;
   if (exact) counts.assign(65536, 0);
   const long off = src.offset();
   filtered([&](const Volume& b, const Box& outer, const Box& core) {
@@ -646,6 +658,10 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
     filt["radius_vox"] = radius;
     filt["radius_m"] = radius * finest;
     filt["box_radii_vox"] = fr;
+  }
+  if (cfg.filter == ImageFilter::gaussian) {
+    filt["sigma_vox"] = sigma;
+    filt["sigma_m"] = sigma * finest;
   }
   summary["filter"] = filt;
   std::vector<double> t;

@@ -156,7 +156,7 @@ void check_segment_options(const SegmentConfig& c) {
 // are counted by read_volume.
 double segment_bytes_per_voxel(const SegmentConfig& c) {
   double b = 12;
-  if (c.filter == ImageFilter::gaussian || c.filter == ImageFilter::cad || c.filter == ImageFilter::nlm) b += 8;  // ITK images in and out
+  if (c.filter == ImageFilter::cad || c.filter == ImageFilter::nlm) b += 8;  // ITK images in and out (the Gaussian works in place)
   if (c.grains) b += 14;                                                        // Maurer distance, markers, flood, labels
   if (!c.vdb.empty()) b += 18;                                                  // smoothed indicator, fog and level-set grids
   return b;
@@ -249,7 +249,7 @@ json apply_filter(const SegmentConfig& cfg, Volume& v) {
     filt["radius_m"] = radius * finest;
     filt["box_radii_vox"] = radii;
   } else if (cfg.filter == ImageFilter::gaussian) {
-    v = gaussian(v, sigma);
+    gaussian_inplace(v, sigma);
     filt["sigma_vox"] = sigma;
     filt["sigma_m"] = sigma * finest;
   } else if (cfg.filter == ImageFilter::cad) {

@@ -55,6 +55,7 @@ TEST(SegmentChunked, LabelsIdenticalToInMemory) {
       {"otsu_c16", iso, "--chunk 16"},
       {"intermeans_aniso_c20", "--method intermeans --spacing 10um,10um,20um --macropore-radius 2vox --macropore-min-voxels 30", "--chunk 20"},
       {"multiotsu3_r2_c24", iso + " --method multiotsu3 --filter-radius 2vox --macropore-radius 1.5vox", "--chunk 24"},
+      {"gaussian_intermeans_aniso_c20", " --filter gaussian --sigma 1.5vox --method intermeans --spacing 10um,10um,20um", "--chunk 20"},
       {"none_peaks_budget", iso + " --filter none --method peaks", "--memory 72MB"}  // 64 voxels per side from the budget,
   };
   for (const auto& c : cases) {
@@ -267,7 +268,7 @@ TEST(SegmentChunked, BadInputExit2WithNumbers) {
       {raw_args + iso + " --grains --memory 86MB",
        "'--memory': value '86MB': is below what grain separation needs with the smallest block (32 voxels per side): 105 MB"},
       {raw_args + iso + " --chunk 16 --min-island 10", "'--min-island': value '10'"},
-      {raw_args + iso + " --chunk 16 --filter gaussian", "'--filter': value 'gaussian'"},
+      {raw_args + iso + " --chunk 16 --filter cad", "'--filter': value 'cad'"},
       {raw_args + iso + " --chunk 16 --method hysteresis --levels 1,2", "'--method': value 'hysteresis'"},
       {raw_args + iso + " --chunk 16 --mha " + (d / "x.mha").string(), "'--mha'"},
   };

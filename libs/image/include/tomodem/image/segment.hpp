@@ -34,8 +34,17 @@ std::array<int, 3> radii_for_length(const Volume& v, double r_vox);
 /// The same on a copy.
 Volume median(const Volume& v, int radius);
 /// Gaussian smoothing, sigma in voxels of the finest axis, the same length on every axis
-/// (ITK SmoothingRecursiveGaussianImageFilter with a sigma per axis).
+/// (ITK SmoothingRecursiveGaussianImageFilter with a sigma per axis: an infinite response; the
+/// phantoms' blur and the level sets' smoothing).
 Volume gaussian(const Volume& v, double sigma_vox);
+/// The half-widths of gaussian_inplace's kernel along each axis: ceil(4 sigma_axis) voxels,
+/// sigma_axis = sigma_vox × finest spacing / the axis's spacing.
+std::array<int, 3> gaussian_radii(const Volume& v, double sigma_vox);
+/// Gaussian smoothing in place (`--filter gaussian`): the sampled Gaussian cut at 4 sigma
+/// (scipy.ndimage's default) and normalised to sum 1, one axis after the other, borders
+/// replicated, sums in double (own code, OpenMP). A voxel depends only on the voxels within
+/// gaussian_radii of it, so a block with that halo gives its core exactly (the chunked path).
+void gaussian_inplace(Volume& v, double sigma_vox);
 /// Curvature anisotropic diffusion (ITK, on the voxel spacing relative to the finest axis); time
 /// step 0.0625 is the 3-D stability limit for the finest axis.
 Volume anisotropic_diffusion(const Volume& v, int iterations, double conductance, double time_step = 0.0625);
