@@ -472,6 +472,37 @@ std::vector<float> edt_to(const Mask& m, bool to_set) {
 
 std::vector<float> distance_squared(const Mask& m) { return edt_to(m, false); }
 
+std::vector<float> signed_contour_distance(const Mask& solid) {
+  const Dims& d = solid.dims;
+  const std::ptrdiff_t nx = std::ptrdiff_t(d.nx), ny = std::ptrdiff_t(d.ny), nz = std::ptrdiff_t(d.nz);
+  std::vector<float> g(solid.v.size());
+  // The contour: solid voxels with a pore among their 26 neighbours inside the volume (ITK's
+  // BinaryContourImageFilter, fully connected, as SignedMaurerDistanceMapImageFilter sets it).
+#pragma omp parallel for schedule(static)
+  for (std::ptrdiff_t z = 0; z < nz; ++z)
+    for (std::ptrdiff_t y = 0; y < ny; ++y)
+      for (std::ptrdiff_t x = 0; x < nx; ++x) {
+        const std::size_t i = std::size_t((z * ny + y) * nx + x);
+        bool contour = false;
+        if (solid.v[i])
+          for (std::ptrdiff_t c = std::max<std::ptrdiff_t>(z - 1, 0); c <= std::min(z + 1, nz - 1) && !contour; ++c)
+            for (std::ptrdiff_t b = std::max<std::ptrdiff_t>(y - 1, 0); b <= std::min(y + 1, ny - 1) && !contour; ++b)
+              for (std::ptrdiff_t a = std::max<std::ptrdiff_t>(x - 1, 0); a <= std::min(x + 1, nx - 1); ++a)
+                if (!solid.v[std::size_t((c * ny + b) * nx + a)]) {
+                  contour = true;
+                  break;
+                }
+        g[i] = contour ? 0.0f : kInf;
+      }
+  edt_inplace(g, d, solid.spacing);
+#pragma omp parallel for schedule(static)
+  for (std::size_t i = 0; i < g.size(); ++i) {
+    const float r = std::sqrt(g[i]);
+    g[i] = solid.v[i] ? r : -r;
+  }
+  return g;
+}
+
 Mask erode_ball(const Mask& m, double r) {
   const auto d2 = edt_to(m, false);
   Mask out;

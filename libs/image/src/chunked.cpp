@@ -28,14 +28,17 @@
 //   The tests compare the grains with the in-memory path's (tests/e2e/segment).
 #include <hdf5.h>
 #include <fcntl.h>
+#include <omp.h>
 #include <unistd.h>
 
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <exception>
 #include <filesystem>
 #include <limits>
 #include <map>
@@ -337,12 +340,13 @@ struct MemoryModel {
   double fixed = 0, per_block = 0;
   double total() const { return fixed + per_block; }
 };
-// Grains (grains_halo > 0): the ITK distance map, markers and watershed of one block with its
-// halo, 40 bytes per voxel (measured with ITK's h-maxima and watershed, docs/segment.md; the own
-// ones need less); the stages run one after the other.
-constexpr double kGrainsBytesPerBlockVoxel = 40;
+// Grains (grains_halo > 0): the distance map, markers and watershed of one block with its halo,
+// 24 bytes per voxel (15-17 measured at 512^3 with one and two blocks at once, docs/segment.md:
+// the block, its distance, markers, labels and the flood's queues); `grain_blocks` blocks are
+// worked on at once (one per thread).
+constexpr double kGrainsBytesPerBlockVoxel = 24;
 MemoryModel memory_model(const Dims& d, std::size_t chunk, std::size_t halo, bool phase2, const BlockSource& src,
-                         std::size_t grains_halo = 0) {
+                         std::size_t grains_halo = 0, std::size_t grain_blocks = 1) {
   const std::size_t type_bytes = src.type_bytes();
   const double N = double(d.nx) * double(d.ny) * double(d.nz);
   const double words = double((d.nx + 63) / 64) * double(d.ny) * double(d.nz) * 8;
@@ -353,17 +357,37 @@ MemoryModel memory_model(const Dims& d, std::size_t chunk, std::size_t halo, boo
   m.per_block = s * s * s * (6 + double(std::min<std::size_t>(type_bytes, 8)) / 2) + c * c * c * 15 + src.reader_bytes();
   if (grains_halo > 0) {
     const double g = double(chunk + 2 * grains_halo);
-    m.per_block = std::max(m.per_block, g * g * g * kGrainsBytesPerBlockVoxel + c * c * c * 19);
+    m.per_block = std::max(m.per_block, double(grain_blocks) * (g * g * g * kGrainsBytesPerBlockVoxel + c * c * c * 19));
   }
   return m;
 }
 
+// Runs f(k) for the blocks k = 0..count-1, `workers` of them at once; the first exception one
+// throws is rethrown after the loop (none may leave an OpenMP region).
+template <class F>
+void each_block(std::size_t count, std::size_t workers, F&& f) {
+  std::exception_ptr error;
+  std::atomic<bool> failed{false};
+#pragma omp parallel for schedule(dynamic, 1) num_threads(int(workers))
+  for (std::ptrdiff_t k = 0; k < std::ptrdiff_t(count); ++k) {
+    if (failed) continue;
+    try {
+      f(std::size_t(k));
+    } catch (...) {
+#pragma omp critical(tomodem_block_error)
+      if (!error) error = std::current_exception();
+      failed = true;
+    }
+  }
+  if (error) std::rethrow_exception(error);
+}
+
 /// The largest block edge, a multiple of 32 below `below`, whose plan fits `budget`; 0 if none.
 std::size_t largest_block(const Dims& d, std::size_t halo, bool phase2, const BlockSource& src, std::size_t grains_halo,
-                          double budget, std::size_t below) {
+                          std::size_t grain_blocks, double budget, std::size_t below) {
   std::size_t best = 0;
   for (std::size_t c = 32; c < below; c += 32)
-    if (memory_model(d, c, halo, phase2, src, grains_halo).total() <= budget) best = c;
+    if (memory_model(d, c, halo, phase2, src, grains_halo, grain_blocks).total() <= budget) best = c;
   return best;
 }
 
@@ -557,15 +581,17 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
   // Grains: the halo is known once the largest inscribed radius is (below); the block size from
   // --memory plans for grains up to 10 voxels in radius (a halo of 24) and is checked again then.
   const std::size_t grains_guess = cfg.grains ? std::max<std::size_t>(halo, 24) : 0;
+  // The grains' markers and watershed are serial within a block: one block per thread at once.
+  const std::size_t workers = cfg.grains ? std::size_t(std::max(1, omp_get_max_threads())) : 1;
 
   // The block size: given (--chunk), or the largest multiple of 32 the budget (--memory) allows.
   const double budget = cfg.memory_text.empty() ? 0 : parse_bytes(cfg.memory_text);
   std::size_t chunk = cfg.chunk;
   const std::size_t biggest = std::max({D.nx, D.ny, D.nz});
   if (chunk == 0) {
-    chunk = largest_block(D, halo, phase2, src, grains_guess, budget, biggest + 32);
+    chunk = largest_block(D, halo, phase2, src, grains_guess, workers, budget, biggest + 32);
     if (chunk == 0) {
-      const MemoryModel m = memory_model(D, std::max<std::size_t>(halo, 32), halo, phase2, src, grains_guess);
+      const MemoryModel m = memory_model(D, std::max<std::size_t>(halo, 32), halo, phase2, src, grains_guess, workers);
       throw InputError("", "--memory", cfg.as_written.count("--memory") ? cfg.as_written.at("--memory") : cfg.memory_text,
                        "is below what one block needs: " + bytes_text(m.total()) + " for the smallest block (" +
                            std::to_string(std::max<std::size_t>(halo, 32)) + " voxels per side with a halo of " +
@@ -581,7 +607,7 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
                          ", macropores 2r + 2 = " + std::to_string(mhalo) + " at r = " + value_text(macro_r) +
                          " voxels): a block would be mostly halo; give --chunk >= " + std::to_string(halo));
   chunk = std::min(chunk, biggest);
-  MemoryModel mem = memory_model(D, chunk, halo, phase2, src, grains_guess);
+  MemoryModel mem = memory_model(D, chunk, halo, phase2, src, grains_guess, workers);
   if (budget > 0 && mem.total() > budget)
     throw InputError("", "--memory", cfg.as_written.count("--memory") ? cfg.as_written.at("--memory") : cfg.memory_text,
                      "is below what --chunk " + std::to_string(chunk) + " needs: " + bytes_text(mem.total()) + " (" +
@@ -736,11 +762,11 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
     }
     ghalo = std::size_t(std::ceil(2 * inscribed_max)) + 4;
     done("grains_radius");
-    mem = memory_model(D, chunk, halo, phase2, src, ghalo);
+    mem = memory_model(D, chunk, halo, phase2, src, ghalo, workers);
     if (budget > 0 && mem.total() > budget) {
       // The block the budget holds with this halo (a multiple of 32, at least the halo): the
       // tool's own choice is re-planned with it; a --chunk the user gave is refused, naming it.
-      std::size_t fits = largest_block(D, halo, phase2, src, ghalo, budget, chunk);
+      std::size_t fits = largest_block(D, halo, phase2, src, ghalo, workers, budget, chunk);
       if (fits < halo) fits = 0;  // a block must be at least its halo
       if (fits && cfg.chunk == 0) {
         info("grains: a halo of " + std::to_string(ghalo) + " (largest inscribed radius " + value_text(inscribed_max) + " voxels) needs " +
@@ -749,12 +775,12 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
         replanned_from = chunk;
         chunk = fits;
         G = Grid3(D, chunk);
-        mem = memory_model(D, chunk, halo, phase2, src, ghalo);
+        mem = memory_model(D, chunk, halo, phase2, src, ghalo, workers);
       } else {
         // The tool's own block is refused only when the smallest block does not fit either.
         const std::size_t smallest = std::min(std::max<std::size_t>(halo, 32), chunk);
         const std::string block = cfg.chunk ? "--chunk " + std::to_string(chunk) : "the smallest block (" + std::to_string(smallest) + " voxels per side)";
-        if (!cfg.chunk) mem = memory_model(D, smallest, halo, phase2, src, ghalo);
+        if (!cfg.chunk) mem = memory_model(D, smallest, halo, phase2, src, ghalo, workers);
         throw InputError("", "--memory", cfg.as_written.count("--memory") ? cfg.as_written.at("--memory") : cfg.memory_text,
                          "is below what grain separation needs with " + block + ": " + bytes_text(mem.total()) +
                              " (the solid's largest inscribed radius is " + value_text(inscribed_max) + " voxels, so a grains halo of " +
@@ -905,17 +931,20 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
   // 4b. Grains (--grains): the markers, numbered over the volume; the watershed runs block by
   // block with the outputs (5).
   if (cfg.grains) {
-    Mask m;
     // Marker voxels of each core, from its block with the grains halo.
     const std::array<std::size_t, 3> gh{ghalo, ghalo, ghalo};
-    for (std::size_t k = 0; k < G.count(); ++k) {
+    std::vector<std::vector<uint64_t>> found(G.count());
+    each_block(G.count(), workers, [&](std::size_t k) {
       const Box core = G.core(k), outer = core.grown(gh, D);
+      Mask m;
       solid_block(outer, m);
       const Mask peaks = grain_peaks(m, go);
       for_core(outer, core, [&](std::size_t i, std::size_t x, std::size_t y, std::size_t z) {
-        if (peaks.v[i]) peak_at.push_back((z * D.ny + y) * D.nx + x);
+        if (peaks.v[i]) found[k].push_back((z * D.ny + y) * D.nx + x);
       });
-    }
+    });
+    for (auto& f : found) peak_at.insert(peak_at.end(), f.begin(), f.end());
+    std::vector<std::vector<uint64_t>>().swap(found);
     // 26-connected marker components over the whole volume, numbered by first voxel.
     std::sort(peak_at.begin(), peak_at.end());
     std::vector<std::size_t> up(peak_at.size());
@@ -1009,16 +1038,17 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
     // The widest halo a block may take: what the budget (or twice the plan) allows.
     const double limit = budget > 0 ? budget : 2 * mem.total();
     std::size_t cap = ghalo;
-    while (memory_model(D, chunk, halo, phase2, src, 2 * cap).total() <= limit) cap *= 2;
-    Mask m;
-    Labels markers, L;
-    std::vector<int32_t> ids;
-    for (std::size_t k = 0; k < G.count(); ++k) {
+    while (memory_model(D, chunk, halo, phase2, src, 2 * cap, workers).total() <= limit) cap *= 2;
+    each_block(G.count(), workers, [&](std::size_t k) {
       const Box core = G.core(k);
       Box outer;
+      Mask m;
+      Labels markers, L;
+      std::vector<int32_t> far;
+      std::size_t H = ghalo, times_widened = 0;
       // The block's watershed with the grains halo; twice as wide while a grain of the core
       // reaches its edge (a grain longer than the halo), up to the cap.
-      for (std::size_t H = ghalo;; H *= 2) {
+      for (;; H *= 2) {
         outer = core.grown({H, H, H}, D);
         solid_block(outer, m);
         markers.copy_geometry(m);
@@ -1032,35 +1062,40 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
                   peak_id[std::size_t(it - peak_at.begin())];
           }
         L = watershed_from_markers(m, markers, go);
-        const auto far = reaching_edge(outer, core, m, L);
-        if (far.empty() || whole(outer) || 2 * H > cap) {
-          for (auto id : far)
-            if (id > 0) at_edge[std::size_t(id)] = 1;
-          for_core(outer, core, [&](std::size_t i, std::size_t, std::size_t, std::size_t) { solid_without_grain += m.v[i] && !L.v[i]; });
-          widest = std::max(widest, H);
-          break;
-        }
-        ++widened;
+        far = reaching_edge(outer, core, m, L);
+        if (far.empty() || whole(outer) || 2 * H > cap) break;
+        ++times_widened;
       }
       const auto d2 = distance_squared(m);  // exact in the core: the halo passes the largest distance
-      ids.assign(core.dims().count(), 0);
-      std::size_t j = 0;
-      for_core(outer, core, [&](std::size_t i, std::size_t x, std::size_t y, std::size_t z) {
-        const int32_t id = L.v[i];
-        ids[j++] = id;
-        if (!id) return;
-        auto& R = grain_regs[std::size_t(id - 1)];
-        ++R.voxels;
-        auto& s = grain_sum[std::size_t(id - 1)];
-        s[0] += double(x);
-        s[1] += double(y);
-        s[2] += double(z);
-        if (x == 0 || y == 0 || z == 0 || x + 1 == D.nx || y + 1 == D.ny || z + 1 == D.nz) R.touches_surface = true;
-        inscribed[std::size_t(id)] = std::max(inscribed[std::size_t(id)], d2[i]);
-        if (phase2 && second.get(x, y, z)) ++n_phase2[std::size_t(id)];
-      });
-      if (out) out->write_grains(core, ids);
-    }
+      std::vector<int32_t> ids(core.dims().count(), 0);
+      // The sums are whole numbers in doubles (the same in any block order); one block at a time.
+#pragma omp critical(tomodem_grains_sums)
+      {
+        widened += times_widened;
+        widest = std::max(widest, H);
+        for (auto id : far)
+          if (id > 0) at_edge[std::size_t(id)] = 1;
+        std::size_t j = 0;
+        for_core(outer, core, [&](std::size_t i, std::size_t x, std::size_t y, std::size_t z) {
+          const int32_t id = L.v[i];
+          ids[j++] = id;
+          if (!id) {
+            solid_without_grain += m.v[i];
+            return;
+          }
+          auto& R = grain_regs[std::size_t(id - 1)];
+          ++R.voxels;
+          auto& s = grain_sum[std::size_t(id - 1)];
+          s[0] += double(x);
+          s[1] += double(y);
+          s[2] += double(z);
+          if (x == 0 || y == 0 || z == 0 || x + 1 == D.nx || y + 1 == D.ny || z + 1 == D.nz) R.touches_surface = true;
+          inscribed[std::size_t(id)] = std::max(inscribed[std::size_t(id)], d2[i]);
+          if (phase2 && second.get(x, y, z)) ++n_phase2[std::size_t(id)];
+        });
+        if (out) out->write_grains(core, ids);
+      }
+    });
     done("grains_watershed");
   };
   try {

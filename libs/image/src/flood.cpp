@@ -1,20 +1,23 @@
-// The grains' markers (h-maxima's regional maxima) and their watershed on a distance map.
-// ITK's HMaxima, RegionalMaxima and MorphologicalWatershedFromMarkers did this before, with the
-// same results: they walk the volume with neighbourhood iterators and the watershed floods the
-// pores too, 90 % of the chunked grains run at 1024^3 (docs/benchmarks.md, "tomodem-segment").
+// The grains: the signed distance to the solid's contour (binary.cpp), its markers (h-maxima's
+// regional maxima) and their watershed. ITK's SignedMaurerDistanceMap, HMaxima, RegionalMaxima
+// and MorphologicalWatershedFromMarkers did this before, with the same results: they walk the
+// volume with neighbourhood iterators and the watershed floods the pores too, 90 % of the
+// chunked grains run at 1024^3 (docs/benchmarks.md, "tomodem-segment").
 // Here the h-maxima transform is two scans and a queue, the maxima one pass and a spread, and the
 // watershed a hierarchical queue: one first-in-first-out queue per distinct height makes every
 // push and pop O(1), and the queue of a height is taken in the order its voxels were reached.
-#include "flood.hpp"
-
 #include <algorithm>
 #include <cstdint>
 #include <cstdlib>
 #include <deque>
 #include <functional>
 #include <limits>
+#include <string>
 #include <unordered_set>
 #include <vector>
+
+#include "tomodem/core/progress.hpp"
+#include "tomodem/image/segment.hpp"
 
 namespace tomodem::image {
 namespace {
@@ -185,8 +188,9 @@ Labels flood(const float* h, const Mask& solid, const Labels& markers, int conne
   return out;
 }
 
-}  // namespace
-
+// The markers of the grains: the regional maxima (`connectivity` 6 or 26, a flat image is one
+// maximum) of the h-maxima transform of `height` (its reconstruction by dilation, 6-connected,
+// from height - h; h rounded to float, as ITK's HMaximaImageFilter does), within the solid.
 Mask grain_markers(const float* height, const Mask& solid, double h, int connectivity) {
   const std::size_t N = solid.v.size();
   // ITK's HMaximaImageFilter: the height is a pixel value (float), the shift done in double.
@@ -201,9 +205,38 @@ Mask grain_markers(const float* height, const Mask& solid, double h, int connect
   return out;
 }
 
+// Floods `solid` from the labelled `markers` (> 0), the highest `height` first: Meyer's flooding
+// with a hierarchical queue. A voxel takes the label of the voxel that reaches it first; the
+// voxels of one height are taken in the order they were reached, the markers first in raster
+// order. Pore voxels stay 0, and so do solid voxels no marker reaches through the solid.
 Labels flood_from_markers(const float* height, const Mask& solid, const Labels& markers, int connectivity) {
   if (solid.v.size() <= std::numeric_limits<uint32_t>::max()) return flood<uint32_t>(height, solid, markers, connectivity);
   return flood<uint64_t>(height, solid, markers, connectivity);
+}
+
+}  // namespace
+
+Labels watershed_grains(const Mask& solid, const GrainOptions& opt, int* count) {
+  // Progress on stderr (unless -q): the distance map and its maxima are the first half of the
+  // work, the watershed the second (measured on the demo scan: about equal).
+  Progress bar("grain separation", 1.0);
+  const std::vector<float> d = signed_contour_distance(solid);
+  bar.update(0.25, "maxima");
+  int n = 0;
+  const Labels markers = components(grain_markers(d.data(), solid, opt.h, opt.connectivity), 26, &n);
+  bar.update(0.5, "watershed");
+  Labels out = flood_from_markers(d.data(), solid, markers, opt.connectivity);
+  bar.finish(std::to_string(n) + " grains");
+  if (count) *count = n;
+  return out;
+}
+
+Mask grain_peaks(const Mask& solid, const GrainOptions& opt) {
+  return grain_markers(signed_contour_distance(solid).data(), solid, opt.h, opt.connectivity);
+}
+
+Labels watershed_from_markers(const Mask& solid, const Labels& markers, const GrainOptions& opt) {
+  return flood_from_markers(signed_contour_distance(solid).data(), solid, markers, opt.connectivity);
 }
 
 }  // namespace tomodem::image

@@ -157,7 +157,7 @@ void check_segment_options(const SegmentConfig& c) {
 double segment_bytes_per_voxel(const SegmentConfig& c) {
   double b = 12;
   if (c.filter == ImageFilter::cad || c.filter == ImageFilter::nlm) b += 8;  // ITK images in and out (the Gaussian works in place)
-  if (c.grains) b += 14;                                                        // Maurer distance, markers, flood, labels
+  if (c.grains) b += 14;                                                        // contour distance, markers, flood, labels
   if (!c.vdb.empty()) b += 18;                                                  // smoothed indicator, fog and level-set grids
   return b;
 }

@@ -34,10 +34,16 @@ typename itk::Image<P, 3>::Pointer to_itk(const Grid<T>& g) {
 
 using FI = itk::Image<float, 3>;
 
-// The signed Maurer distance (inside positive), as morph_itk.cpp computes it (isotropic voxels).
+// ITK's signed Maurer distance (inside positive), in voxels of the finest axis, as tomodem used
+// it before issue 19 (now signed_contour_distance).
 FI::Pointer itk_distance(const Mask& solid) {
   auto dist = itk::SignedMaurerDistanceMapImageFilter<itk::Image<uint8_t, 3>, FI>::New();
-  dist->SetInput(to_itk<uint8_t>(solid));
+  auto in = to_itk<uint8_t>(solid);
+  const double finest = std::min({solid.spacing[0], solid.spacing[1], solid.spacing[2]});
+  itk::Image<uint8_t, 3>::SpacingType sp;
+  for (unsigned a = 0; a < 3; ++a) sp[a] = solid.spacing[a] / finest;
+  in->SetSpacing(sp);
+  dist->SetInput(in);
   dist->SetInsideIsPositive(true);
   dist->SetSquaredDistance(false);
   dist->SetUseImageSpacing(true);
@@ -102,6 +108,39 @@ Mask packing_solid(uint64_t seed) {
 }
 
 }  // namespace
+
+// The own signed distance against ITK's Maurer filter: every voxel equal on isotropic voxels
+// (integer squared distances, exact in float on both sides); on anisotropic voxels ITK weighs,
+// squares and sums the steps in float where we do it in double and round once, so the two part
+// in the last bits (measured: up to 7.6e-6 relative at z spacing 1.7; bound 2e-5).
+// The packings touch the volume's faces, and the slab checks a solid that fills whole planes.
+TEST(Watershed, OwnSignedDistanceIsItksMaurerDistance) {
+  for (uint64_t seed : {1, 2, 3})
+    for (double sz : {1.0, 1.7}) {
+      Mask solid = packing_solid(seed);
+      solid.spacing = {1e-5, 1e-5, sz * 1e-5};
+      const std::vector<float> ours = signed_contour_distance(solid);
+      const FI::Pointer itk = itk_distance(solid);
+      std::size_t differ = 0;
+      double worst = 0;
+      for (std::size_t i = 0; i < solid.v.size(); ++i) {
+        const double a = ours[i], b = itk->GetBufferPointer()[i];
+        differ += a != b;
+        worst = std::max(worst, std::abs(a - b) / std::max(1.0, std::abs(b)));
+      }
+      if (sz == 1.0) {
+        EXPECT_EQ(differ, 0u) << "seed " << seed;
+      }
+      EXPECT_LT(worst, 2e-5) << "seed " << seed << ", z spacing " << sz;
+    }
+  Mask slab(Dims{12, 10, 9});
+  for (std::size_t i = 0; i < slab.v.size(); ++i) slab.v[i] = i / (12 * 10) < 4;  // z < 4 solid
+  const std::vector<float> ours = signed_contour_distance(slab);
+  const FI::Pointer itk = itk_distance(slab);
+  for (std::size_t i = 0; i < slab.v.size(); ++i) ASSERT_EQ(ours[i], itk->GetBufferPointer()[i]) << "voxel " << i;
+  EXPECT_EQ(ours[slab.index(5, 5, 0)], 3.0f);   // three planes above the contour plane z = 3
+  EXPECT_EQ(ours[slab.index(5, 5, 6)], -3.0f);  // three planes above the solid
+}
 
 // The h-maxima transform and the regional maxima are defined without ties (a reconstruction and
 // the plateaus with no greater neighbour): the same marker voxels as ITK's, for heights below,

@@ -91,6 +91,11 @@ Mask hysteresis(const Volume& v, double low, double high);
 /// Squared Euclidean distance (in finest voxels²; exact for anisotropic spacing) of every voxel to the nearest voxel where m == 0
 /// (for m != 0 voxels; 0 elsewhere). Felzenszwalb–Huttenlocher, exact, separable.
 std::vector<float> distance_squared(const Mask& m);
+/// The signed distance of ITK's SignedMaurerDistanceMapImageFilter (inside positive, image
+/// spacing, in finest voxels): in the solid, the distance to its nearest contour voxel (a solid
+/// voxel with a pore among its 26 neighbours; 0 on the contour); in the pores, minus the distance
+/// to the nearest solid voxel. Exact and separable (one transform, to the contour).
+std::vector<float> signed_contour_distance(const Mask& solid);
 Mask erode_ball(const Mask& m, double r);   ///< Euclidean ball of radius r (finest voxels; round in metres)
 Mask dilate_ball(const Mask& m, double r);
 Mask open_ball(const Mask& m, double r);
@@ -130,7 +135,7 @@ double specific_surface(const Mask& m);
 /// The same from the counts of unlike neighbour pairs along x, y and z (one formula for both paths).
 double specific_surface(double fx, double fy, double fz, const Dims& d, const std::array<double, 3>& spacing);
 
-// ---- macropores and grains (morph_itk.cpp, binary.cpp) ----
+// ---- macropores and grains (binary.cpp, flood.cpp) ----
 /// Macropores = pore voxels within r + 1 of the centres where a ball of radius r (voxels) fits
 /// in the pores (an opening whose dilation is one voxel wider, restricted to the pores, so the
 /// digital ball's lost surface voxels come back); labelled (6-connectivity), filtered by min_voxels.
@@ -143,7 +148,7 @@ struct GrainOptions {
   double h = 1.0;            ///< h-maxima height of the distance map (voxels)
   int connectivity = 26;     ///< of markers and watershed
 };
-/// Separates touching grains of `solid`: signed Maurer distance (ITK), h-maxima markers,
+/// Separates touching grains of `solid`: signed contour distance (as ITK's Maurer), h-maxima markers,
 /// morphological watershed from markers on -distance, restricted to the solid.
 Labels watershed_grains(const Mask& solid, const GrainOptions& opt, int* count);
 /// watershed_grains in its two steps, for a block of a larger volume (the chunked path numbers the
