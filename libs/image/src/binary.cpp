@@ -107,31 +107,35 @@ void median27_row(const float* const* rows, std::size_t nx, float* out, float* S
 }
 }  // namespace
 
-std::array<int, 3> radii_for_length(const Volume& v, double r_vox) {
+namespace {
+// A length given in voxels of the finest axis, in voxels of each axis.
+std::array<double, 3> along_each_axis(const Volume& v, double length_vox) {
   const double finest = std::min({v.spacing[0], v.spacing[1], v.spacing[2]});
-  std::array<int, 3> r{};
+  return {length_vox * finest / v.spacing[0], length_vox * finest / v.spacing[1], length_vox * finest / v.spacing[2]};
+}
+}  // namespace
+
+std::array<int, 3> radii_for_length(const Volume& v, double r_vox) {
+  const std::array<double, 3> l = along_each_axis(v, r_vox);
   // The voxel centres within r along each axis; 1e-9 keeps 1um/1um at 1 despite round-off.
-  for (int a = 0; a < 3; ++a) r[std::size_t(a)] = int(std::floor(r_vox * finest / v.spacing[std::size_t(a)] + 1e-9));
-  return r;
+  return {int(std::floor(l[0] + 1e-9)), int(std::floor(l[1] + 1e-9)), int(std::floor(l[2] + 1e-9))};
 }
 
 std::array<int, 3> gaussian_radii(const Volume& v, double sigma_vox) {
-  const double finest = std::min({v.spacing[0], v.spacing[1], v.spacing[2]});
-  std::array<int, 3> r{};
-  for (std::size_t a = 0; a < 3; ++a) r[a] = int(std::ceil(4 * sigma_vox * finest / v.spacing[a] - 1e-9));
-  return r;
+  const std::array<double, 3> l = along_each_axis(v, 4 * sigma_vox);
+  return {int(std::ceil(l[0] - 1e-9)), int(std::ceil(l[1] - 1e-9)), int(std::ceil(l[2] - 1e-9))};
 }
 
 void gaussian_inplace(Volume& v, double sigma_vox) {
   if (!(sigma_vox > 0)) throw InputError("", "--sigma", std::to_string(sigma_vox), "must be > 0 (voxels)");
-  const double finest = std::min({v.spacing[0], v.spacing[1], v.spacing[2]});
+  const std::array<double, 3> sigma = along_each_axis(v, sigma_vox);
   const std::array<int, 3> radii = gaussian_radii(v, sigma_vox);
   const std::array<std::size_t, 3> n{v.dims.nx, v.dims.ny, v.dims.nz};
   const std::size_t nx = n[0], ny = n[1], nz = n[2];
   for (std::size_t a = 0; a < 3; ++a) {
     const int r = radii[a];
     if (n[a] < 2 || r < 1) continue;  // one sample, or a kernel narrower than a voxel: unchanged
-    const double s = sigma_vox * finest / v.spacing[a];
+    const double s = sigma[a];
     std::vector<double> w(std::size_t(2 * r + 1));
     for (int k = -r; k <= r; ++k) w[std::size_t(k + r)] = std::exp(-0.5 * k * k / (s * s));
     const double sum = std::accumulate(w.begin(), w.end(), 0.0);

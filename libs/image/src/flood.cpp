@@ -38,7 +38,11 @@ class Neighbours {
   // g(j) for every neighbour j of voxel i inside the volume.
   template <class G>
   void each(std::size_t i, G&& g) const {
-    const std::size_t x = i % nx_, y = i / nx_ % ny_, z = i / (nx_ * ny_);
+    each_at(i, i % nx_, i / nx_ % ny_, i / (nx_ * ny_), g);
+  }
+  // The same for voxel i at (x, y, z), for loops that know them (no divisions).
+  template <class G>
+  void each_at(std::size_t i, std::size_t x, std::size_t y, std::size_t z, G&& g) const {
     if (x > 0 && x + 1 < nx_ && y > 0 && y + 1 < ny_ && z > 0 && z + 1 < nz_) {
       for (const Step& s : steps_) g(std::size_t(std::ptrdiff_t(i) + s.offset));
       return;
@@ -105,16 +109,22 @@ void reconstruct_by_dilation(std::vector<float>& g, const float* f, const Dims& 
 std::vector<uint8_t> regional_maxima(const std::vector<float>& g, const Dims& d, int connectivity) {
   const std::size_t N = g.size();
   const Neighbours nb(d, connectivity);
+  const auto each_voxel = [&](auto&& f) {  // f(i, x, y, z) in raster order
+    for (std::size_t z = 0, i = 0; z < d.nz; ++z)
+      for (std::size_t y = 0; y < d.ny; ++y)
+        for (std::size_t x = 0; x < d.nx; ++x, ++i) f(i, x, y, z);
+  };
   std::vector<uint8_t> top(N, 1);
-  for (std::size_t i = 0; i < N; ++i)
-    nb.each(i, [&](std::size_t j) { top[i] &= !(g[j] > g[i]); });
+  each_voxel([&](std::size_t i, std::size_t x, std::size_t y, std::size_t z) {
+    nb.each_at(i, x, y, z, [&](std::size_t j) { top[i] &= !(g[j] > g[i]); });
+  });
   // A plateau that touches a greater value anywhere is no maximum: spread that through it.
   std::vector<std::size_t> stack;
-  for (std::size_t i = 0; i < N; ++i) {
-    if (!top[i]) continue;
+  each_voxel([&](std::size_t i, std::size_t x, std::size_t y, std::size_t z) {
+    if (!top[i]) return;
     bool on_spoiled_plateau = false;
-    nb.each(i, [&](std::size_t j) { on_spoiled_plateau |= !top[j] && g[j] == g[i]; });
-    if (!on_spoiled_plateau) continue;
+    nb.each_at(i, x, y, z, [&](std::size_t j) { on_spoiled_plateau |= !top[j] && g[j] == g[i]; });
+    if (!on_spoiled_plateau) return;
     top[i] = 0;
     stack.push_back(i);
     while (!stack.empty()) {
@@ -127,7 +137,7 @@ std::vector<uint8_t> regional_maxima(const std::vector<float>& g, const Dims& d,
         }
       });
     }
-  }
+  });
   return top;
 }
 
