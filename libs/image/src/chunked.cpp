@@ -1069,8 +1069,10 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
       const auto d2 = distance_squared(m);  // exact in the core: the halo passes the largest distance
       std::vector<int32_t> ids(core.dims().count(), 0);
       // The sums are whole numbers in doubles (the same in any block order); one block at a time.
+      // An exception (the write: a full disk) may not leave the critical section: kept, rethrown.
+      std::exception_ptr error;
 #pragma omp critical(tomodem_grains_sums)
-      {
+      try {
         widened += times_widened;
         widest = std::max(widest, H);
         for (auto id : far)
@@ -1094,7 +1096,10 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
           if (phase2 && second.get(x, y, z)) ++n_phase2[std::size_t(id)];
         });
         if (out) out->write_grains(core, ids);
+      } catch (...) {
+        error = std::current_exception();
       }
+      if (error) std::rethrow_exception(error);
     });
     done("grains_watershed");
   };
