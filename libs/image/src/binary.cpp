@@ -612,29 +612,27 @@ int remove_islands(Mask& m, std::size_t min_voxels, int connectivity) {
 }
 
 std::vector<Region> regions(const Labels& l, int n) {
-  std::vector<Region> r(static_cast<std::size_t>(n));
-  std::vector<std::array<double, 3>> sum(static_cast<std::size_t>(n), std::array<double, 3>{0, 0, 0});
+  RegionSums sums(static_cast<std::size_t>(n));
   const auto [nx, ny, nz] = l.dims;
   for (std::size_t z = 0; z < nz; ++z)
     for (std::size_t y = 0; y < ny; ++y)
       for (std::size_t x = 0; x < nx; ++x) {
         const int32_t k = l.v[l.index(x, y, z)];
-        if (k <= 0 || k > n) continue;
-        auto& R = r[std::size_t(k - 1)];
-        ++R.voxels;
-        sum[std::size_t(k - 1)][0] += double(x);
-        sum[std::size_t(k - 1)][1] += double(y);
-        sum[std::size_t(k - 1)][2] += double(z);
-        if (x == 0 || y == 0 || z == 0 || x + 1 == nx || y + 1 == ny || z + 1 == nz) R.touches_surface = true;
+        if (k > 0 && k <= n) sums.add(k, x, y, z, l.dims);
       }
-  const double vox = l.spacing[0] * l.spacing[1] * l.spacing[2];
-  for (int k = 0; k < n; ++k) {
-    auto& R = r[std::size_t(k)];
-    R.label = k + 1;
+  return sums.regions(l.origin, l.spacing);
+}
+
+std::vector<Region> RegionSums::regions(const std::array<double, 3>& origin, const std::array<double, 3>& spacing) const {
+  std::vector<Region> r = r_;
+  const double vox = spacing[0] * spacing[1] * spacing[2];
+  for (std::size_t k = 0; k < r.size(); ++k) {
+    Region& R = r[k];
+    R.label = int(k + 1);
     if (!R.voxels) continue;
     const double c = double(R.voxels);
-    R.centroid = {l.origin[0] + sum[std::size_t(k)][0] / c * l.spacing[0], l.origin[1] + sum[std::size_t(k)][1] / c * l.spacing[1],
-                  l.origin[2] + sum[std::size_t(k)][2] / c * l.spacing[2]};
+    R.centroid = {origin[0] + sum_[k][0] / c * spacing[0], origin[1] + sum_[k][1] / c * spacing[1],
+                  origin[2] + sum_[k][2] / c * spacing[2]};
     R.volume_m3 = c * vox;
     R.equivalent_diameter_m = std::cbrt(6.0 * R.volume_m3 / M_PI);
   }

@@ -977,11 +977,10 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
     info("grains: " + std::to_string(n_grains) + " markers");
   }
 
-  // 5. Outputs block by block; each macropore's statistics as regions() sums them (whole
-  // numbers in doubles: the same in any order).
+  // 5. Outputs block by block; each macropore's statistics summed as regions() sums them
+  // (RegionSums: the same in any block order).
   const int n_macro = int(kept.size());
-  std::vector<Region> regs(kept.size());
-  std::vector<std::array<double, 3>> sum(kept.size(), std::array<double, 3>{0, 0, 0});
+  RegionSums macro_sums(kept.size());
   std::size_t n_macro_vox = 0;
   const std::string legend = "0:solid,1:fine_pore,2:macropore,3:solid_phase_2";
   std::string tmp;
@@ -991,9 +990,8 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
     // No input hashes, as the in-memory writer (hashing a 16 GiB scan would read it once more).
     out = std::make_unique<LabelsWriter>(tmp, D, chunk, std::vector<std::string>{}, cfg.grains);
   }
-  // Grains: each block floods from the markers in its reach; statistics as regions() sums them.
-  std::vector<Region> grain_regs(static_cast<std::size_t>(n_grains));
-  std::vector<std::array<double, 3>> grain_sum(std::size_t(n_grains), std::array<double, 3>{0, 0, 0});
+  // Grains: each block floods from the markers in its reach; statistics as for the macropores.
+  RegionSums grain_sums(static_cast<std::size_t>(n_grains));
   std::vector<float> inscribed(std::size_t(n_grains) + 1, 0.0f);
   std::vector<std::size_t> n_phase2(std::size_t(n_grains) + 1, 0);
   std::vector<char> at_edge(std::size_t(n_grains) + 1, 0);
@@ -1085,13 +1083,7 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
             solid_without_grain += m.v[i];
             return;
           }
-          auto& R = grain_regs[std::size_t(id - 1)];
-          ++R.voxels;
-          auto& s = grain_sum[std::size_t(id - 1)];
-          s[0] += double(x);
-          s[1] += double(y);
-          s[2] += double(z);
-          if (x == 0 || y == 0 || z == 0 || x + 1 == D.nx || y + 1 == D.ny || z + 1 == D.nz) R.touches_surface = true;
+          grain_sums.add(id, x, y, z, D);
           inscribed[std::size_t(id)] = std::max(inscribed[std::size_t(id)], d2[i]);
           if (phase2 && second.get(x, y, z)) ++n_phase2[std::size_t(id)];
         });
@@ -1123,13 +1115,7 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
             if (id) {
               p = 2;
               ++n_macro_vox;
-              auto& R = regs[std::size_t(id - 1)];
-              ++R.voxels;
-              auto& s = sum[std::size_t(id - 1)];
-              s[0] += double(x);
-              s[1] += double(y);
-              s[2] += double(z);
-              if (x == 0 || y == 0 || z == 0 || x + 1 == D.nx || y + 1 == D.ny || z + 1 == D.nz) R.touches_surface = true;
+              macro_sums.add(id, x, y, z, D);
             } else if (!solid.get(x, y, z)) p = 1;
             else if (phase2 && second.get(x, y, z)) p = 3;
             phases[i] = p;
@@ -1166,31 +1152,9 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
   summary["specific_surface_per_m"] = surface;
   summary["cleaning"] = {{"open_radius_vox", 0}, {"close_radius_vox", 0}, {"min_island_vox", cfg.min_island},
                          {"solid_islands_removed", 0}, {"pore_islands_removed", 0}, {"connectivity", cfg.connectivity}};
-  {
-    const double vox = sp[0] * sp[1] * sp[2];
-    for (std::size_t k = 0; k < regs.size(); ++k) {
-      auto& R = regs[k];
-      R.label = int(k + 1);
-      const double c = double(R.voxels);
-      R.centroid = {vg.origin[0] + sum[k][0] / c * sp[0], vg.origin[1] + sum[k][1] / c * sp[1], vg.origin[2] + sum[k][2] / c * sp[2]};
-      R.volume_m3 = c * vox;
-      R.equivalent_diameter_m = std::cbrt(6.0 * R.volume_m3 / M_PI);
-    }
-    macropore_summary(regs, summary);
-  }
+  macropore_summary(macro_sums.regions(vg.origin, sp), summary);
   if (cfg.grains) {
-    const double vox = sp[0] * sp[1] * sp[2];
-    for (std::size_t k = 0; k < grain_regs.size(); ++k) {
-      auto& R = grain_regs[k];
-      R.label = int(k + 1);
-      if (!R.voxels) continue;
-      const double c = double(R.voxels);
-      R.centroid = {vg.origin[0] + grain_sum[k][0] / c * sp[0], vg.origin[1] + grain_sum[k][1] / c * sp[1],
-                    vg.origin[2] + grain_sum[k][2] / c * sp[2]};
-      R.volume_m3 = c * vox;
-      R.equivalent_diameter_m = std::cbrt(6.0 * R.volume_m3 / M_PI);
-    }
-    Packing packing = grains_packing(grain_regs, inscribed, n_phase2, D, sp, vg.origin, phase2, cfg.h, solid_without_grain, summary);
+    Packing packing = grains_packing(grain_sums.regions(vg.origin, sp), inscribed, n_phase2, D, sp, vg.origin, phase2, cfg.h, solid_without_grain, summary);
     summary.n_particles(packing.particles.size());
     write_grains_packing(cfg, packing, summary);
   }

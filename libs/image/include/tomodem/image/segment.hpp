@@ -116,6 +116,28 @@ struct Region {
 };
 /// Statistics of labels 1..n.
 std::vector<Region> regions(const Labels& l, int n);
+/// The sums behind regions(), voxel by voxel in any order: counts and centroid sums are whole
+/// numbers in doubles, so a volume summed block by block (the chunked path) gives the same.
+class RegionSums {
+ public:
+  explicit RegionSums(std::size_t n) : r_(n), sum_(n, std::array<double, 3>{0, 0, 0}) {}
+  /// Voxel (x, y, z) of a volume of dims d carries label k (1..n).
+  void add(int32_t k, std::size_t x, std::size_t y, std::size_t z, const Dims& d) {
+    Region& R = r_[std::size_t(k - 1)];
+    ++R.voxels;
+    std::array<double, 3>& s = sum_[std::size_t(k - 1)];
+    s[0] += double(x);
+    s[1] += double(y);
+    s[2] += double(z);
+    if (x == 0 || y == 0 || z == 0 || x + 1 == d.nx || y + 1 == d.ny || z + 1 == d.nz) R.touches_surface = true;
+  }
+  /// The regions in metres (origin: the centre of voxel 0); a label without voxels keeps zeros.
+  std::vector<Region> regions(const std::array<double, 3>& origin, const std::array<double, 3>& spacing) const;
+
+ private:
+  std::vector<Region> r_;
+  std::vector<std::array<double, 3>> sum_;
+};
 /// The summary keys of the macropores: `macropores` (id, voxels, volume_m3, equivalent_diameter_m,
 /// centroid_m, touches_surface), `n_macropores_touching_surface`, `pore_size_distribution`.
 void macropore_summary(const std::vector<Region>& regs, Summary& summary);
