@@ -6,7 +6,8 @@
 // mode). A volume's arrays are hundreds of MB, and each block of a chunked run allocates them
 // afresh: with 4 KiB pages the first touch of every page faults, and the distance transform's
 // passes along y and z step one page per voxel, a TLB miss each. 512^3 chunked with grains, one
-// thread: 114 s, 17 s of it in the kernel; with 2 MiB pages 87 s (docs/benchmarks.md).
+// thread, medians of three: 110.7 s, 16.4 s of it in the kernel; with 2 MiB pages 84.6 s, 5.0 s
+// in the kernel (docs/benchmarks.md, "Huge pages").
 //
 // How: what glibc's own glibc.malloc.hugetlb=1 tunable does for its mapped blocks, done here so
 // that no environment variable is needed. Blocks of at least kLarge bytes are mapped by glibc on
