@@ -15,7 +15,8 @@ WORK=${WORK:-$(mktemp -d)}
 export OMP_WAIT_POLICY=PASSIVE OMP_NUM_THREADS=2
 for s in $SIZES; do
   if [ ! -f "$WORK/labels$s.h5" ] && [ "$s" -ge 512 ]; then
-    # tomodem-phantom had not finished 512^3 after 19 min of CPU: the out-of-core benchmark's volume.
+    # 512^3: the out-of-core benchmark's volume, as when docs/conduct.md's 512^3 row was measured
+    # (tomodem-phantom then took hours at 512^3; it now takes 13 s, but the row is of this volume).
     "$BIN/segment_gen_raw" "$s" "$WORK/grey$s.raw"
     "$BIN/tomodem-segment" "$WORK/grey$s.raw" --raw-dims "$s,$s,$s" --raw-type uint16 --spacing 10um --threads 2 \
         -o "$WORK/labels$s.h5" -q --json "$WORK/made$s.json"

@@ -20,6 +20,7 @@
 
 namespace fs = std::filesystem;
 using namespace tomodem::image;
+using tomodem::Vec3;
 
 namespace {
 fs::path tmpdir(const std::string& name) {
@@ -524,6 +525,71 @@ TEST(Phantom, DefaultMacroporeCountFitsSmallSizes) {
   const tomodem::InputError e = input_error([] { tomodem::parse_name(kPhantomKindNames, "", "--kind", "nosuch"); });
   EXPECT_EQ(e.field(), "--kind");
   EXPECT_NE(std::string(e.what()).find("expected pores, lamellae, sphere or packing"), std::string::npos) << e.what();
+}
+
+// The phantoms are drawn object by object over each object's box; the truth must be what the
+// definition gives voxel by voxel over every object (written here as the definition, from the
+// objects the phantom reports; a voxel of 1 m keeps their coordinates exact).
+TEST(Phantom, TruthIsTheDefinitionVoxelByVoxel) {
+  for (uint64_t seed : {1, 2, 3}) {
+    PhantomOptions po;
+    po.n = 64;
+    po.voxel = 1;
+    po.seed = seed;
+    po.fine_porosity = 0.06;
+    po.macropores_auto = true;
+    const Phantom P = make_phantom(po);
+    ASSERT_GT(P.fine_pore_centres.size(), 50u);
+    ASSERT_EQ(P.macropore_semi_axes.size(), P.macropore_centres.size());
+    std::vector<std::size_t> voxels(P.macropore_centres.size(), 0);
+    std::size_t mismatches = 0, fine = 0;
+    for (std::size_t z = 0; z < po.n; ++z)
+      for (std::size_t y = 0; y < po.n; ++y)
+        for (std::size_t x = 0; x < po.n; ++x) {
+          const double X = double(x), Y = double(y), Z = double(z);
+          int32_t lab = 0, id = 0;
+          for (std::size_t k = 0; k < P.macropore_centres.size() && !id; ++k) {
+            const Vec3 c = P.macropore_centres[k], a = P.macropore_semi_axes[k];
+            const double u = (X - c.x) / a.x, v = (Y - c.y) / a.y, w = (Z - c.z) / a.z;
+            if (u * u + v * v + w * w <= 1.0) lab = 2, id = int32_t(k + 1);
+          }
+          for (std::size_t k = 0; k < P.fine_pore_centres.size() && !lab; ++k) {
+            const Vec3 c = P.fine_pore_centres[k];
+            const double dx = X - c.x, dy = Y - c.y, dz = Z - c.z;
+            if (dx * dx + dy * dy + dz * dz <= po.fine_radius * po.fine_radius) lab = 1;
+          }
+          fine += lab == 1;
+          if (id) ++voxels[std::size_t(id - 1)];
+          mismatches += P.truth.at(x, y, z) != lab || P.macropore_ids.at(x, y, z) != id;
+        }
+    EXPECT_EQ(mismatches, 0u) << "pores, seed " << seed;
+    EXPECT_EQ(P.macropore_voxels, voxels) << "pores, seed " << seed;
+    EXPECT_GT(fine, 1000u) << "pores, seed " << seed;
+
+    po.kind = PhantomKind::packing;
+    const Phantom G = make_phantom(po);
+    const auto& pos = G.packing.particles.position;
+    const auto& rad = G.packing.particles.radius;
+    ASSERT_GE(pos.size(), 20u);  // at most n_grains: as many as fit
+    std::size_t shared = 0;  // voxels inside two grains or more: the necks
+    mismatches = 0;
+    for (std::size_t z = 0; z < po.n; ++z)
+      for (std::size_t y = 0; y < po.n; ++y)
+        for (std::size_t x = 0; x < po.n; ++x) {
+          const Vec3 p{double(x), double(y), double(z)};
+          int32_t lab = 0, inside = 0;
+          double best = 0;
+          for (std::size_t k = 0; k < pos.size(); ++k) {
+            const double d = norm(p - pos[k]) - rad[k];
+            if (d <= 0) ++inside;
+            if (d <= 0 && (lab == 0 || d < best)) lab = int32_t(k + 1), best = d;
+          }
+          shared += inside > 1;
+          mismatches += G.truth.at(x, y, z) != lab;
+        }
+    EXPECT_EQ(mismatches, 0u) << "packing, seed " << seed;
+    EXPECT_GT(shared, 100u) << "packing, seed " << seed;
+  }
 }
 
 TEST(LevelSet, TruncatedVdbIsRefusedNotRead) {

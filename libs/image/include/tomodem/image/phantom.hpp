@@ -56,6 +56,8 @@ struct Phantom {
   std::vector<std::size_t> macropore_voxels;   ///< per macropore k = truth id k+1 in `macropore_ids`
   Labels macropore_ids;                        ///< 0 none, k macropore k (pores kind)
   std::vector<Vec3> macropore_centres;         ///< m
+  std::vector<Vec3> macropore_semi_axes;       ///< m, along x, y, z (pores kind)
+  std::vector<Vec3> fine_pore_centres;         ///< m (pores kind; radius PhantomOptions::fine_radius voxels)
   Packing packing;                             ///< packing kind: the true spheres (m)
 };
 
