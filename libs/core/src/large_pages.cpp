@@ -1,13 +1,15 @@
 // Transparent huge pages for the large arrays of the image tools (issue 19, scans larger than
 // memory): a replacement of the global operator new, linked into the executables that hold
-// volumes (the OBJECT library tomodem_large_pages), never into a library.
+// volumes (tomodem-segment, -phantom, -conduct: the OBJECT library tomodem_large_pages), never
+// into a library.
 //
 // Why: Debian's kernel gives huge pages only where a program asks for them (THP "madvise"
 // mode). A volume's arrays are hundreds of MB, and each block of a chunked run allocates them
 // afresh: with 4 KiB pages the first touch of every page faults, and the distance transform's
 // passes along y and z step one page per voxel, a TLB miss each. 512^3 chunked with grains, one
 // thread, medians of three: 110.7 s, 16.4 s of it in the kernel; with 2 MiB pages 84.6 s, 5.0 s
-// in the kernel (docs/benchmarks.md, "Huge pages").
+// in the kernel (docs/benchmarks.md, "Huge pages"); tomodem-conduct --image 256^3 0.80x the
+// wall time, tomodem-phantom 512^3 0.52x.
 //
 // How: what glibc's own glibc.malloc.hugetlb=1 tunable does for its mapped blocks, done here so
 // that no environment variable is needed. Blocks of at least kLarge bytes are mapped by glibc on
