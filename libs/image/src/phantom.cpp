@@ -46,7 +46,10 @@ class PlacementGrid {
 
  private:
   int cell(double v) const { return std::clamp(int(std::floor(v / edge_)), 0, m_ - 1); }
-  std::size_t index(int x, int y, int z) const { return (std::size_t(z) * std::size_t(m_) + std::size_t(y)) * std::size_t(m_) + std::size_t(x); }
+  std::size_t index(int x, int y, int z) const {
+    const std::size_t m = std::size_t(m_);
+    return (std::size_t(z) * m + std::size_t(y)) * m + std::size_t(x);
+  }
   double edge_;
   int m_;
   std::vector<std::vector<std::size_t>> cells_;
@@ -218,8 +221,10 @@ void packing_kind(const PhantomOptions& o, std::mt19937_64& rng, Phantom& P) {
     const Vec3 ci = c[i] + (r[i] + ri - 0.1 * std::min(r[i], ri)) * dir;
     if (ci.x < ri + 1 || ci.y < ri + 1 || ci.z < ri + 1 || ci.x > n - ri - 2 || ci.y > n - ri - 2 || ci.z > n - ri - 2)
       continue;
-    const bool ok = !placed.any(ci, [&](std::size_t j) { return j != i && norm(ci - c[j]) < r[j] + ri - 0.1 * std::min(r[j], ri) - 1e-9; });
-    if (ok) { placed.add(ci, c.size()); c.push_back(ci); r.push_back(ri); }
+    const bool overlaps = placed.any(ci, [&](std::size_t j) {
+      return j != i && norm(ci - c[j]) < r[j] + ri - 0.1 * std::min(r[j], ri) - 1e-9;
+    });
+    if (!overlaps) { placed.add(ci, c.size()); c.push_back(ci); r.push_back(ri); }
   }
   // Each grain drawn over its own box, in order: a voxel inside several grains goes to the
   // deeper one (the smaller norm(p - c) - r), the first of equals.
