@@ -93,7 +93,7 @@ void pores_kind(const PhantomOptions& o, std::mt19937_64& rng, Phantom& P) {
                          "^3 volume (6 voxels of solid between them); give at most that many or a larger --size");
   std::vector<Vec3> fine;
   const double fine_vol = 4.0 / 3.0 * M_PI * std::pow(o.fine_radius, 3);
-  const std::size_t n_fine = std::size_t(o.fine_porosity * n * n * n / fine_vol);
+  const std::size_t n_fine = o.fine_porosity > 0 ? std::size_t(o.fine_porosity * n * n * n / fine_vol) : 0;
   const double apart = 2 * o.fine_radius + 2;
   PlacementGrid placed(n, apart);
   // Attempts grow with the count (a 1024^3 cube needs 190 000 fine pores at the default 2 %).
@@ -286,6 +286,9 @@ void check_phantom_options(const PhantomOptions& o) {
   for (double x : {o.macro_radius_min, o.macro_radius_max, o.fine_radius, o.grain_radius_min, o.grain_radius_max,
                    o.pore_value, o.solid_value})
     if (!std::isfinite(x) || x < 0) throw InputError("", "phantom", text(x), "radii and grey values must be finite and >= 0");
+  // A fine pore under one voxel draws nothing, and at zero radius the count divides by zero.
+  if (o.kind == PhantomKind::pores && o.fine_porosity > 0 && !(o.fine_radius >= 1))
+    throw InputError("", "fine_radius", text(o.fine_radius), "must be >= 1 voxel when the fine porosity is > 0");
   const double n = double(o.n);
   check_memory_request(n * n * n * kPhantomBytesPerVoxel, "", "--size", std::to_string(o.n),
                        "a " + std::to_string(o.n) + "^3 phantom");

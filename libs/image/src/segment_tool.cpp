@@ -510,6 +510,9 @@ std::string run_phantom(const PhantomConfig& c) {
   if (c.opt.kind == PhantomKind::packing) {
     s["n_grains"] = P.packing.particles.size();
     s.n_particles(P.packing.particles.size());
+    if (int(P.packing.particles.size()) < c.opt.n_grains)
+      warn("only " + std::to_string(P.packing.particles.size()) + " of the " + std::to_string(c.opt.n_grains) +
+           " grains of --grain-count fit in a " + std::to_string(c.opt.n) + "^3 volume (n_grains in the summary)");
   }
   s.unit("voxel_m", "m");
   write_volume(c.output, P.grey, !c.as_float);

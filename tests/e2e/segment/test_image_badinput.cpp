@@ -292,6 +292,7 @@ const std::vector<Row> kRows = {
     {"PhantomMacroporesNegative", "phantom", "-o {W}/g.mha --size 16 --macropores -1", {}, 2, {"--macropores", "-1"}},
     {"PhantomMacroporesDoNotFit", "phantom", "-o {W}/g.mha --size 16 --macropores 50", {}, 2, {"--macropores", "50", "fit"}},
     {"PhantomGrainsZero", "phantom", "-o {W}/g.mha --size 16 --kind packing --grain-count 0", {}, 2, {"--grain-count", "0"}},
+    {"PhantomGrainsNotAllFit", "phantom", "-o {W}/g.mha --size 64 --kind packing", {}, 0, {"warning", "of the 60 grains", "--grain-count"}},
     {"PhantomSphereTooLarge", "phantom", "-o {W}/g.mha --size 16 --kind sphere --sphere-radius 30", {}, 2, {"--sphere-radius", "30"}},
     {"PhantomKindUnknown", "phantom", "-o {W}/g.mha --kind nosuch", {}, 2, {"--kind", "nosuch"}},
     {"PhantomFormatUnknown", "phantom", "-o {W}/g.xyz --size 16", {}, 2, {"-o", "g.xyz"}},

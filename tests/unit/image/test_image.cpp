@@ -521,6 +521,15 @@ TEST(Phantom, DefaultMacroporeCountFitsSmallSizes) {
     set(q);
     EXPECT_THROW(make_phantom(q), tomodem::InputError);
   }
+  // A fine pore under one voxel draws nothing; at zero radius the pore count divided by zero.
+  for (double radius : {0.0, 0.5}) {
+    PhantomOptions q = po;
+    q.fine_radius = radius;
+    const tomodem::InputError f = input_error([&] { make_phantom(q); });
+    EXPECT_EQ(f.field(), "fine_radius") << radius;
+    q.fine_porosity = 0;  // no fine pores: the radius is not used
+    EXPECT_NO_THROW(make_phantom(q)) << radius;
+  }
   // An unknown kind is refused where the name is parsed, with the message the library gave before.
   const tomodem::InputError e = input_error([] { tomodem::parse_name(kPhantomKindNames, "", "--kind", "nosuch"); });
   EXPECT_EQ(e.field(), "--kind");
