@@ -1,6 +1,6 @@
 // Transparent huge pages for the large arrays of the image tools (issue 19, scans larger than
 // memory): a replacement of the global operator new, linked into the executables that hold
-// volumes (tomodem-segment, -phantom, -conduct: the OBJECT library tomodem_large_pages), never
+// volumes (the OBJECT library tomodem_large_pages; tools/*/CMakeLists.txt name which), never
 // into a library.
 //
 // Why: Debian's kernel gives huge pages only where a program asks for them (THP "madvise"
