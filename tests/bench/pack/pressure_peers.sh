@@ -1,8 +1,8 @@
 #!/bin/sh
 # A jammed packing at a pressure target, tomodem-pack against Yade (issue 19 item 2; numbers in
-# docs/benchmarks.md, "Packing to a pressure target: Yade on the same spheres"). Both codes start
-# from the same spheres and stop at the same criterion (unbalanced-force ratio < 1e-4, the
-# contact pressure within 1 % of the target), one thread each, one after the other.
+# docs/benchmarks.md, "Packing to a pressure target", paragraph "Yade on the same spheres").
+# Both codes start from the same spheres and stop at the same criterion (unbalanced-force ratio
+# < 1e-4, the contact pressure within 1 % of the target), one thread each, one after the other.
 #
 #   pressure_peers.sh BUILD_DIR WORK_DIR N SEED [PRESSURE] [YADE_ARGS...]
 #

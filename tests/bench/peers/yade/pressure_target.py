@@ -46,6 +46,10 @@ dt0 = 0.8 * utils.PWaveTimeStep()
 done = [False]
 
 
+def solid_fraction():
+    return sum(4 / 3 * math.pi * b.shape.radius ** 3 for b in O.bodies) / O.cell.volume
+
+
 def finished():
     done[0] = True
     O.pause()
@@ -66,17 +70,15 @@ O.engines = [
 ]
 newton.densityScaling = bool(SCALING)  # a property: it needs the time stepper in O.engines
 O.dt = dt0
-setup_cpu = time.process_time() - cpu0
 while not done[0] and O.iter < MAX_STEPS:
     O.run(min(20000, MAX_STEPS - O.iter), True)
     s = utils.getStress()
     print('step %d p/P %.4f unbalanced %.3e dt %.3e phi %.5f cpu %.1f' % (
-        O.iter, -s.trace() / 3 / P, utils.unbalancedForce(), O.dt,
-        sum(4 / 3 * math.pi * b.shape.radius ** 3 for b in O.bodies) / O.cell.volume, time.process_time() - cpu0),
+        O.iter, -s.trace() / 3 / P, utils.unbalancedForce(), O.dt, solid_fraction(), time.process_time() - cpu0),
         flush=True)
 s = utils.getStress()
 p = -s.trace() / 3
-phi = sum(4 / 3 * math.pi * b.shape.radius ** 3 for b in O.bodies) / O.cell.volume
+phi = solid_fraction()
 contacts = sum(1 for i in O.interactions if i.isReal and i.phys.normalForce.norm() > 0)
 unbalanced = utils.unbalancedForce()
 reached = unbalanced < CRITERION and abs(p / P - 1) < STRESS_TOL
