@@ -6,11 +6,11 @@
 #
 #   pressure_peers.sh BUILD_DIR WORK_DIR N SEED [PRESSURE] [YADE_ARGS...]
 #
-# Writes the pressure-target bench input (Hertz alumina, lognormal sigma = 0.3 by volume, d = 1 um,
-# inserted at phi = 0.3; tests/bench/pack/criterion_sweep.py has the same) for N particles and
-# SEED. The common start is tomodem-pack's inserted spheres (a run stopped after its first step,
-# exit 4), written as state_*.txt for Yade and state_*.data for LAMMPS (../peers/lammps/
-# in.pressure_target shows why LAMMPS has no run). Then tomodem-pack runs to the target, and
+# Runs the pressure-target bench input of criterion_sweep.py (Hertz alumina, lognormal sigma = 0.3
+# by volume, d = 1 um, inserted at phi = 0.3) for N particles, SEED and PRESSURE. The common
+# start is tomodem-pack's inserted spheres (a run stopped after its first step, exit 4), written
+# as state_*.txt for Yade and state_*.data for LAMMPS (../peers/lammps/in.pressure_target shows
+# why LAMMPS has no run). Then tomodem-pack runs to the target, and
 # ../peers/yade/pressure_target.py (YADE_ARGS: its MAX_STEPS DAMPING STRAIN_PER_STEP SCALING
 # CELL_MASS), each under /usr/bin/time -v. Prints one RESULT line per code and the load.
 # Needs yade and python3 with h5py (Debian: yade, python3-h5py); exit 77 without yade.
@@ -28,26 +28,13 @@ mkdir -p "$W"
 cd "$W"
 export OMP_WAIT_POLICY=passive OMP_NUM_THREADS=1
 PY=${PYTHON:-/usr/bin/python3}  # Debian's, with h5py
-config() {  # MAX_STEPS line (empty: none)
-  cat <<CFG
-particles: $N
-initial_solid_fraction: 0.3
-seed: $SEED
-phases:
-  - name: alumina
-    material: {youngs_modulus: 3.8e11, poisson_ratio: 0.22, density: 3950}
-    size_distribution: {kind: lognormal, diameter: 1.0e-6, sigma: 0.3, basis: volume}
-contact: {normal: hertz}
-target: {pressure: $P}
-$1
-output: {packing: packing.h5, tessellation: false}
-CFG
-}
+# The bench input as criterion_sweep.py writes it (one copy of it); N, SEED and PRESSURE as flags.
+"$PY" -c "import sys; sys.path.insert(0, '$HERE'); import criterion_sweep; print(criterion_sweep.CONFIG.format(n=$N))" > pack.yaml
+{ cat pack.yaml; echo "protocol: {max_steps: 1}"; } > start.yaml
 S=n${N}_s$SEED
-config "protocol: {max_steps: 1}" > start_$S.yaml
-config "" > pack_$S.yaml
+FLAGS="--seed $SEED --target-pressure $P --threads 1 -q"
 # The common start: tomodem-pack's insertion (exit 4: stopped short of the target, by design).
-"$B/tomodem-pack" start_$S.yaml -o start_$S.h5 --threads 1 -q --json start_$S.json 2> start_$S.log || [ $? -eq 4 ]
+"$B/tomodem-pack" start.yaml -o start_$S.h5 $FLAGS --json start_$S.json 2> start_$S.log || [ $? -eq 4 ]
 "$PY" - start_$S.h5 state_$S.txt <<'PY'
 import sys
 import h5py
@@ -70,7 +57,7 @@ with open(sys.argv[2][:-4] + ".data", "w") as out:
         out.write("%d 1 %.17g 3950 %.17g %.17g %.17g\n" % (i + 1, 2 * ri, p[0] % L, p[1] % L, p[2] % L))
 PY
 echo "load before: $(cat /proc/loadavg)"
-/usr/bin/time -v "$B/tomodem-pack" pack_$S.yaml -o pack_$S.h5 --threads 1 -q --json pack_$S.json 2> time_tomodem_$S.log
+/usr/bin/time -v "$B/tomodem-pack" pack.yaml -o pack_$S.h5 $FLAGS --json pack_$S.json 2> time_tomodem_$S.log
 "$PY" - pack_$S.json time_tomodem_$S.log "$N" <<'PY'
 import json, re, sys
 r = json.load(open(sys.argv[1]))
