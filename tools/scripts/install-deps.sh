@@ -2,7 +2,7 @@
 # Installs the Debian 12 packages tomodem needs to build and test (idempotent; skips apt when
 # everything is already there). Run as root or with sudo available.
 set -euo pipefail
-PKGS=(build-essential cmake ninja-build pkg-config git
+PKGS=(build-essential cmake ninja-build pkg-config git ccache
       libhdf5-dev hdf5-tools libeigen3-dev libyaml-cpp-dev nlohmann-json3-dev libcli11-dev
       libfmt-dev libspdlog-dev libxxhash-dev
       libgtest-dev libgmock-dev libbenchmark-dev python3 gnuplot-nox
