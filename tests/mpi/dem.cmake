@@ -19,9 +19,9 @@ set_tests_properties(dem_decomposition_doc_example PROPERTIES LABELS mpi PROCESS
 # tomodem-dem started by mpirun on 1, 2 and 3 ranks against its run without mpirun: the test
 # starts the launcher itself (it is not an MPI program), so it is an ordinary executable.
 add_executable(dem_tool_ranks_tests ${CMAKE_CURRENT_SOURCE_DIR}/dem/test_dem_tool.cpp)
-target_link_libraries(dem_tool_ranks_tests PRIVATE tomodem_core nlohmann_json::nlohmann_json GTest::gtest_main)
-target_compile_definitions(dem_tool_ranks_tests PRIVATE
-  TOMODEM_BIN_DIR="${CMAKE_BINARY_DIR}/bin" TOMODEM_MPIEXEC="${MPIEXEC_EXECUTABLE}")
+target_link_libraries(dem_tool_ranks_tests PRIVATE tomodem_core nlohmann_json::nlohmann_json GTest::gtest_main
+                      tomodem_test_paths)
+target_compile_definitions(dem_tool_ranks_tests PRIVATE TOMODEM_MPIEXEC="${MPIEXEC_EXECUTABLE}")
 add_dependencies(tomodem_mpi_tests dem_tool_ranks_tests tomodem-dem tomodem-sinter)
 add_test(NAME dem_tool_ranks COMMAND dem_tool_ranks_tests)
 set_tests_properties(dem_tool_ranks PROPERTIES LABELS mpi PROCESSORS 3
@@ -42,9 +42,9 @@ tomodem_mpi_test(dem_decomposition_wall_tests
 # Checkpoints written on 2 ranks (HDF5 MPI-IO), restarted on 1-3 ranks and without mpirun:
 # bitwise the uninterrupted run; another version refused (docs/dem.md, "Checkpoints").
 add_executable(dem_checkpoint_ranks_tests ${CMAKE_CURRENT_SOURCE_DIR}/dem/test_checkpoint_ranks.cpp)
-target_link_libraries(dem_checkpoint_ranks_tests PRIVATE tomodem_core nlohmann_json::nlohmann_json GTest::gtest_main)
-target_compile_definitions(dem_checkpoint_ranks_tests PRIVATE
-  TOMODEM_BIN_DIR="${CMAKE_BINARY_DIR}/bin" TOMODEM_MPIEXEC="${MPIEXEC_EXECUTABLE}")
+target_link_libraries(dem_checkpoint_ranks_tests PRIVATE tomodem_core nlohmann_json::nlohmann_json GTest::gtest_main
+                      tomodem_test_paths)
+target_compile_definitions(dem_checkpoint_ranks_tests PRIVATE TOMODEM_MPIEXEC="${MPIEXEC_EXECUTABLE}")
 add_dependencies(tomodem_mpi_tests dem_checkpoint_ranks_tests tomodem-dem)
 add_test(NAME dem_checkpoint_ranks COMMAND dem_checkpoint_ranks_tests)
 set_tests_properties(dem_checkpoint_ranks PROPERTIES LABELS mpi PROCESSORS 3
