@@ -10,9 +10,9 @@ JOBS=${JOBS:-$(nproc)}
 # a clean clone, as CI builds, then compiles only what changed since a build of this machine.
 # ccache hashes the flag -march=native as text, not the CPU it stands for (ccache issue 824), so
 # the cache is kept per set of target flags that -march=native means here. Paths under the
-# checkout are hashed relative to it (CCACHE_BASEDIR), so two clones share the objects of the
-# libraries and tools (a test's command line holds the clone's absolute data paths, so tests are
-# compiled again). The settings travel in the launcher: a later `cmake --build` keeps them.
+# checkout are hashed relative to it (CCACHE_BASEDIR), so two clones share their objects (the
+# tests' absolute paths are compiled once per build tree: tests/test_paths.hpp). The settings
+# travel in the launcher: a later `cmake --build` keeps them.
 LAUNCHER=()
 if [ "${CCACHE:-1}" != 0 ] && command -v ccache >/dev/null; then
   cpu=$({ c++ -march=native -Q --help=target 2>/dev/null || true; } | sha1sum | cut -c1-12)
