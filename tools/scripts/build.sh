@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Configures and builds tomodem (Release) into ${BUILD_DIR:-build}; arguments go to CMake's
-# configure step (-DTOMODEM_MPI=ON), TARGET=name builds one target.
+# configure step (-DTOMODEM_MPI=ON), BUILD_TARGET=name builds one target.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 BUILD_DIR=${BUILD_DIR:-build}
@@ -25,4 +25,4 @@ fi
 # Native tuning (AVX2/FMA where the CPU has them) unless NATIVE=OFF: the binaries stay on this machine.
 cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=Release -DTOMODEM_NATIVE="${NATIVE:-ON}" "${LAUNCHER[@]}" \
   "$@" >/dev/null
-cmake --build "$BUILD_DIR" -j "$JOBS" ${TARGET:+--target "$TARGET"}
+cmake --build "$BUILD_DIR" -j "$JOBS" ${BUILD_TARGET:+--target "$BUILD_TARGET"}

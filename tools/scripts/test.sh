@@ -37,7 +37,7 @@ ctest --test-dir "$BUILD_DIR" --output-on-failure -j "$(nproc)" "${EXCLUDE[@]}"
 # them to that target). Each test runs under mpirun on 1, 2, ... ranks, oversubscribed, one
 # OpenMP thread per rank.
 MPI_BUILD_DIR=${MPI_BUILD_DIR:-build-mpi}
-BUILD_DIR=$MPI_BUILD_DIR TARGET=tomodem_mpi_tests bash tools/scripts/build.sh -DTOMODEM_MPI=ON
+BUILD_DIR=$MPI_BUILD_DIR BUILD_TARGET=tomodem_mpi_tests bash tools/scripts/build.sh -DTOMODEM_MPI=ON
 export OMP_NUM_THREADS=1
 if [ "$(id -u)" -eq 0 ]; then export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1; fi
 # -j: each MPI test declares its ranks (ctest PROCESSORS), so ctest pairs only one-rank tests and
