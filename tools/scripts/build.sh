@@ -15,8 +15,10 @@ JOBS=${JOBS:-$(nproc)}
 # ccache stops the compile when it cannot write its folder, so an unwritable one means no cache.
 LAUNCHER=()
 cpu=$({ c++ -march=native -Q --help=target 2>/dev/null || true; } | sha1sum | cut -c1-12)
-dir=${CCACHE_DIR:-${XDG_CACHE_HOME:-${HOME:-/nonexistent}/.cache}/tomodem-ccache/$cpu}
-if [ "${CCACHE:-1}" != 0 ] && command -v ccache >/dev/null && mkdir -p "$dir" 2>/dev/null && [ -w "$dir" ]; then
+cache_root=${XDG_CACHE_HOME:-${HOME:+$HOME/.cache}}  # neither set (HOME unset): no cache
+dir=${CCACHE_DIR:-${cache_root:+$cache_root/tomodem-ccache/$cpu}}
+if [ "${CCACHE:-1}" != 0 ] && [ -n "$dir" ] && command -v ccache >/dev/null && mkdir -p "$dir" 2>/dev/null \
+  && [ -w "$dir" ]; then
   LAUNCHER=("-DCMAKE_CXX_COMPILER_LAUNCHER=env;CCACHE_DIR=$dir;CCACHE_BASEDIR=$PWD;ccache"
             "-DCMAKE_C_COMPILER_LAUNCHER=env;CCACHE_DIR=$dir;CCACHE_BASEDIR=$PWD;ccache")
 else
