@@ -2,7 +2,7 @@
 // TOMODEM_SOURCE_DIR (const char*). They are defined in test_paths.cpp, which CMake writes for
 // each build tree, rather than on every test's command line: the test objects then do not depend
 // on where the checkout lies, and a compiler cache serves them to a second clone (build.sh).
-// Force-included into every test (tomodem_test_paths() in tests/CMakeLists.txt).
+// Force-included into every test that links the library tomodem_test_paths (tests/CMakeLists.txt).
 #pragma once
 
 namespace tomodem_test_paths {

@@ -19,8 +19,8 @@ cache_root=${XDG_CACHE_HOME:-${HOME:+$HOME/.cache}}  # neither set (HOME unset):
 dir=${CCACHE_DIR:-${cache_root:+$cache_root/tomodem-ccache/$cpu}}
 if [ "${CCACHE:-1}" != 0 ] && [ -n "$dir" ] && command -v ccache >/dev/null && mkdir -p "$dir" 2>/dev/null \
   && [ -w "$dir" ]; then
-  LAUNCHER=("-DCMAKE_CXX_COMPILER_LAUNCHER=env;CCACHE_DIR=$dir;CCACHE_BASEDIR=$PWD;ccache"
-            "-DCMAKE_C_COMPILER_LAUNCHER=env;CCACHE_DIR=$dir;CCACHE_BASEDIR=$PWD;ccache")
+  ccache="env;CCACHE_DIR=$dir;CCACHE_BASEDIR=$PWD;ccache"
+  LAUNCHER=("-DCMAKE_CXX_COMPILER_LAUNCHER=$ccache" "-DCMAKE_C_COMPILER_LAUNCHER=$ccache")
 else
   LAUNCHER=(-UCMAKE_CXX_COMPILER_LAUNCHER -UCMAKE_C_COMPILER_LAUNCHER)
 fi

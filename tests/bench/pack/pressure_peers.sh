@@ -29,12 +29,13 @@ cd "$W"
 export OMP_WAIT_POLICY=passive OMP_NUM_THREADS=1
 PY=${PYTHON:-/usr/bin/python3}  # Debian's, with h5py
 # The bench input as criterion_sweep.py writes it (one copy of it); N, SEED and PRESSURE as flags.
-"$PY" -c "import sys; sys.path.insert(0, '$HERE'); import criterion_sweep; print(criterion_sweep.CONFIG.format(n=$N))" > pack.yaml
-{ cat pack.yaml; echo "protocol: {max_steps: 1}"; } > start.yaml
+# Named per run (S), so runs of other N or seeds in the same WORK_DIR keep their own inputs.
 S=n${N}_s$SEED
+"$PY" -c "import sys; sys.path.insert(0, '$HERE'); import criterion_sweep; print(criterion_sweep.CONFIG.format(n=$N))" > pack_$S.yaml
+{ cat pack_$S.yaml; echo "protocol: {max_steps: 1}"; } > start_$S.yaml
 FLAGS="--seed $SEED --target-pressure $P --threads 1 -q"
 # The common start: tomodem-pack's insertion (exit 4: stopped short of the target, by design).
-"$B/tomodem-pack" start.yaml -o start_$S.h5 $FLAGS --json start_$S.json 2> start_$S.log || [ $? -eq 4 ]
+"$B/tomodem-pack" start_$S.yaml -o start_$S.h5 $FLAGS --json start_$S.json 2> start_$S.log || [ $? -eq 4 ]
 "$PY" - start_$S.h5 state_$S.txt <<'PY'
 import sys
 import h5py
@@ -57,7 +58,7 @@ with open(sys.argv[2][:-4] + ".data", "w") as out:
         out.write("%d 1 %.17g 3950 %.17g %.17g %.17g\n" % (i + 1, 2 * ri, p[0] % L, p[1] % L, p[2] % L))
 PY
 echo "load before: $(cat /proc/loadavg)"
-/usr/bin/time -v "$B/tomodem-pack" pack.yaml -o pack_$S.h5 $FLAGS --json pack_$S.json 2> time_tomodem_$S.log
+/usr/bin/time -v "$B/tomodem-pack" pack_$S.yaml -o pack_$S.h5 $FLAGS --json pack_$S.json 2> time_tomodem_$S.log
 "$PY" - pack_$S.json time_tomodem_$S.log "$N" <<'PY'
 import json, re, sys
 r = json.load(open(sys.argv[1]))
