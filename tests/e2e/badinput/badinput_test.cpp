@@ -330,7 +330,7 @@ const std::vector<Row> kRows = {
 // Valid inputs, made once (under a lock: ctest may run rows in parallel) and cached.
 // ---------------------------------------------------------------------------------------------
 const std::string kBin = TOMODEM_BIN_DIR;
-const std::string kCache = TOMODEM_BADINPUT_CACHE;
+const std::string kCache = (fs::path(TOMODEM_BUILD_DIR) / "tests/e2e/badinput/inputs").string();
 
 const char* kPackYaml = R"(# a small green body (docs/pack.md)
 particles: 150

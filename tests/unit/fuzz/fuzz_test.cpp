@@ -56,7 +56,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const fs::path kCorpus = TOMODEM_FUZZ_CORPUS;
+const fs::path kCorpus = fs::path(TOMODEM_SOURCE_DIR) / "tests/unit/fuzz/corpus";
 
 double env_number(const char* name, double fallback) {
   const char* v = std::getenv(name);
