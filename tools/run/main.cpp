@@ -87,6 +87,8 @@ int main(int argc, char** argv) {
   rp->add_option("--group", rep.group, "columns whose values make a cell; its rows are replicas (default: plots' by, x)")
       ->delimiter(',');
   rp->add_option("--stats", rep.stats, "properties to summarise (default: every number column)")->delimiter(',');
+  rp->add_option("--bound", rep.bounds, "NAME=LO:HI: the physical range of a column (numbers or columns; a side may be empty); repeatable")
+      ->allow_extra_args(false);
   rp->add_option("--replicas", rep.replicas, "the runner's adaptive-replica record (${run.replicas}): stopped_because");
   app.require_subcommand(0, 1);
   if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
@@ -102,6 +104,7 @@ int main(int argc, char** argv) {
     }
     if (rp->parsed()) {
       const tp::ReportFiles f = tp::write_report(report_dir, report_rows, rep);
+      for (const auto& o : f.outside_bounds) tomodem::warn(o);
       tomodem::info("wrote " + f.table + " (" + std::to_string(f.rows) + " rows, " + std::to_string(f.columns) +
                     " columns), " + std::to_string(f.plots.size()) + " plots, " + f.summary + " (" +
                     std::to_string(f.cells) + " cells, " + std::to_string(f.rankings) + " rankings) and " + f.html);

@@ -30,6 +30,16 @@ std::string shell_quoted(const std::string& s) {
   return out + "'";
 }
 
+bool has_bars(const PlotSeries& s) { return !s.yerr.empty() || !s.ylow.empty() || !s.yhigh.empty(); }
+
+// The ends of point i's bar: ylow/yhigh where given, else y -/+ yerr (a bar of 0 without either).
+std::pair<double, double> bar_ends(const PlotSeries& s, std::size_t i) {
+  const double e = i < s.yerr.size() && std::isfinite(s.yerr[i]) ? s.yerr[i] : 0;
+  const double lo = i < s.ylow.size() && std::isfinite(s.ylow[i]) ? s.ylow[i] : s.y[i] - e;
+  const double hi = i < s.yhigh.size() && std::isfinite(s.yhigh[i]) ? s.yhigh[i] : s.y[i] + e;
+  return {lo, hi};
+}
+
 // The positive data range of one axis (bars included on y): a log axis of a decade or more gets
 // 10^n labels; a narrower one keeps plain numbers, since it may hold no power of ten at all.
 bool spans_a_decade(const PlotSpec& spec, bool y_axis) {
@@ -37,8 +47,8 @@ bool spans_a_decade(const PlotSpec& spec, bool y_axis) {
   for (const auto& s : spec.series)
     for (std::size_t i = 0; i < s.x.size(); ++i) {
       const double v = y_axis ? s.y[i] : s.x[i];
-      const double e = y_axis && !s.yerr.empty() && std::isfinite(s.yerr[i]) ? s.yerr[i] : 0;
-      for (double w : {v - e, v, v + e})
+      const auto [bar_lo, bar_hi] = y_axis ? bar_ends(s, i) : std::pair{v, v};
+      for (double w : {bar_lo, v, bar_hi})
         if (std::isfinite(w) && w > 0) lo = std::min(lo, w), hi = std::max(hi, w);
     }
   return hi > 0 && hi >= 10 * lo;
@@ -98,7 +108,8 @@ const std::string& plot_style() {
 void write_plot(const std::filesystem::path& stem, const PlotSpec& spec) {
   if (!writes_outputs()) return;  // a silent rank (output.hpp): gnuplot would write its own files
   for (const auto& s : spec.series)
-    if (s.x.size() != s.y.size() || (!s.yerr.empty() && s.yerr.size() != s.y.size()))
+    if (s.x.size() != s.y.size() || (!s.yerr.empty() && s.yerr.size() != s.y.size()) ||
+        (!s.ylow.empty() && s.ylow.size() != s.y.size()) || (!s.yhigh.empty() && s.yhigh.size() != s.y.size()))
       throw InputError(stem.string(), "series '" + s.title + "'", std::to_string(s.x.size()) + " x values",
                        "it has " + std::to_string(s.y.size()) + " y values; a series needs one y per x");
   for (const auto& [field, label] : {std::pair{"xlabel", &spec.xlabel}, std::pair{"ylabel", &spec.ylabel}})
@@ -117,8 +128,12 @@ void write_plot(const std::filesystem::path& stem, const PlotSpec& spec) {
     for (std::size_t i = 0; i < s.x.size(); ++i)
       if (std::isfinite(s.x[i]) && std::isfinite(s.y[i])) {
         data << s.x[i] << ' ' << s.y[i];
-        // A third column only for series with bars; a point without a spread gets a bar of 0.
-        if (!s.yerr.empty()) data << ' ' << (i < s.yerr.size() && std::isfinite(s.yerr[i]) ? s.yerr[i] : 0.0);
+        // The bar's ends (columns 3, 4) only for series with bars; a point without a spread gets
+        // a bar of 0.
+        if (has_bars(s)) {
+          const auto [lo, hi] = bar_ends(s, i);
+          data << ' ' << lo << ' ' << hi;
+        }
         data << '\n';
       }
     data << "\n\n";
@@ -149,14 +164,14 @@ void write_plot(const std::filesystem::path& stem, const PlotSpec& spec) {
   script << "plot ";
   for (std::size_t i = 0; i < spec.series.size(); ++i) {
     const auto& s = spec.series[i];
-    const bool bars = !s.yerr.empty();
+    const bool bars = has_bars(s);
     const std::string lt = " linetype " + std::to_string(i % 8 + 1);
-    script << (i ? ", \\\n     " : "") << quoted(dat_name) << " index " << i << (bars ? " using 1:2:3" : " using 1:2")
+    script << (i ? ", \\\n     " : "") << quoted(dat_name) << " index " << i << (bars ? " using 1:2:3:4" : " using 1:2")
            << " with " << gnuplot_style(s, bars) << lt << " title " << quoted(s.title) << " noenhanced";
     // Lines and steps have no bar style of their own: the bars go on top in the same colour.
     const PlotDraw d = s.points_only ? PlotDraw::points : s.draw;
     if (bars && (d == PlotDraw::lines || d == PlotDraw::steps))
-      script << ", \\\n     " << quoted(dat_name) << " index " << i << " using 1:2:3 with yerrorbars" << lt
+      script << ", \\\n     " << quoted(dat_name) << " index " << i << " using 1:2:3:4 with yerrorbars" << lt
              << " pointsize 0 notitle";
   }
   script << "\n";

@@ -296,6 +296,92 @@ std::vector<PlotRequest> plot_requests(const Table& t, const std::vector<std::st
   return plots;
 }
 
+// ---- physical bounds (--bound NAME=LO:HI) ----------------------------------------------------
+
+// Each side a number, a column (a bound per row: the Voigt or Hashin-Shtrikman bound of its
+// sample), or "" (none).
+struct Bound {
+  std::string lo, hi;
+};
+using Bounds = std::map<std::string, Bound>;
+
+Bounds bounds_of(const Table& t, const std::vector<std::string>& specs) {
+  Bounds out;
+  for (const auto& item : specs) {
+    const auto [name, range] = split_eq(item, "--bound");
+    const auto colon = range.find(':');
+    if (colon == std::string::npos) throw InputError("", "--bound", item, "expected NAME=LO:HI (a side may be empty: E_rel=0:)");
+    if (!t.known.count(name)) throw InputError("", "--bound", item, "no row has the column '" + name + "'");
+    const Bound b{range.substr(0, colon), range.substr(colon + 1)};
+    if (b.lo.empty() && b.hi.empty()) throw InputError("", "--bound", item, "names neither a lower nor an upper bound");
+    for (const auto& side : {b.lo, b.hi})
+      if (!side.empty() && !t.known.count(side) && !value_of(side).number)
+        throw InputError("", "--bound", item, "'" + side + "' is neither a column nor a finite number");
+    const Value lo = value_of(b.lo), hi = value_of(b.hi);
+    if (lo.number && hi.number && !(lo.x < hi.x)) throw InputError("", "--bound", item, "the lower bound must be below the upper");
+    if (!out.emplace(name, b).second) throw InputError("", "--bound", item, "a second bound for '" + name + "'");
+  }
+  return out;
+}
+
+// A side's value in one row: the column's number there, or the literal; NaN for none.
+double side_in(const Row& r, const std::string& side) {
+  if (side.empty()) return NAN;
+  const Value lit = value_of(side);
+  return lit.number && !find(r, side) ? lit.x : number_in(r, side);
+}
+
+// The range of a cell's mean: the lowest of its rows' lower bounds and the highest of their
+// upper ones (each row's value lies within its own); infinite where there is none.
+struct Range {
+  double lo = -INFINITY, hi = INFINITY;
+};
+Range range_of(const Bounds& bs, const std::string& c, const std::vector<const Row*>& rows) {
+  const auto it = bs.find(c);
+  if (it == bs.end()) return {};
+  double lo = INFINITY, hi = -INFINITY;
+  for (const Row* r : rows) {
+    if (const double l = side_in(*r, it->second.lo); std::isfinite(l)) lo = std::min(lo, l);
+    if (const double h = side_in(*r, it->second.hi); std::isfinite(h)) hi = std::max(hi, h);
+  }
+  return {std::isfinite(lo) ? lo : -INFINITY, std::isfinite(hi) ? hi : INFINITY};
+}
+
+// The 95 % interval, cut at the range: the true mean lies in it, so the cut interval covers it
+// at least as often. A mean outside its range (a replica outside its bound) is left uncut.
+struct Interval {
+  double lo = NAN, hi = NAN;
+  bool cut = false;
+};
+Interval interval_of(const stats::Estimate& e, const Range& r) {
+  if (!std::isfinite(e.half95)) return {};
+  Interval i{e.mean - e.half95, e.mean + e.half95, false};
+  if (e.mean < r.lo || e.mean > r.hi) return i;
+  if (i.lo < r.lo) i.lo = r.lo, i.cut = true;
+  if (i.hi > r.hi) i.hi = r.hi, i.cut = true;
+  return i;
+}
+
+// Replica values outside their own row's bound (beyond rounding: 1e-12 of the bound).
+std::vector<json> outside_bounds(const Table& t, const Bounds& bs, const std::vector<std::string>& files) {
+  std::vector<json> out;
+  for (std::size_t i = 0; i < t.rows.size(); ++i)
+    for (const auto& [c, b] : bs) {
+      const double x = number_in(t.rows[i], c);
+      if (!std::isfinite(x)) continue;
+      const double lo = side_in(t.rows[i], b.lo), hi = side_in(t.rows[i], b.hi);
+      const auto slack = [](double v) { return 1e-12 * std::fabs(v); };
+      const bool below = std::isfinite(lo) && x < lo - slack(lo), above = std::isfinite(hi) && x > hi + slack(hi);
+      if (!below && !above) continue;
+      const std::string& side = below ? b.lo : b.hi;
+      const double bound = below ? lo : hi;
+      out.push_back({{"row_file", files[i]}, {"column", c}, {"value", x}, {below ? "lower_bound" : "upper_bound", bound},
+                     {"text", files[i] + ": " + c + " = " + number_text(x) + (below ? " is below its lower" : " is above its upper") +
+                                  " bound " + number_text(bound) + (value_of(side).number ? "" : " (" + side + ")")}});
+    }
+  return out;
+}
+
 std::string csv_text(const Table& t, const std::vector<std::string>& columns) {
   std::ostringstream csv;
   for (std::size_t k = 0; k < columns.size(); ++k) csv << (k ? "," : "") << csv_field(columns[k]);
@@ -435,7 +521,7 @@ std::string cell_text(const std::vector<std::pair<std::string, std::string>>& ke
   return s;
 }
 
-json cell_json(const Cell& c, const std::string& property, const stats::Estimate& e) {
+json cell_json(const Cell& c, const std::string& property, const stats::Estimate& e, const Range& r) {
   json j = json::object();
   for (const auto& [k, v] : c.key) {
     const Value x = value_of(v);
@@ -449,7 +535,12 @@ json cell_json(const Cell& c, const std::string& property, const stats::Estimate
   j["tool_error"] = e.tool;
   j["u"] = e.u;
   j["dof"] = std::isinf(e.dof) ? json("inf") : json(e.dof);
-  j["ci95"] = std::isfinite(e.half95) ? json::array({e.mean - e.half95, e.mean + e.half95}) : json(nullptr);
+  const Interval ci = interval_of(e, r);
+  j["ci95"] = std::isfinite(ci.lo) ? json::array({ci.lo, ci.hi}) : json(nullptr);
+  if (std::isfinite(r.lo) || std::isfinite(r.hi)) {
+    j["bounds"] = json::array({std::isfinite(r.lo) ? json(r.lo) : json(nullptr), std::isfinite(r.hi) ? json(r.hi) : json(nullptr)});
+    j["ci95_cut_at_bound"] = ci.cut;
+  }
   j["half_width95"] = e.half95;
   j["rel_half_width95"] = e.rel_half95();
   j["stopped_because"] = c.stopped_because;
@@ -501,7 +592,7 @@ std::vector<Ranking> rankings_of(const std::vector<Cell>& cells, const std::vect
 // ---- plots ----------------------------------------------------------------------------------
 
 // Each point: the mean over the rows sharing its x value and series, with its 95 % half-width.
-PlotSpec plot_spec(const Table& t, const PlotRequest& p) {
+PlotSpec plot_spec(const Table& t, const PlotRequest& p, const Bounds& bounds) {
   PlotSpec spec;
   spec.title = p.title;
   spec.xlabel = p.xlabel;
@@ -531,9 +622,12 @@ PlotSpec plot_spec(const Table& t, const PlotRequest& p) {
       s.title = g.empty() ? yname : p.y.size() > 1 ? g + ", " + yname : g;
       for (const auto& [x, rows] : at_x) {
         const stats::Estimate e = estimate_of(rows, ycol);
+        const Interval ci = interval_of(e, range_of(bounds, ycol, rows));
         s.x.push_back(x);
         s.y.push_back(e.mean);
         s.yerr.push_back(e.half95);
+        s.ylow.push_back(ci.lo);
+        s.yhigh.push_back(ci.hi);
       }
       spec.series.push_back(std::move(s));
     }
@@ -584,6 +678,8 @@ struct Page {
   const std::vector<Cell>& cells;
   const std::vector<std::string>& shown_props;
   const std::vector<Ranking>& rankings;
+  const Bounds& bounds;
+  const std::vector<json>& outside;  // replica values outside their bounds
   const ReportOptions& o;
 };
 
@@ -610,17 +706,29 @@ std::string html_statistics(const Page& pg) {
        "tool error&sup2;) (Student 1908; effective dof &nu; by Welch&ndash;Satterthwaite), every cell and property in "
        "<a href=\"summary.json\">summary.json</a>.</p>\n<table>\n<tr><th>cell</th><th>property</th><th>n</th><th>mean</th>"
        "<th>95 % CI</th><th>&plusmn; %</th><th>stopped because</th><th>CPU s</th></tr>\n";
+  bool any_cut = false;
   for (const auto& prop : pg.shown_props)
     for (const auto& c : pg.cells) {
       const stats::Estimate e = estimate_of(c.rows, prop);
       if (e.n == 0) continue;
+      const Interval ci = interval_of(e, range_of(pg.bounds, prop, c.rows));
+      any_cut = any_cut || ci.cut;
       h << "<tr><td>" << xml_escape(cell_text(c.key)) << "</td><td>" << xml_escape(prop) << "</td><td>" << e.n << "</td><td>"
         << short_number(e.mean) << "</td><td>"
-        << (std::isfinite(e.half95) ? short_number(e.mean - e.half95) + " &ndash; " + short_number(e.mean + e.half95) : "")
+        << (std::isfinite(ci.lo) ? short_number(ci.lo) + " &ndash; " + short_number(ci.hi) + (ci.cut ? " *" : "") : "")
         << "</td><td>" << (std::isfinite(e.rel_half95()) ? short_number(100 * e.rel_half95()) : "") << "</td><td>"
         << xml_escape(c.stopped_because) << "</td><td>" << short_number(c.cpu_s) << "</td></tr>\n";
     }
   h << "</table>\n";
+  if (any_cut)
+    h << "<p>* cut at the property's physical bound (<code>--bound</code>): t u reaches past it, so the replicas "
+         "cannot pin the mean down more closely than that bound does.</p>\n";
+  if (!pg.outside.empty()) {
+    h << "<p style=\"color:#b00\"><b>Replica values outside their physical bounds</b> (a result outside its bound is "
+         "not an answer: check the run or the bound):</p>\n<ul>\n";
+    for (const auto& o : pg.outside) h << "<li>" << xml_escape(o.at("text").get<std::string>()) << "</li>\n";
+    h << "</ul>\n";
+  }
   if (!pg.rankings.empty()) {
     h << "<h3>Rankings</h3>\n<p>Welch's t-test (Welch 1947), two-sided; \"not resolved\" when p &ge; 0.05.</p>\n<ul>\n";
     for (const auto& r : pg.rankings)
@@ -723,22 +831,24 @@ std::vector<std::string> properties(const Table& t, const ReportOptions& o) {
 }
 
 json summary_of(const std::vector<Cell>& cells, const std::vector<std::string>& props, const std::vector<Ranking>& ranks,
-                const ReportOptions& o) {
+                const Bounds& bounds, const std::vector<json>& outside, const ReportOptions& o) {
   json j = json::object();
   j["format"] = "tomodem report summary 1";
   j["group"] = o.group;
   j["method"] =
       "per cell and property: mean of the replicas; sem = sd/sqrt(n); tool_error = mean of the replicas' own "
       "1-sigma errors (<key>_error, relative unless its unit says otherwise), taken as systematic; u = sqrt(sem^2 + "
-      "tool_error^2); dof = u^4/(sem^4/(n-1)) (Welch-Satterthwaite); ci95 = mean -/+ t(0.975, dof) u (Student 1908). "
+      "tool_error^2); dof = u^4/(sem^4/(n-1)) (Welch-Satterthwaite); ci95 = mean -/+ t(0.975, dof) u (Student 1908), "
+      "cut at the property's bounds where --bound gives them (ci95_cut_at_bound). "
       "Rankings: Welch (1947) t-test between cells differing in the first group column, two-sided p; "
       "resolved when p < 0.05.";
   j["cells"] = json::array();
   for (const auto& prop : props)
     for (const auto& c : cells) {
       const stats::Estimate e = estimate_of(c.rows, prop);
-      if (e.n) j["cells"].push_back(cell_json(c, prop, e));
+      if (e.n) j["cells"].push_back(cell_json(c, prop, e, range_of(bounds, prop, c.rows)));
     }
+  j["outside_bounds"] = outside;
   j["rankings"] = json::array();
   for (const auto& r : ranks) j["rankings"].push_back(r.j);
   return j;
@@ -753,6 +863,7 @@ ReportFiles write_report(const std::string& dir, const std::vector<std::string>&
   ReportOptions o = options;
   Table t = read_rows(row_files);
   add_ratios(t, o.ratios);
+  const Bounds bounds = bounds_of(t, o.bounds);
   const std::vector<std::string> columns = o.columns.empty() ? t.all : o.columns;
   for (const auto& c : columns)
     if (!t.known.count(c)) throw InputError("", "--columns", c, "no row has this column");
@@ -761,6 +872,7 @@ ReportFiles write_report(const std::string& dir, const std::vector<std::string>&
   const std::vector<std::string> props = properties(t, o);
   const std::vector<Cell> cells = cells_of(t, o.group, read_stops(o.replicas));
   const std::vector<Ranking> ranks = rankings_of(cells, props);
+  const std::vector<json> outside = outside_bounds(t, bounds, row_files);
   // The page shows the plotted (or asked-for) properties; summary.json has every one.
   std::vector<std::string> shown = o.stats;
   for (const auto& p : plots)
@@ -780,7 +892,7 @@ ReportFiles write_report(const std::string& dir, const std::vector<std::string>&
   try {
     write_text_atomic((tmp / "table.csv").string(), csv_text(t, columns));
     for (const auto& p : plots) {
-      write_plot(tmp / p.name, plot_spec(t, p));
+      write_plot(tmp / p.name, plot_spec(t, p, bounds));
       out.plots.push_back((final_dir / p.name).string());
     }
     std::vector<std::string> error_plots;
@@ -792,9 +904,9 @@ ReportFiles write_report(const std::string& dir, const std::vector<std::string>&
       error_plots.push_back(stem);
       out.plots.push_back((final_dir / stem).string());
     }
-    write_text_atomic((tmp / "summary.json").string(), summary_of(cells, props, ranks, o).dump(1) + "\n");
+    write_text_atomic((tmp / "summary.json").string(), summary_of(cells, props, ranks, bounds, outside, o).dump(1) + "\n");
     write_text_atomic((tmp / "index.html").string(),
-                      html_page(Page{t, columns, plots, error_plots, cells, shown, ranks, o}));
+                      html_page(Page{t, columns, plots, error_plots, cells, shown, ranks, bounds, outside, o}));
     replace_folder(tmp, final_dir);
   } catch (...) {
     std::error_code ec;
@@ -804,6 +916,7 @@ ReportFiles write_report(const std::string& dir, const std::vector<std::string>&
   out.table = (final_dir / "table.csv").string();
   out.html = (final_dir / "index.html").string();
   out.summary = (final_dir / "summary.json").string();
+  for (const auto& x : outside) out.outside_bounds.push_back(x.at("text").get<std::string>());
   return out;
 }
 

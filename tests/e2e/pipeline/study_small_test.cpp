@@ -167,8 +167,17 @@ TEST(StudySmall, ReportIntervalsAdaptiveStopAndRankingsMatchTheReplicaTable) {
     EXPECT_NEAR(c["dof"].get<double>(), h.dof, 1e-6 * h.dof) << prop;
     // The quadrature and the report's t agree to 1e-6 relative (both converged far below it).
     EXPECT_NEAR(c["half_width95"].get<double>(), h.half, 1e-6 * h.half) << prop << " " << key.first << " " << key.second;
-    EXPECT_NEAR(c["ci95"][0].get<double>(), h.mean - h.half, 1e-6 * h.half);
-    EXPECT_NEAR(c["ci95"][1].get<double>(), h.mean + h.half, 1e-6 * h.half);
+    // The interval is cut at study.yaml's --bound ranges: [0, 1] for the density, >= 0 for the
+    // bonds and K_IC, [0, the largest Hashin-Shtrikman bound of the cell's rows] for sigma_rel.
+    double lo = 0, hi = INFINITY;
+    if (prop == "young.relative_density") hi = 1;
+    if (prop == "sigma_rel") {
+      const std::vector<double> hs = column(rows, "conduct.bounds.hs_upper_sigma_over_sigma_s", rows.size());
+      hi = *std::max_element(hs.begin(), hs.end());
+    }
+    EXPECT_NEAR(c["ci95"][0].get<double>(), std::max(lo, h.mean - h.half), 1e-6 * h.half) << prop;
+    EXPECT_NEAR(c["ci95"][1].get<double>(), std::min(hi, h.mean + h.half), 1e-6 * h.half) << prop;
+    EXPECT_EQ(c["ci95_cut_at_bound"].get<bool>(), h.mean - h.half < lo || h.mean + h.half > hi) << prop;
     ++checked;
   }
   EXPECT_EQ(checked, 9 * 4);

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 #include <sstream>
 
@@ -98,6 +99,14 @@ TEST_F(Plot, StepsLinesBarsAndNarrowLogAxis) {
   EXPECT_NE(gp.find("set format x '10^{%L}'"), std::string::npos) << gp;
   // The saw-tooth keeps its points in order: the drop at x = 2 stays a vertical segment.
   EXPECT_NE(slurp(stem.string() + ".dat").find("2 4\n2 3\n1.5 2.25\n"), std::string::npos);
+  // Bars are written as their ends (x y low high): y -/+ yerr, or ylow/yhigh where given (an
+  // interval cut at a bound).
+  EXPECT_NE(slurp(stem.string() + ".dat").find("0.05 0.2 0.19 0.21\n"), std::string::npos);
+  EXPECT_NE(gp.find("using 1:2:3:4 with histeps"), std::string::npos) << gp;
+  PlotSeries cut{"cut", {1, 2}, {0.1, 0.3}, true, {0.2, 0.1}};
+  cut.ylow = {0, NAN};
+  write_plot(stem, {"t", "x (m)", "y (N)", false, false, {cut}});
+  EXPECT_NE(slurp(stem.string() + ".dat").find("1 0.1 0 0.3\n2 0.3 0.2 0.4\n"), std::string::npos) << slurp(stem.string() + ".dat");
   spec.series = {{"narrow", {2, 3, 5}, {1, 2, 3}}};  // x within one decade: plain numbers
   write_plot(stem, spec);
   EXPECT_NE(slurp(stem.string() + ".gp").find("set format x '%g'"), std::string::npos);

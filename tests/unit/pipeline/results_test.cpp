@@ -243,3 +243,85 @@ TEST(Results, RandomToolErrorsAreNotAddedAgain) {
   EXPECT_TRUE(std::isnan(tp::own_error(row(R"({"sigma_eff": {"x": 10}, "sigma_eff_error": {"x": 0.5},
                                              "sigma_eff_error_kind": "random"})"), "f.sigma_eff.x", 10)));
 }
+
+// --bound: a 95 % interval that reaches past a physical bound is cut at it (the true mean lies
+// within the bound, so the cut interval covers it at least as often), and a replica outside its
+// own bound is listed. Family a (three sub-volumes of one scan, E_rel as in the demo):
+// 0.0386, 0.0121, 0.0298: mean 0.026833, sd 0.013497, sem 0.0077924, t_{0.975,2} = 4.3027,
+// half-width 0.033528: [-0.006695, 0.060361] -> [0, 0.060361] with E_rel=0:voigt (0.4 per row).
+// Family c, nu = 0.49, 0.45, 0.40 with nu=-1:0.5: mean 0.44667, sd 0.045092, sem 0.026034,
+// half-width 0.11202: [0.33465, 0.55868] -> [0.33465, 0.5]. Family b has one E_rel of 0.5
+// above its row's Voigt bound 0.4: listed.
+TEST(Results, IntervalsAreCutAtPhysicalBoundsAndValuesOutsideThemListed) {
+  ASSERT_TRUE(tomodem::plotting_available()) << "gnuplot is not installed (Debian package gnuplot-nox)";
+  Scratch s;
+  std::vector<std::string> files;
+  const double e_a[] = {0.0386, 0.0121, 0.0298}, e_b[] = {0.02, 0.5, 0.03}, nu_c[] = {0.49, 0.45, 0.40};
+  for (int r = 0; r < 3; ++r) {
+    std::ostringstream a, b, c;
+    a.precision(17);
+    b.precision(17);
+    c.precision(17);
+    a << "{\"family\": \"a\", \"replica\": " << r << ", \"density\": 0.4, \"voigt\": 0.4, \"E_rel\": " << e_a[r] << ", \"nu\": 0.2}";
+    b << "{\"family\": \"b\", \"replica\": " << r << ", \"density\": 0.4, \"voigt\": 0.4, \"E_rel\": " << e_b[r] << ", \"nu\": 0.2}";
+    c << "{\"family\": \"c\", \"replica\": " << r << ", \"density\": 0.4, \"voigt\": 0.4, \"E_rel\": 0.1, \"nu\": " << nu_c[r] << "}";
+    files.push_back(s.write("a" + std::to_string(r) + ".json", a.str()));
+    files.push_back(s.write("b" + std::to_string(r) + ".json", b.str()));
+    files.push_back(s.write("c" + std::to_string(r) + ".json", c.str()));
+  }
+  tp::ReportOptions o;
+  o.group = {"family"};
+  o.stats = {"E_rel", "nu"};
+  o.bounds = {"E_rel=0:voigt", "nu=-1:0.5"};
+  o.plots = {"name=stiffness;x=density;y=E_rel;by=family;xlabel=relative density (-);ylabel=E/E_s (-)"};
+  const auto f = tp::write_report(s.path("report"), files, o);
+  ASSERT_EQ(f.outside_bounds.size(), 1u);
+  EXPECT_NE(f.outside_bounds[0].find("b1.json: E_rel = 0.5 is above its upper bound 0.4 (voigt)"), std::string::npos)
+      << f.outside_bounds[0];
+  const std::string j = s.read("report/summary.json");
+  // The cell of `family` F and `property` P: the text from its "family" key to the next cell.
+  const auto cell = [&](const std::string& fam, const std::string& prop) {
+    for (std::size_t at = j.find("\"family\": \"" + fam + "\""); at != std::string::npos; at = j.find("\"family\": \"" + fam + "\"", at + 1)) {
+      const std::string c = j.substr(at, j.find('}', at) - at);
+      if (c.find("\"property\": \"" + prop + "\"") != std::string::npos) return c;
+    }
+    return std::string();
+  };
+  const auto ci = [&](const std::string& c) {
+    const auto at = c.find("\"ci95\": [");
+    const std::string rest = c.substr(at + 9);
+    return std::pair{std::stod(rest), std::stod(rest.substr(rest.find(',') + 1))};
+  };
+  const std::string a = cell("a", "E_rel"), b = cell("b", "E_rel"), cnu = cell("c", "nu");
+  ASSERT_FALSE(a.empty() || b.empty() || cnu.empty()) << j;
+  EXPECT_EQ(ci(a).first, 0.0);
+  EXPECT_NEAR(ci(a).second, 0.060361, 2e-6);
+  EXPECT_NE(a.find("\"ci95_cut_at_bound\": true"), std::string::npos) << a;
+  EXPECT_NEAR(ci(cnu).first, 0.33465, 2e-5);
+  EXPECT_EQ(ci(cnu).second, 0.5);
+  // b: mean 0.18333 (inside [0, 0.4]), sd 0.27429, half-width 0.68137: [-0.49803, 0.86470] is cut
+  // at both ends; its replica outside the bound is listed above.
+  EXPECT_EQ(ci(b).first, 0.0);
+  EXPECT_EQ(ci(b).second, 0.4);
+  EXPECT_NE(j.find("\"outside_bounds\": ["), std::string::npos);
+  EXPECT_NE(j.find("b1.json"), std::string::npos);
+  // The plot's bar ends are the cut interval (x y low high).
+  EXPECT_NE(s.read("report/stiffness.dat").find("0.4 0.02683333333 0 0.06036"), std::string::npos) << s.read("report/stiffness.dat");
+  const std::string html = s.read("report/index.html");
+  EXPECT_NE(html.find("cut at the property's physical bound"), std::string::npos);
+  EXPECT_NE(html.find("outside their physical bounds"), std::string::npos);
+}
+
+TEST(Results, BadBoundsWriteNothing) {
+  Scratch s;
+  const auto files = rows(s);
+  for (const std::string spec : {"young.E", "young.E=0", "nope=0:1", "young.E=:", "young.E=1:0", "young.E=0:missing", "young.E=0:inf"}) {
+    tp::ReportOptions o;
+    o.bounds = {spec};
+    EXPECT_THROW(tp::write_report(s.path("report"), files, o), tomodem::InputError) << spec;
+    EXPECT_FALSE(fs::exists(s.path("report"))) << spec;
+  }
+  tp::ReportOptions o;
+  o.bounds = {"young.E=0:", "young.E=:1e12"};
+  EXPECT_THROW(tp::write_report(s.path("report"), files, o), tomodem::InputError);
+}

@@ -23,6 +23,9 @@ struct PlotSeries {
   bool points_only = false;  ///< markers without a line (same as draw = points; kept for callers)
   std::vector<double> yerr;  ///< error bar half-heights, one per y (empty: no bars; NaN: none at that point)
   PlotDraw draw = PlotDraw::points_and_lines;
+  /// Asymmetric bars: their lower and upper ends where given (finite), else y -/+ yerr; either
+  /// empty or one per y (an interval cut at a physical bound).
+  std::vector<double> ylow, yhigh;
 };
 
 struct PlotSpec {

@@ -55,6 +55,10 @@ struct ReportOptions {
   // (default: every number column but the group, replica, seed, *_error*, *_time_s, *_bytes).
   std::vector<std::string> group, stats;
   std::string replicas;              // the runner's adaptive-replica record (${run.replicas}), or ""
+  // "NAME=LO:HI": the physical range of a column (LO, HI: numbers or columns; one may be empty,
+  // as in E_rel=0:). A 95 % interval that reaches past it is cut there; a replica outside it is
+  // listed (ReportFiles::outside_bounds, summary.json) and marked on the page.
+  std::vector<std::string> bounds;
 };
 
 /// What write_report wrote, for the caller's summary.
@@ -63,6 +67,7 @@ struct ReportFiles {
   std::vector<std::string> plots;  // stems; each has .png, .svg, .gp, .dat (error-vs-cpu plots too)
   std::size_t cells = 0, rankings = 0;
   std::size_t rows = 0, columns = 0;
+  std::vector<std::string> outside_bounds;  // one text per replica value outside its --bound
 };
 
 /// Reads the row files (make_row's JSON), adds the ratio columns and writes `dir`/table.csv,
