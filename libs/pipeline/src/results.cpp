@@ -575,17 +575,33 @@ std::vector<Ranking> rankings_of(const std::vector<Cell>& cells, const std::vect
         const bool a_low = ma <= mb;
         const std::string lo = a_low ? ka[0].second : kb[0].second, hi = a_low ? kb[0].second : ka[0].second;
         const std::string at = cell_text(ka, 1);
-        const bool resolved = w.p < 0.05;
         Ranking r;
         r.property = prop;
         r.at = at;
-        r.text = (resolved ? lo + " < " + hi : lo + " vs " + hi) + " in " + prop + (at.empty() ? "" : " at " + at) + ": " +
-                 (resolved ? "" : "not resolved, ") + "Welch " + stats::p_phrase(w.p);
-        r.j = {{"property", prop}, {"at", at},      {"lower", lo},       {"higher", hi}, {"mean_lower", a_low ? ma : mb},
-               {"mean_higher", a_low ? mb : ma},    {"t", std::fabs(w.t)}, {"dof", w.dof}, {"p", w.p},
-               {"resolved", resolved},              {"text", r.text}};
+        r.j = {{"property", prop}, {"at", at},   {"lower", lo},         {"higher", hi}, {"mean_lower", a_low ? ma : mb},
+               {"mean_higher", a_low ? mb : ma}, {"t", std::fabs(w.t)}, {"dof", w.dof}, {"p", w.p}};
         out.push_back(std::move(r));
       }
+  // Resolved by the Benjamini-Hochberg q over every ranking of the report: a study ranks many
+  // pairs (properties x densities), and at p < 0.05 each, one in twenty differences that are not
+  // there would be called resolved.
+  std::vector<double> p;
+  for (const auto& r : out) p.push_back(r.j["p"].get<double>());
+  const std::vector<double> q = stats::benjamini_hochberg(p);
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    Ranking& r = out[i];
+    const bool resolved = q[i] < 0.05;
+    const std::string lo = r.j["lower"], hi = r.j["higher"];
+    r.text = (resolved ? lo + " < " + hi : lo + " vs " + hi) + " in " + r.property + (r.at.empty() ? "" : " at " + r.at) + ": " +
+             (resolved ? "" : "not resolved, ") + "Welch " + stats::p_phrase(p[i]) +
+             (out.size() > 1 ? ", q " + std::string(q[i] < 1e-4 ? "" : "= ") + stats::p_text(q[i]) + " over " +
+                                   std::to_string(out.size()) + " rankings"
+                             : "");
+    r.j["q"] = q[i];
+    r.j["rankings_in_report"] = out.size();
+    r.j["resolved"] = resolved;
+    r.j["text"] = r.text;
+  }
   return out;
 }
 
@@ -730,7 +746,9 @@ std::string html_statistics(const Page& pg) {
     h << "</ul>\n";
   }
   if (!pg.rankings.empty()) {
-    h << "<h3>Rankings</h3>\n<p>Welch's t-test (Welch 1947), two-sided; \"not resolved\" when p &ge; 0.05.</p>\n<ul>\n";
+    h << "<h3>Rankings</h3>\n<p>Welch's t-test (Welch 1947), two-sided p; \"not resolved\" when the "
+         "Benjamini&ndash;Hochberg q over all " << pg.rankings.size() << " rankings is &ge; 0.05 (among the "
+         "resolved ones, fewer than one in twenty is expected to be a difference that is not there).</p>\n<ul>\n";
     for (const auto& r : pg.rankings)
       if (std::find(pg.shown_props.begin(), pg.shown_props.end(), r.property) != pg.shown_props.end())
         h << "<li>" << xml_escape(r.text) << "</li>\n";
@@ -841,7 +859,7 @@ json summary_of(const std::vector<Cell>& cells, const std::vector<std::string>& 
       "tool_error^2); dof = u^4/(sem^4/(n-1)) (Welch-Satterthwaite); ci95 = mean -/+ t(0.975, dof) u (Student 1908), "
       "cut at the property's bounds where --bound gives them (ci95_cut_at_bound). "
       "Rankings: Welch (1947) t-test between cells differing in the first group column, two-sided p; "
-      "resolved when p < 0.05.";
+      "q = Benjamini-Hochberg (1995) adjusted p over every ranking of the report; resolved when q < 0.05.";
   j["cells"] = json::array();
   for (const auto& prop : props)
     for (const auto& c : cells) {

@@ -169,6 +169,21 @@ std::size_t projected_replicas(const Estimate& e, double target, std::size_t cap
   return hi;
 }
 
+std::vector<double> benjamini_hochberg(const std::vector<double>& p) {
+  std::vector<std::size_t> order;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    if (!std::isnan(p[i])) order.push_back(i);
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return p[a] < p[b]; });
+  std::vector<double> q(p.size(), NAN);
+  const double m = double(order.size());
+  double running = 1;  // the minimum over the larger p-values, taken from the largest down
+  for (std::size_t k = order.size(); k-- > 0;) {
+    running = std::min(running, m * p[order[k]] / double(k + 1));
+    q[order[k]] = running;
+  }
+  return q;
+}
+
 std::string p_text(double p) {
   if (std::isnan(p)) return "n/a";
   if (p < 1e-4) return "< 0.0001";

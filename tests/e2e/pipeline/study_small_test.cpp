@@ -228,10 +228,22 @@ TEST(StudySmall, ReportIntervalsAdaptiveStopAndRankingsMatchTheReplicaTable) {
   }
   EXPECT_EQ(met + maxed, 6);
 
-  // 3. Every Welch ranking of E_rel and sigma_rel: t, dof, p by hand; "<" and the p-value when
-  // p < 0.05, "not resolved" otherwise.
+  // 3. Every Welch ranking of E_rel and sigma_rel: t, dof, p by hand; "<" when the
+  // Benjamini-Hochberg q over all the report's rankings (by hand from their p, below) is < 0.05,
+  // "not resolved" otherwise.
+  std::vector<std::pair<double, std::size_t>> sorted_p;
+  for (std::size_t i = 0; i < summary["rankings"].size(); ++i) sorted_p.push_back({summary["rankings"][i]["p"].get<double>(), i});
+  std::sort(sorted_p.begin(), sorted_p.end());
+  std::vector<double> q(sorted_p.size());
+  const double m = double(sorted_p.size());
+  for (std::size_t k = 0; k < sorted_p.size(); ++k) {  // q_(k) = min over j >= k of m p_(j) / j
+    double qk = 1;
+    for (std::size_t j = k; j < sorted_p.size(); ++j) qk = std::min(qk, m * sorted_p[j].first / double(j + 1));
+    q[sorted_p[k].second] = qk;
+  }
   int ranked = 0;
-  for (const auto& r : summary["rankings"]) {
+  for (std::size_t i = 0; i < summary["rankings"].size(); ++i) {
+    const auto& r = summary["rankings"][i];
     const std::string prop = r["property"];
     if (prop != "E_rel" && prop != "sigma_rel") continue;
     const std::string at = r["at"];  // "density=0.6"
@@ -249,11 +261,13 @@ TEST(StudySmall, ReportIntervalsAdaptiveStopAndRankingsMatchTheReplicaTable) {
     EXPECT_NEAR(std::abs(r["t"].get<double>()), tt, 1e-6 * tt);
     EXPECT_NEAR(r["dof"].get<double>(), nu, 1e-6 * nu);
     EXPECT_NEAR(r["p"].get<double>(), p, 1e-6 + 1e-5 * p) << r["text"];
+    EXPECT_NEAR(r["q"].get<double>(), q[i], 1e-12 * q[i]);
+    const bool resolved = q[i] < 0.05;
     const std::string text = r["text"];
-    const std::string pair = r["lower"].get<std::string>() + (p < 0.05 ? " < " : " vs ") + r["higher"].get<std::string>();
+    const std::string pair = r["lower"].get<std::string>() + (resolved ? " < " : " vs ") + r["higher"].get<std::string>();
     EXPECT_EQ(text.rfind(pair + " in " + prop + " at " + at, 0), 0u) << text;
-    EXPECT_EQ(r["resolved"].get<bool>(), p < 0.05) << text;
-    EXPECT_EQ(text.find("not resolved") != std::string::npos, !(p < 0.05)) << text;
+    EXPECT_EQ(r["resolved"].get<bool>(), resolved) << text;
+    EXPECT_EQ(text.find("not resolved") != std::string::npos, !resolved) << text;
     ++ranked;
   }
   EXPECT_EQ(ranked, 2 * 3 * 3);  // 2 properties x 3 densities x 3 pairs of the 3 series

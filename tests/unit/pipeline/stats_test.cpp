@@ -122,3 +122,27 @@ TEST(Stats, ProjectedReplicasAgainstAnIndependentComputation) {
   EXPECT_EQ(st::projected_replicas(est(5, 10.0, 0.5, 0.12), 0.02, 1000), 1000u);
   EXPECT_EQ(st::projected_replicas(est(1, 10.0, std::nan(""), 0), 0.02, 1000), 2u);  // no spread yet
 }
+
+// Benjamini-Hochberg by hand (Benjamini & Hochberg 1995; the same numbers as R's
+// p.adjust(p, "BH")). p = 0.01, 0.04, 0.03, 0.005: sorted 0.005, 0.01, 0.03, 0.04, m p/k = 0.02,
+// 0.02, 0.04, 0.04, the running minimum from the top keeps them: q = 0.02, 0.04, 0.04, 0.02 in
+// the order given. p = 0.04, 0.041: m p/k = 0.08, 0.041, so the smaller p gets q = 0.041 (a
+// step-up: a larger p that passes carries the smaller ones). A NaN stays out of m.
+TEST(Stats, BenjaminiHochbergByHand) {
+  const auto q = st::benjamini_hochberg({0.01, 0.04, 0.03, 0.005});
+  ASSERT_EQ(q.size(), 4u);
+  EXPECT_NEAR(q[0], 0.02, 1e-15);
+  EXPECT_NEAR(q[1], 0.04, 1e-15);
+  EXPECT_NEAR(q[2], 0.04, 1e-15);
+  EXPECT_NEAR(q[3], 0.02, 1e-15);
+  const auto step_up = st::benjamini_hochberg({0.04, 0.041});
+  EXPECT_NEAR(step_up[0], 0.041, 1e-15);
+  EXPECT_NEAR(step_up[1], 0.041, 1e-15);
+  const auto with_nan = st::benjamini_hochberg({0.02, NAN, 0.5});
+  EXPECT_NEAR(with_nan[0], 0.04, 1e-15);
+  EXPECT_TRUE(std::isnan(with_nan[1]));
+  EXPECT_NEAR(with_nan[2], 0.5, 1e-15);
+  EXPECT_NEAR(st::benjamini_hochberg({0.3})[0], 0.3, 1e-15);  // one test: q = p
+  EXPECT_NEAR(st::benjamini_hochberg({0.9, 0.8})[0], 0.9, 1e-15);  // never above 1, never below p
+  EXPECT_TRUE(st::benjamini_hochberg({}).empty());
+}
