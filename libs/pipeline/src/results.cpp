@@ -312,6 +312,8 @@ Bounds bounds_of(const Table& t, const std::vector<std::string>& specs) {
     const auto colon = range.find(':');
     if (colon == std::string::npos) throw InputError("", "--bound", item, "expected NAME=LO:HI (a side may be empty: E_rel=0:)");
     if (!t.known.count(name)) throw InputError("", "--bound", item, "no row has the column '" + name + "'");
+    if (std::none_of(t.rows.begin(), t.rows.end(), [&](const Row& r) { return std::isfinite(number_in(r, name)); }))
+      throw InputError("", "--bound", item, "the column '" + name + "' holds no numbers");
     const Bound b{range.substr(0, colon), range.substr(colon + 1)};
     if (b.lo.empty() && b.hi.empty()) throw InputError("", "--bound", item, "names neither a lower nor an upper bound");
     for (const auto& side : {b.lo, b.hi})
@@ -550,6 +552,7 @@ json cell_json(const Cell& c, const std::string& property, const stats::Estimate
 
 struct Ranking {
   std::string property, at, text;
+  double p = NAN;  // Welch's two-sided p
   json j;
 };
 
@@ -578,6 +581,7 @@ std::vector<Ranking> rankings_of(const std::vector<Cell>& cells, const std::vect
         Ranking r;
         r.property = prop;
         r.at = at;
+        r.p = w.p;
         r.j = {{"property", prop}, {"at", at},   {"lower", lo},         {"higher", hi}, {"mean_lower", a_low ? ma : mb},
                {"mean_higher", a_low ? mb : ma}, {"t", std::fabs(w.t)}, {"dof", w.dof}, {"p", w.p}};
         out.push_back(std::move(r));
@@ -586,7 +590,7 @@ std::vector<Ranking> rankings_of(const std::vector<Cell>& cells, const std::vect
   // pairs (properties x densities), and at p < 0.05 each, one in twenty differences that are not
   // there would be called resolved.
   std::vector<double> p;
-  for (const auto& r : out) p.push_back(r.j["p"].get<double>());
+  for (const auto& r : out) p.push_back(r.p);
   const std::vector<double> q = stats::benjamini_hochberg(p);
   for (std::size_t i = 0; i < out.size(); ++i) {
     Ranking& r = out[i];

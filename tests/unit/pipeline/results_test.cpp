@@ -315,7 +315,7 @@ TEST(Results, IntervalsAreCutAtPhysicalBoundsAndValuesOutsideThemListed) {
 TEST(Results, BadBoundsWriteNothing) {
   Scratch s;
   const auto files = rows(s);
-  for (const std::string spec : {"young.E", "young.E=0", "nope=0:1", "young.E=:", "young.E=1:0", "young.E=0:missing", "young.E=0:inf"}) {
+  for (const std::string spec : {"young.E", "young.E=0", "nope=0:1", "young.E=:", "young.E=1:0", "young.E=0:missing", "young.E=0:inf", "family=0:1"}) {
     tp::ReportOptions o;
     o.bounds = {spec};
     EXPECT_THROW(tp::write_report(s.path("report"), files, o), tomodem::InputError) << spec;
