@@ -530,9 +530,13 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
   using clk = std::chrono::steady_clock;
   auto last = clk::now();
   json times = json::object();
+  // The process's peak memory so far after each stage: the stage where it rises is the one whose
+  // buffers set the run's peak (what --memory has to hold).
+  json peaks = json::object();
   const auto done = [&](const char* stage) {
     const auto t = clk::now();
     times[stage] = std::chrono::duration<double>(t - last).count();
+    peaks[stage] = peak_rss_bytes();
     last = t;
   };
   const std::string format = input_format(cfg.input, ro);
@@ -1174,6 +1178,8 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
   }
   summary["stage_times_s"] = times;
   summary.unit("stage_times_s", "s");
+  summary["peak_rss_after_stage_bytes"] = peaks;
+  summary.unit("peak_rss_after_stage_bytes", "B");
   return summary.text();
 }
 

@@ -253,6 +253,17 @@ TEST(SegmentChunked, FloatVolumeTwoHistogramPasses) {
   EXPECT_EQ(sa["thresholds"], sb["thresholds"]);
   EXPECT_EQ(sa["porosity"], sb["porosity"]);
   EXPECT_EQ(sb["chunked"]["histogram_passes"], 2);
+  // The running peak after each stage: one per timed stage, never falling, and the last at most
+  // the run's own peak (the summary's is taken later).
+  ASSERT_EQ(sb["peak_rss_after_stage_bytes"].size(), sb["stage_times_s"].size());
+  double before = 0;
+  for (const char* stage : {"filter_histogram", "threshold", "macropores", "labels", "outputs_blocks"}) {
+    const double p = sb["peak_rss_after_stage_bytes"].at(stage).get<double>();
+    EXPECT_GE(p, before) << stage;
+    before = p;
+  }
+  EXPECT_LE(before, sb["peak_rss_bytes"].get<double>());
+  EXPECT_GT(before, 1e6);
 }
 
 // Bad block sizes and budgets, and what the chunked path does not do: exit 2, the message names
