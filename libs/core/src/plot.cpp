@@ -111,7 +111,7 @@ void write_plot(const std::filesystem::path& stem, const PlotSpec& spec) {
     if (s.x.size() != s.y.size() || (!s.yerr.empty() && s.yerr.size() != s.y.size()) ||
         (!s.ylow.empty() && s.ylow.size() != s.y.size()) || (!s.yhigh.empty() && s.yhigh.size() != s.y.size()))
       throw InputError(stem.string(), "series '" + s.title + "'", std::to_string(s.x.size()) + " x values",
-                       "it has " + std::to_string(s.y.size()) + " y values; a series needs one y per x");
+                       "it has " + std::to_string(s.y.size()) + " y values; a series needs one y (and one bar, if any) per x");
   for (const auto& [field, label] : {std::pair{"xlabel", &spec.xlabel}, std::pair{"ylabel", &spec.ylabel}})
     if (axis_label_unit(*label).empty())
       throw InputError(stem.string(), field, *label,

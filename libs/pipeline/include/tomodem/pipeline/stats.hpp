@@ -45,7 +45,8 @@ Welch welch(const std::vector<double>& a, const std::vector<double>& b);
 /// Benjamini-Hochberg adjusted p-values (q-values) of m tests, in the order given: with p
 /// sorted ascending, q_(k) = min over j >= k of min(1, m p_(j) / j) (Benjamini & Hochberg
 /// 1995). Calling the tests with q < 0.05 resolved keeps the expected share of false ones among
-/// them below 5 %, however many are made. NaN p-values stay NaN and do not count in m.
+/// them below 5 %, however many are made (proved for independent or positively dependent
+/// tests). NaN p-values stay NaN and do not count in m.
 std::vector<double> benjamini_hochberg(const std::vector<double>& p);
 
 /// The adaptive stop rule for one cell after `n` replicas: "" (add one more) while n < min;
