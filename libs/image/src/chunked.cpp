@@ -331,11 +331,13 @@ double parse_bytes(const std::string& text) {
   return x * it->second;
 }
 
-// What the chunked run holds (bytes): the whole-volume bit masks and face planes, and one block.
-// Per block voxel (side chunk + 2 halo): the float block and its raw rows (filter), or the pores
-// mask, one float distance field and the result (macropores): 6 bytes, 8 with a raw type of 4
-// bytes or more; per core voxel: labels (4), the mask (1), the outputs (uint8 + int32 + HDF5's
-// compression buffers, 10). Checked against /usr/bin/time -v at 96^3 and 512^3 (docs/segment.md).
+// What the chunked run holds (bytes): the whole-volume bit masks and face planes, the process
+// itself (88 MB: 70 MB measured before the first block, and the output writer's buffers that do
+// not grow with the block), and one block of the pass that holds the most. The passes run one after another and each frees its block: per block voxel (side chunk +
+// 2 halo) the filter's float block and raw rows or the macropores' mask, distance and result, 6
+// bytes, 8 with a raw type of 4 bytes or more (5.5 measured for uint16); per core voxel the
+// outputs' uint8 and int32 blocks and HDF5's compression buffers, 12 (9.0-9.6 measured, the
+// run's peak). Measured per stage at 512^3 (peak_rss_after_stage_bytes, docs/segment.md).
 struct MemoryModel {
   double fixed = 0, per_block = 0;
   double total() const { return fixed + per_block; }
@@ -351,10 +353,10 @@ MemoryModel memory_model(const Dims& d, std::size_t chunk, std::size_t halo, boo
   const double N = double(d.nx) * double(d.ny) * double(d.nz);
   const double words = double((d.nx + 63) / 64) * double(d.ny) * double(d.nz) * 8;
   MemoryModel m;
-  m.fixed = words * (phase2 ? 3 : 2) + 2.0 * 4 * double(d.nx) * double(d.ny) + 64e6;  // bits, faces, process
+  m.fixed = words * (phase2 ? 3 : 2) + 2.0 * 4 * double(d.nx) * double(d.ny) + 88e6;  // bits, faces, process
   (void)N;
   const double s = double(chunk + 2 * halo), c = double(chunk);
-  m.per_block = s * s * s * (6 + double(std::min<std::size_t>(type_bytes, 8)) / 2) + c * c * c * 15 + src.reader_bytes();
+  m.per_block = std::max(s * s * s * (6 + double(std::min<std::size_t>(type_bytes, 8)) / 2), c * c * c * 12) + src.reader_bytes();
   if (grains_halo > 0) {
     const double g = double(chunk + 2 * grains_halo);
     m.per_block = std::max(m.per_block, double(grain_blocks) * (g * g * g * kGrainsBytesPerBlockVoxel + c * c * c * 19));
@@ -601,7 +603,7 @@ std::string run_segment_chunked(const SegmentConfig& cfg, const ReadOptions& ro)
                            std::to_string(std::max<std::size_t>(halo, 32)) + " voxels per side with a halo of " +
                            std::to_string(halo) + "): " + bytes_text(m.fixed) + " held for the whole run (bit masks of the " +
                            std::to_string(D.nx) + "x" + std::to_string(D.ny) + "x" + std::to_string(D.nz) +
-                           " volume, block faces, 64 MB for the process) plus " + bytes_text(m.per_block) + " for the block");
+                           " volume, block faces, 88 MB for the process) plus " + bytes_text(m.per_block) + " for the block");
     }
   }
   if (chunk < halo)

@@ -124,8 +124,8 @@ TEST(SegmentH5Chunked, IdenticalToInMemoryAndRaw) {
     const json expected_chunk = std::string(name) == "chunked" ? json{20, 20, 20} : json{0, 0, 0};
     EXPECT_EQ(c["input_h5_chunk_vox"], expected_chunk);
   }
-  // --filter none reads the cores alone; a budget picks the block (64 MB fixed + one block).
-  const Result none = segment((d / "chunked.h5").string() + " --filter none --memory 72MB", d / "none_chk");
+  // --filter none reads the cores alone; a budget picks the block (88 MB fixed + one block).
+  const Result none = segment((d / "chunked.h5").string() + " --filter none --memory 92MB", d / "none_chk");
   const Result none_ref = segment(raw + " --filter none", d / "none_mem");
   expect_same(none_ref, none, true);
   const std::size_t C = none.summary["chunked"]["chunk_vox"].get<std::size_t>();
