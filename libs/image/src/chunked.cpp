@@ -333,11 +333,12 @@ double parse_bytes(const std::string& text) {
 
 // What the chunked run holds (bytes): the whole-volume bit masks and face planes, the process
 // itself (88 MB: 70 MB measured before the first block, and the output writer's buffers that do
-// not grow with the block), and one block of the pass that holds the most. The passes run one after another and each frees its block: per block voxel (side chunk +
-// 2 halo) the filter's float block and raw rows or the macropores' mask, distance and result, 6
-// bytes, 8 with a raw type of 4 bytes or more (5.5 measured for uint16); per core voxel the
-// outputs' uint8 and int32 blocks and HDF5's compression buffers, 12 (9.0-9.6 measured, the
-// run's peak). Measured per stage at 512^3 (peak_rss_after_stage_bytes, docs/segment.md).
+// not grow with the block), and one block of the pass that holds the most. The passes run one
+// after another and each frees its block: per block voxel (side chunk + 2 halo) the filter's
+// float block and raw rows or the macropores' mask, distance and result, 6 bytes, 8 with a raw
+// type of 4 bytes or more (5.5 measured for uint16); per core voxel the outputs' uint8 and int32
+// blocks and HDF5's compression buffers, 12 (9.0-9.6 measured, the run's peak). Measured per
+// stage at 512^3 (peak_rss_after_stage_bytes, docs/segment.md).
 struct MemoryModel {
   double fixed = 0, per_block = 0;
   double total() const { return fixed + per_block; }
@@ -350,11 +351,9 @@ constexpr double kGrainsBytesPerBlockVoxel = 24;
 MemoryModel memory_model(const Dims& d, std::size_t chunk, std::size_t halo, bool phase2, const BlockSource& src,
                          std::size_t grains_halo = 0, std::size_t grain_blocks = 1) {
   const std::size_t type_bytes = src.type_bytes();
-  const double N = double(d.nx) * double(d.ny) * double(d.nz);
   const double words = double((d.nx + 63) / 64) * double(d.ny) * double(d.nz) * 8;
   MemoryModel m;
   m.fixed = words * (phase2 ? 3 : 2) + 2.0 * 4 * double(d.nx) * double(d.ny) + 88e6;  // bits, faces, process
-  (void)N;
   const double s = double(chunk + 2 * halo), c = double(chunk);
   m.per_block = std::max(s * s * s * (6 + double(std::min<std::size_t>(type_bytes, 8)) / 2), c * c * c * 12) + src.reader_bytes();
   if (grains_halo > 0) {
