@@ -298,10 +298,15 @@ std::vector<PlotRequest> plot_requests(const Table& t, const std::vector<std::st
 
 // ---- physical bounds (--bound NAME=LO:HI) ----------------------------------------------------
 
-// Each side a number, a column (a bound per row: the Voigt or Hashin-Shtrikman bound of its
-// sample), or "" (none).
+// One side of a bound: a column (a bound per row: the Voigt or Hashin-Shtrikman bound of its
+// sample), a number, or neither (no bound on that side). Decided once, when parsed.
+struct Side {
+  std::string text, column;
+  double value = NAN;
+  double in(const Row& r) const { return column.empty() ? value : number_in(r, column); }
+};
 struct Bound {
-  std::string lo, hi;
+  Side lo, hi;
 };
 using Bounds = std::map<std::string, Bound>;
 
@@ -314,23 +319,21 @@ Bounds bounds_of(const Table& t, const std::vector<std::string>& specs) {
     if (!t.known.count(name)) throw InputError("", "--bound", item, "no row has the column '" + name + "'");
     if (std::none_of(t.rows.begin(), t.rows.end(), [&](const Row& r) { return std::isfinite(number_in(r, name)); }))
       throw InputError("", "--bound", item, "the column '" + name + "' holds no numbers");
-    const Bound b{range.substr(0, colon), range.substr(colon + 1)};
-    if (b.lo.empty() && b.hi.empty()) throw InputError("", "--bound", item, "names neither a lower nor an upper bound");
-    for (const auto& side : {b.lo, b.hi})
-      if (!side.empty() && !t.known.count(side) && !value_of(side).number)
-        throw InputError("", "--bound", item, "'" + side + "' is neither a column nor a finite number");
-    const Value lo = value_of(b.lo), hi = value_of(b.hi);
-    if (lo.number && hi.number && !(lo.x < hi.x)) throw InputError("", "--bound", item, "the lower bound must be below the upper");
+    const auto side = [&](const std::string& text) {
+      Side s{text, "", NAN};
+      if (text.empty()) return s;
+      if (t.known.count(text)) s.column = text;
+      else if (const Value v = value_of(text); v.number) s.value = v.x;
+      else throw InputError("", "--bound", item, "'" + text + "' is neither a column nor a finite number");
+      return s;
+    };
+    const Bound b{side(range.substr(0, colon)), side(range.substr(colon + 1))};
+    if (b.lo.text.empty() && b.hi.text.empty()) throw InputError("", "--bound", item, "names neither a lower nor an upper bound");
+    if (!(b.lo.value < b.hi.value) && std::isfinite(b.lo.value) && std::isfinite(b.hi.value))
+      throw InputError("", "--bound", item, "the lower bound must be below the upper");
     if (!out.emplace(name, b).second) throw InputError("", "--bound", item, "a second bound for '" + name + "'");
   }
   return out;
-}
-
-// A side's value in one row: the column's number there, or the literal; NaN for none.
-double side_in(const Row& r, const std::string& side) {
-  if (side.empty()) return NAN;
-  const Value lit = value_of(side);
-  return lit.number && !find(r, side) ? lit.x : number_in(r, side);
 }
 
 // The range of a cell's mean: the lowest of its rows' lower bounds and the highest of their
@@ -343,8 +346,8 @@ Range range_of(const Bounds& bs, const std::string& c, const std::vector<const R
   if (it == bs.end()) return {};
   double lo = INFINITY, hi = -INFINITY;
   for (const Row* r : rows) {
-    if (const double l = side_in(*r, it->second.lo); std::isfinite(l)) lo = std::min(lo, l);
-    if (const double h = side_in(*r, it->second.hi); std::isfinite(h)) hi = std::max(hi, h);
+    if (const double l = it->second.lo.in(*r); std::isfinite(l)) lo = std::min(lo, l);
+    if (const double h = it->second.hi.in(*r); std::isfinite(h)) hi = std::max(hi, h);
   }
   return {std::isfinite(lo) ? lo : -INFINITY, std::isfinite(hi) ? hi : INFINITY};
 }
@@ -371,15 +374,15 @@ std::vector<json> outside_bounds(const Table& t, const Bounds& bs, const std::ve
     for (const auto& [c, b] : bs) {
       const double x = number_in(t.rows[i], c);
       if (!std::isfinite(x)) continue;
-      const double lo = side_in(t.rows[i], b.lo), hi = side_in(t.rows[i], b.hi);
+      const double lo = b.lo.in(t.rows[i]), hi = b.hi.in(t.rows[i]);
       const auto slack = [](double v) { return 1e-12 * std::fabs(v); };
       const bool below = std::isfinite(lo) && x < lo - slack(lo), above = std::isfinite(hi) && x > hi + slack(hi);
       if (!below && !above) continue;
-      const std::string& side = below ? b.lo : b.hi;
+      const Side& side = below ? b.lo : b.hi;
       const double bound = below ? lo : hi;
       out.push_back({{"row_file", files[i]}, {"column", c}, {"value", x}, {below ? "lower_bound" : "upper_bound", bound},
                      {"text", files[i] + ": " + c + " = " + number_text(x) + (below ? " is below its lower" : " is above its upper") +
-                                  " bound " + number_text(bound) + (value_of(side).number ? "" : " (" + side + ")")}});
+                                  " bound " + number_text(bound) + (side.column.empty() ? "" : " (" + side.column + ")")}});
     }
   return out;
 }
