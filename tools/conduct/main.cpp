@@ -57,6 +57,11 @@ int main(int argc, char** argv) {
     tomodem::cli::Common common;
     tomodem::cli::add_common(app, "tomodem-conduct", common);
     if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
+    // Given but without effect: refused, never ignored.
+    if (app.count("--axis") && c.bc == "periodic")
+      throw tomodem::InputError("", "--axis", c.axes, "--bc periodic solves x, y and z (the whole tensor); --axis is for electrodes");
+    if (app.count("--neck-law") && c.isolated_necks && c.neck_law != "isolated")
+      throw tomodem::InputError("", "--isolated-necks", "", "means --neck-law isolated; it contradicts --neck-law " + c.neck_law);
     if (c.preconditioner == "petsc") tomodem::require_petsc("--preconditioner");
     c.json = common.json;
     tomodem::network::parse_voxel_resolutions(voxel, c);

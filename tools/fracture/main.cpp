@@ -88,6 +88,9 @@ int main(int argc, char** argv) {
     tomodem::cli::Common common;
     tomodem::cli::add_common(app, "tomodem-fracture", common);
     if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
+    using tomodem::mechanics::FractureMethod;
+    if (c.method == FractureMethod::explicit_test) tomodem::cli::refuse_unused_scope(app, "sla", "--method explicit");
+    if (c.method == FractureMethod::sla) tomodem::cli::refuse_unused_scope(app, "explicit", "--method sla");
     c.json = common.json;
     if (e_opt->count()) c.youngs_modulus = youngs_modulus;
     if (nu_opt->count()) c.poisson_ratio = poisson_ratio;

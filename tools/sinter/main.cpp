@@ -105,9 +105,10 @@ void check_sinter_outputs(const std::string& scene_path, const dem::Scene& scene
   std::vector<std::string> written = {out(settings.curve), out(settings.necks), packing, sidecar};
   if (plots)
     for (const char* stem : kPlotStems)
-      for (const char* ext : {".png", ".svg"}) {
-        written.push_back(out(std::string(stem) + ext));
-        refuse_output_over_input(written.back(), "--output-dir (plot " + std::string(stem) + ext + ")", inputs);
+      for (const std::string& file : plot_files(out(stem))) {
+        written.push_back(file);
+        refuse_output_over_input(file, "--output-dir (plot " + std::filesystem::path(file).filename().string() + ")",
+                                 inputs);
       }
   refuse_output_over_input(json_path, "--json", inputs);
   if (!json_path.empty()) refuse_output_over_input(json_path, "--json", written);
@@ -487,7 +488,8 @@ int run(int argc, char** argv) {
   j.output("necks", out(settings.necks));
   if (plotted) {
     json plots_out = json::array();
-    for (const char* stem : kPlotStems) plots_out.push_back(out(std::string(stem) + ".png"));
+    for (const char* stem : kPlotStems)
+      for (const std::string& file : plot_files(out(stem))) plots_out.push_back(file);
     j.output("plots", plots_out);
   }
   emit_summary(j.text(), json_path);

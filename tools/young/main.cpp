@@ -62,6 +62,11 @@ int main(int argc, char** argv) {
     tomodem::cli::Common common;
     tomodem::cli::add_common(app, "tomodem-young", common);
     if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
+    using tomodem::mechanics::YoungMethod;
+    if (c.method == YoungMethod::explicit_test) tomodem::cli::refuse_unused_scope(app, "implicit", "--method explicit");
+    if (c.method == YoungMethod::implicit) tomodem::cli::refuse_unused_scope(app, "explicit", "--method implicit");
+    else if (ex.protocol != tomodem::mechanics::LoadProtocol::increments)
+      tomodem::cli::refuse_unused_scope(app, "explicit increments", "--protocol rate");
     if (im.solver == tomodem::mechanics::ElasticSolver::petsc) tomodem::require_petsc("--solver");
     c.json = common.json;
     if (e_opt->count()) c.youngs_modulus = youngs_modulus;

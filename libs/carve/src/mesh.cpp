@@ -140,7 +140,7 @@ void check_mesh_size(const std::string& path) {
 }  // namespace
 
 std::unique_ptr<Macropores> load_mesh(const std::string& path, double unit) {
-  if (!(unit > 0)) throw InputError(path, "--image-unit", std::to_string(unit), "must be > 0");
+  if (!(unit > 0)) throw InputError(path, "--image-unit", value_text(unit), "must be > 0");
   {
     std::error_code ec;
     if (std::filesystem::is_directory(path, ec)) throw InputError(path, "", "", "is a folder, not a mesh file");

@@ -213,6 +213,15 @@ void check_outputs(const std::vector<std::string>& inputs, const std::vector<Out
     const fs::path parent = fs::path(o.path).parent_path();
     if (!parent.empty() && !fs::is_directory(parent, ec))
       throw InputError("", o.option, o.path, "the folder " + parent.string() + " does not exist");
+    // A folder that exists but cannot take a file (read-only mount, immutable, no permission)
+    // would otherwise be found only at the end, after the work and the other outputs.
+    const fs::path probe = (parent.empty() ? fs::path(".") : parent) / (".tomodem-probe-" + std::to_string(::getpid()));
+    const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0600);
+    if (fd < 0 && errno != EEXIST)
+      throw InputError("", o.option, o.path,
+                       "the folder " + (parent.empty() ? std::string(".") : parent.string()) +
+                           " cannot be written: " + std::strerror(errno));
+    if (fd >= 0) ::close(fd), ::unlink(probe.c_str());
   }
   const auto same = [](const std::string& a, const std::string& b) {
     std::error_code ec;

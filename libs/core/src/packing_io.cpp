@@ -405,6 +405,18 @@ struct Reader {
       if (b.i[k] == b.j[k])
         bad("/bonds/j[" + std::to_string(k) + "]", std::to_string(b.j[k]),
             "a bond joins particle " + std::to_string(b.i[k]) + " to itself (i = j); a bond needs two particles");
+    // Two intact bonds on one pair would both carry load (E, sigma and K_IC doubled); a broken
+    // row beside an intact one is history and is kept.
+    std::vector<std::pair<std::pair<int32_t, int32_t>, std::size_t>> pairs;
+    for (std::size_t k = 0; k < m; ++k)
+      if (b.state[k] == BondTable::intact) pairs.push_back({std::minmax(b.i[k], b.j[k]), k});
+    std::sort(pairs.begin(), pairs.end());
+    for (std::size_t q = 1; q < pairs.size(); ++q)
+      if (pairs[q].first == pairs[q - 1].first)
+        bad("/bonds/i[" + std::to_string(pairs[q].second) + "]", std::to_string(b.i[pairs[q].second]),
+            "particles " + std::to_string(pairs[q].first.first) + " and " + std::to_string(pairs[q].first.second) +
+                " are joined by two intact bonds (rows " + std::to_string(pairs[q - 1].second) + " and " +
+                std::to_string(pairs[q].second) + "); a pair has one neck");
     for (std::size_t k = 0; k < m; ++k)
       if (!std::isfinite(b.radius[k]) || b.radius[k] <= 0)
         bad("/bonds/radius[" + std::to_string(k) + "]", num(b.radius[k]), "bond (neck) radius must be finite and > 0");

@@ -105,6 +105,10 @@ const std::string& plot_style() {
   return s;
 }
 
+std::vector<std::string> plot_files(const std::string& stem) {
+  return {stem + ".png", stem + ".svg", stem + ".dat", stem + ".gp"};
+}
+
 void write_plot(const std::filesystem::path& stem, const PlotSpec& spec) {
   if (!writes_outputs()) return;  // a silent rank (output.hpp): gnuplot would write its own files
   for (const auto& s : spec.series)
@@ -119,8 +123,8 @@ void write_plot(const std::filesystem::path& stem, const PlotSpec& spec) {
   if (!plotting_available())
     throw RuntimeFailure("plot " + stem.string() + ": gnuplot not found (install Debian's gnuplot-nox)");
 
-  const std::string dat = stem.string() + ".dat", gp = stem.string() + ".gp";
-  const std::string png = stem.string() + ".png", svg = stem.string() + ".svg";
+  const std::vector<std::string> files = plot_files(stem.string());
+  const std::string &png = files[0], &svg = files[1], &dat = files[2], &gp = files[3];
   std::ostringstream data;
   data.precision(10);
   for (const auto& s : spec.series) {  // one block per series, addressed by `index` in the script

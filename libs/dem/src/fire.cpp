@@ -394,7 +394,7 @@ struct CellDof {
 }  // namespace
 
 FireResult minimise_enthalpy(Simulation& sim, const FireOptions& o, const EnthalpyOptions& e) {
-  if (!(e.pressure > 0)) throw InputError("", "pressure", std::to_string(e.pressure), "the enthalpy minimiser needs a target pressure > 0");
+  if (!(e.pressure > 0)) throw InputError("", "pressure", value_text(e.pressure), "the enthalpy minimiser needs a target pressure > 0");
   if (sim.cell_control().active())
     throw InputError("", "minimise", "", "the enthalpy minimiser drives the cell itself: stop the cell's deformation and servo first");
 #if TOMODEM_HAVE_MPI

@@ -526,7 +526,7 @@ void read_protocol(const Map& root, Scene& scene) {
   const std::string ts = pr.string("timestep", "auto");
   const double crit = sim.critical_time_step();
   if (!(std::isfinite(crit) && crit > 0))
-    throw InputError(file, "physics", std::to_string(crit), "the critical time step is not a positive finite number");
+    throw InputError(file, "physics", value_text(crit), "the critical time step is not a positive finite number");
   if (ts == "auto") {
     p.auto_timestep = true;
     p.timestep = p.timestep_fraction * crit;
@@ -594,7 +594,7 @@ void check_start_overlaps(Scene& scene) {
       std::ostringstream s;
       s << "particles " << P.id[ct.i[c]] << " and " << P.id[ct.j[c]] << " overlap by " << ratio
         << " of the smaller radius at start (limit 0.5)";
-      throw InputError(scene.inputs.empty() ? file : scene.inputs[0], "particles.position", std::to_string(ratio), s.str());
+      throw InputError(scene.inputs.empty() ? file : scene.inputs[0], "particles.position", value_text(ratio), s.str());
     }
   }
 }

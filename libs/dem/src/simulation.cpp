@@ -123,7 +123,7 @@ struct Simulation::Impl : SimState {
 
   /// The first half of a step: half-kick, drift, the forces at the new positions.
   void begin_step() {
-    if (dt <= 0) throw InputError("", "timestep", std::to_string(dt), "the time step must be set and positive");
+    if (dt <= 0) throw InputError("", "timestep", value_text(dt), "the time step must be set and positive");
     if (!forces_valid) {
       // Forces at the current state, before any time has passed: the incremental springs
       // (tangential, rolling) must not advance by v_rel·Δt here, or every contact present at the
@@ -340,7 +340,7 @@ DomainHooks* Simulation::domain() const { return impl_->domain; }
 const std::vector<double>& Simulation::stiffness_sums() const { return impl_->forces.stiffness; }
 void Simulation::set_time_step(double dt, bool check_limit) {
   if (!(dt > 0) || !std::isfinite(dt))
-    throw InputError("", "timestep", std::to_string(dt), "the time step must be a positive number");
+    throw InputError("", "timestep", value_text(dt), "the time step must be a positive number");
   const double crit = check_limit ? critical_time_step() : dt;
   if (dt > crit) {
     std::ostringstream s;
@@ -348,7 +348,7 @@ void Simulation::set_time_step(double dt, bool check_limit) {
       << (law_info(impl_->model.normal).stiffness_kind == StiffnessKind::spring ? "two-particle Verlet limit"
                                                                                  : "Rayleigh time")
       << "); use 'auto' or a smaller value";
-    throw InputError("", "timestep", std::to_string(dt), s.str());
+    throw InputError("", "timestep", value_text(dt), s.str());
   }
   // Forces stay valid: recomputing them would apply the incremental springs twice.
   impl_->dt = dt;
@@ -550,7 +550,7 @@ void check_engine_state(const SimState& s, const Simulation::EngineState& e) {
     size_is(g + "/history", e.wall_history[w].size(), n * std::size_t(s.stride));
     size_is(g + "/touching", e.wall_touching[w].size(), s.kern.touch_flag ? n : 0);
   }
-  if (!(std::isfinite(e.dt) && e.dt > 0)) throw InputError("", "/engine/scalars[1]", std::to_string(e.dt), "the time step must be positive" + mismatch);
+  if (!(std::isfinite(e.dt) && e.dt > 0)) throw InputError("", "/engine/scalars[1]", value_text(e.dt), "the time step must be positive" + mismatch);
   if (!std::isfinite(e.time) || e.step < 0) throw InputError("", "/engine/scalars", std::to_string(e.step), "time and step must be finite and >= 0" + mismatch);
   size_is("/bonds/i", e.bonds.size(), s.bonds.size());
   {

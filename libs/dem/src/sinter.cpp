@@ -1218,7 +1218,7 @@ Scene sinter_scene(const Packing& green, const std::string& source, const std::s
       throw InputError(source, "/particles/phase", std::to_string(m), "no material with this index");
     const double rho = green.materials[std::size_t(m)].density;
     if (!(rho > 0))
-      throw InputError(source, "/materials/" + green.materials[std::size_t(m)].name + "/density", std::to_string(rho),
+      throw InputError(source, "/materials/" + green.materials[std::size_t(m)].name + "/density", value_text(rho),
                        "must be positive");
     parts.add(green.particles.position[i], green.particles.radius[i], rho, m);
   }
@@ -1252,7 +1252,7 @@ SinteredPacking sinter_packing(const Packing& green, const std::string& source, 
     scene.sim->measure();  // the neighbour list, so the density counts the overlaps once
     const double rho0 = density_state(*scene.sim).density;
     if (!(target_density > rho0 && target_density < 1))
-      throw InputError("", "--target-density", std::to_string(target_density),
+      throw InputError("", "--target-density", value_text(target_density),
                        "must lie between the packing's relative density (" + std::to_string(rho0) + ") and 1");
     s.target_density = target_density;
   }

@@ -127,7 +127,7 @@ std::array<int, 3> gaussian_radii(const Volume& v, double sigma_vox) {
 }
 
 void gaussian_inplace(Volume& v, double sigma_vox) {
-  if (!(sigma_vox > 0)) throw InputError("", "--sigma", std::to_string(sigma_vox), "must be > 0 (voxels)");
+  if (!(sigma_vox > 0)) throw InputError("", "--sigma", value_text(sigma_vox), "must be > 0 (voxels)");
   const std::array<double, 3> sigma = along_each_axis(v, sigma_vox);
   const std::array<int, 3> radii = gaussian_radii(v, sigma_vox);
   const std::array<std::size_t, 3> n{v.dims.nx, v.dims.ny, v.dims.nz};

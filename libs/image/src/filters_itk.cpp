@@ -47,7 +47,7 @@ static Volume run_filter(const Volume& v, Filter* f) {
 }
 
 Volume gaussian(const Volume& v, double sigma) {
-  if (!(sigma > 0)) throw InputError("", "--sigma", std::to_string(sigma), "must be > 0 (voxels)");
+  if (!(sigma > 0)) throw InputError("", "--sigma", value_text(sigma), "must be > 0 (voxels)");
   using Filter = itk::SmoothingRecursiveGaussianImageFilter<FI, FI>;
   auto f = Filter::New();
   // sigma in voxels of the finest axis, the same length on each axis (image spacing is relative, so

@@ -244,7 +244,7 @@ std::vector<double> sample_level_set(const std::string& path, const std::vector<
     warn(path + ": the level set states no unit (metadata metres_per_unit or units): taken in metres");
   }
   if (!(unit > 0) || !std::isfinite(unit))
-    throw InputError(path, "metres_per_unit", std::to_string(unit), "must be finite and > 0");
+    throw InputError(path, "metres_per_unit", value_text(unit), "must be finite and > 0");
   openvdb::tools::GridSampler<openvdb::FloatGrid, openvdb::tools::BoxSampler> sampler(*grid);
   std::vector<double> out;
   for (const auto& p : pts) out.push_back(sampler.wsSample(openvdb::Vec3d(p.x, p.y, p.z) / unit) * unit);

@@ -302,7 +302,7 @@ void check_read_options(const ReadOptions& o) {
   if (!(o.header_unit > 0) || !std::isfinite(o.header_unit))
     throw InputError("", "--header-unit", std::to_string(o.header_unit), "must be finite and > 0 (metres per header unit, e.g. 0.001)");
   for (double s : o.spacing)
-    if (!(s >= 0) || !std::isfinite(s)) throw InputError("", "--spacing", std::to_string(s), "must be finite and > 0");
+    if (!(s >= 0) || !std::isfinite(s)) throw InputError("", "--spacing", value_text(s), "must be finite and > 0");
   if (o.has_roi && (o.roi[3] == 0 || o.roi[4] == 0 || o.roi[5] == 0))
     throw InputError("", "--roi", std::to_string(o.roi[3]) + "x" + std::to_string(o.roi[4]) + "x" + std::to_string(o.roi[5]),
                      "an empty region: NX, NY and NZ must be >= 1");
@@ -360,7 +360,7 @@ VolumeGeometry h5_geometry(const std::string& path, const ReadOptions& o) {
     g.spacing_source = "--spacing";
   } else if (header_spacing) {
     for (double s : g.spacing)
-      if (!(s > 0) || !std::isfinite(s)) throw InputError(path, "spacing", std::to_string(s), "invalid voxel size in header");
+      if (!(s > 0) || !std::isfinite(s)) throw InputError(path, "spacing", value_text(s), "invalid voxel size in header");
     g.spacing_source = "header";
   } else {
     throw InputError(path, "spacing", "", "h5 carries no voxel size; give --spacing (e.g. 60.7um)");
@@ -444,7 +444,7 @@ Volume read_volume(const std::string& input, const ReadOptions& o, ReadInfo* inf
     info.spacing_source = "--spacing";
   } else if (header_spacing) {
     for (double s : v.spacing)
-      if (!(s > 0) || !std::isfinite(s)) throw InputError(input, "spacing", std::to_string(s), "invalid voxel size in header");
+      if (!(s > 0) || !std::isfinite(s)) throw InputError(input, "spacing", value_text(s), "invalid voxel size in header");
     info.spacing_source = "header";
   } else {
     throw InputError(input, "spacing", "", info.format + " carries no voxel size; give --spacing (e.g. 60.7um)");

@@ -473,7 +473,7 @@ ImplicitResult solve_implicit(const Packing& p, const std::vector<Image>& image,
     res.converged = res.converged && r.converged;
     if (res.solver != ElasticSolver::ldlt)
       info("  strain case " + std::to_string(c + 1) + "/" + std::to_string(ncase) + ": " +
-           std::to_string(r.iterations) + " iterations, residual " + std::to_string(r.residual));
+           std::to_string(r.iterations) + " iterations, residual " + value_text(r.residual));
   }
   res.solve_s = seconds_since(t1);
   for (int a = 0; a < 6; ++a)

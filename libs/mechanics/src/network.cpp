@@ -90,11 +90,11 @@ std::vector<dem::BondLaw> bond_laws(const Packing& p, const std::string& file, c
     const Material& m = p.materials[k];
     const std::string field = "/materials/" + std::to_string(k) + " (" + m.name + ")";
     if (!(m.youngs_modulus > 0) || !std::isfinite(m.youngs_modulus))
-      throw InputError(file, field + "@youngs_modulus_Pa", std::to_string(m.youngs_modulus), "must be finite and > 0");
+      throw InputError(file, field + "@youngs_modulus_Pa", value_text(m.youngs_modulus), "must be finite and > 0");
     if (!(m.poisson_ratio > -1 && m.poisson_ratio < 0.5))
-      throw InputError(file, field + "@poisson_ratio", std::to_string(m.poisson_ratio), "must lie in (-1, 0.5)");
+      throw InputError(file, field + "@poisson_ratio", value_text(m.poisson_ratio), "must lie in (-1, 0.5)");
     if (need_density && !(m.density > 0 && std::isfinite(m.density)))
-      throw InputError(file, field + "@density_kg_per_m3", std::to_string(m.density),
+      throw InputError(file, field + "@density_kg_per_m3", value_text(m.density),
                        "must be > 0 for the explicit (dynamic) test");
   }
   for (std::size_t i = 0; i < p.particles.size(); ++i)
@@ -135,6 +135,10 @@ void override_materials(Packing& p, const std::optional<double>& youngs_modulus,
   check_material_overrides(youngs_modulus, poisson_ratio, density);
   if (!youngs_modulus && !poisson_ratio && !density) return;
   if (p.materials.empty() && p.particles.size()) {
+    // Nothing in the file to keep: a constant left out would be a silent 0 (nu = 0 is a material).
+    if (!youngs_modulus || !poisson_ratio)
+      throw InputError("", youngs_modulus ? "--poisson-ratio" : "--youngs-modulus", "(not given)",
+                       "the packing has no /materials, so both --youngs-modulus and --poisson-ratio are needed");
     const int n = 1 + *std::max_element(p.particles.phase.begin(), p.particles.phase.end());
     for (int k = 0; k < n; ++k) p.materials.push_back(Material{"phase" + std::to_string(k)});
   }

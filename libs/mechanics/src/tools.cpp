@@ -382,8 +382,14 @@ std::string run_young(const YoungConfig& c) {
                                              c.explicit_.strain, c.input));
     out.output("fields", c.fields.output);
   }
-  out["E"] = want_implicit ? ir.E : er.E;
-  out["nu"] = want_implicit ? ir.nu : er.nu;
+  const double E = want_implicit ? ir.E : er.E, nu = want_implicit ? ir.nu : er.nu;
+  // A modulus that overflowed (constants near the limits of a double) is no result: a summary
+  // with E null and E_error 0 would read as an exact answer.
+  if (!std::isfinite(E) || !std::isfinite(nu))
+    throw NumericalError("young: E = " + value_text(E) + " Pa, nu = " + value_text(nu) + " from " + c.input +
+                         ": not finite (material constants or neck sizes beyond what a double can carry?)");
+  out["E"] = E;
+  out["nu"] = nu;
   out["E_error"] = want_implicit ? ir.E_error : er.E_error;
   out["nu_error"] = want_implicit ? ir.E_error : er.nu_error;  // implicit: the relative residual, as for E
   // The unit tells the report how to combine it: the explicit test's error of nu is absolute.
@@ -401,7 +407,14 @@ std::string run_young(const YoungConfig& c) {
   const double E_iso_over_Es = bc.E_s > 0 ? E_iso / bc.E_s : std::nan("");
   const bool iso_exceeded = E_iso_over_Es > bc.hs_upper_E_over_Es;
   if (want_implicit) out["E_iso_over_Es"] = finite(E_iso_over_Es);
-  out["bound_exceeded"] = bc.exceeded || iso_exceeded;
+  // Poisson's ratio of a stable isotropic solid lies in [-1, 0.5]; the explicit test can leave it
+  // (an overdamped or too fast run), and then it is no answer either.
+  const bool nu_outside = nu < -1 || nu > 0.5;
+  out["nu_outside_bounds"] = nu_outside;
+  if (nu_outside)
+    warn("nu = " + value_text(nu) + " lies outside [-1, 0.5], the range of a stable isotropic solid" +
+         (want_implicit ? std::string() : ": the explicit test was not quasi-static (see --damping-ratio, --transits)"));
+  out["bound_exceeded"] = bc.exceeded || iso_exceeded || nu_outside;
   const NeckRange nr = neck_range(p);
   out["neck_correction"] = {{"valid_up_to", nr.valid_up_to}, {"max_neck_ratio", nr.max_ratio}, {"bonds_beyond", nr.bonds_beyond}};
   if (nr.bonds_beyond) warn(neck_range_warning(nr, long(p.bonds.size())));

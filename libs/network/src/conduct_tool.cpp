@@ -137,6 +137,13 @@ std::vector<int> parse_axes(const std::string& text, bool unique) {
 }
 
 // --image: every option before the volume is read; returns the conductivity of each label.
+// The error reported is sigma * max(conservation, residual): a residual, not a bound. Looser
+// than 1e-3 it stops failing to bound the error: the linear starting potential alone has a
+// relative residual below 1e-2 on the cathode example, so CG stops at once and sigma is 3x too
+// high against a reported 11 % (docs/conduct.md).
+constexpr double kLoosestTolerance = 1e-3;
+constexpr const char* kToleranceMeaning = "relative residual of the CG solve; looser gives no error estimate";
+
 std::array<double, 256> check_image_options(const ConductConfig& c) {
   if (!c.input.empty())
     throw InputError("", "--image", c.image, "give either a packing (positional input '" + c.input + "') or --image, not both");
@@ -147,7 +154,7 @@ std::array<double, 256> check_image_options(const ConductConfig& c) {
   if (c.bc != "electrodes") throw InputError("", "--bc", c.bc, "applies to a packing; with --image use --sides noflux|periodic");
   if (c.sides != "noflux" && c.sides != "periodic")
     throw InputError("", "--sides", c.sides, "expected 'noflux' or 'periodic'");
-  require_range("--tolerance", c.tolerance, 0, true, 1, true, "relative residual of the CG solve");
+  require_range("--tolerance", c.tolerance, 0, true, kLoosestTolerance, false, kToleranceMeaning);
   if (c.max_iterations < 0)
     throw InputError("", "--max-iterations", std::to_string(c.max_iterations), "must be >= 0 (0: automatic)");
   std::array<double, 256> table{};
@@ -286,7 +293,7 @@ void check_packing_options(const ConductConfig& c) {
                      "applies to --image; a packing takes --phases and --bc");
   if (c.bc != "electrodes" && c.bc != "periodic")
     throw InputError("", "--bc", c.bc, "expected 'electrodes' or 'periodic'");
-  require_range("--tolerance", c.tolerance, 0, true, 1, true, "relative residual of the CG solve");
+  require_range("--tolerance", c.tolerance, 0, true, kLoosestTolerance, false, kToleranceMeaning);
   require_range("--voltage", c.voltage, 0, true, INFINITY, true, "V");
   require_range("--gap-tolerance", c.gap_tolerance, 0, false, 1, false,
                 "gap / R*; a gap wider than the contact radius scale is no contact");

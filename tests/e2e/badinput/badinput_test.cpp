@@ -209,6 +209,8 @@ const std::vector<Row> kRows = {
     {"conduct", "{bonded.h5} --voltage nan", 2, {"--voltage", "nan"}},
     {"conduct", "{bonded.h5} --voltage inf", 2, {"--voltage", "inf"}},
     {"conduct", "{bonded.h5} --tolerance -1", 2, {"--tolerance", "-1"}},
+    // Looser than 1e-3 the starting potential can pass with no iteration: no error estimate.
+    {"conduct", "{bonded.h5} --tolerance 0.01", 2, {"--tolerance", "0.01", "0.001"}},
     {"conduct", "{bonded.h5} --gap-tolerance nan", 2, {"--gap-tolerance", "nan"}},
     {"conduct", "{bonded.h5} --bc nosuch", 2, {"--bc", "nosuch"}},
     {"conduct", "{bonded.h5} --axis q", 2, {"--axis", "q"}},

@@ -84,11 +84,14 @@ const std::vector<Case> kCases = {
     {"cracks_zero", "fracture", B + " --cracks 0", 2, {"--cracks", "0"}},
     {"crack_orientations_unknown", "fracture", B + " --cracks 3 --crack-orientations two", 2,
      {"--crack-orientations", "two"}},
-    {"cracks_explicit", "fracture", B + " --method explicit --cracks 2", 2, {"--cracks", "2", "--method sla or both"}},
+    {"cracks_explicit", "fracture", B + " --method explicit --cracks 2", 2, {"--cracks", "2", "applies to sla only"}},
     // ---- outputs
     {"map_is_input", "fracture", B + " --map {D}/bonded.h5", 2, {"--map", "bonded.h5"}},
     {"curve_is_input", "fracture", B + " --curve {D}/bonded.h5", 2, {"--curve", "bonded.h5"}},
     {"plot_png_is_curve", "fracture", B + " --curve {D}/c.png --plot {D}/c", 2, {"--plot", "c.png", "same file"}},
+    // The plot's data and script are outputs too: they overwrote a --curve or an input before.
+    {"plot_dat_is_curve", "fracture", B + " --curve {D}/c.dat --plot {D}/c", 2, {"--plot (its .dat)", "c.dat", "same file"}},
+    {"plot_gp_is_json", "fracture", B + " --json {D}/c.gp --plot {D}/c", 2, {"c.gp", "same file"}},
     {"map_sidecar_is_json", "fracture", B + " --json {D}/m.xdmf --map {D}/m.h5", 2, {"m.xdmf", "same file"}},
     {"explicit_curve_is_json", "fracture", B + " --method both --curve {D}/c.csv --json {D}/c_explicit.csv", 2,
      {"c_explicit.csv", "same file"}},

@@ -92,9 +92,16 @@ TEST_F(FractureCli, CrackLongerThanSampleExits2WithoutOutput) {
   const std::string in = network(mechanics::test::slab(12, 3, 18, 11));
   auto [c1, e1] = run(in + " --geometry edge --a-over-w 1.2" + outputs());
   EXPECT_EQ(c1, 2) << e1;
-  EXPECT_NE(e1.find("longer than the sample"), std::string::npos) << e1;
+  EXPECT_NE(e1.find("a/W must lie in (0, 0.6]"), std::string::npos) << e1;
   auto [c2, e2] = run(in + " --geometry centre --a-over-w 0.5" + outputs());
   EXPECT_EQ(c2, 2) << e2;
+  // Inside the sample but past where the geometry factor holds (Tada: a/W <= 0.6 for an edge
+  // notch, 2a/W <= 0.7 for a centre crack): K_IC would carry an unknown bias.
+  auto [c3, e3] = run(in + " --geometry edge --a-over-w 0.7" + outputs());
+  EXPECT_EQ(c3, 2) << e3;
+  auto [c4, e4] = run(in + " --geometry centre --a-over-w 0.4" + outputs());
+  EXPECT_EQ(c4, 2) << e4;
+  EXPECT_NE(e4.find("2a/W <= 0.7"), std::string::npos) << e4;
   expect_no_output();
 }
 

@@ -138,3 +138,18 @@ TEST(PackCli, PressureTargetNotReachedExitsFourAndSaysSo) {
   EXPECT_NE(o.out.find("\"target_reached\": true"), std::string::npos) << o.out;
   EXPECT_NE(o.out.find("\"unloaded\": false"), std::string::npos) << o.out;
 }
+
+// The same for a solid-fraction target: `target_reached` was true whatever the run reached (the
+// hostile review: 0.29 against 0.55 after a step cap, exit 0, no warning).
+TEST(PackCli, SolidFractionTargetNotReachedExitsFourAndSaysSo) {
+  const std::string js = ::testing::TempDir() + "short_phi.json";
+  const auto cfg = config("short_phi.yaml", kOne, "target: {solid_fraction: 0.55}\nprotocol: {max_steps: 50}\n");
+  const CliRun r = run(cfg + " -q --no-tessellation -o " + ::testing::TempDir() + "short_phi.h5 --json " + js);
+  EXPECT_EQ(r.code, 4) << r.out;
+  EXPECT_NE(file_text(js).find("\"target_reached\": false"), std::string::npos) << file_text(js);
+  EXPECT_NE(r.out.find("the target solid fraction 0.55 was not reached"), std::string::npos) << r.out;
+  const auto ok = config("long_phi.yaml", kOne, "target: {solid_fraction: 0.55}\n");
+  const CliRun o = run(ok + " -q --no-tessellation -o " + ::testing::TempDir() + "long_phi.h5");
+  EXPECT_EQ(o.code, 0) << o.out;
+  EXPECT_NE(o.out.find("\"target_reached\": true"), std::string::npos) << o.out;
+}

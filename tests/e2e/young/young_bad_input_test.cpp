@@ -77,6 +77,19 @@ void make_inputs(const fs::path& d) {
     j[1] = b.bonds.i[1];
     f.write("/bonds/j", j);
   });
+  write_damaged(d / "bond_duplicate.h5", b, [&](h5::File& f) {  // row 1 repeats row 0, both intact
+    auto i = b.bonds.i, j = b.bonds.j;
+    i[1] = i[0], j[1] = j[0];
+    f.write("/bonds/i", i);
+    f.write("/bonds/j", j);
+  });
+  write_damaged(d / "no_materials.h5", b, [](h5::File&) {});
+  {
+    const hid_t f = H5Fopen((d / "no_materials.h5").c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    ASSERT_GE(f, 0);
+    ASSERT_GE(H5Ldelete(f, "/materials", H5P_DEFAULT), 0);
+    ASSERT_GE(H5Fclose(f), 0);
+  }
   write_damaged(d / "huge.h5", b, [](h5::File&) {});
   claim_huge(d / "huge.h5");
   write_not_packings(d, d / "bonded.h5", b);
@@ -124,6 +137,10 @@ const std::vector<Case> kCases = {
     {"young_bond_radius_negative", "young", "{D}/bond_negative.h5", 2, {"bond_negative.h5", "/bonds/radius[4]", "-2"}},
     {"young_bond_index_out_of_range", "young", "{D}/bond_range.h5", 2, {"bond_range.h5", "/bonds/j[2]", "999"}},
     {"young_self_bond", "young", "{D}/bond_self.h5", 2, {"bond_self.h5", "/bonds/j[1]", "itself"}},
+    // Two intact bonds on one pair: both would carry load (E doubled before, exit 0).
+    {"young_duplicate_bond", "young", "{D}/bond_duplicate.h5", 2, {"bond_duplicate.h5", "/bonds/i[", "two intact bonds"}},
+    // No /materials and only E given: nu was silently 0 before.
+    {"young_no_materials_E_only", "young", "{D}/no_materials.h5 --youngs-modulus 1e9", 2, {"--poisson-ratio", "not given"}},
     {"young_zero_cell", "young", "{D}/cell_zero.h5", 2, {"cell_zero.h5", "/cell/h"}},
     {"young_singular_cell", "young", "{D}/cell_singular.h5", 2, {"cell_singular.h5", "/cell/h", "det"}},
     {"young_half_file", "young", "{D}/half.h5", 2, {"half.h5", "cut short"}},

@@ -150,6 +150,12 @@ TEST_F(YoungCli, BothMethodsReportAgreement) {
                                      path("e.json")).first, 0);
   EXPECT_EQ(json("e.json")["units"]["nu_error"], "absolute");
   EXPECT_EQ(json("e.json")["nu_error"], json("e.json")["explicit"]["nu_error"]);
+  EXPECT_FALSE(y["nu_outside_bounds"].get<bool>());
+  // An option of the method not run is refused, not ignored (implicit is the default).
+  std::tie(code, err) = run("tomodem-young", path("b.h5") + " --transits 7 --json " + path("t.json"));
+  EXPECT_EQ(code, 2) << err;
+  EXPECT_NE(err.find("applies to explicit only"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(path("t.json")));
 }
 
 // A solve stopped by its iteration cap gives numbers, but says so: the summary's converged is

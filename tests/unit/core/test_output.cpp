@@ -172,6 +172,27 @@ TEST_F(Output, OutputOverInputIsRefused) {
   }
 }
 
+// A folder that exists but takes no file is refused before any work (the hostile review found
+// young, fracture and conduct writing their curves and fields, then failing on --json at the
+// end). As root, mode bits do not stop a write: the folder is made immutable (chattr +i) there.
+TEST_F(Output, UnwritableFolderIsRefusedBeforeAnyWork) {
+  const std::string ro = file("ro");
+  ASSERT_EQ(::mkdir(ro.c_str(), 0755), 0);
+  EXPECT_NO_THROW(check_outputs({}, {{"--json", ro + "/s.json"}}));
+  EXPECT_TRUE(test::entries(ro).empty());  // the probe is gone
+  const bool immutable = ::geteuid() == 0 && std::system(("chattr +i '" + ro + "' 2>/dev/null").c_str()) == 0;
+  if (!immutable && (::geteuid() == 0 || ::chmod(ro.c_str(), 0555) != 0)) GTEST_SKIP() << "cannot make a read-only folder here";
+  try {
+    check_outputs({}, {{"--curve", file("c.csv")}, {"--json", ro + "/s.json"}});
+    ADD_FAILURE() << "an unwritable folder was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "--json");
+    EXPECT_NE(std::string(e.what()).find("cannot be written"), std::string::npos) << e.what();
+  }
+  if (immutable) EXPECT_EQ(std::system(("chattr -i '" + ro + "'").c_str()), 0);
+  else ::chmod(ro.c_str(), 0755);
+}
+
 TEST(OutputsOutside, RelativeInsideOnly) {
   EXPECT_NO_THROW(refuse_output_outside("a/b.h5", "out", "s.yaml", "output.packing"));
   for (const char* bad : {"../x.h5", "../../x.h5", "/etc/x.h5", ".", "a/../..", ""})

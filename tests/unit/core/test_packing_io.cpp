@@ -415,6 +415,18 @@ TEST_F(PackingIo, BadBondValuesNameTheFirstBadRow) {
   expect_input_error([&] { read_packing(path); }, path, "/bonds/i[1]", "-7");
 }
 
+// Two intact bonds on one pair (in either order) would both carry load: E, sigma and K_IC came out
+// doubled with exit 0 before. A broken row beside an intact one is history and loads.
+TEST_F(PackingIo, DuplicateIntactBondRefused) {
+  auto path = corrupted([](File& f) { f.write("/bonds/j", std::vector<int32_t>{1, 0, 4}); });  // row 1 broken
+  EXPECT_NO_THROW(read_packing(path));
+  path = corrupted([](File& f) {
+    f.write("/bonds/j", std::vector<int32_t>{1, 0, 4});
+    f.write("/bonds/state", std::vector<uint8_t>{0, 0, 0});
+  });
+  expect_input_error([&] { read_packing(path); }, path, "/bonds/i[1]", "two intact bonds");
+}
+
 TEST_F(PackingIo, NonFiniteMaterialPropertyRefused) {
   auto path = corrupted([](File& f) { f.set_attr("/materials/1", "youngs_modulus_Pa", kNaN); });
   expect_input_error([&] { read_packing(path); }, path, "/materials/1@youngs_modulus_Pa", "nan");

@@ -116,6 +116,23 @@ inline void check_o_as_folder(const std::string& o_value, const std::string& too
                          " writes the files its scene names into a folder: give it with --output-dir");
 }
 
+/// Refuses every option given whose help text starts with `scope` and a colon ("explicit: bond
+/// dashpot ratio", "sla pcg: relative residual" for scope "sla") when that scope is not in use:
+/// the help text's prefix says where an option applies, and an option that would be ignored is
+/// refused, never ignored. `in_use` says what runs instead ("--method implicit").
+inline void refuse_unused_scope(const CLI::App& app, const std::string& scope, const std::string& in_use) {
+  for (const CLI::Option* o : app.get_options()) {
+    const std::string& d = o->get_description();
+    const auto colon = d.find(':');
+    if (o->count() == 0 || colon == std::string::npos || d.compare(0, scope.size(), scope) != 0 ||
+        (d.size() > scope.size() && d[scope.size()] != ':' && d[scope.size()] != ' '))
+      continue;
+    const auto given = o->results();
+    throw InputError("", o->get_name(), given.empty() ? "(given)" : given.front(),
+                     "applies to " + d.substr(0, colon) + " only, and " + in_use + " does not run it");
+  }
+}
+
 /// Parses the command line: the exit code to stop with (0 after --help or --version, 2 for bad
 /// usage, after CLI11's message), or nothing when the tool should go on.
 /// `TOOL --help-man` prints the manual page and `TOOL --help-completion` the bash completion,

@@ -58,4 +58,8 @@ const std::string& plot_style();
 /// without a unit, before anything is written, and RuntimeFailure when gnuplot is missing or fails.
 void write_plot(const std::filesystem::path& stem, const PlotSpec& spec);
 
+/// The four files write_plot(stem) writes, in the order png, svg, dat, gp: a tool checks each
+/// against its inputs before any work and lists them as its outputs.
+std::vector<std::string> plot_files(const std::string& stem);
+
 }  // namespace tomodem
