@@ -387,3 +387,31 @@ TEST(PipelineBadInput, AdaptiveReplicasNeedEnoughUpstreamReplicasAndTheRecordNee
   EXPECT_NE(r.find("p.yaml:16"), std::string::npos) << r;
   EXPECT_NE(r.find("needs a step with `replicas: {until: ...}`"), std::string::npos) << r;
 }
+
+// Review D5: yaml-cpp resolves a repeated key first-wins or last-wins depending on how the map is
+// read; every repeated key is refused, with its line.
+TEST(PipelineBadInput, RepeatedKeysAreRefusedWithTheirLine) {
+  Scratch s;
+  const std::vector<std::tuple<std::string, std::string, std::string>> cases = {
+      {"steps:\n  a:\n    cmd: echo a > a.txt\n    cmd: echo b > a.txt\n    outs: [a.txt]\n", "p.yaml:4", "steps.a.cmd"},
+      {"vars: {n: 1, n: 2}\nsteps:\n  a:\n    cmd: echo ${vars.n} > a.txt\n    outs: [a.txt]\n", "p.yaml:1", "vars.n"},
+      {"steps:\n  a:\n    params: {k: 1, k: 2}\n    cmd: echo > a.txt\n    outs: [a.txt]\n", "p.yaml:3", "steps.a.params.k"},
+      {"steps:\n  a:\n    cmd: echo > ${outs.o}\n    outs: {o: first.txt, o: second.txt}\n", "p.yaml:4", "steps.a.outs.o"},
+      {"steps:\n  a:\n    cmd: true\n  a:\n    cmd: false\n", "p.yaml:4", "steps.a"},
+      {"steps:\n  a:\n    cmd: true\nsteps:\n  b:\n    cmd: true\n", "p.yaml:4", "steps"},
+      {"steps:\n  a:\n    matrix: {d: [1, 2]}\n    cases:\n      - {d: 3, d: 4}\n    cmd: true\n", "p.yaml:5", "d"},
+  };
+  for (const auto& [text, where, field] : cases) {
+    const auto m = load_error(s, text);
+    EXPECT_NE(m.find(where), std::string::npos) << text << "\n" << m;
+    EXPECT_NE(m.find(field), std::string::npos) << text << "\n" << m;
+    EXPECT_NE(m.find("given twice"), std::string::npos) << text << "\n" << m;
+  }
+  // In an included file too, named as the including file names it.
+  s.write("common.yaml", "vars:\n  n: 1\n  n: 2\n");
+  const auto m = load_error(s, "include: common.yaml\nsteps:\n  a:\n    cmd: echo > a.txt\n    outs: [a.txt]\n");
+  EXPECT_NE(m.find("common.yaml:3"), std::string::npos) << m;
+  // Equal values under different maps are no repeat.
+  EXPECT_EQ(load_error(s, "vars: {n: 1, m: {n: 2}}\nsteps:\n  a:\n    params: {n: 1}\n    cmd: echo > ${outs.n}\n"
+                          "    outs: {n: a.txt}\n"), "");
+}
