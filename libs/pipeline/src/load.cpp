@@ -919,15 +919,47 @@ class Expander {
     return out;
   }
 
-  // Two instances writing one file would race and make staleness meaningless.
+  // A path as the file system sees it (symbolic links resolved, absolute): `x.txt`,
+  // `/abs/dir/x.txt` and `self/x.txt` (self -> .) are one file, so outputs and the inputs that
+  // read them are matched by this key, never by their spelling.
+  const std::string& key_of(const std::string& path) {
+    auto it = keys_.find(path);
+    if (it == keys_.end()) it = keys_.emplace(path, resolved(fs::path(p_.dir) / path).string()).first;
+    return it->second;
+  }
+
+  std::string out_field(std::size_t i, std::size_t k) const {
+    return "steps." + inst_[i].step + ".outs." + inst_[i].outs[k].first;
+  }
+
+  // Two instances writing one file would race and make staleness meaningless. An output inside
+  // another instance's output folder is the same thing: re-running the folder's step moves the
+  // whole folder aside, and the other output with it.
   void check_unique_outputs() {
+    std::map<std::string, std::pair<std::size_t, std::size_t>> where;  // key -> (instance, output)
     for (std::size_t i = 0; i < inst_.size(); ++i)
       for (std::size_t k = 0; k < inst_[i].outs.size(); ++k) {
-        const auto [it, fresh] = producer_.emplace(inst_[i].outs[k].second, i);
-        if (!fresh)
-          fail(pend_[i].out_where[k], "steps." + inst_[i].step + ".outs." + inst_[i].outs[k].first, inst_[i].outs[k].second,
-               "output also written by '" + inst_[it->second].id + "' (" + pend_[it->second].out_where[0].str() + ")");
+        const std::string& key = key_of(inst_[i].outs[k].second);
+        const auto [it, fresh] = producer_.emplace(key, i);
+        if (!fresh) {
+          const auto [j, l] = where.at(key);
+          fail(pend_[i].out_where[k], out_field(i, k), inst_[i].outs[k].second,
+               "output also written by '" + inst_[j].id + "' as " + inst_[j].outs[l].second + " (" + pend_[j].out_where[l].str() + ")");
+        }
+        where.emplace(key, std::make_pair(i, k));
       }
+    for (const auto& [key, ik] : where) {
+      const auto [i, k] = ik;
+      for (fs::path up = fs::path(key).parent_path(); up.has_relative_path(); up = up.parent_path()) {
+        const auto outer = where.find(up.string());
+        if (outer == where.end() || outer->second.first == i) continue;
+        const auto [j, l] = outer->second;
+        fail(pend_[i].out_where[k], out_field(i, k), inst_[i].outs[k].second,
+             "this output lies inside the output folder " + inst_[j].outs[l].second + " of '" + inst_[j].id + "' (" +
+                 pend_[j].out_where[l].str() + "): re-running '" + inst_[j].id +
+                 "' would remove it; give the two steps separate folders");
+      }
+    }
   }
 
   // ${steps.S.outs[.NAME]} from instance i: the outputs of the cells of S that agree with i on
@@ -1048,7 +1080,7 @@ class Expander {
     const std::string base = "steps." + in.step + ".";
     for (std::size_t k = 0; k < in.deps.size(); ++k) {
       const std::string& path = in.deps[k].second;
-      if (const auto it = producer_.find(path); it != producer_.end()) {
+      if (const auto it = producer_.find(key_of(path)); it != producer_.end()) {
         if (it->second == i) fail(pe.dep_where[k], base + "deps." + in.deps[k].first, path, "a step cannot read its own output");
         if (std::find(in.upstream.begin(), in.upstream.end(), it->second) == in.upstream.end()) in.upstream.push_back(it->second);
       } else if (options_.check_inputs && path != replicas_ref_ && !fs::exists(fs::path(p_.dir) / path)) {
@@ -1089,21 +1121,21 @@ class Expander {
 
   // An output folder must not hold a file the user made (an input no step writes): the runner
   // would move it aside with the folder.
-  void check_output_folders() const {
+  void check_output_folders() {
     std::map<std::string, std::pair<std::size_t, fs::path>> sources;  // input no step writes -> reader
     for (std::size_t i = 0; i < inst_.size(); ++i)
       for (const auto& d : inst_[i].deps)
-        if (!producer_.count(d.second) && !sources.count(d.second))
+        if (!producer_.count(key_of(d.second)) && !sources.count(d.second))
           sources.emplace(d.second, std::make_pair(i, resolved(fs::path(p_.dir) / d.second)));
     if (sources.empty()) return;
-    for (const auto& [path, j] : producer_) {
-      const fs::path out = resolved(fs::path(p_.dir) / path);
+    for (const auto& [key, j] : producer_) {
+      const fs::path out(key);
       for (const auto& [dep, source] : sources)
         if (strictly_inside(source.second, out)) {
           const auto& o = inst_[j].outs;
-          const auto it = std::find_if(o.begin(), o.end(), [&](const auto& x) { return x.second == path; });
+          const auto it = std::find_if(o.begin(), o.end(), [&, k = key](const auto& x) { return key_of(x.second) == k; });
           fail(pend_[j].out_where[static_cast<std::size_t>(it - o.begin())], "steps." + inst_[j].step + ".outs." + it->first,
-               path, "this output folder holds the input " + dep + " of '" + inst_[source.first].id +
+               it->second, "this output folder holds the input " + dep + " of '" + inst_[source.first].id +
                          "', which no step makes: the runner would replace it");
         }
     }
@@ -1233,7 +1265,8 @@ class Expander {
   std::vector<Instance> inst_;
   std::vector<Pending> pend_;
   std::map<std::string, std::vector<std::size_t>> of_step_;
-  std::map<std::string, std::size_t> producer_;  // output path -> instance
+  std::map<std::string, std::size_t> producer_;  // output (resolved, key_of) -> instance
+  std::map<std::string, std::string> keys_;      // path as written -> key_of(path)
   std::map<std::string, std::size_t> adaptive_of_;  // step -> index into p_.adaptive
 };
 

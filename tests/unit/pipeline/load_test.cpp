@@ -388,6 +388,40 @@ TEST(PipelineBadInput, AdaptiveReplicasNeedEnoughUpstreamReplicasAndTheRecordNee
   EXPECT_NE(r.find("needs a step with `replicas: {until: ...}`"), std::string::npos) << r;
 }
 
+// Review D2: one file under two spellings (absolute and relative, or through a link) is one
+// output, and an input spelt either way is read from the step that writes it.
+TEST(PipelineBadInput, TwoSpellingsOfOneOutputAreOneOutput) {
+  Scratch s;
+  auto m = load_error(s, "steps:\n  a:\n    cmd: echo a > ${outs.0}\n    outs: [" + s.path("x.txt") +
+                             "]\n  b:\n    cmd: echo b > ${outs.0}\n    outs: [x.txt]\n");
+  EXPECT_NE(m.find("p.yaml:7"), std::string::npos) << m;
+  EXPECT_NE(m.find("also written by 'a'"), std::string::npos) << m;
+  std::filesystem::create_directory_symlink(".", s.path("self"));
+  m = load_error(s, "steps:\n  a:\n    cmd: echo a > ${outs.0}\n    outs: [self/y.txt]\n"
+                    "  b:\n    cmd: echo b > ${outs.0}\n    outs: [y.txt]\n");
+  EXPECT_NE(m.find("p.yaml:7"), std::string::npos) << m;
+  EXPECT_NE(m.find("also written by 'a' as self/y.txt"), std::string::npos) << m;
+  // An absolute input that another step writes (which does not exist yet) makes it upstream.
+  const auto p = tp::load(s.write("p.yaml", "steps:\n  b:\n    cmd: cat ${deps.0} > ${outs.0}\n    deps: [" +
+                                                s.path("z.txt") + "]\n    outs: [b.txt]\n"
+                                                "  a:\n    cmd: echo a > ${outs.0}\n    outs: [z.txt]\n"));
+  ASSERT_EQ(ids(p), (std::vector<std::string>{"a", "b"}));
+  EXPECT_EQ(by_id(p, "b").upstream, (std::vector<std::size_t>{0}));
+}
+
+// Review D4: re-running a folder's step would move the folder aside with another step's output in it.
+TEST(PipelineBadInput, OutputInsideAnotherStepsOutputFolder) {
+  Scratch s;
+  const auto m = load_error(s, "steps:\n  a:\n    cmd: mkdir -p ${outs.o}\n    outs: {o: out}\n"
+                               "  b:\n    cmd: echo b > ${outs.o}\n    outs: {o: out/sub/b.txt}\n");
+  EXPECT_NE(m.find("p.yaml:7"), std::string::npos) << m;
+  EXPECT_NE(m.find("steps.b.outs.o"), std::string::npos) << m;
+  EXPECT_NE(m.find("inside the output folder out of 'a' (" + s.path("p.yaml:4)")), std::string::npos) << m;
+  // One step may still declare a folder and a file in it; sibling paths are fine.
+  EXPECT_EQ(load_error(s, "steps:\n  a:\n    cmd: true\n    outs: [out, out/x.txt]\n"
+                          "  b:\n    cmd: true\n    outs: [out2/b.txt, outx]\n"), "");
+}
+
 // Review D5: yaml-cpp resolves a repeated key first-wins or last-wins depending on how the map is
 // read; every repeated key is refused, with its line.
 TEST(PipelineBadInput, RepeatedKeysAreRefusedWithTheirLine) {
