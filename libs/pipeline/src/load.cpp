@@ -53,7 +53,7 @@ long long integer(const std::string& text, const Location& where, const std::str
     if (whole) v = static_cast<long long>(d);
   }
   if (!whole || v < lo)
-    fail(where, field, text, "expected an integer >= " + std::to_string(lo));
+    fail(where, field, text, lo == LLONG_MIN ? "expected an integer" : "expected an integer >= " + std::to_string(lo));
   return v;
 }
 
@@ -68,6 +68,9 @@ std::string normal_path(const std::string& p) {
   while (s.size() > 1 && s.back() == '/') s.pop_back();
   return s;
 }
+
+// Step names and instance ids name log files (<id>.log), and a file name has at most 255 bytes.
+constexpr std::size_t kMaxStepName = 200, kMaxInstanceId = 250;
 
 // ---- the document after includes --------------------------------------------------------
 
@@ -218,6 +221,10 @@ void read_file(const fs::path& path, const std::string& shown, const Location& f
       const std::string name = kv.first.Scalar();
       const Location where = at(shown, kv.first);
       if (!is_name(name)) fail(where, "steps." + name, "", "a step name uses only letters, digits, '_' and '-'");
+      // The name is part of its log file's name, which a file system caps at 255 bytes.
+      if (name.size() > kMaxStepName)
+        fail(where, "steps." + name.substr(0, 40) + "...", "",
+             "a step name has at most " + std::to_string(kMaxStepName) + " bytes (this one has " + std::to_string(name.size()) + ")");
       for (const auto& s : raw.steps)
         if (s.name == name) fail(where, "steps." + name, "", "step defined twice (first at " + s.where.str() + ")");
       if (!kv.second.IsMap()) fail(where, "steps." + name, "", "a step is a map (cmd or tool, deps, outs, ...)");
@@ -796,6 +803,11 @@ void check_step_keys(const RawStep& st) {
            "unknown key (expected cmd, tool, args, deps, outs, params, threads, ranks, matrix, cases, cell, replicas, "
            "seed, version, desc)");
   if (!st.node["cmd"] == !st.node["tool"]) fail(st.where, "steps." + st.name, "", "a step needs one of cmd: or tool:");
+  if (const YAML::Node cmd = st.node["cmd"]) {
+    const std::string text = scalar(cmd, f, base + "cmd");
+    if (text.find_first_not_of(" \t\r\n") == std::string::npos)
+      fail(at(f, cmd), base + "cmd", text, "an empty command (it would run nothing and write none of its outputs)");
+  }
   if (st.node["args"] && !st.node["tool"]) fail(at(f, st.node["args"]), base + "args", "", "args: goes with tool:");
 }
 
@@ -859,6 +871,10 @@ class Expander {
     in.step = st.name;
     in.cell = cell.name;
     in.id = cell.name.empty() ? st.name : st.name + "[" + cell.name + "]";
+    if (in.id.size() > kMaxInstanceId)
+      fail(st.node["cell"] ? at(f, st.node["cell"]) : st.where, base + "cell", cell.name,
+           "the instance id " + in.id.substr(0, 40) + "... has " + std::to_string(in.id.size()) + " bytes, more than " +
+               std::to_string(kMaxInstanceId) + " (it names the step's log file): use a shorter `cell:` template");
     in.where = st.where;
     in.replica = cell.replica;
     for (const auto& [k, v] : cell.values) in.matrix[k] = v;

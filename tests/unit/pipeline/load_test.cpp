@@ -449,3 +449,24 @@ TEST(PipelineBadInput, RepeatedKeysAreRefusedWithTheirLine) {
   EXPECT_EQ(load_error(s, "vars: {n: 1, m: {n: 2}}\nsteps:\n  a:\n    params: {n: 1}\n    cmd: echo > ${outs.n}\n"
                           "    outs: {n: a.txt}\n"), "");
 }
+
+// Review D19/D21: what would fail only at run time (or say the wrong thing) is refused at load.
+TEST(PipelineBadInput, EmptyCommandLongNamesAndNonIntegerReplicaCounts) {
+  Scratch s;
+  auto m = load_error(s, "steps:\n  a:\n    cmd: \"\"\n    outs: [a.txt]\n");
+  EXPECT_NE(m.find("p.yaml:3"), std::string::npos) << m;
+  EXPECT_NE(m.find("empty command"), std::string::npos) << m;
+  EXPECT_NE(load_error(s, "steps:\n  a:\n    cmd: '  '\n").find("empty command"), std::string::npos);
+  m = load_error(s, "steps:\n  " + std::string(201, 's') + ":\n    cmd: true\n");
+  EXPECT_NE(m.find("p.yaml:2"), std::string::npos) << m;
+  EXPECT_NE(m.find("at most 200 bytes (this one has 201)"), std::string::npos) << m;
+  EXPECT_EQ(load_error(s, "steps:\n  " + std::string(200, 's') + ":\n    cmd: true\n"), "");
+  m = load_error(s, "steps:\n  " + std::string(200, 's') + ":\n    matrix: {k: [" + std::string(60, 'v') +
+                        "]}\n    cmd: true\n");
+  EXPECT_NE(m.find("use a shorter `cell:` template"), std::string::npos) << m;
+  m = load_error(s, "steps:\n  a:\n    replicas: {until: {y: 0.1}, min: 3.5, max: 9}\n    cmd: true\n"
+                    "    outs: [a.json]\n");
+  EXPECT_NE(m.find("steps.a.replicas.min"), std::string::npos) << m;
+  EXPECT_NE(m.find("expected an integer"), std::string::npos) << m;
+  EXPECT_EQ(m.find("-9223372036854775808"), std::string::npos) << m;
+}
