@@ -226,6 +226,10 @@ class Scheduler {
     load_all_locks(p_, lock_, cache_);
     shard_mode_ = o_.shards > 0;
     lock_out_ = shard_mode_ ? shard_lock_file(p_, o_.shard) : p_.lock_file;
+    if (shard_mode_) {
+      HashCache unused;
+      merge_lock(lock_out_, shard_kept_, unused);
+    }
     if (!o_.dry_run) take_locks(locked);
     mark_outside(only);
   }
@@ -287,9 +291,12 @@ class Scheduler {
 
   void save() {
     if (!shard_mode_) return write_text_atomic(lock_out_, lock_json(lock_, cache_));
-    // A shard writes only what it ran, so shards never overwrite each other's records.
-    LockFile part;
+    // A shard writes only what it ran, so shards never overwrite each other's records. Its file
+    // is named by K alone, so what an earlier `--shard K/M` (another M) recorded there is kept.
+    LockFile part = shard_kept_;
     for (const auto& id : touched_) {
+      part.steps.erase(id);
+      part.failures.erase(id);
       if (auto it = lock_.steps.find(id); it != lock_.steps.end()) part.steps[id] = it->second;
       if (auto it = lock_.failures.find(id); it != lock_.failures.end()) part.failures[id] = it->second;
     }
@@ -509,7 +516,7 @@ class Scheduler {
   std::vector<char> selected_, needed_, forced_, would_;
   std::vector<St> st_;
   std::vector<std::optional<Verdict>> verdicts_;
-  LockFile lock_;
+  LockFile lock_, shard_kept_;  // shard_kept_: what this shard's lock file held when the run began
   HashCache cache_;
   bool shard_mode_ = false, stop_ = false, killed_ = false;
   std::string lock_out_, stop_after_;
