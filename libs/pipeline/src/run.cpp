@@ -43,13 +43,17 @@ extern "C" void on_signal(int s) { g_signal = s; }
 // a lock of its own, so no two runners ever run one step at once.
 class FileLock {
  public:
-  FileLock(const std::string& path, int how, const std::string& busy) {
-    fd_ = ::open(path.c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0644);
+  // `existing`: lock a file that must not be created or written (the pipeline file itself);
+  // where the file system cannot lock it (NFS refuses LOCK_EX on a read-only descriptor) the
+  // lock is simply not held.
+  FileLock(const std::string& path, int how, const std::string& busy, bool existing = false) {
+    fd_ = existing ? ::open(path.c_str(), O_RDONLY | O_CLOEXEC) : ::open(path.c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0644);
     if (fd_ < 0) throw RuntimeFailure("cannot open " + path + ": " + std::strerror(errno));
     if (::flock(fd_, how | LOCK_NB) != 0) {
+      const bool busy_now = errno == EWOULDBLOCK;
       ::close(fd_);
       fd_ = -1;
-      if (!busy.empty()) throw RuntimeFailure(busy + " (lock " + path + ")");
+      if (!busy.empty() && (busy_now || !existing)) throw RuntimeFailure(busy + " (lock " + path + ")");
     }
   }
   ~FileLock() {
@@ -64,6 +68,22 @@ class FileLock {
 };
 
 std::string run_lock_path(const Pipeline& p) { return (fs::path(p.logs_dir) / ".run.lock").string(); }
+
+// The run lock lives in <logs>, which is named after the file's name: a symbolic (or hard) link
+// to the pipeline under another name has other logs and would run beside it, both writing the
+// same outputs. So the pipeline file itself (its inode, whatever the name) is locked too.
+struct RunLock {
+  RunLock(const Pipeline& p, bool shared) {
+    const char* busy = shared ? "a plain tomodem-run is running this pipeline; shards wait until it ends"
+                              : "another tomodem-run (plain or --shard) is running this pipeline";
+    const int how = shared ? LOCK_SH : LOCK_EX;
+    std::error_code ec;
+    fs::create_directories(p.logs_dir, ec);
+    logs.emplace(run_lock_path(p), how, busy);
+    file.emplace(p.file, how, std::string(busy) + " (under this or another name)", true);
+  }
+  std::optional<FileLock> logs, file;
+};
 
 std::string step_lock_path(const Pipeline& p, const Instance& in) {
   char hex[17];
@@ -276,9 +296,7 @@ class Scheduler {
   void take_locks(bool locked) {
     fs::create_directories(p_.logs_dir);
     fs::create_directories(fs::path(p_.logs_dir) / ".step-locks");
-    if (!locked) guard_.emplace(run_lock_path(p_), shard_mode_ ? LOCK_SH : LOCK_EX,
-                                shard_mode_ ? "a plain tomodem-run is running this pipeline; shards wait until it ends"
-                                            : "another tomodem-run (plain or --shard) is running this pipeline");
+    if (!locked) guard_.emplace(p_, shard_mode_);
     if (shard_mode_)
       shard_guard_.emplace((fs::path(p_.logs_dir) / (".run-shard-" + std::to_string(o_.shard) + ".lock")).string(), LOCK_EX,
                            "another tomodem-run is running shard " + std::to_string(o_.shard) + " of this pipeline");
@@ -520,7 +538,8 @@ class Scheduler {
   HashCache cache_;
   bool shard_mode_ = false, stop_ = false, killed_ = false;
   std::string lock_out_, stop_after_;
-  std::optional<FileLock> guard_, shard_guard_;
+  std::optional<RunLock> guard_;
+  std::optional<FileLock> shard_guard_;
   std::set<std::string> touched_;
   std::vector<Running> running_;
 };
@@ -555,8 +574,7 @@ RunSummary run(const Pipeline& p, const RunOptions& options, std::ostream& progr
   refuse_shards(p, options);
   if (p.adaptive.empty() || options.dry_run) return execute(p, options, &progress);
   // One lock over every round, so no other runner slips in between them.
-  fs::create_directories(p.logs_dir);
-  const FileLock guard(run_lock_path(p), LOCK_EX, "another tomodem-run (plain or --shard) is running this pipeline");
+  const RunLock guard(p, false);
   return detail::run_adaptive(p, options, progress);
 }
 

@@ -413,3 +413,30 @@ TEST(RunSafety, ReportNeverReplacesAFolderItDidNotMake) {
   EXPECT_EQ(same.code, 2) << same.err;
   EXPECT_EQ(s.read("rows/r1.json"), "{\"a\": 1}\n");
 }
+
+// Review D6: the run lock lived only in <stem>.logs, so a link to the pipeline under another name
+// ran beside it, both writing one output. The pipeline file itself is locked as well.
+TEST(RunSafety, ALinkToThePipelineIsTheSamePipelineForTheRunLock) {
+  Scratch s;
+  s.write("p.yaml", "steps:\n  a:\n    cmd: for i in 1 2 3 4 5; do echo pass $i >> ${outs.0}; sleep 0.3; done\n"
+                    "    outs: [a.txt]\n");
+  fs::create_symlink("p.yaml", s.path("q.yaml"));
+  fs::create_hard_link(s.path("p.yaml"), s.path("h.yaml"));
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::chdir(s.dir.c_str());
+    ::freopen("/dev/null", "w", stderr);
+    ::execl(kRun.c_str(), kRun.c_str(), "p.yaml", "-q", static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  for (const char* other : {"q.yaml", "h.yaml", "q.yaml --shard 1/1"}) {
+    const auto r = run_in(s.dir, std::string(other) + " -q");
+    EXPECT_NE(r.code, 0) << other;
+    EXPECT_TRUE(has(r.err, "under this or another name")) << other << ": " << r.err;
+  }
+  int st = 0;
+  ::waitpid(pid, &st, 0);
+  EXPECT_TRUE(WIFEXITED(st) && WEXITSTATUS(st) == 0);
+  EXPECT_EQ(s.read("a.txt"), "pass 1\npass 2\npass 3\npass 4\npass 5\n");
+}
