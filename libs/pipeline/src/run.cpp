@@ -60,6 +60,7 @@ class FileLock {
     if (fd_ >= 0) ::close(fd_);
   }
   bool held() const { return fd_ >= 0; }
+  int fd() const { return fd_; }
   FileLock(const FileLock&) = delete;
   FileLock& operator=(const FileLock&) = delete;
 
@@ -84,6 +85,22 @@ struct RunLock {
   }
   std::optional<FileLock> logs, file;
 };
+
+// A step's lock file holds the process group of the step's last start. The step's processes
+// inherit the locked descriptor, so after a `kill -9` of the runner the lock stays held for as
+// long as anything the step started still runs (and may still write its outputs).
+pid_t recorded_group(const std::string& path) {
+  std::ifstream in(path);
+  long pgid = 0;
+  in >> pgid;
+  return pgid > 1 ? static_cast<pid_t>(pgid) : 0;
+}
+
+std::string lock_owner(const std::string& path) {
+  const std::string pgid = std::to_string(recorded_group(path));
+  return pgid == "0" ? "" : " or processes it started are still running (process group " + pgid +
+                                "; `kill -- -" + pgid + "` stops them)";
+}
 
 std::string step_lock_path(const Pipeline& p, const Instance& in) {
   char hex[17];
@@ -163,7 +180,7 @@ std::string launch_text(const Instance& in, const Launcher& launcher) {
   return text;
 }
 
-pid_t spawn(const Pipeline& p, const Instance& in, const std::string& log, const Launcher& launcher) {
+pid_t spawn(const Pipeline& p, const Instance& in, const std::string& log, const Launcher& launcher, int lock_fd) {
   // A step starts from a clean slate; its old outputs wait aside until it has succeeded.
   move_outputs_aside(p, in);
   const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
@@ -180,6 +197,7 @@ pid_t spawn(const Pipeline& p, const Instance& in, const std::string& log, const
     if (::getppid() != parent) ::_exit(128 + SIGTERM);
     ::dup2(fd, 1);
     ::dup2(fd, 2);
+    ::fcntl(lock_fd, F_SETFD, 0);  // the step's lock goes with every process it starts (lock_owner)
     const int nul = ::open("/dev/null", O_RDONLY);
     if (nul >= 0) ::dup2(nul, 0);
     const std::string t = std::to_string(in.threads);
@@ -202,6 +220,10 @@ pid_t spawn(const Pipeline& p, const Instance& in, const std::string& log, const
   }
   ::setpgid(pid, pid);
   ::close(fd);
+  const std::string pgid = std::to_string(pid) + "\n";
+  if (::ftruncate(lock_fd, 0) != 0 || ::pwrite(lock_fd, pgid.data(), pgid.size(), 0) < 0) {
+    // Only the message of a later run that finds the lock held would lack the process group.
+  }
   return pid;
 }
 
@@ -430,21 +452,45 @@ class Scheduler {
     StepResult& res = sum_.steps[i];
     const int slots = std::min(in.threads * in.ranks, jobs_);
     if (slots > free_slots_) return false;  // wait for a slot; later, smaller steps may still fit
-    auto step_lock = std::make_shared<FileLock>(step_lock_path(p_, in), LOCK_EX, "");
+    const std::string lock_path = step_lock_path(p_, in);
+    auto step_lock = std::make_shared<FileLock>(lock_path, LOCK_EX, "");
+    if (!step_lock->held() && !shard_mode_) step_lock = stop_leftovers(in, lock_path);
     if (!step_lock->held()) {
       st_[i] = St::skipped;
       res.state = "skipped";
-      res.reason = "another tomodem-run is running this step now";
+      res.reason = "another tomodem-run is running this step now" + lock_owner(lock_path);
       ++sum_.skipped;
       say(counter() + "skipped " + in.id + ": " + res.reason);
       return true;
     }
     res.log = log_path(p_, in);
     say("run  " + in.id + " (" + res.reason + ")");
-    running_.push_back(Running{i, spawn(p_, in, res.log, launcher_), std::chrono::steady_clock::now(), utc_now(), slots, std::move(step_lock)});
+    running_.push_back(Running{i, spawn(p_, in, res.log, launcher_, step_lock->fd()), std::chrono::steady_clock::now(), utc_now(), slots, std::move(step_lock)});
     free_slots_ -= slots;
     st_[i] = St::running;
     return true;
+  }
+
+  // A plain run holds the run lock alone, so no other runner of this pipeline is alive: a step
+  // lock still held belongs to processes an earlier run of the step started before its runner
+  // was killed (kill -9, an OOM kill). They would go on writing the outputs this run is about to
+  // make, and the docs promise that steps go with their runner: they are stopped here. (A shard
+  // run cannot tell them from another shard's step: it skips the step, naming the group.)
+  std::shared_ptr<FileLock> stop_leftovers(const Instance& in, const std::string& path) {
+    const pid_t pgid = recorded_group(path);
+    if (pgid && pgid != ::getpgrp()) {
+      say("stop process group " + std::to_string(pgid) + ": left running by an earlier run of " + in.id +
+          " whose runner was killed");
+      for (const int sig : {SIGTERM, SIGKILL}) {
+        if (::kill(-pgid, sig) != 0) break;  // none left in the group
+        for (int k = 0; k < 100; ++k) {      // up to 5 s for the last of them to exit
+          auto lock = std::make_shared<FileLock>(path, LOCK_EX, "");
+          if (lock->held()) return lock;
+          ::usleep(50000);
+        }
+      }
+    }
+    return std::make_shared<FileLock>(path, LOCK_EX, "");
   }
 
   void wait_one() {
