@@ -35,7 +35,14 @@ int main(int argc, char** argv) {
   ro.jobs = default_jobs();
   app.add_option("pipeline", file, "pipeline file (YAML)");
   app.add_option("-j,--jobs", ro.jobs, "parallel slots; a step takes `threads` of them (default: all cores)")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Validator(
+          [](std::string& v) {  // CLI::PositiveNumber's message named a range from 0 to 1.8e308
+            char* end = nullptr;
+            const long n = std::strtol(v.c_str(), &end, 10);
+            return !v.empty() && *end == '\0' && n >= 1 && n <= 1000000 ? std::string()
+                                                                       : "value '" + v + "': expected a number of slots from 1 to 1000000";
+          },
+          "N>=1"));
   app.add_option("--force", ro.force, "run STEP (or STEP[cell]) even if it is up to date")->allow_extra_args(false);
   app.add_flag("-B,--force-all", ro.force_all, "run every step");
   app.add_flag("-n,--dry-run", ro.dry_run, "say what would run and why; run nothing");

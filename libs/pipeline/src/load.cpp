@@ -1,6 +1,7 @@
 // Reading a pipeline file: includes, variables, --set overrides, sweeps, references between
 // steps, and the checks that must fail (exit 2) before anything runs.
 #include <unistd.h>
+#include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -52,7 +53,7 @@ long long integer(const std::string& text, const Location& where, const std::str
     if (whole) v = static_cast<long long>(d);
   }
   if (!whole || v < lo)
-    fail(where, field, text, "expected an integer >= " + std::to_string(lo));
+    fail(where, field, text, lo == LLONG_MIN ? "expected an integer" : "expected an integer >= " + std::to_string(lo));
   return v;
 }
 
@@ -67,6 +68,9 @@ std::string normal_path(const std::string& p) {
   while (s.size() > 1 && s.back() == '/') s.pop_back();
   return s;
 }
+
+// Step names and instance ids name log files (<id>.log), and a file name has at most 255 bytes.
+constexpr std::size_t kMaxStepName = 200, kMaxInstanceId = 250;
 
 // ---- the document after includes --------------------------------------------------------
 
@@ -101,6 +105,56 @@ void flatten_vars(const YAML::Node& n, const std::string& prefix, const std::str
   }
 }
 
+// yaml-cpp keeps the first of two equal keys for `node[key]` and the last when a map is iterated,
+// so `cmd:` given twice would be silently resolved one way or the other. The parser's events see
+// every key (and aliases as single events, so an alias bomb costs nothing here).
+class DuplicateKeys : public YAML::EventHandler {
+ public:
+  explicit DuplicateKeys(std::string shown) : shown_(std::move(shown)) {}
+  void OnDocumentStart(const YAML::Mark&) override {}
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark& m, YAML::anchor_t) override { node(m, nullptr); }
+  void OnAlias(const YAML::Mark& m, YAML::anchor_t) override { node(m, nullptr); }
+  void OnScalar(const YAML::Mark& m, const std::string&, YAML::anchor_t, const std::string& v) override { node(m, &v); }
+  void OnSequenceStart(const YAML::Mark& m, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {
+    node(m, nullptr);
+    open_.push_back(Level{false, true, "", {}});
+  }
+  void OnMapStart(const YAML::Mark& m, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {
+    node(m, nullptr);
+    open_.push_back(Level{true, true, "", {}});
+  }
+  void OnSequenceEnd() override { open_.pop_back(); }
+  void OnMapEnd() override { open_.pop_back(); }
+
+ private:
+  struct Level {
+    bool map, key_next;
+    std::string key;              // the key whose value is being read
+    std::map<std::string, int> lines;  // key -> its line
+  };
+  // A node starts: in a map it is a key or a value, in turn.
+  void node(const YAML::Mark& m, const std::string* scalar) {
+    if (open_.empty() || !open_.back().map) return;
+    Level& l = open_.back();
+    if (l.key_next) {
+      l.key = scalar ? *scalar : "";
+      if (scalar) {
+        const auto [it, fresh] = l.lines.emplace(*scalar, m.line + 1);
+        if (!fresh) {
+          std::string field;
+          for (const auto& o : open_)
+            if (o.map) field += (field.empty() ? "" : ".") + o.key;
+          fail({shown_, m.line + 1}, field, "", "key '" + *scalar + "' given twice (first at line " + std::to_string(it->second) + ")");
+        }
+      }
+    }
+    l.key_next = !l.key_next;
+  }
+  std::string shown_;
+  std::vector<Level> open_;
+};
+
 void read_file(const fs::path& path, const std::string& shown, const Location& from, bool root, Raw& raw,
                std::vector<std::string>& stack) {
   std::error_code ec;
@@ -111,6 +165,11 @@ void read_file(const fs::path& path, const std::string& shown, const Location& f
   if (fs::is_directory(path, ec)) fail(from, root ? "" : "include", shown, "is a folder, not a pipeline file");
   try {
     doc = YAML::LoadFile(path.string());
+    std::ifstream in(path);
+    YAML::Parser parser(in);
+    DuplicateKeys dup(shown);
+    while (parser.HandleNextDocument(dup)) {
+    }
   } catch (const YAML::BadFile&) {
     fail(from, root ? "" : "include", shown, "cannot read the file");
   } catch (const YAML::ParserException& e) {
@@ -162,6 +221,10 @@ void read_file(const fs::path& path, const std::string& shown, const Location& f
       const std::string name = kv.first.Scalar();
       const Location where = at(shown, kv.first);
       if (!is_name(name)) fail(where, "steps." + name, "", "a step name uses only letters, digits, '_' and '-'");
+      // The name is part of its log file's name, which a file system caps at 255 bytes.
+      if (name.size() > kMaxStepName)
+        fail(where, "steps." + name.substr(0, 40) + "...", "",
+             "a step name has at most " + std::to_string(kMaxStepName) + " bytes (this one has " + std::to_string(name.size()) + ")");
       for (const auto& s : raw.steps)
         if (s.name == name) fail(where, "steps." + name, "", "step defined twice (first at " + s.where.str() + ")");
       if (!kv.second.IsMap()) fail(where, "steps." + name, "", "a step is a map (cmd or tool, deps, outs, ...)");
@@ -740,6 +803,11 @@ void check_step_keys(const RawStep& st) {
            "unknown key (expected cmd, tool, args, deps, outs, params, threads, ranks, matrix, cases, cell, replicas, "
            "seed, version, desc)");
   if (!st.node["cmd"] == !st.node["tool"]) fail(st.where, "steps." + st.name, "", "a step needs one of cmd: or tool:");
+  if (const YAML::Node cmd = st.node["cmd"]) {
+    const std::string text = scalar(cmd, f, base + "cmd");
+    if (text.find_first_not_of(" \t\r\n") == std::string::npos)
+      fail(at(f, cmd), base + "cmd", text, "an empty command (it would run nothing and write none of its outputs)");
+  }
   if (st.node["args"] && !st.node["tool"]) fail(at(f, st.node["args"]), base + "args", "", "args: goes with tool:");
 }
 
@@ -803,6 +871,10 @@ class Expander {
     in.step = st.name;
     in.cell = cell.name;
     in.id = cell.name.empty() ? st.name : st.name + "[" + cell.name + "]";
+    if (in.id.size() > kMaxInstanceId)
+      fail(st.node["cell"] ? at(f, st.node["cell"]) : st.where, base + "cell", cell.name,
+           "the instance id " + in.id.substr(0, 40) + "... has " + std::to_string(in.id.size()) + " bytes, more than " +
+               std::to_string(kMaxInstanceId) + " (it names the step's log file): use a shorter `cell:` template");
     in.where = st.where;
     in.replica = cell.replica;
     for (const auto& [k, v] : cell.values) in.matrix[k] = v;
@@ -863,15 +935,47 @@ class Expander {
     return out;
   }
 
-  // Two instances writing one file would race and make staleness meaningless.
+  // A path as the file system sees it (symbolic links resolved, absolute): `x.txt`,
+  // `/abs/dir/x.txt` and `self/x.txt` (self -> .) are one file, so outputs and the inputs that
+  // read them are matched by this key, never by their spelling.
+  const std::string& key_of(const std::string& path) {
+    auto it = keys_.find(path);
+    if (it == keys_.end()) it = keys_.emplace(path, resolved(fs::path(p_.dir) / path).string()).first;
+    return it->second;
+  }
+
+  std::string out_field(std::size_t i, std::size_t k) const {
+    return "steps." + inst_[i].step + ".outs." + inst_[i].outs[k].first;
+  }
+
+  // Two instances writing one file would race and make staleness meaningless. An output inside
+  // another instance's output folder is the same thing: re-running the folder's step moves the
+  // whole folder aside, and the other output with it.
   void check_unique_outputs() {
+    std::map<std::string, std::pair<std::size_t, std::size_t>> where;  // key -> (instance, output)
     for (std::size_t i = 0; i < inst_.size(); ++i)
       for (std::size_t k = 0; k < inst_[i].outs.size(); ++k) {
-        const auto [it, fresh] = producer_.emplace(inst_[i].outs[k].second, i);
-        if (!fresh)
-          fail(pend_[i].out_where[k], "steps." + inst_[i].step + ".outs." + inst_[i].outs[k].first, inst_[i].outs[k].second,
-               "output also written by '" + inst_[it->second].id + "' (" + pend_[it->second].out_where[0].str() + ")");
+        const std::string& key = key_of(inst_[i].outs[k].second);
+        const auto [it, fresh] = producer_.emplace(key, i);
+        if (!fresh) {
+          const auto [j, l] = where.at(key);
+          fail(pend_[i].out_where[k], out_field(i, k), inst_[i].outs[k].second,
+               "output also written by '" + inst_[j].id + "' as " + inst_[j].outs[l].second + " (" + pend_[j].out_where[l].str() + ")");
+        }
+        where.emplace(key, std::make_pair(i, k));
       }
+    for (const auto& [key, ik] : where) {
+      const auto [i, k] = ik;
+      for (fs::path up = fs::path(key).parent_path(); up.has_relative_path(); up = up.parent_path()) {
+        const auto outer = where.find(up.string());
+        if (outer == where.end() || outer->second.first == i) continue;
+        const auto [j, l] = outer->second;
+        fail(pend_[i].out_where[k], out_field(i, k), inst_[i].outs[k].second,
+             "this output lies inside the output folder " + inst_[j].outs[l].second + " of '" + inst_[j].id + "' (" +
+                 pend_[j].out_where[l].str() + "): re-running '" + inst_[j].id +
+                 "' would remove it; give the two steps separate folders");
+      }
+    }
   }
 
   // ${steps.S.outs[.NAME]} from instance i: the outputs of the cells of S that agree with i on
@@ -992,7 +1096,7 @@ class Expander {
     const std::string base = "steps." + in.step + ".";
     for (std::size_t k = 0; k < in.deps.size(); ++k) {
       const std::string& path = in.deps[k].second;
-      if (const auto it = producer_.find(path); it != producer_.end()) {
+      if (const auto it = producer_.find(key_of(path)); it != producer_.end()) {
         if (it->second == i) fail(pe.dep_where[k], base + "deps." + in.deps[k].first, path, "a step cannot read its own output");
         if (std::find(in.upstream.begin(), in.upstream.end(), it->second) == in.upstream.end()) in.upstream.push_back(it->second);
       } else if (options_.check_inputs && path != replicas_ref_ && !fs::exists(fs::path(p_.dir) / path)) {
@@ -1033,21 +1137,21 @@ class Expander {
 
   // An output folder must not hold a file the user made (an input no step writes): the runner
   // would move it aside with the folder.
-  void check_output_folders() const {
+  void check_output_folders() {
     std::map<std::string, std::pair<std::size_t, fs::path>> sources;  // input no step writes -> reader
     for (std::size_t i = 0; i < inst_.size(); ++i)
       for (const auto& d : inst_[i].deps)
-        if (!producer_.count(d.second) && !sources.count(d.second))
+        if (!producer_.count(key_of(d.second)) && !sources.count(d.second))
           sources.emplace(d.second, std::make_pair(i, resolved(fs::path(p_.dir) / d.second)));
     if (sources.empty()) return;
-    for (const auto& [path, j] : producer_) {
-      const fs::path out = resolved(fs::path(p_.dir) / path);
+    for (const auto& [key, j] : producer_) {
+      const fs::path out(key);
       for (const auto& [dep, source] : sources)
         if (strictly_inside(source.second, out)) {
           const auto& o = inst_[j].outs;
-          const auto it = std::find_if(o.begin(), o.end(), [&](const auto& x) { return x.second == path; });
+          const auto it = std::find_if(o.begin(), o.end(), [&, k = key](const auto& x) { return key_of(x.second) == k; });
           fail(pend_[j].out_where[static_cast<std::size_t>(it - o.begin())], "steps." + inst_[j].step + ".outs." + it->first,
-               path, "this output folder holds the input " + dep + " of '" + inst_[source.first].id +
+               it->second, "this output folder holds the input " + dep + " of '" + inst_[source.first].id +
                          "', which no step makes: the runner would replace it");
         }
     }
@@ -1177,7 +1281,8 @@ class Expander {
   std::vector<Instance> inst_;
   std::vector<Pending> pend_;
   std::map<std::string, std::vector<std::size_t>> of_step_;
-  std::map<std::string, std::size_t> producer_;  // output path -> instance
+  std::map<std::string, std::size_t> producer_;  // output (resolved, key_of) -> instance
+  std::map<std::string, std::string> keys_;      // path as written -> key_of(path)
   std::map<std::string, std::size_t> adaptive_of_;  // step -> index into p_.adaptive
 };
 

@@ -43,19 +43,24 @@ extern "C" void on_signal(int s) { g_signal = s; }
 // a lock of its own, so no two runners ever run one step at once.
 class FileLock {
  public:
-  FileLock(const std::string& path, int how, const std::string& busy) {
-    fd_ = ::open(path.c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0644);
+  // `existing`: lock a file that must not be created or written (the pipeline file itself);
+  // where the file system cannot lock it (NFS refuses LOCK_EX on a read-only descriptor) the
+  // lock is simply not held.
+  FileLock(const std::string& path, int how, const std::string& busy, bool existing = false) {
+    fd_ = existing ? ::open(path.c_str(), O_RDONLY | O_CLOEXEC) : ::open(path.c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0644);
     if (fd_ < 0) throw RuntimeFailure("cannot open " + path + ": " + std::strerror(errno));
     if (::flock(fd_, how | LOCK_NB) != 0) {
+      const bool busy_now = errno == EWOULDBLOCK;
       ::close(fd_);
       fd_ = -1;
-      if (!busy.empty()) throw RuntimeFailure(busy + " (lock " + path + ")");
+      if (!busy.empty() && (busy_now || !existing)) throw RuntimeFailure(busy + " (lock " + path + ")");
     }
   }
   ~FileLock() {
     if (fd_ >= 0) ::close(fd_);
   }
   bool held() const { return fd_ >= 0; }
+  int fd() const { return fd_; }
   FileLock(const FileLock&) = delete;
   FileLock& operator=(const FileLock&) = delete;
 
@@ -64,6 +69,38 @@ class FileLock {
 };
 
 std::string run_lock_path(const Pipeline& p) { return (fs::path(p.logs_dir) / ".run.lock").string(); }
+
+// The run lock lives in <logs>, which is named after the file's name: a symbolic (or hard) link
+// to the pipeline under another name has other logs and would run beside it, both writing the
+// same outputs. So the pipeline file itself (its inode, whatever the name) is locked too.
+struct RunLock {
+  RunLock(const Pipeline& p, bool shared) {
+    const char* busy = shared ? "a plain tomodem-run is running this pipeline; shards wait until it ends"
+                              : "another tomodem-run (plain or --shard) is running this pipeline";
+    const int how = shared ? LOCK_SH : LOCK_EX;
+    std::error_code ec;
+    fs::create_directories(p.logs_dir, ec);
+    logs.emplace(run_lock_path(p), how, busy);
+    file.emplace(p.file, how, std::string(busy) + " (under this or another name)", true);
+  }
+  std::optional<FileLock> logs, file;
+};
+
+// A step's lock file holds the process group of the step's last start. The step's processes
+// inherit the locked descriptor, so after a `kill -9` of the runner the lock stays held for as
+// long as anything the step started still runs (and may still write its outputs).
+pid_t recorded_group(const std::string& path) {
+  std::ifstream in(path);
+  long pgid = 0;
+  in >> pgid;
+  return pgid > 1 ? static_cast<pid_t>(pgid) : 0;
+}
+
+std::string lock_owner(const std::string& path) {
+  const std::string pgid = std::to_string(recorded_group(path));
+  return pgid == "0" ? "" : " or processes it started are still running (process group " + pgid +
+                                "; `kill -- -" + pgid + "` stops them)";
+}
 
 std::string step_lock_path(const Pipeline& p, const Instance& in) {
   char hex[17];
@@ -143,7 +180,7 @@ std::string launch_text(const Instance& in, const Launcher& launcher) {
   return text;
 }
 
-pid_t spawn(const Pipeline& p, const Instance& in, const std::string& log, const Launcher& launcher) {
+pid_t spawn(const Pipeline& p, const Instance& in, const std::string& log, const Launcher& launcher, int lock_fd) {
   // A step starts from a clean slate; its old outputs wait aside until it has succeeded.
   move_outputs_aside(p, in);
   const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
@@ -160,6 +197,7 @@ pid_t spawn(const Pipeline& p, const Instance& in, const std::string& log, const
     if (::getppid() != parent) ::_exit(128 + SIGTERM);
     ::dup2(fd, 1);
     ::dup2(fd, 2);
+    ::fcntl(lock_fd, F_SETFD, 0);  // the step's lock goes with every process it starts (lock_owner)
     const int nul = ::open("/dev/null", O_RDONLY);
     if (nul >= 0) ::dup2(nul, 0);
     const std::string t = std::to_string(in.threads);
@@ -182,6 +220,10 @@ pid_t spawn(const Pipeline& p, const Instance& in, const std::string& log, const
   }
   ::setpgid(pid, pid);
   ::close(fd);
+  const std::string pgid = std::to_string(pid) + "\n";
+  if (::ftruncate(lock_fd, 0) != 0 || ::pwrite(lock_fd, pgid.data(), pgid.size(), 0) < 0) {
+    // Only the message of a later run that finds the lock held would lack the process group.
+  }
   return pid;
 }
 
@@ -226,6 +268,10 @@ class Scheduler {
     load_all_locks(p_, lock_, cache_);
     shard_mode_ = o_.shards > 0;
     lock_out_ = shard_mode_ ? shard_lock_file(p_, o_.shard) : p_.lock_file;
+    if (shard_mode_) {
+      HashCache unused;
+      merge_lock(lock_out_, shard_kept_, unused);
+    }
     if (!o_.dry_run) take_locks(locked);
     mark_outside(only);
   }
@@ -272,9 +318,7 @@ class Scheduler {
   void take_locks(bool locked) {
     fs::create_directories(p_.logs_dir);
     fs::create_directories(fs::path(p_.logs_dir) / ".step-locks");
-    if (!locked) guard_.emplace(run_lock_path(p_), shard_mode_ ? LOCK_SH : LOCK_EX,
-                                shard_mode_ ? "a plain tomodem-run is running this pipeline; shards wait until it ends"
-                                            : "another tomodem-run (plain or --shard) is running this pipeline");
+    if (!locked) guard_.emplace(p_, shard_mode_);
     if (shard_mode_)
       shard_guard_.emplace((fs::path(p_.logs_dir) / (".run-shard-" + std::to_string(o_.shard) + ".lock")).string(), LOCK_EX,
                            "another tomodem-run is running shard " + std::to_string(o_.shard) + " of this pipeline");
@@ -287,9 +331,12 @@ class Scheduler {
 
   void save() {
     if (!shard_mode_) return write_text_atomic(lock_out_, lock_json(lock_, cache_));
-    // A shard writes only what it ran, so shards never overwrite each other's records.
-    LockFile part;
+    // A shard writes only what it ran, so shards never overwrite each other's records. Its file
+    // is named by K alone, so what an earlier `--shard K/M` (another M) recorded there is kept.
+    LockFile part = shard_kept_;
     for (const auto& id : touched_) {
+      part.steps.erase(id);
+      part.failures.erase(id);
       if (auto it = lock_.steps.find(id); it != lock_.steps.end()) part.steps[id] = it->second;
       if (auto it = lock_.failures.find(id); it != lock_.failures.end()) part.failures[id] = it->second;
     }
@@ -405,21 +452,45 @@ class Scheduler {
     StepResult& res = sum_.steps[i];
     const int slots = std::min(in.threads * in.ranks, jobs_);
     if (slots > free_slots_) return false;  // wait for a slot; later, smaller steps may still fit
-    auto step_lock = std::make_shared<FileLock>(step_lock_path(p_, in), LOCK_EX, "");
+    const std::string lock_path = step_lock_path(p_, in);
+    auto step_lock = std::make_shared<FileLock>(lock_path, LOCK_EX, "");
+    if (!step_lock->held() && !shard_mode_) step_lock = stop_leftovers(in, lock_path);
     if (!step_lock->held()) {
       st_[i] = St::skipped;
       res.state = "skipped";
-      res.reason = "another tomodem-run is running this step now";
+      res.reason = "another tomodem-run is running this step now" + lock_owner(lock_path);
       ++sum_.skipped;
       say(counter() + "skipped " + in.id + ": " + res.reason);
       return true;
     }
     res.log = log_path(p_, in);
     say("run  " + in.id + " (" + res.reason + ")");
-    running_.push_back(Running{i, spawn(p_, in, res.log, launcher_), std::chrono::steady_clock::now(), utc_now(), slots, std::move(step_lock)});
+    running_.push_back(Running{i, spawn(p_, in, res.log, launcher_, step_lock->fd()), std::chrono::steady_clock::now(), utc_now(), slots, std::move(step_lock)});
     free_slots_ -= slots;
     st_[i] = St::running;
     return true;
+  }
+
+  // A plain run holds the run lock alone, so no other runner of this pipeline is alive: a step
+  // lock still held belongs to processes an earlier run of the step started before its runner
+  // was killed (kill -9, an OOM kill). They would go on writing the outputs this run is about to
+  // make, and the docs promise that steps go with their runner: they are stopped here. (A shard
+  // run cannot tell them from another shard's step: it skips the step, naming the group.)
+  std::shared_ptr<FileLock> stop_leftovers(const Instance& in, const std::string& path) {
+    const pid_t pgid = recorded_group(path);
+    if (pgid && pgid != ::getpgrp()) {
+      say("stop process group " + std::to_string(pgid) + ": left running by an earlier run of " + in.id +
+          " whose runner was killed");
+      for (const int sig : {SIGTERM, SIGKILL}) {
+        if (::kill(-pgid, sig) != 0) break;  // none left in the group
+        for (int k = 0; k < 100; ++k) {      // up to 5 s for the last of them to exit
+          auto lock = std::make_shared<FileLock>(path, LOCK_EX, "");
+          if (lock->held()) return lock;
+          ::usleep(50000);
+        }
+      }
+    }
+    return std::make_shared<FileLock>(path, LOCK_EX, "");
   }
 
   void wait_one() {
@@ -509,11 +580,12 @@ class Scheduler {
   std::vector<char> selected_, needed_, forced_, would_;
   std::vector<St> st_;
   std::vector<std::optional<Verdict>> verdicts_;
-  LockFile lock_;
+  LockFile lock_, shard_kept_;  // shard_kept_: what this shard's lock file held when the run began
   HashCache cache_;
   bool shard_mode_ = false, stop_ = false, killed_ = false;
   std::string lock_out_, stop_after_;
-  std::optional<FileLock> guard_, shard_guard_;
+  std::optional<RunLock> guard_;
+  std::optional<FileLock> shard_guard_;
   std::set<std::string> touched_;
   std::vector<Running> running_;
 };
@@ -548,8 +620,7 @@ RunSummary run(const Pipeline& p, const RunOptions& options, std::ostream& progr
   refuse_shards(p, options);
   if (p.adaptive.empty() || options.dry_run) return execute(p, options, &progress);
   // One lock over every round, so no other runner slips in between them.
-  fs::create_directories(p.logs_dir);
-  const FileLock guard(run_lock_path(p), LOCK_EX, "another tomodem-run (plain or --shard) is running this pipeline");
+  const RunLock guard(p, false);
   return detail::run_adaptive(p, options, progress);
 }
 

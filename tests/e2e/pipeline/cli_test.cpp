@@ -384,3 +384,16 @@ TEST(RunCli, ToolsSpinBrieflyUnlessTheUserSaidOtherwise) {
   EXPECT_EQ(with("OMP_WAIT_POLICY=ACTIVE"), "|ACTIVE");
   EXPECT_EQ(with("GOMP_SPINCOUNT=5"), "5|");
 }
+
+// Review D21: `-j 0` said "Value 0 not in range 0.000000 to 1797693...".
+TEST(RunCli, BadJobsCountSaysWhatIsExpected) {
+  Scratch s = chain();
+  for (const char* bad : {"0", "-1", "x", "1.5"}) {
+    const auto r = run(s, std::string("p.yaml -j ") + bad);
+    EXPECT_EQ(r.code, 2) << bad << ": " << r.err;
+    EXPECT_NE(r.err.find("--jobs"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("from 1 to 1000000"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("1797693"), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(s.path("runs.txt")));
+  }
+}

@@ -413,3 +413,57 @@ TEST(RunSafety, ReportNeverReplacesAFolderItDidNotMake) {
   EXPECT_EQ(same.code, 2) << same.err;
   EXPECT_EQ(s.read("rows/r1.json"), "{\"a\": 1}\n");
 }
+
+// Review D1: `kill -9` of the runner ends the step's shell (PR_SET_PDEATHSIG) but not what the
+// shell started, which went on writing the output while a run started at once ran the step
+// again and recorded the mixed file. Those processes hold the step's lock (they inherit it), so
+// the next run stops their process group before it runs the step.
+TEST(RunSafety, KillNineLeavesNoOrphanThatARerunMixesWith) {
+  Scratch s;
+  s.write("p.yaml", "steps:\n  a:\n    cmd: sh -c 'for i in 1 2 3 4 5 6 7 8; do echo line $i >> a.txt; sleep 0.3; done;"
+                    " echo complete >> a.txt'; echo wrapper-done\n    outs: [a.txt]\n");
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::chdir(s.dir.c_str());
+    ::freopen("/dev/null", "w", stderr);
+    ::execl(kRun.c_str(), kRun.c_str(), "p.yaml", "-q", static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  for (int k = 0; k < 100 && s.read("a.txt").size() < 14; ++k) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  ::kill(pid, SIGKILL);
+  ::waitpid(pid, nullptr, 0);
+  const auto r = run_in(s.dir, "p.yaml");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(has(r.err, "stop process group ")) << r.err;
+  EXPECT_TRUE(has(r.err, "left running by an earlier run of a whose runner was killed")) << r.err;
+  std::this_thread::sleep_for(std::chrono::milliseconds(1000));  // an orphan left running would write now
+  EXPECT_EQ(s.read("a.txt"), "line 1\nline 2\nline 3\nline 4\nline 5\nline 6\nline 7\nline 8\ncomplete\n");
+  EXPECT_TRUE(has(run_in(s.dir, "status p.yaml").out, "up to date  a"));
+}
+
+// Review D6: the run lock lived only in <stem>.logs, so a link to the pipeline under another name
+// ran beside it, both writing one output. The pipeline file itself is locked as well.
+TEST(RunSafety, ALinkToThePipelineIsTheSamePipelineForTheRunLock) {
+  Scratch s;
+  s.write("p.yaml", "steps:\n  a:\n    cmd: for i in 1 2 3 4 5; do echo pass $i >> ${outs.0}; sleep 0.3; done\n"
+                    "    outs: [a.txt]\n");
+  fs::create_symlink("p.yaml", s.path("q.yaml"));
+  fs::create_hard_link(s.path("p.yaml"), s.path("h.yaml"));
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::chdir(s.dir.c_str());
+    ::freopen("/dev/null", "w", stderr);
+    ::execl(kRun.c_str(), kRun.c_str(), "p.yaml", "-q", static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  for (const char* other : {"q.yaml", "h.yaml", "q.yaml --shard 1/1"}) {
+    const auto r = run_in(s.dir, std::string(other) + " -q");
+    EXPECT_NE(r.code, 0) << other;
+    EXPECT_TRUE(has(r.err, "under this or another name")) << other << ": " << r.err;
+  }
+  int st = 0;
+  ::waitpid(pid, &st, 0);
+  EXPECT_TRUE(WIFEXITED(st) && WEXITSTATUS(st) == 0);
+  EXPECT_EQ(s.read("a.txt"), "pass 1\npass 2\npass 3\npass 4\npass 5\n");
+}

@@ -387,3 +387,86 @@ TEST(PipelineBadInput, AdaptiveReplicasNeedEnoughUpstreamReplicasAndTheRecordNee
   EXPECT_NE(r.find("p.yaml:16"), std::string::npos) << r;
   EXPECT_NE(r.find("needs a step with `replicas: {until: ...}`"), std::string::npos) << r;
 }
+
+// Review D2: one file under two spellings (absolute and relative, or through a link) is one
+// output, and an input spelt either way is read from the step that writes it.
+TEST(PipelineBadInput, TwoSpellingsOfOneOutputAreOneOutput) {
+  Scratch s;
+  auto m = load_error(s, "steps:\n  a:\n    cmd: echo a > ${outs.0}\n    outs: [" + s.path("x.txt") +
+                             "]\n  b:\n    cmd: echo b > ${outs.0}\n    outs: [x.txt]\n");
+  EXPECT_NE(m.find("p.yaml:7"), std::string::npos) << m;
+  EXPECT_NE(m.find("also written by 'a'"), std::string::npos) << m;
+  std::filesystem::create_directory_symlink(".", s.path("self"));
+  m = load_error(s, "steps:\n  a:\n    cmd: echo a > ${outs.0}\n    outs: [self/y.txt]\n"
+                    "  b:\n    cmd: echo b > ${outs.0}\n    outs: [y.txt]\n");
+  EXPECT_NE(m.find("p.yaml:7"), std::string::npos) << m;
+  EXPECT_NE(m.find("also written by 'a' as self/y.txt"), std::string::npos) << m;
+  // An absolute input that another step writes (which does not exist yet) makes it upstream.
+  const auto p = tp::load(s.write("p.yaml", "steps:\n  b:\n    cmd: cat ${deps.0} > ${outs.0}\n    deps: [" +
+                                                s.path("z.txt") + "]\n    outs: [b.txt]\n"
+                                                "  a:\n    cmd: echo a > ${outs.0}\n    outs: [z.txt]\n"));
+  ASSERT_EQ(ids(p), (std::vector<std::string>{"a", "b"}));
+  EXPECT_EQ(by_id(p, "b").upstream, (std::vector<std::size_t>{0}));
+}
+
+// Review D4: re-running a folder's step would move the folder aside with another step's output in it.
+TEST(PipelineBadInput, OutputInsideAnotherStepsOutputFolder) {
+  Scratch s;
+  const auto m = load_error(s, "steps:\n  a:\n    cmd: mkdir -p ${outs.o}\n    outs: {o: out}\n"
+                               "  b:\n    cmd: echo b > ${outs.o}\n    outs: {o: out/sub/b.txt}\n");
+  EXPECT_NE(m.find("p.yaml:7"), std::string::npos) << m;
+  EXPECT_NE(m.find("steps.b.outs.o"), std::string::npos) << m;
+  EXPECT_NE(m.find("inside the output folder out of 'a' (" + s.path("p.yaml:4)")), std::string::npos) << m;
+  // One step may still declare a folder and a file in it; sibling paths are fine.
+  EXPECT_EQ(load_error(s, "steps:\n  a:\n    cmd: true\n    outs: [out, out/x.txt]\n"
+                          "  b:\n    cmd: true\n    outs: [out2/b.txt, outx]\n"), "");
+}
+
+// Review D5: yaml-cpp resolves a repeated key first-wins or last-wins depending on how the map is
+// read; every repeated key is refused, with its line.
+TEST(PipelineBadInput, RepeatedKeysAreRefusedWithTheirLine) {
+  Scratch s;
+  const std::vector<std::tuple<std::string, std::string, std::string>> cases = {
+      {"steps:\n  a:\n    cmd: echo a > a.txt\n    cmd: echo b > a.txt\n    outs: [a.txt]\n", "p.yaml:4", "steps.a.cmd"},
+      {"vars: {n: 1, n: 2}\nsteps:\n  a:\n    cmd: echo ${vars.n} > a.txt\n    outs: [a.txt]\n", "p.yaml:1", "vars.n"},
+      {"steps:\n  a:\n    params: {k: 1, k: 2}\n    cmd: echo > a.txt\n    outs: [a.txt]\n", "p.yaml:3", "steps.a.params.k"},
+      {"steps:\n  a:\n    cmd: echo > ${outs.o}\n    outs: {o: first.txt, o: second.txt}\n", "p.yaml:4", "steps.a.outs.o"},
+      {"steps:\n  a:\n    cmd: true\n  a:\n    cmd: false\n", "p.yaml:4", "steps.a"},
+      {"steps:\n  a:\n    cmd: true\nsteps:\n  b:\n    cmd: true\n", "p.yaml:4", "steps"},
+      {"steps:\n  a:\n    matrix: {d: [1, 2]}\n    cases:\n      - {d: 3, d: 4}\n    cmd: true\n", "p.yaml:5", "d"},
+  };
+  for (const auto& [text, where, field] : cases) {
+    const auto m = load_error(s, text);
+    EXPECT_NE(m.find(where), std::string::npos) << text << "\n" << m;
+    EXPECT_NE(m.find(field), std::string::npos) << text << "\n" << m;
+    EXPECT_NE(m.find("given twice"), std::string::npos) << text << "\n" << m;
+  }
+  // In an included file too, named as the including file names it.
+  s.write("common.yaml", "vars:\n  n: 1\n  n: 2\n");
+  const auto m = load_error(s, "include: common.yaml\nsteps:\n  a:\n    cmd: echo > a.txt\n    outs: [a.txt]\n");
+  EXPECT_NE(m.find("common.yaml:3"), std::string::npos) << m;
+  // Equal values under different maps are no repeat.
+  EXPECT_EQ(load_error(s, "vars: {n: 1, m: {n: 2}}\nsteps:\n  a:\n    params: {n: 1}\n    cmd: echo > ${outs.n}\n"
+                          "    outs: {n: a.txt}\n"), "");
+}
+
+// Review D19/D21: what would fail only at run time (or say the wrong thing) is refused at load.
+TEST(PipelineBadInput, EmptyCommandLongNamesAndNonIntegerReplicaCounts) {
+  Scratch s;
+  auto m = load_error(s, "steps:\n  a:\n    cmd: \"\"\n    outs: [a.txt]\n");
+  EXPECT_NE(m.find("p.yaml:3"), std::string::npos) << m;
+  EXPECT_NE(m.find("empty command"), std::string::npos) << m;
+  EXPECT_NE(load_error(s, "steps:\n  a:\n    cmd: '  '\n").find("empty command"), std::string::npos);
+  m = load_error(s, "steps:\n  " + std::string(201, 's') + ":\n    cmd: true\n");
+  EXPECT_NE(m.find("p.yaml:2"), std::string::npos) << m;
+  EXPECT_NE(m.find("at most 200 bytes (this one has 201)"), std::string::npos) << m;
+  EXPECT_EQ(load_error(s, "steps:\n  " + std::string(200, 's') + ":\n    cmd: true\n"), "");
+  m = load_error(s, "steps:\n  " + std::string(200, 's') + ":\n    matrix: {k: [" + std::string(60, 'v') +
+                        "]}\n    cmd: true\n");
+  EXPECT_NE(m.find("use a shorter `cell:` template"), std::string::npos) << m;
+  m = load_error(s, "steps:\n  a:\n    replicas: {until: {y: 0.1}, min: 3.5, max: 9}\n    cmd: true\n"
+                    "    outs: [a.json]\n");
+  EXPECT_NE(m.find("steps.a.replicas.min"), std::string::npos) << m;
+  EXPECT_NE(m.find("expected an integer"), std::string::npos) << m;
+  EXPECT_EQ(m.find("-9223372036854775808"), std::string::npos) << m;
+}

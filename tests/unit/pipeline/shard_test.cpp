@@ -4,6 +4,7 @@
 
 #include <cstdlib>
 #include <set>
+#include <sstream>
 
 #include "scratch.hpp"
 #include "tomodem/core/error.hpp"
@@ -111,4 +112,24 @@ TEST(SlurmExport, DefaultsToOneShardPerLeafAndRefusesAPipelineWithoutASweep) {
   EXPECT_NE(f.array_script.find("--array=1-9%8"), std::string::npos) << f.array_script;
   const auto q = tp::load(s.write("q.yaml", "steps:\n  a:\n    cmd: true\n"));
   EXPECT_THROW(tp::slurm_scripts(q, {}), tomodem::InputError);
+}
+
+// Review D3: shard lock files are named by K alone, so `--shard 0/2` after `--shard 0/3` wrote
+// shard-0's file afresh and dropped the record of prep (shared under N = 3, not under N = 2).
+TEST(Shards, AShardRunUnderAnotherCountKeepsTheRecordsOfItsLockFile) {
+  Scratch s;
+  const auto p = tp::load(s.write("p.yaml", kStudy));
+  std::ostringstream progress;
+  tp::RunOptions o;
+  o.shard = 0;
+  o.shards = 3;
+  ASSERT_EQ(tp::run(p, o, progress).ran, 1) << progress.str();  // prep
+  o.shards = 2;
+  const auto second = tp::run(p, o, progress);
+  EXPECT_EQ(second.ran, 1) << progress.str();  // pack[d-0.7], which both halves read
+  EXPECT_EQ(second.up_to_date, 1);
+  const auto st = tp::status(p, {});
+  for (std::size_t i = 0; i < p.instances.size(); ++i)
+    if (p.instances[i].id == "prep" || p.instances[i].id == "pack[d-0.7]")
+      EXPECT_EQ(st.steps[i].state, "up-to-date") << p.instances[i].id << ": " << st.steps[i].reason;
 }
