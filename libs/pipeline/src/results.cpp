@@ -221,6 +221,7 @@ void refuse_report_folder(const std::string& dir, const std::vector<std::string>
 
 struct Table {
   std::vector<Row> rows;
+  std::vector<std::string> files;  // the row file of each row, as given
   std::vector<std::string> all;  // every column, in order of first appearance
   std::set<std::string> known;
   void note(const std::string& c) {
@@ -230,7 +231,15 @@ struct Table {
 
 Table read_rows(const std::vector<std::string>& row_files) {
   Table t;
+  // One file named twice (a.json and ./a.json, a glob and the file) would count as two
+  // replicas of itself: a zero-width interval. Compared by resolved path.
+  std::map<fs::path, std::string> seen;
   for (const auto& f : row_files) {
+    std::error_code ec;
+    const fs::path resolved = fs::weakly_canonical(fs::absolute(f), ec);
+    if (const auto [it, fresh] = seen.emplace(ec ? fs::path(f) : resolved, f); !fresh)
+      throw InputError(f, "rows", f,
+                       "the same row file as '" + it->second + "': given twice, it would count as two replicas");
     json j;
     try {
       j = json::parse(read_file(f, "rows"));
@@ -242,6 +251,7 @@ Table read_rows(const std::vector<std::string>& row_files) {
     Row r = flatten_json(j.dump(), "", f);
     for (const auto& kv : r) t.note(kv.first);
     t.rows.push_back(std::move(r));
+    t.files.push_back(f);
   }
   return t;
 }

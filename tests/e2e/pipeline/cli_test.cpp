@@ -403,4 +403,10 @@ TEST(RunCli, ReportRowFilesMayFollowEveryOption) {
     EXPECT_EQ(lines, 5) << opts;  // the header and the 4 rows
   }
   EXPECT_EQ(s.read("report/table.csv").substr(0, 8), "family,x");
+  // One row file given twice (another spelling of it) would be two replicas: exit 2, naming both.
+  std::filesystem::remove_all(s.path("report"));
+  const auto twice = run(s, "report -o report --group family a1.json a2.json ./a1.json");
+  EXPECT_EQ(twice.code, 2);
+  EXPECT_NE(twice.err.find("./a1.json"), std::string::npos) << twice.err;
+  EXPECT_FALSE(std::filesystem::exists(s.path("report")));
 }

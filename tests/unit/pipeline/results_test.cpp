@@ -325,3 +325,38 @@ TEST(Results, BadBoundsWriteNothing) {
   o.bounds = {"young.E=0:", "young.E=:1e12"};
   EXPECT_THROW(tp::write_report(s.path("report"), files, o), tomodem::InputError);
 }
+
+namespace {
+// Row files NAME.json from {"family": F, "y": Y, ...extra}: one replica each.
+std::string row_file(const Scratch& s, const std::string& name, const std::string& fields) {
+  return s.write(name + ".json", "{" + fields + "}");
+}
+
+// The message of the InputError that `f` throws ("" when it throws none).
+template <class F>
+std::string input_error(F f) {
+  try {
+    f();
+  } catch (const tomodem::InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+}  // namespace
+
+// One file named twice (another spelling of its path) would be two replicas of one result, with
+// an interval of zero width: refused, naming both arguments, nothing written.
+TEST(Results, OneRowFileGivenTwiceIsRefused) {
+  Scratch s;
+  const auto a = row_file(s, "a", R"("family": "a", "y": 2)"), b = row_file(s, "b", R"("family": "a", "y": 3)");
+  fs::create_directories(s.path("sub"));
+  for (const std::string again : {a, s.dir + "/./a.json", s.dir + "/sub/../a.json"}) {
+    tp::ReportOptions o;
+    o.group = {"family"};
+    const std::string what = input_error([&] { tp::write_report(s.path("report"), {a, b, again}, o); });
+    EXPECT_NE(what.find("given twice"), std::string::npos) << again << ": " << what;
+    EXPECT_NE(what.find("'" + again + "'"), std::string::npos) << what;
+    EXPECT_NE(what.find("'" + a + "'"), std::string::npos) << what;
+    EXPECT_FALSE(fs::exists(s.path("report")));
+  }
+}
