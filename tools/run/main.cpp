@@ -113,6 +113,8 @@ int main(int argc, char** argv) {
     if (rp->parsed()) {
       const tp::ReportFiles f = tp::write_report(report_dir, report_rows, rep);
       for (const auto& o : f.outside_bounds) tomodem::warn(o);
+      for (const auto& w : f.warnings) tomodem::warn(w);
+      for (const auto& n : f.not_ranked) tomodem::info(n);
       tomodem::info("wrote " + f.table + " (" + std::to_string(f.rows) + " rows, " + std::to_string(f.columns) +
                     " columns), " + std::to_string(f.plots.size()) + " plots, " + f.summary + " (" +
                     std::to_string(f.cells) + " cells, " + std::to_string(f.rankings) + " rankings) and " + f.html);
