@@ -86,14 +86,22 @@ int main(int argc, char** argv) {
   rp->add_option("rows", report_rows, "row files (from `tomodem run row`), one table row each")->required();
   rp->add_option("--title", rep.title, "title of the report")->capture_default_str();
   rp->add_option("--command", rep.command, "the command that makes the report, shown in it");
-  rp->add_option("--columns", rep.columns, "the table's columns, in order (default: all)")->delimiter(',');
+  // Every list option takes one value per occurrence (repeat it, or join the list with commas
+  // where the help says so): a multi-value option would swallow the row files that follow it.
+  rp->add_option("--columns", rep.columns, "A,B,...: the table's columns, in order (default: all); repeatable")
+      ->delimiter(',')
+      ->allow_extra_args(false);
   rp->add_option("--ratio", rep.ratios, "NAME=A/B: a column A/B (columns or numbers); repeatable")->allow_extra_args(false);
   rp->add_option("--plot", rep.plots,
                  "name=N;x=COL;y=COL[,COL];by=COL;logx;logy;title=T;xlabel=L;ylabel=L (repeatable)")
       ->allow_extra_args(false);
-  rp->add_option("--group", rep.group, "columns whose values make a cell; its rows are replicas (default: plots' by, x)")
-      ->delimiter(',');
-  rp->add_option("--stats", rep.stats, "properties to summarise (default: every number column)")->delimiter(',');
+  rp->add_option("--group", rep.group,
+                 "A,B: columns whose values make a cell; its rows are replicas (default: plots' by, x); repeatable")
+      ->delimiter(',')
+      ->allow_extra_args(false);
+  rp->add_option("--stats", rep.stats, "A,B,...: properties to summarise (default: every number column); repeatable")
+      ->delimiter(',')
+      ->allow_extra_args(false);
   rp->add_option("--bound", rep.bounds, "NAME=LO:HI: the physical range of a column (numbers or columns; a side may be empty); repeatable")
       ->allow_extra_args(false);
   rp->add_option("--replicas", rep.replicas, "the runner's adaptive-replica record (${run.replicas}): stopped_because");
@@ -112,6 +120,8 @@ int main(int argc, char** argv) {
     if (rp->parsed()) {
       const tp::ReportFiles f = tp::write_report(report_dir, report_rows, rep);
       for (const auto& o : f.outside_bounds) tomodem::warn(o);
+      for (const auto& w : f.warnings) tomodem::warn(w);
+      for (const auto& n : f.not_ranked) tomodem::info(n);
       tomodem::info("wrote " + f.table + " (" + std::to_string(f.rows) + " rows, " + std::to_string(f.columns) +
                     " columns), " + std::to_string(f.plots.size()) + " plots, " + f.summary + " (" +
                     std::to_string(f.cells) + " cells, " + std::to_string(f.rankings) + " rankings) and " + f.html);

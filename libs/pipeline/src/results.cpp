@@ -221,6 +221,7 @@ void refuse_report_folder(const std::string& dir, const std::vector<std::string>
 
 struct Table {
   std::vector<Row> rows;
+  std::vector<std::string> files;  // the row file of each row, as given
   std::vector<std::string> all;  // every column, in order of first appearance
   std::set<std::string> known;
   void note(const std::string& c) {
@@ -230,7 +231,15 @@ struct Table {
 
 Table read_rows(const std::vector<std::string>& row_files) {
   Table t;
+  // One file named twice (a.json and ./a.json, a glob and the file) would count as two
+  // replicas of itself: a zero-width interval. Compared by resolved path.
+  std::map<fs::path, std::string> seen;
   for (const auto& f : row_files) {
+    std::error_code ec;
+    const fs::path resolved = fs::weakly_canonical(fs::absolute(f), ec);
+    if (const auto [it, fresh] = seen.emplace(ec ? fs::path(f) : resolved, f); !fresh)
+      throw InputError(f, "rows", f,
+                       "the same row file as '" + it->second + "': given twice, it would count as two replicas");
     json j;
     try {
       j = json::parse(read_file(f, "rows"));
@@ -242,11 +251,13 @@ Table read_rows(const std::vector<std::string>& row_files) {
     Row r = flatten_json(j.dump(), "", f);
     for (const auto& kv : r) t.note(kv.first);
     t.rows.push_back(std::move(r));
+    t.files.push_back(f);
   }
   return t;
 }
 
-void add_ratios(Table& t, const std::vector<std::string>& ratios) {
+// Ratio columns; `warnings` gets the rows where a divisor column is 0 (the ratio is empty there).
+void add_ratios(Table& t, const std::vector<std::string>& ratios, std::vector<std::string>& warnings) {
   for (const auto& item : ratios) {
     const auto [name, expr] = split_eq(item, "--ratio");
     const auto slash = expr.find('/');
@@ -255,8 +266,14 @@ void add_ratios(Table& t, const std::vector<std::string>& ratios) {
     for (const auto& operand : {a, b})
       if (!t.known.count(operand) && !value_of(operand).number)
         throw InputError("", "--ratio", item, "'" + operand + "' is neither a column nor a number");
+    // A name that is taken would leave two columns of one name, of which only the first is read.
+    for (const auto& c : {name, name + "_error"})
+      if (t.known.count(c))
+        throw InputError("", "--ratio", item, "the column '" + c + "' exists already (in the rows or from an earlier --ratio)");
+    if (const Value lit = value_of(b); !t.known.count(b) && lit.number && lit.x == 0) throw InputError("", "--ratio", item, "divides by the number 0");
     t.note(name);
     bool error_column = false;
+    std::string zero_rows;
     for (auto& r : t.rows) {
       // A column's number, or the operand itself as a literal; NaN when the row lacks it.
       const auto num = [&](const std::string& s) {
@@ -265,6 +282,7 @@ void add_ratios(Table& t, const std::vector<std::string>& ratios) {
         return v ? (v->number ? v->x : NAN) : lit.number ? lit.x : NAN;
       };
       const double x = num(a), y = num(b);
+      if (std::isfinite(x) && y == 0) zero_rows += (zero_rows.empty() ? "" : ", ") + t.files[std::size_t(&r - t.rows.data())];
       if (!(std::isfinite(x) && std::isfinite(y) && y != 0)) continue;
       // The operands' own relative errors carry over in quadrature (independent errors).
       const double ea = t.known.count(a) ? tool_error(r, a, x) / std::fabs(x) : NAN;
@@ -277,6 +295,7 @@ void add_ratios(Table& t, const std::vector<std::string>& ratios) {
       }
     }
     if (error_column) t.note(name + "_error");
+    if (!zero_rows.empty()) warnings.push_back("--ratio " + item + ": '" + b + "' is 0 in " + zero_rows + ", so '" + name + "' is empty there");
   }
 }
 
@@ -331,6 +350,16 @@ Bounds bounds_of(const Table& t, const std::vector<std::string>& specs) {
     if (b.lo.text.empty() && b.hi.text.empty()) throw InputError("", "--bound", item, "names neither a lower nor an upper bound");
     if (!(b.lo.value < b.hi.value) && std::isfinite(b.lo.value) && std::isfinite(b.hi.value))
       throw InputError("", "--bound", item, "the lower bound must be below the upper");
+    // A bound column must give a number in every row that has a number to check against it:
+    // a row without one would pass unchecked, and its cell's interval would not be cut.
+    for (const Side* sd : {&b.lo, &b.hi})
+      for (std::size_t i = 0; i < t.rows.size() && !sd->column.empty(); ++i)
+        if (std::isfinite(number_in(t.rows[i], name)) && !std::isfinite(number_in(t.rows[i], sd->column))) {
+          const Value* v = find(t.rows[i], sd->column);
+          throw InputError(t.files[i], "--bound " + item, v ? v->text : "",
+                           v ? "the bound column '" + sd->column + "' holds no number in this row"
+                             : "this row has '" + name + "' but no bound column '" + sd->column + "'");
+        }
     if (!out.emplace(name, b).second) throw InputError("", "--bound", item, "a second bound for '" + name + "'");
   }
   return out;
@@ -352,18 +381,25 @@ Range range_of(const Bounds& bs, const std::string& c, const std::vector<const R
   return {std::isfinite(lo) ? lo : -INFINITY, std::isfinite(hi) ? hi : INFINITY};
 }
 
+// Rounding slack at a bound: 1e-12 of it.
+double slack(double bound) { return 1e-12 * std::fabs(bound); }
+
 // The 95 % interval, cut at the range: the true mean lies in it, so the cut interval covers it
-// at least as often. A mean outside its range (a replica outside its bound) is left uncut.
+// at least as often. Each side is cut where the mean satisfies that side's bound; a mean
+// outside a bound (replicas outside it) is flagged, and that side stays uncut, as it must still
+// hold the mean.
 struct Interval {
   double lo = NAN, hi = NAN;
-  bool cut = false;
+  bool cut = false, mean_outside = false;
 };
 Interval interval_of(const stats::Estimate& e, const Range& r) {
-  if (!std::isfinite(e.half95)) return {};
-  Interval i{e.mean - e.half95, e.mean + e.half95, false};
-  if (e.mean < r.lo || e.mean > r.hi) return i;
-  if (i.lo < r.lo) i.lo = r.lo, i.cut = true;
-  if (i.hi > r.hi) i.hi = r.hi, i.cut = true;
+  Interval i;
+  const bool below = e.mean < r.lo - slack(r.lo), above = e.mean > r.hi + slack(r.hi);
+  i.mean_outside = e.n > 0 && (below || above);
+  if (!std::isfinite(e.half95)) return i;
+  i.lo = e.mean - e.half95, i.hi = e.mean + e.half95;
+  if (!below && i.lo < r.lo) i.lo = r.lo, i.cut = true;
+  if (!above && i.hi > r.hi) i.hi = r.hi, i.cut = true;
   return i;
 }
 
@@ -375,7 +411,6 @@ std::vector<json> outside_bounds(const Table& t, const Bounds& bs, const std::ve
       const double x = number_in(t.rows[i], c);
       if (!std::isfinite(x)) continue;
       const double lo = b.lo.in(t.rows[i]), hi = b.hi.in(t.rows[i]);
-      const auto slack = [](double v) { return 1e-12 * std::fabs(v); };
       const bool below = std::isfinite(lo) && x < lo - slack(lo), above = std::isfinite(hi) && x > hi + slack(hi);
       if (!below && !above) continue;
       const Side& side = below ? b.lo : b.hi;
@@ -526,12 +561,18 @@ std::string cell_text(const std::vector<std::pair<std::string, std::string>>& ke
   return s;
 }
 
-json cell_json(const Cell& c, const std::string& property, const stats::Estimate& e, const Range& r) {
+// A cell's group values, numbers as numbers.
+json key_json(const Cell& c) {
   json j = json::object();
   for (const auto& [k, v] : c.key) {
     const Value x = value_of(v);
     j[k] = x.number ? json(x.x) : json(v);
   }
+  return j;
+}
+
+json cell_json(const Cell& c, const std::string& property, const stats::Estimate& e, const Range& r) {
+  json j = key_json(c);
   j["property"] = property;
   j["n"] = e.n;
   j["mean"] = e.mean;
@@ -539,12 +580,14 @@ json cell_json(const Cell& c, const std::string& property, const stats::Estimate
   j["sem"] = e.sem;
   j["tool_error"] = e.tool;
   j["u"] = e.u;
-  j["dof"] = std::isinf(e.dof) ? json("inf") : json(e.dof);
+  // JSON has no infinity: null when the dof is infinite (no replica scatter) or undefined (n < 2).
+  j["dof"] = e.n >= 2 && std::isfinite(e.dof) ? json(e.dof) : json(nullptr);
   const Interval ci = interval_of(e, r);
   j["ci95"] = std::isfinite(ci.lo) ? json::array({ci.lo, ci.hi}) : json(nullptr);
   if (std::isfinite(r.lo) || std::isfinite(r.hi)) {
     j["bounds"] = json::array({std::isfinite(r.lo) ? json(r.lo) : json(nullptr), std::isfinite(r.hi) ? json(r.hi) : json(nullptr)});
     j["ci95_cut_at_bound"] = ci.cut;
+    j["mean_outside_bound"] = ci.mean_outside;
   }
   j["half_width95"] = e.half95;
   j["rel_half_width95"] = e.rel_half95();
@@ -559,9 +602,17 @@ struct Ranking {
   json j;
 };
 
+// A cell left out of the rankings of a property because it has one replica of it.
+struct Unranked {
+  std::size_t cell;
+  std::string property, text;
+};
+
 // Pairs of cells that differ only in the first group column, per property: which is lower, and
-// whether Welch's test resolves it at 5 %.
-std::vector<Ranking> rankings_of(const std::vector<Cell>& cells, const std::vector<std::string>& props) {
+// whether Welch's test resolves it at 5 %. A pair with a cell of one replica cannot be tested:
+// that cell goes to `unranked`, so its absence from the rankings is said.
+std::vector<Ranking> rankings_of(const std::vector<Cell>& cells, const std::vector<std::string>& props,
+                                 std::vector<Unranked>& unranked) {
   std::vector<Ranking> out;
   if (cells.empty() || cells[0].key.empty()) return out;
   for (const auto& prop : props)
@@ -575,7 +626,15 @@ std::vector<Ranking> rankings_of(const std::vector<Cell>& cells, const std::vect
           if (std::isfinite(number_in(*r, prop))) xa.push_back(number_in(*r, prop));
         for (const Row* r : cells[b].rows)
           if (std::isfinite(number_in(*r, prop))) xb.push_back(number_in(*r, prop));
-        if (xa.size() < 2 || xb.size() < 2) continue;
+        if (xa.size() < 2 || xb.size() < 2) {
+          for (const auto& [c, n] : {std::pair{a, xa.size()}, std::pair{b, xb.size()}})
+            if (n == 1 && std::none_of(unranked.begin(), unranked.end(),
+                                       [&](const Unranked& u) { return u.cell == c && u.property == prop; }))
+              unranked.push_back({c, prop,
+                                  (cells[c].key.empty() ? std::string("all rows") : cell_text(cells[c].key)) + ": " + prop +
+                                      " has 1 replica, not ranked (Welch's test needs 2 or more)"});
+          continue;
+        }
         const stats::Welch w = stats::welch(xa, xb);
         const double ma = stats::estimate(xa).mean, mb = stats::estimate(xb).mean;
         const bool a_low = ma <= mb;
@@ -640,11 +699,16 @@ PlotSpec plot_spec(const Table& t, const PlotRequest& p, const Bounds& bounds) {
         at_x[xv->x].push_back(&r);
       }
       if (at_x.empty()) continue;
-      PlotSeries s;
+      PlotSeries s, single;  // points with an interval (bars), points of one replica (none)
       const std::string yname = p.legend.empty() ? ycol : p.legend[std::size_t(&ycol - p.y.data())];
       s.title = g.empty() ? yname : p.y.size() > 1 ? g + ", " + yname : g;
       for (const auto& [x, rows] : at_x) {
         const stats::Estimate e = estimate_of(rows, ycol);
+        if (e.n < 2) {
+          single.x.push_back(x);
+          single.y.push_back(e.mean);
+          continue;
+        }
         const Interval ci = interval_of(e, range_of(bounds, ycol, rows));
         s.x.push_back(x);
         s.y.push_back(e.mean);
@@ -652,7 +716,15 @@ PlotSpec plot_spec(const Table& t, const PlotRequest& p, const Bounds& bounds) {
         s.ylow.push_back(ci.lo);
         s.yhigh.push_back(ci.hi);
       }
-      spec.series.push_back(std::move(s));
+      // A point of one replica has no interval, and a bar of length 0 would make it look exact:
+      // such points are a series of their own without bars, joined by lines only when the whole
+      // series is of single replicas (a sweep without replicas keeps its curve).
+      if (!single.x.empty()) {
+        single.title = s.title + " (n = 1: no interval)";
+        single.draw = s.x.empty() ? PlotDraw::points_and_lines : PlotDraw::points;
+      }
+      for (PlotSeries* series : {&s, &single})
+        if (!series->x.empty()) spec.series.push_back(std::move(*series));
     }
   if (spec.series.empty()) throw InputError("", "--plot", p.name, "no row has numbers in both '" + p.x + "' and the y columns");
   return spec;
@@ -701,6 +773,7 @@ struct Page {
   const std::vector<Cell>& cells;
   const std::vector<std::string>& shown_props;
   const std::vector<Ranking>& rankings;
+  const std::vector<Unranked>& unranked;
   const Bounds& bounds;
   const std::vector<json>& outside;  // replica values outside their bounds
   const ReportOptions& o;
@@ -729,36 +802,54 @@ std::string html_statistics(const Page& pg) {
        "tool error&sup2;) (Student 1908; effective dof &nu; by Welch&ndash;Satterthwaite), every cell and property in "
        "<a href=\"summary.json\">summary.json</a>.</p>\n<table>\n<tr><th>cell</th><th>property</th><th>n</th><th>mean</th>"
        "<th>95 % CI</th><th>&plusmn; %</th><th>stopped because</th><th>CPU s</th></tr>\n";
-  bool any_cut = false;
+  bool any_cut = false, any_outside = false;
   for (const auto& prop : pg.shown_props)
     for (const auto& c : pg.cells) {
       const stats::Estimate e = estimate_of(c.rows, prop);
       if (e.n == 0) continue;
       const Interval ci = interval_of(e, range_of(pg.bounds, prop, c.rows));
       any_cut = any_cut || ci.cut;
+      any_outside = any_outside || ci.mean_outside;
+      // One replica has no interval: say so, rather than leave a blank that reads as exact.
+      std::string interval = e.n < 2 ? "n = 1: no interval"
+                             : std::isfinite(ci.lo) ? short_number(ci.lo) + " &ndash; " + short_number(ci.hi) + (ci.cut ? " *" : "")
+                                                    : "";
+      if (ci.mean_outside) interval += " <b style=\"color:#b00\">mean outside its bound</b>";
       h << "<tr><td>" << xml_escape(cell_text(c.key)) << "</td><td>" << xml_escape(prop) << "</td><td>" << e.n << "</td><td>"
-        << short_number(e.mean) << "</td><td>"
-        << (std::isfinite(ci.lo) ? short_number(ci.lo) + " &ndash; " + short_number(ci.hi) + (ci.cut ? " *" : "") : "")
-        << "</td><td>" << (std::isfinite(e.rel_half95()) ? short_number(100 * e.rel_half95()) : "") << "</td><td>"
+        << short_number(e.mean) << "</td><td>" << interval << "</td><td>" << (std::isfinite(e.rel_half95()) ? short_number(100 * e.rel_half95()) : "") << "</td><td>"
         << xml_escape(c.stopped_because) << "</td><td>" << short_number(c.cpu_s) << "</td></tr>\n";
     }
   h << "</table>\n";
   if (any_cut)
     h << "<p>* cut at the property's physical bound (<code>--bound</code>): t u reaches past it, so the replicas "
          "cannot pin the mean down more closely than that bound does.</p>\n";
+  if (any_outside)
+    h << "<p style=\"color:#b00\"><b>Mean outside its bound</b>: the cell's mean lies outside the property's "
+         "<code>--bound</code> range, so some of its replicas do (listed below); its interval is cut only at the "
+         "bound the mean is within.</p>\n";
   if (!pg.outside.empty()) {
     h << "<p style=\"color:#b00\"><b>Replica values outside their physical bounds</b> (a result outside its bound is "
          "not an answer: check the run or the bound):</p>\n<ul>\n";
     for (const auto& o : pg.outside) h << "<li>" << xml_escape(o.at("text").get<std::string>()) << "</li>\n";
     h << "</ul>\n";
   }
+  const auto shown = [&](const std::string& prop) {
+    return std::find(pg.shown_props.begin(), pg.shown_props.end(), prop) != pg.shown_props.end();
+  };
+  const bool any_unranked = std::any_of(pg.unranked.begin(), pg.unranked.end(), [&](const Unranked& u) { return shown(u.property); });
+  if (!pg.rankings.empty() || any_unranked) h << "<h3>Rankings</h3>\n";
   if (!pg.rankings.empty()) {
-    h << "<h3>Rankings</h3>\n<p>Welch's t-test (Welch 1947), two-sided p; \"not resolved\" when the "
+    h << "<p>Welch's t-test (Welch 1947), two-sided p; \"not resolved\" when the "
          "Benjamini&ndash;Hochberg q over all " << pg.rankings.size() << " rankings is &ge; 0.05 (among the "
          "resolved ones, fewer than one in twenty is expected to be a difference that is not there).</p>\n<ul>\n";
     for (const auto& r : pg.rankings)
-      if (std::find(pg.shown_props.begin(), pg.shown_props.end(), r.property) != pg.shown_props.end())
-        h << "<li>" << xml_escape(r.text) << "</li>\n";
+      if (shown(r.property)) h << "<li>" << xml_escape(r.text) << "</li>\n";
+    h << "</ul>\n";
+  }
+  if (any_unranked) {
+    h << "<p>Not ranked (fewer than 2 replicas):</p>\n<ul>\n";
+    for (const auto& u : pg.unranked)
+      if (shown(u.property)) h << "<li>" << xml_escape(u.text) << "</li>\n";
     h << "</ul>\n";
   }
   for (const auto& stem : pg.error_plots) h << figure(stem, "error against CPU time: " + stem.substr(13));
@@ -789,7 +880,8 @@ std::string html_page(const Page& pg) {
   h << ".</p>\n";
   if (!pg.plots.empty())
     h << "<h2>Plots</h2>\n<p>Points are the mean over the rows (replicas) that share an x value; error bars are its "
-         "95 % confidence interval (see Statistics).</p>\n";
+         "95 % confidence interval (see Statistics). A point of one row has no interval and no bar: its series is "
+         "titled \"n = 1: no interval\".</p>\n";
   for (const auto& p : pg.plots) h << figure(p.name, p.title);
   h << html_statistics(pg);
   constexpr std::size_t kMaxRows = 500;
@@ -823,8 +915,17 @@ void replace_folder(const fs::path& tmp, const fs::path& final_dir) {
   fs::remove_all(old, ec);
 }
 
+// A column named twice in one list (--stats y --stats y) would be reported twice: refused.
+void refuse_repeats(const std::vector<std::string>& list, const std::string& field) {
+  for (auto it = list.begin(); it != list.end(); ++it)
+    if (std::find(list.begin(), it, *it) != it) throw InputError("", field, *it, "named twice");
+}
+
 // Defaults of the statistics options, and their checks.
 void statistics_options(const Table& t, const std::vector<PlotRequest>& plots, ReportOptions& o) {
+  refuse_repeats(o.group, "--group");
+  refuse_repeats(o.stats, "--stats");
+  const bool group_given = !o.group.empty();
   if (o.group.empty())
     for (const auto& p : plots)
       for (const auto& c : {p.by, p.x})
@@ -833,6 +934,13 @@ void statistics_options(const Table& t, const std::vector<PlotRequest>& plots, R
     if (!t.known.count(c)) throw InputError("", "--group", c, "no row has this column");
   for (const auto& c : o.stats)
     if (!t.known.count(c)) throw InputError("", "--stats", c, "no row has this column");
+  // A row without a group column would make a cell of its own with an empty value.
+  for (std::size_t i = 0; i < t.rows.size(); ++i)
+    for (const auto& c : o.group)
+      if (!find(t.rows[i], c))
+        throw InputError(t.files[i], "--group", c,
+                         "this row has no such column, so it belongs to no cell" +
+                             std::string(group_given ? "" : " (the default group: the plots' by and x columns)"));
 }
 
 // A column with one number in every row that has it (E_s, the solid's modulus): nothing to summarise.
@@ -856,7 +964,8 @@ std::vector<std::string> properties(const Table& t, const ReportOptions& o) {
 }
 
 json summary_of(const std::vector<Cell>& cells, const std::vector<std::string>& props, const std::vector<Ranking>& ranks,
-                const Bounds& bounds, const std::vector<json>& outside, const ReportOptions& o) {
+                const std::vector<Unranked>& unranked, const Bounds& bounds, const std::vector<json>& outside,
+                const ReportOptions& o) {
   json j = json::object();
   j["format"] = "tomodem report summary 1";
   j["group"] = o.group;
@@ -864,7 +973,8 @@ json summary_of(const std::vector<Cell>& cells, const std::vector<std::string>& 
       "per cell and property: mean of the replicas; sem = sd/sqrt(n); tool_error = mean of the replicas' own "
       "1-sigma errors (<key>_error, relative unless its unit says otherwise), taken as systematic; u = sqrt(sem^2 + "
       "tool_error^2); dof = u^4/(sem^4/(n-1)) (Welch-Satterthwaite); ci95 = mean -/+ t(0.975, dof) u (Student 1908), "
-      "cut at the property's bounds where --bound gives them (ci95_cut_at_bound). "
+      "cut at the property's bounds where --bound gives them (ci95_cut_at_bound), at a bound the mean is within "
+      "(mean_outside_bound: it is not); n < 2: no interval, dof null (also null when infinite, sd = 0). "
       "Rankings: Welch (1947) t-test between cells differing in the first group column, two-sided p; "
       "q = Benjamini-Hochberg (1995) adjusted p over every ranking of the report; resolved when q < 0.05.";
   j["cells"] = json::array();
@@ -876,6 +986,14 @@ json summary_of(const std::vector<Cell>& cells, const std::vector<std::string>& 
   j["outside_bounds"] = outside;
   j["rankings"] = json::array();
   for (const auto& r : ranks) j["rankings"].push_back(r.j);
+  j["not_ranked"] = json::array();
+  for (const auto& u : unranked) {
+    json x = key_json(cells[u.cell]);
+    x["property"] = u.property;
+    x["n"] = 1;
+    x["text"] = u.text;
+    j["not_ranked"].push_back(x);
+  }
   return j;
 }
 }  // namespace
@@ -887,8 +1005,10 @@ ReportFiles write_report(const std::string& dir, const std::vector<std::string>&
   refuse_report_folder(dir, inputs);
   ReportOptions o = options;
   Table t = read_rows(row_files);
-  add_ratios(t, o.ratios);
+  std::vector<std::string> warnings;
+  add_ratios(t, o.ratios, warnings);
   const Bounds bounds = bounds_of(t, o.bounds);
+  refuse_repeats(o.columns, "--columns");
   const std::vector<std::string> columns = o.columns.empty() ? t.all : o.columns;
   for (const auto& c : columns)
     if (!t.known.count(c)) throw InputError("", "--columns", c, "no row has this column");
@@ -896,8 +1016,18 @@ ReportFiles write_report(const std::string& dir, const std::vector<std::string>&
   statistics_options(t, plots, o);
   const std::vector<std::string> props = properties(t, o);
   const std::vector<Cell> cells = cells_of(t, o.group, read_stops(o.replicas));
-  const std::vector<Ranking> ranks = rankings_of(cells, props);
+  std::vector<Unranked> unranked;
+  const std::vector<Ranking> ranks = rankings_of(cells, props, unranked);
   const std::vector<json> outside = outside_bounds(t, bounds, row_files);
+  for (const auto& prop : props)
+    for (const auto& c : cells) {
+      const stats::Estimate e = estimate_of(c.rows, prop);
+      const Range r = range_of(bounds, prop, c.rows);
+      if (interval_of(e, r).mean_outside)
+        warnings.push_back((c.key.empty() ? std::string("all rows") : cell_text(c.key)) + ": the mean of " + prop + ", " +
+                           number_text(e.mean) + ", is outside its bound [" + (std::isfinite(r.lo) ? number_text(r.lo) : "") + ", " +
+                           (std::isfinite(r.hi) ? number_text(r.hi) : "") + "]");
+    }
   // The page shows the plotted (or asked-for) properties; summary.json has every one.
   std::vector<std::string> shown = o.stats;
   for (const auto& p : plots)
@@ -929,9 +1059,9 @@ ReportFiles write_report(const std::string& dir, const std::vector<std::string>&
       error_plots.push_back(stem);
       out.plots.push_back((final_dir / stem).string());
     }
-    write_text_atomic((tmp / "summary.json").string(), summary_of(cells, props, ranks, bounds, outside, o).dump(1) + "\n");
+    write_text_atomic((tmp / "summary.json").string(), summary_of(cells, props, ranks, unranked, bounds, outside, o).dump(1) + "\n");
     write_text_atomic((tmp / "index.html").string(),
-                      html_page(Page{t, columns, plots, error_plots, cells, shown, ranks, bounds, outside, o}));
+                      html_page(Page{t, columns, plots, error_plots, cells, shown, ranks, unranked, bounds, outside, o}));
     replace_folder(tmp, final_dir);
   } catch (...) {
     std::error_code ec;
@@ -942,6 +1072,8 @@ ReportFiles write_report(const std::string& dir, const std::vector<std::string>&
   out.html = (final_dir / "index.html").string();
   out.summary = (final_dir / "summary.json").string();
   for (const auto& x : outside) out.outside_bounds.push_back(x.at("text").get<std::string>());
+  out.warnings = warnings;
+  for (const auto& u : unranked) out.not_ranked.push_back(u.text);
   return out;
 }
 

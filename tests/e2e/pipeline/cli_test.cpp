@@ -397,3 +397,29 @@ TEST(RunCli, BadJobsCountSaysWhatIsExpected) {
     EXPECT_FALSE(std::filesystem::exists(s.path("runs.txt")));
   }
 }
+
+// `tomodem run report`'s list options take one value per occurrence, so row files may follow
+// any of them (docs/pipelines.md's worked example: `--group family a*.json b*.json`); a comma
+// still separates the items of --group, --stats and --columns.
+TEST(RunCli, ReportRowFilesMayFollowEveryOption) {
+  Scratch s;
+  for (const char* f : {"a1", "a2", "b1", "b2"})
+    s.write(std::string(f) + ".json", std::string("{\"family\": \"") + f[0] + "\", \"x\": 1, \"y\": " + (f[1] == '1' ? "2" : "3") + "}");
+  for (const std::string opts :
+       {"--group family", "--group=family", "--stats y", "--stats x,y", "--columns family,y", "--columns family --columns y",
+        "--ratio r=y/2", "--bound y=0:", "--plot 'name=p;x=x;y=y;xlabel=x (-);ylabel=y (-)'"}) {
+    const auto r = run(s, "report -o report " + opts + " a*.json b*.json");
+    ASSERT_EQ(r.code, 0) << opts << ": " << r.err;
+    std::istringstream table(s.read("report/table.csv"));
+    int lines = 0;
+    for (std::string l; std::getline(table, l);) ++lines;
+    EXPECT_EQ(lines, 5) << opts;  // the header and the 4 rows
+  }
+  EXPECT_EQ(s.read("report/table.csv").substr(0, 8), "family,x");
+  // One row file given twice (another spelling of it) would be two replicas: exit 2, naming both.
+  std::filesystem::remove_all(s.path("report"));
+  const auto twice = run(s, "report -o report --group family a1.json a2.json ./a1.json");
+  EXPECT_EQ(twice.code, 2);
+  EXPECT_NE(twice.err.find("./a1.json"), std::string::npos) << twice.err;
+  EXPECT_FALSE(std::filesystem::exists(s.path("report")));
+}

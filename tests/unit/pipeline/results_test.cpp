@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <map>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "scratch.hpp"
@@ -324,4 +326,192 @@ TEST(Results, BadBoundsWriteNothing) {
   tp::ReportOptions o;
   o.bounds = {"young.E=0:", "young.E=:1e12"};
   EXPECT_THROW(tp::write_report(s.path("report"), files, o), tomodem::InputError);
+}
+
+namespace {
+// Row files NAME.json from {"family": F, "y": Y, ...extra}: one replica each.
+std::string row_file(const Scratch& s, const std::string& name, const std::string& fields) {
+  return s.write(name + ".json", "{" + fields + "}");
+}
+
+// The cells of summary.json for `property`, by the value of `family`.
+std::map<std::string, nlohmann::json> cells_of(const nlohmann::json& summary, const std::string& property) {
+  std::map<std::string, nlohmann::json> out;
+  for (const auto& c : summary.at("cells"))
+    if (c.at("property") == property) out[c.at("family").get<std::string>()] = c;
+  return out;
+}
+
+// The message of the InputError that `f` throws ("" when it throws none).
+template <class F>
+std::string input_error(F f) {
+  try {
+    f();
+  } catch (const tomodem::InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+}  // namespace
+
+// One file named twice (another spelling of its path) would be two replicas of one result, with
+// an interval of zero width: refused, naming both arguments, nothing written.
+TEST(Results, OneRowFileGivenTwiceIsRefused) {
+  Scratch s;
+  const auto a = row_file(s, "a", R"("family": "a", "y": 2)"), b = row_file(s, "b", R"("family": "a", "y": 3)");
+  fs::create_directories(s.path("sub"));
+  for (const std::string again : {a, s.dir + "/./a.json", s.dir + "/sub/../a.json"}) {
+    tp::ReportOptions o;
+    o.group = {"family"};
+    const std::string what = input_error([&] { tp::write_report(s.path("report"), {a, b, again}, o); });
+    EXPECT_NE(what.find("given twice"), std::string::npos) << again << ": " << what;
+    EXPECT_NE(what.find("'" + again + "'"), std::string::npos) << what;
+    EXPECT_NE(what.find("'" + a + "'"), std::string::npos) << what;
+    EXPECT_FALSE(fs::exists(s.path("report")));
+  }
+}
+
+// A cell of one replica has a mean and no interval: the page says "n = 1: no interval", the plot
+// draws its point without a bar (a series of its own, titled so), summary.json has dof null,
+// and the cell is listed under not_ranked rather than silently left out of the rankings.
+// Family a: y = 1, 2, 3 (n = 3: dof 2); family b: y = 5 (n = 1).
+TEST(Results, OneReplicaCellsSayTheyHaveNoInterval) {
+  ASSERT_TRUE(tomodem::plotting_available()) << "gnuplot is not installed (Debian package gnuplot-nox)";
+  Scratch s;
+  std::vector<std::string> files;
+  for (int r = 0; r < 3; ++r) files.push_back(row_file(s, "a" + std::to_string(r), R"("family": "a", "x": 1, "y": )" + std::to_string(1 + r)));
+  files.push_back(row_file(s, "b0", R"("family": "b", "x": 1, "y": 5)"));
+  tp::ReportOptions o;
+  o.group = {"family"};
+  o.plots = {"name=p;x=x;y=y;by=family;xlabel=x (-);ylabel=y (-)"};
+  const auto f = tp::write_report(s.path("report"), files, o);
+  const auto summary = nlohmann::json::parse(s.read("report/summary.json"));
+  auto cells = cells_of(summary, "y");
+  ASSERT_EQ(cells.size(), 2u) << summary.dump(1);
+  EXPECT_NEAR(cells["a"].at("dof").get<double>(), 2, 1e-12);
+  EXPECT_EQ(cells["b"].at("n"), 1);
+  EXPECT_EQ(cells["b"].at("mean"), 5.0);
+  EXPECT_TRUE(cells["b"].at("dof").is_null()) << cells["b"];  // was 0.0
+  EXPECT_TRUE(cells["b"].at("ci95").is_null());
+  EXPECT_TRUE(summary.at("rankings").empty());
+  ASSERT_EQ(summary.at("not_ranked").size(), 1u) << summary.dump(1);
+  EXPECT_EQ(summary.at("not_ranked")[0].at("family"), "b");
+  EXPECT_EQ(summary.at("not_ranked")[0].at("property"), "y");
+  ASSERT_EQ(f.not_ranked.size(), 1u);
+  EXPECT_EQ(f.not_ranked[0], "family=b: y has 1 replica, not ranked (Welch's test needs 2 or more)");
+  const std::string html = s.read("report/index.html");
+  EXPECT_NE(html.find("<td>5</td><td>n = 1: no interval</td>"), std::string::npos) << html;
+  EXPECT_NE(html.find("Not ranked (fewer than 2 replicas)"), std::string::npos);
+  // The plot data: a's point with its bar ends (x y low high), b's point alone in its own series.
+  const std::string dat = s.read("report/p.dat");
+  EXPECT_NE(dat.find("# b (n = 1: no interval)\n1 5\n"), std::string::npos) << dat;
+  EXPECT_NE(dat.find("# a\n1 2 "), std::string::npos) << dat;
+}
+
+// A --bound side naming a column must give a number in every row that has the bounded column:
+// a row without it, or with text in it, would go unchecked. Refused naming the row file.
+TEST(Results, BoundColumnsMustHoldANumberInEveryBoundedRow) {
+  Scratch s;
+  const auto b1 = row_file(s, "b1", R"("family": "b", "y": 5, "ub": 10)");
+  const auto b2 = row_file(s, "b2", R"("family": "b", "y": 6)");
+  const auto b3 = row_file(s, "b3", R"("family": "b", "y": 7, "ub": "n/a")");
+  const auto c1 = row_file(s, "c1", R"("family": "c", "ub": "n/a")");  // no y: nothing to bound
+  tp::ReportOptions o;
+  o.group = {"family"};
+  o.bounds = {"y=0:ub"};
+  for (const auto& [rows, bad] : {std::pair{std::vector<std::string>{b1, b2}, b2}, std::pair{std::vector<std::string>{b1, b3}, b3}}) {
+    const std::string what = input_error([&] { tp::write_report(s.path("report"), rows, o); });
+    EXPECT_NE(what.find(bad), std::string::npos) << what;
+    EXPECT_NE(what.find("'ub'"), std::string::npos) << what;
+    EXPECT_FALSE(fs::exists(s.path("report")));
+  }
+  o.bounds = {"y=family:"};  // a text column as a bound
+  EXPECT_THROW(tp::write_report(s.path("report"), {b1}, o), tomodem::InputError);
+  o.bounds = {"y=0:ub"};
+  EXPECT_NO_THROW(tp::write_report(s.path("report"), {b1, c1}, o));
+}
+
+// A cell whose mean lies outside its bound: its interval is still cut at the bound the mean is
+// within, and the cell itself is flagged (summary.json, page, warning). y = 0.095, 0.100, 0.108
+// with y=0.09:0.10: mean 0.101, sd = sqrt(86e-6 / 2) = 0.0065574, sem 0.0037859,
+// t_{0.975,2} = 4.3027: [0.08471, 0.11729] -> [0.09, 0.11729] (the mean is above 0.10).
+TEST(Results, AMeanOutsideItsBoundIsFlaggedAndCutAtTheOtherBound) {
+  Scratch s;
+  std::vector<std::string> files;
+  int k = 0;
+  for (const char* y : {"0.095", "0.100", "0.108"}) files.push_back(row_file(s, "r" + std::to_string(k++), std::string(R"("family": "a", "y": )") + y));
+  tp::ReportOptions o;
+  o.group = {"family"};
+  o.bounds = {"y=0.09:0.10"};
+  const auto f = tp::write_report(s.path("report"), files, o);
+  const auto summary = nlohmann::json::parse(s.read("report/summary.json"));
+  const auto a = cells_of(summary, "y").at("a");
+  EXPECT_NEAR(a.at("mean").get<double>(), 0.101, 1e-12);
+  EXPECT_EQ(a.at("ci95")[0].get<double>(), 0.09) << a;
+  EXPECT_NEAR(a.at("ci95")[1].get<double>(), 0.101 + 4.30265 * 0.0037859, 2e-6) << a;
+  EXPECT_TRUE(a.at("ci95_cut_at_bound").get<bool>());
+  EXPECT_TRUE(a.at("mean_outside_bound").get<bool>());
+  ASSERT_EQ(f.outside_bounds.size(), 1u);  // the replica 0.108
+  ASSERT_EQ(f.warnings.size(), 1u);
+  EXPECT_EQ(f.warnings[0], "family=a: the mean of y, 0.101, is outside its bound [0.09, 0.1]");
+  EXPECT_NE(s.read("report/index.html").find("mean outside its bound"), std::string::npos);
+  // Inside its bound, the flag is false.
+  o.bounds = {"y=0.09:0.2"};
+  tp::write_report(s.path("report"), files, o);
+  EXPECT_FALSE(cells_of(nlohmann::json::parse(s.read("report/summary.json")), "y").at("a").at("mean_outside_bound").get<bool>());
+}
+
+// --ratio NAME=A/B: a NAME that is taken (a column, another ratio) or a divisor of the number 0
+// is refused; a divisor column that is 0 in some rows leaves the ratio empty there, with a
+// warning naming those rows.
+TEST(Results, RatiosRefuseTakenNamesAndADivisorOfZero) {
+  Scratch s;
+  const auto r1 = row_file(s, "r1", R"("family": "a", "y": 2, "z": 0)");
+  const auto r2 = row_file(s, "r2", R"("family": "a", "y": 3, "z": 1)");
+  const auto r3 = row_file(s, "r3", R"("family": "a", "y": 4, "z": 0)");
+  for (const std::vector<std::string> ratios :
+       {std::vector<std::string>{"y=y/2"}, {"r=y/2", "r=y/3"}, {"r=y/0"}, {"r=y/0.0"}, {"r=y/2", "q=r/y", "q=y/3"}}) {
+    tp::ReportOptions o;
+    o.ratios = ratios;
+    const std::string what = input_error([&] { tp::write_report(s.path("report"), {r1, r2, r3}, o); });
+    EXPECT_NE(what.find("--ratio"), std::string::npos) << ratios.back() << ": " << what;
+    EXPECT_FALSE(fs::exists(s.path("report")));
+  }
+  tp::ReportOptions o;
+  o.ratios = {"r=y/z"};
+  const auto f = tp::write_report(s.path("report"), {r1, r2, r3}, o);
+  ASSERT_EQ(f.warnings.size(), 1u);
+  EXPECT_EQ(f.warnings[0], "--ratio r=y/z: 'z' is 0 in " + r1 + ", " + r3 + ", so 'r' is empty there");
+}
+
+// Small inconsistencies: a column named twice in --stats, --columns or --group is refused; a row
+// without a group column (a cell of its own with an empty value) is refused naming the row; dof
+// is a number or null (no replica scatter: infinite, and JSON has no infinity), never "inf".
+TEST(Results, RepeatsRowsWithoutTheGroupAndInfiniteDof) {
+  Scratch s;
+  const auto a1 = row_file(s, "a1", R"("family": "a", "y": 2)");
+  const auto a2 = row_file(s, "a2", R"("family": "a", "y": 2)");
+  const auto none = row_file(s, "none", R"("y": 3)");
+  const auto bad = [&](tp::ReportOptions o, const std::vector<std::string>& rows, const std::string& expect) {
+    const std::string what = input_error([&] { tp::write_report(s.path("report"), rows, o); });
+    EXPECT_NE(what.find(expect), std::string::npos) << what;
+    EXPECT_FALSE(fs::exists(s.path("report")));
+  };
+  tp::ReportOptions o;
+  o.stats = {"y", "y"};
+  bad(o, {a1, a2}, "named twice");
+  o = {};
+  o.columns = {"family", "y", "y"};
+  bad(o, {a1, a2}, "named twice");
+  o = {};
+  o.group = {"family", "family"};
+  bad(o, {a1, a2}, "named twice");
+  o = {};
+  o.group = {"family"};
+  bad(o, {a1, a2, none}, none);
+  o.stats = {"y"};  // a constant column is no property by default
+  tp::write_report(s.path("report"), {a1, a2}, o);
+  const auto a = cells_of(nlohmann::json::parse(s.read("report/summary.json")), "y").at("a");
+  EXPECT_TRUE(a.at("dof").is_null()) << a;
+  EXPECT_EQ(a.at("sd").get<double>(), 0.0);
 }

@@ -68,6 +68,8 @@ struct ReportFiles {
   std::size_t cells = 0, rankings = 0;
   std::size_t rows = 0, columns = 0;
   std::vector<std::string> outside_bounds;  // one text per replica value outside its --bound
+  std::vector<std::string> warnings;        // a cell's mean outside its --bound; a --ratio's divisor 0 in some rows
+  std::vector<std::string> not_ranked;      // cells left out of the rankings: one replica of a property
 };
 
 /// Reads the row files (make_row's JSON), adds the ratio columns and writes `dir`/table.csv,
