@@ -135,7 +135,9 @@ void move_outputs_aside(const Pipeline& p, const Instance& in) {
   }
 }
 
-void settle_outputs(const Pipeline& p, const Instance& in, bool ok) {
+// Returns whether every output of a failed step is the last good one again (false when ok).
+bool settle_outputs(const Pipeline& p, const Instance& in, bool ok) {
+  bool restored = !ok;
   for (const auto& [name, path] : in.outs) {
     const fs::path out = fs::path(p.dir) / path, old = aside_path(out);
     std::error_code ec;
@@ -144,10 +146,13 @@ void settle_outputs(const Pipeline& p, const Instance& in, bool ok) {
     } else if (present(old)) {
       fs::remove_all(out, ec);  // what the failed step wrote
       fs::rename(old, out, ec);
+      if (ec) restored = false;
     } else {
       fs::remove_all(out, ec);  // Make's .DELETE_ON_ERROR: nothing that could look finished
+      restored = false;
     }
   }
+  return restored;
 }
 
 // Restores the caller's SIGINT/SIGTERM handlers however the run ends.
@@ -524,7 +529,7 @@ class Scheduler {
         why = "declared output " + path + " was not written";
       }
     touched_.insert(in.id);
-    settle_outputs(p_, in, ok);
+    const bool restored = settle_outputs(p_, in, ok);
     if (ok) {
       lock_.steps[in.id] = record(in, cache_, r.started, res.seconds);
       lock_.steps[in.id].launch = launch_text(in, launcher_);
@@ -534,18 +539,20 @@ class Scheduler {
       ++sum_.ran;
       say(counter() + "done " + in.id + " in " + seconds_text(res.seconds));
     } else {
-      failed(r.idx, status, why);
+      failed(r.idx, status, why, restored);
     }
     save();
   }
 
-  void failed(std::size_t i, int status, std::string why) {
+  // `restored`: the last good outputs are back in place, so the last success record still
+  // describes them and is kept (going back to that configuration is then up to date again).
+  void failed(std::size_t i, int status, std::string why, bool restored) {
     const Instance& in = p_.instances[i];
     StepResult& res = sum_.steps[i];
     const std::string tail = last_line(res.log);
     if (!tail.empty() && why != "interrupted") why += ": " + tail;
     res.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    lock_.steps.erase(in.id);
+    if (!restored) lock_.steps.erase(in.id);
     lock_.failures[in.id] = FailureRecord{res.exit_code, utc_now(), why, res.log};
     st_[i] = St::failed;
     res.state = "failed";

@@ -45,16 +45,17 @@ std::string HashCache::hash(const std::string& path) {
     return hex;
   }
   const std::int64_t mtime = static_cast<std::int64_t>(st.st_mtim.tv_sec) * 1000000000 + st.st_mtim.tv_nsec;
+  const std::int64_t ctime = static_cast<std::int64_t>(st.st_ctim.tv_sec) * 1000000000 + st.st_ctim.tv_nsec;
   if (const auto it = entries.find(path); it != entries.end()) {
     const Entry& e = it->second;
-    if (e.size == st.st_size && e.mtime_ns == mtime && e.inode == st.st_ino) return e.hash;
+    if (e.size == st.st_size && e.mtime_ns == mtime && e.inode == st.st_ino && e.ctime_ns == ctime) return e.hash;
   }
   const std::string h = file_hash(full.string());
   ++hashed_;
   // Racy-git rule: a file changed within the last 2 s could change again within the same
   // timestamp tick, so it is not trusted from the cache until it has been stable.
   if (now_ns() - mtime > 2'000'000'000LL)
-    entries[path] = Entry{h, static_cast<std::int64_t>(st.st_size), mtime, static_cast<std::uint64_t>(st.st_ino)};
+    entries[path] = Entry{h, static_cast<std::int64_t>(st.st_size), mtime, static_cast<std::uint64_t>(st.st_ino), ctime};
   else
     entries.erase(path);
   return h;
@@ -86,14 +87,17 @@ void merge_lock(const std::string& path, LockFile& lock, HashCache& cache) {
       lock.steps[id] = x;
       lock.failures.erase(id);
     }
+    // A later file's failure replaces an earlier success, but one file may hold both for a step:
+    // the failed re-run put the last good outputs back, and their success record was kept.
     for (const auto& [id, e] : failures.items()) {
       lock.failures[id] = FailureRecord{e.value("exit_code", 1), e.value("finished", ""), e.value("reason", ""),
                                         e.value("log", "")};
-      lock.steps.erase(id);
+      if (!steps.contains(id)) lock.steps.erase(id);
     }
     for (const auto& [f, e] : files.items())
       cache.entries[f] = HashCache::Entry{e.at("hash").get<std::string>(), e.at("size").get<std::int64_t>(),
-                                          e.at("mtime_ns").get<std::int64_t>(), e.at("inode").get<std::uint64_t>()};
+                                          e.at("mtime_ns").get<std::int64_t>(), e.at("inode").get<std::uint64_t>(),
+                                          e.value("ctime_ns", std::int64_t{0})};  // absent in older lock files
   } catch (const json::exception& e) {
     throw InputError(path, "", "", std::string("unreadable lock file (delete it to start afresh): ") + e.what());
   }
@@ -121,7 +125,8 @@ std::string lock_json(const LockFile& lock, HashCache& cache) {
     j["files"][it->first] = {{"hash", it->second.hash},
                              {"size", it->second.size},
                              {"mtime_ns", it->second.mtime_ns},
-                             {"inode", it->second.inode}};
+                             {"inode", it->second.inode},
+                             {"ctime_ns", it->second.ctime_ns}};
     ++it;
   }
   return j.dump(1) + "\n";

@@ -2,6 +2,7 @@
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <ctime>
 #include <filesystem>
@@ -43,19 +44,59 @@ TEST(HashCache, UnchangedStatIsNotReadAgain) {
   const std::string h1 = c.hash("a.txt");
   EXPECT_EQ(c.hash("a.txt"), h1);
   EXPECT_EQ(c.files_hashed(), 1);
-  // Same size and the same timestamp: the cache trusts the stat and does not read the file,
-  // which this test proves by changing the bytes behind its back.
-  struct stat st {};
-  ASSERT_EQ(::stat(f.c_str(), &st), 0);
-  s.write("a.txt", "bbbb");
-  struct timespec t[2] = {st.st_atim, st.st_mtim};
-  ASSERT_EQ(::utimensat(AT_FDCWD, f.c_str(), t, 0), 0);
-  EXPECT_EQ(c.hash("a.txt"), h1);
-  EXPECT_EQ(c.files_hashed(), 1);
   // A new timestamp makes it read the file again.
   age(f, 50);
-  EXPECT_NE(c.hash("a.txt"), h1);
+  EXPECT_EQ(c.hash("a.txt"), h1);
   EXPECT_EQ(c.files_hashed(), 2);
+}
+
+namespace {
+// Writes `text` into `f` in place (same inode) and puts its old size-preserving timestamps back,
+// as `printf ... 1<> f; touch -r ref f` does. Only the status-change time (ctime) moves.
+void rewrite_keeping_stat(const std::string& f, const std::string& text) {
+  struct stat st {};
+  ASSERT_EQ(::stat(f.c_str(), &st), 0);
+  ::usleep(20000);  // ctime ticks coarsely: make sure it moves
+  const int fd = ::open(f.c_str(), O_WRONLY);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(::write(fd, text.data(), text.size()), static_cast<ssize_t>(text.size()));
+  ::close(fd);
+  struct timespec t[2] = {st.st_atim, st.st_mtim};
+  ASSERT_EQ(::utimensat(AT_FDCWD, f.c_str(), t, 0), 0);
+  struct stat after {};
+  ASSERT_EQ(::stat(f.c_str(), &after), 0);
+  ASSERT_EQ(after.st_ino, st.st_ino);
+  ASSERT_EQ(after.st_size, st.st_size);
+}
+}  // namespace
+
+TEST(HashCache, SameSizeMtimeAndInodeStillSeenThroughCtime) {
+  // D16: size, mtime and inode all kept; the content changed. ctime (which touch cannot set) tells.
+  Scratch s;
+  const auto f = s.write("a.txt", "aaaa");
+  age(f, 100);
+  tp::HashCache c;
+  c.root = s.dir;
+  const std::string h1 = c.hash("a.txt");
+  rewrite_keeping_stat(f, "bbbb");
+  EXPECT_NE(c.hash("a.txt"), h1);
+  EXPECT_EQ(c.hash("a.txt"), tomodem::file_hash(f));
+}
+
+TEST(HashCache, EntryWithoutCtimeIsReadAgain) {
+  // An entry from a lock file written before ctime was kept (ctime_ns 0) is not trusted.
+  Scratch s;
+  const auto f = s.write("a.txt", "aaaa");
+  age(f, 100);
+  struct stat st {};
+  ASSERT_EQ(::stat(f.c_str(), &st), 0);
+  tp::HashCache c;
+  c.root = s.dir;
+  c.entries["a.txt"] = tp::HashCache::Entry{"stale", static_cast<std::int64_t>(st.st_size),
+                                            static_cast<std::int64_t>(st.st_mtim.tv_sec) * 1000000000 + st.st_mtim.tv_nsec,
+                                            static_cast<std::uint64_t>(st.st_ino), 0};
+  EXPECT_EQ(c.hash("a.txt"), tomodem::file_hash(f));
+  EXPECT_EQ(c.files_hashed(), 1);
 }
 
 TEST(HashCache, FreshlyWrittenFilesAreNotTrustedYet) {
@@ -116,4 +157,23 @@ TEST(Staleness, AnotherBuildOfTheSameReleaseIsUpToDateUnlessAsked) {
   EXPECT_EQ(run_with(pipe, build_b, true).ran, 1);
   // A new release always re-runs it.
   EXPECT_EQ(run_with(pipe, fake_tool(s, "build-c", "tomodem 0.9.1 (git bbbbbbb)")).ran, 1);
+}
+
+TEST(Staleness, FailedRerunKeepsTheLastGoodRecordWhenItsOutputIsBack) {
+  // D17: tag one runs; tag bad fails and the runner puts tag one's output back; going back to
+  // tag one is then up to date, not a re-run.
+  Scratch s;
+  const auto pipe = [&](const std::string& tag) {
+    return s.write("p.yaml", "steps:\n  a:\n    params: {tag: " + tag +
+                                 "}\n    cmd: test ${params.tag} != bad && echo ${params.tag} > ${outs.0}\n    outs: [a.txt]\n");
+  };
+  EXPECT_EQ(run_with(pipe("one"), "").ran, 1);
+  EXPECT_EQ(run_with(pipe("bad"), "").failed, 1);
+  EXPECT_EQ(s.read("a.txt"), "one\n");
+  const tp::RunSummary back = run_with(pipe("one"), "");
+  EXPECT_EQ(back.ran, 0);
+  EXPECT_EQ(back.up_to_date, 1);
+  // The failure is still reported by explain, beside the kept record.
+  const std::string why = tp::explain(tp::load(pipe("bad"), {}), "a");
+  EXPECT_NE(why.find("would run"), std::string::npos);
 }

@@ -20,6 +20,9 @@ class HashCache {
     std::string hash;
     std::int64_t size = 0, mtime_ns = 0;
     std::uint64_t inode = 0;
+    // Status-change time, as git keeps it: `touch -r` can put an old mtime back, not an old ctime.
+    // 0 (a lock file written before ctime was kept) never matches, so the file is read again.
+    std::int64_t ctime_ns = 0;
   };
   /// "" when the path does not exist. Relative paths are taken from `root`, and are the keys.
   std::string hash(const std::string& path);
