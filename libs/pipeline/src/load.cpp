@@ -236,11 +236,16 @@ void read_file(const fs::path& path, const std::string& shown, const Location& f
 
 // ---- variables --------------------------------------------------------------------------
 
+constexpr int kMaxVarDepth = 32;
+constexpr std::size_t kMaxVarBytes = 1 << 20;
+
 class Vars {
  public:
   explicit Vars(const std::map<std::string, Var>& v) : vars_(v) {}
   std::vector<std::string> get(const std::string& name, int depth = 0) const {
-    if (depth > 32) throw RefError{"variables refer to each other in a cycle"};
+    if (depth > kMaxVarDepth)
+      throw RefError{"variables refer to each other in a cycle, or nest deeper than " + std::to_string(kMaxVarDepth) +
+                     " levels (at 'vars." + name + "')"};
     const auto it = vars_.find(name);
     if (it == vars_.end()) throw RefError{"unknown variable 'vars." + name + "'" + known_under(name)};
     const YAML::Node& n = it->second.node;
@@ -259,6 +264,13 @@ class Vars {
     } else if (n.IsNull()) {
       out.push_back("");
     }
+    // Variables that each refer several times to the one below grow exponentially (9 levels of 10
+    // made a gigabyte): refused at the first one past a size no pipeline needs.
+    std::size_t bytes = 0;
+    for (const auto& s : out) bytes += s.size() + 1;
+    if (bytes > kMaxVarBytes)
+      throw RefError{"variable 'vars." + name + "' expands to more than 1 MB (" + std::to_string(bytes) +
+                     " bytes): variables that refer many times to each other"};
     return out;
   }
 
@@ -679,14 +691,24 @@ std::vector<std::tuple<std::string, std::string, Location>> path_items(const YAM
   return items;
 }
 
+std::string trimmed(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t\r\n");
+  return b == std::string::npos ? "" : s.substr(b, s.find_last_not_of(" \t\r\n") - b + 1);
+}
+
 void apply_overrides(const std::vector<std::string>& overrides, Raw& raw,
                      std::map<std::string, std::map<std::string, std::string>>& param_sets) {
   for (const auto& o : overrides) {
     const Location cli{"--set", 0};
     const auto eq = o.find('=');
     if (eq == std::string::npos || eq == 0) fail(cli, o, "", "expected KEY=VALUE");
-    std::string key = o.substr(0, eq);
-    const std::string value = o.substr(eq + 1);
+    // Spaces around the '=' or the value come from the shell line, never from intent (" 64" would
+    // be a new param value, hence a re-run), and an empty value is most often an unset shell
+    // variable (`--set densities=$D`): refused rather than turned into a cell named "d".
+    std::string key = trimmed(o.substr(0, eq));
+    const std::string value = trimmed(o.substr(eq + 1));
+    if (key.empty()) fail(cli, o, "", "expected KEY=VALUE");
+    if (value.empty()) fail(cli, key, o.substr(eq + 1), "empty value (give KEY=VALUE with a value)");
     if (key.rfind("steps.", 0) == 0) {
       const auto dot = key.find('.', 6);
       const std::string step = key.substr(6, dot == std::string::npos ? std::string::npos : dot - 6);
@@ -1288,11 +1310,90 @@ class Expander {
 
 }  // namespace
 
+// ---- variables nothing uses ---------------------------------------------------------------
+
+// Every `${vars.NAME}` written in `text`: exact names, and the fixed start of computed ones
+// (`${vars.scales.${vars.scale}.n}` may use any variable under `scales.`).
+void var_uses(const std::string& text, std::set<std::string>& exact, std::set<std::string>& prefixes) {
+  std::vector<std::string> refs;
+  try {
+    refs = detail::references(text);
+  } catch (const RefError&) {
+    return;  // a malformed reference is reported where it is resolved, with its line
+  }
+  for (const auto& r : refs) {
+    const auto inner = r.find("${");
+    const bool var = r.rfind("vars.", 0) == 0;
+    if (inner == std::string::npos) {
+      if (var) exact.insert(r.substr(5));
+      continue;
+    }
+    if (var && inner >= 5) prefixes.insert(r.substr(5, inner - 5));
+    var_uses(r, exact, prefixes);  // the references the name is computed from
+  }
+}
+
+void var_uses(const YAML::Node& n, std::set<std::string>& exact, std::set<std::string>& prefixes) {
+  if (n.IsScalar()) return var_uses(n.Scalar(), exact, prefixes);
+  if (n.IsSequence())
+    for (const auto& e : n) var_uses(e, exact, prefixes);
+  if (n.IsMap())
+    for (const auto& kv : n) {
+      var_uses(kv.first, exact, prefixes);
+      var_uses(kv.second, exact, prefixes);
+    }
+}
+
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diag = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diag = up;
+    }
+  }
+  return row[b.size()];
+}
+
+// A variable that no `${vars.NAME}` uses is almost always a misspelt override of an included
+// one (`partciles: 800` beside an included `particles: 500`), which would otherwise be silently
+// a new variable while the old value is used: refused, naming the closest existing name.
+void refuse_unused_vars(const Raw& raw, const LoadOptions& options) {
+  std::set<std::string> exact, prefixes;
+  for (const auto& [name, v] : raw.vars) var_uses(v.node, exact, prefixes);
+  for (const auto& st : raw.steps) var_uses(st.node, exact, prefixes);
+  for (const auto& text : {raw.logs, raw.out}) var_uses(text, exact, prefixes);
+  for (const auto& o : options.overrides) var_uses(o, exact, prefixes);
+  const auto used = [&](const std::string& name) {
+    return exact.count(name) ||
+           std::any_of(prefixes.begin(), prefixes.end(), [&](const std::string& p) { return name.rfind(p, 0) == 0; });
+  };
+  for (const auto& [name, v] : raw.vars) {
+    if (used(name)) continue;
+    std::string hint;
+    std::size_t best = 3;
+    for (const auto& [other, w] : raw.vars)
+      if (other != name && used(other))
+        if (const std::size_t d = edit_distance(name, other); d < best) {
+          best = d;
+          hint = " (did you mean 'vars." + other + "', defined at " + w.where.str() + "?)";
+        }
+    fail(v.where, "vars." + name, "",
+         "variable not used by any ${vars." + name + "} in the pipeline or the files it includes" + hint +
+             "; remove it or use it");
+  }
+}
+
 Pipeline load(const std::string& file, const LoadOptions& options) {
   Raw raw;
   std::vector<std::string> stack;
   read_file(file, file, Location{file, 0}, true, raw, stack);
   if (raw.steps.empty()) fail({file, 0}, "steps", "", "the pipeline declares no steps");
+  refuse_unused_vars(raw, options);
   std::map<std::string, std::map<std::string, std::string>> param_sets;
   apply_overrides(options.overrides, raw, param_sets);
   const Vars vars(raw.vars);

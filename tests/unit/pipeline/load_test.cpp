@@ -176,8 +176,8 @@ steps:
   // an escaped one; in "...": the characters the shell would read escaped.
   EXPECT_EQ(p.instances[0].command,
             "echo 'a b; touch P' 'a b; touch P' \"a b; touch P\" 'x y' 'it'\\''s' > a.txt");
-  o.overrides = {"label=$(x) `y` \\ \"q\"", "list=[a]"};
-  const auto d = tp::load(s.write("d.yaml", "vars: {label: x, list: [a]}\nsteps:\n  a:\n    cmd: echo \"${vars.label}\" > ${outs.0}\n    outs: [a.txt]\n"), o);
+  o.overrides = {"label=$(x) `y` \\ \"q\""};
+  const auto d = tp::load(s.write("d.yaml", "vars: {label: x}\nsteps:\n  a:\n    cmd: echo \"${vars.label}\" > ${outs.0}\n    outs: [a.txt]\n"), o);
   EXPECT_EQ(d.instances[0].command, "echo \"\\$(x) \\`y\\` \\\\ \\\"q\\\"\" > a.txt");
 }
 
@@ -302,6 +302,62 @@ TEST(PipelineBadInput, UnknownSetKeyAndParam) {
   EXPECT_NE(load_error(s, kSweep, o).find("densitys"), std::string::npos);
   o.overrides = {"steps.pack.params.dens=0.5"};
   EXPECT_NE(load_error(s, kSweep, o).find("dens"), std::string::npos);
+}
+
+TEST(PipelineLoad, SetTrimsSpacesAroundTheValue) {
+  // D18: " 64" would be a new param value (a re-run of every instance) for a shell-line accident.
+  Scratch s;
+  s.write("in.txt", "x");
+  tp::LoadOptions o;
+  o.overrides = {"steps.pack.params.density= 0.9 ", "densities =[0.6]\t"};
+  const auto p = tp::load(s.write("p.yaml", kSweep), o);
+  EXPECT_EQ(by_id(p, "pack[d0.6]").params.at("density"), "0.9");
+}
+
+TEST(PipelineBadInput, SetWithAnEmptyValueIsRefused) {
+  // D18: `--set densities=$UNSET` must not make a cell named "d".
+  Scratch s;
+  s.write("in.txt", "x");
+  tp::LoadOptions o;
+  for (const std::string set : {"densities=", "densities=  ", "steps.pack.params.density="}) {
+    o.overrides = {set};
+    const std::string m = load_error(s, kSweep, o);
+    EXPECT_NE(m.find("--set"), std::string::npos) << set << ": " << m;
+    EXPECT_NE(m.find("empty value"), std::string::npos) << set << ": " << m;
+    EXPECT_NE(m.find(set.substr(0, set.find('='))), std::string::npos) << set << ": " << m;
+  }
+}
+
+TEST(PipelineBadInput, ExponentialVariableExpansionIsRefused) {
+  // D20: 9 levels, each referring 10 times to the one below, hung the loader; now the first
+  // variable past 1 MB is named.
+  Scratch s;
+  std::string text = "vars:\n  s0: xxxxxxxxxx\n";
+  for (int k = 1; k <= 8; ++k) {
+    text += "  s" + std::to_string(k) + ": '";
+    for (int r = 0; r < 10; ++r) text += (r ? " ${vars.s" : "${vars.s") + std::to_string(k - 1) + "}";
+    text += "'\n";
+  }
+  text += "steps:\n  s:\n    cmd: echo ${vars.s8} > ${outs.o}\n    outs: {o: b.txt}\n";
+  const std::string m = load_error(s, text);
+  EXPECT_NE(m.find("'vars.s5' expands to more than 1 MB"), std::string::npos) << m.substr(0, 300);
+  EXPECT_NE(m.find("p.yaml:"), std::string::npos) << m.substr(0, 300);
+}
+
+TEST(PipelineBadInput, UnusedVariableIsRefusedWithTheClosestName) {
+  // D13: a misspelt override of an included variable was silently a new variable.
+  Scratch s;
+  s.write("common.yaml", "vars:\n  particles: 500\n");
+  const std::string m = load_error(s, "include: common.yaml\nvars: {partciles: 800}\nsteps:\n  a:\n"
+                                      "    cmd: echo ${vars.particles} > ${outs.o}\n    outs: {o: a.txt}\n");
+  EXPECT_NE(m.find("p.yaml:2"), std::string::npos) << m;
+  EXPECT_NE(m.find("vars.partciles"), std::string::npos) << m;
+  EXPECT_NE(m.find("common.yaml:2?)"), std::string::npos) << m;
+  EXPECT_NE(m.find("did you mean 'vars.particles'"), std::string::npos) << m;
+  // Used only through a computed name, a variable is used (kScales: scales.small.n).
+  EXPECT_EQ(load_error(s, kScales), "");
+  // Used only by another variable, it is used too.
+  EXPECT_EQ(load_error(s, "vars: {a: '${vars.b}', b: 1}\nsteps:\n  s:\n    cmd: echo ${vars.a} > ${outs.0}\n    outs: [a.txt]\n"), "");
 }
 
 TEST(PipelineBadInput, DuplicateCellNames) {
@@ -446,7 +502,7 @@ TEST(PipelineBadInput, RepeatedKeysAreRefusedWithTheirLine) {
   const auto m = load_error(s, "include: common.yaml\nsteps:\n  a:\n    cmd: echo > a.txt\n    outs: [a.txt]\n");
   EXPECT_NE(m.find("common.yaml:3"), std::string::npos) << m;
   // Equal values under different maps are no repeat.
-  EXPECT_EQ(load_error(s, "vars: {n: 1, m: {n: 2}}\nsteps:\n  a:\n    params: {n: 1}\n    cmd: echo > ${outs.n}\n"
+  EXPECT_EQ(load_error(s, "vars: {n: 1, m: {n: 2}}\nsteps:\n  a:\n    params: {n: 1}\n    cmd: echo ${vars.n} ${vars.m.n} > ${outs.n}\n"
                           "    outs: {n: a.txt}\n"), "");
 }
 
