@@ -131,6 +131,7 @@ int main(int argc, char** argv) {
     if (!shard.empty()) std::tie(ro.shard, ro.shards) = tp::parse_shard(shard);
     lo.check_inputs = !(dt->parsed() || sl->parsed());  // nothing runs, so inputs may come later
     const tp::Pipeline p = tp::load(file, lo);
+    for (const auto& w : p.warnings) tomodem::warn(w);
     tomodem::check_outputs({file, p.lock_file}, {{"--json", json_file}});
     if (sl->parsed()) {
       const tp::SlurmFiles f = tp::slurm_scripts(p, so);

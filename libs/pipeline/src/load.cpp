@@ -139,6 +139,10 @@ class DuplicateKeys : public YAML::EventHandler {
     Level& l = open_.back();
     if (l.key_next) {
       l.key = scalar ? *scalar : "";
+      // yaml-cpp reads `<<: *anchor` as a key named "<<", not as a merge.
+      if (scalar && *scalar == "<<")
+        fail({shown_, m.line + 1}, "<<", "",
+             "YAML merge keys (<<) are not supported: write the keys out, or share values through vars: and ${vars.NAME}");
       if (scalar) {
         const auto [it, fresh] = l.lines.emplace(*scalar, m.line + 1);
         if (!fresh) {
@@ -465,6 +469,15 @@ void add_case_cells(const RawStep& st, const Scope& vs, std::vector<Cell>& cells
   if (!cs.IsSequence() || cs.size() == 0) fail(at(f, cs), base + "cases", "", "expected a list of maps");
   if (!swept) cells.clear();
   swept = true;
+  // Every cell gives the same keys, so a misspelt case key (`densty`) is reported here, at its
+  // line, rather than as "no matrix key 'density'" where a command reads it.
+  const auto key_set = [](const Cell& c) {
+    std::set<std::string> k;
+    for (const auto& kv : c.values) k.insert(kv.first);
+    return k;
+  };
+  std::optional<std::set<std::string>> expected;
+  if (!cells.empty()) expected = key_set(cells.front());
   for (const auto& c : cs) {
     if (!c.IsMap()) fail(at(f, c), base + "cases", "", "each case is a map of key: value");
     Cell cell;
@@ -472,6 +485,17 @@ void add_case_cells(const RawStep& st, const Scope& vs, std::vector<Cell>& cells
       const std::string field = base + "cases." + kv.first.Scalar();
       if (!is_name(kv.first.Scalar())) fail(at(f, kv.first), field, "", "bad case key");
       cell.values.emplace_back(kv.first.Scalar(), resolve(scalar(kv.second, f, field), vs, at(f, kv.second), field));
+    }
+    const std::set<std::string> keys = key_set(cell);
+    if (!expected) expected = keys;
+    if (keys != *expected) {
+      std::string list;
+      for (const auto& k : *expected) list += (list.empty() ? "" : ", ") + k;
+      for (const auto& kv : c)
+        if (!expected->count(kv.first.Scalar()))
+          fail(at(f, kv.first), base + "cases." + kv.first.Scalar(), "",
+               "case key '" + kv.first.Scalar() + "' is not a key of the other cells (" + list + "); every cell gives the same keys");
+      fail(at(f, c), base + "cases", "", "this case lacks a key the other cells have (" + list + ")");
     }
     cells.push_back(cell);
   }
@@ -1076,7 +1100,31 @@ class Expander {
     if (const auto a = adaptive_of_.find(in.step); a != adaptive_of_.end()) check_until(in, p_.adaptive[a->second]);
   }
 
-  void resolve_command(Instance& in, const RawStep& st, const Scope& s) const {
+  // A file named literally in `args:` (`g2.yaml`, `--config=g2.yaml`) that exists in the pipeline's
+  // folder but is not a dep or out of the step is not tracked: editing it would not re-run the
+  // step. A warning, not an error: the file may be meant untracked (Make would not track it either).
+  void warn_untracked_arg(const Instance& in, const RawStep& st, const std::string& text, const Location& where) {
+    if (text.find("${") != std::string::npos) return;  // a reference: its file is declared where it comes from
+    std::string name = text;
+    if (name.rfind("-", 0) == 0) {
+      const auto eq = name.find('=');
+      if (eq == std::string::npos) return;
+      name = name.substr(eq + 1);
+    }
+    if (name.empty()) return;
+    std::error_code ec;
+    const fs::path file = resolved(fs::path(p_.dir) / name);
+    if (!fs::is_regular_file(file, ec) || !strictly_inside(file, resolved(p_.dir))) return;
+    for (const auto* paths : {&in.deps, &in.outs})
+      for (const auto& [k, path] : *paths)
+        if (resolved(fs::path(p_.dir) / path) == file) return;
+    const std::string w = where.str() + ": step '" + st.name + "' names the file " + name +
+                          " in args: but not in deps:, so a change to it will not re-run the step (list it under "
+                          "deps: and write ${deps.NAME} in args:)";
+    if (std::find(p_.warnings.begin(), p_.warnings.end(), w) == p_.warnings.end()) p_.warnings.push_back(w);
+  }
+
+  void resolve_command(Instance& in, const RawStep& st, const Scope& s) {
     const std::string& f = st.file;
     const std::string base = "steps." + st.name + ".";
     if (const YAML::Node cmd = st.node["cmd"]) {
@@ -1095,11 +1143,13 @@ class Expander {
     in.command = "tomodem-" + in.tool;
     if (const YAML::Node args = st.node["args"]) {
       if (!args.IsSequence()) fail(at(f, args), base + "args", "", "expected a list of arguments");
-      for (const auto& a : args)
+      for (const auto& a : args) {
+        warn_untracked_arg(in, st, scalar(a, f, base + "args"), at(f, a));
         for (auto& v : resolve_list(scalar(a, f, base + "args"), s, at(f, a), base + "args")) {
           in.argv.push_back(v);
           in.command += " " + detail::shell_quote(v);
         }
+      }
     }
     in.version = tool_version(exe);
     // A tool of a build without MPI would run `ranks` copies of the serial run: refused here,
@@ -1362,9 +1412,11 @@ std::size_t edit_distance(const std::string& a, const std::string& b) {
 // A variable that no `${vars.NAME}` uses is almost always a misspelt override of an included
 // one (`partciles: 800` beside an included `particles: 500`), which would otherwise be silently
 // a new variable while the old value is used: refused, naming the closest existing name.
-void refuse_unused_vars(const Raw& raw, const LoadOptions& options) {
+// `declared`: the variables as the files give them (before --set), for their lines.
+void refuse_unused_vars(const std::map<std::string, Var>& declared, const Raw& raw, const LoadOptions& options) {
   std::set<std::string> exact, prefixes;
   for (const auto& [name, v] : raw.vars) var_uses(v.node, exact, prefixes);
+  for (const auto& [name, v] : declared) var_uses(v.node, exact, prefixes);
   for (const auto& st : raw.steps) var_uses(st.node, exact, prefixes);
   for (const auto& text : {raw.logs, raw.out}) var_uses(text, exact, prefixes);
   for (const auto& o : options.overrides) var_uses(o, exact, prefixes);
@@ -1372,11 +1424,11 @@ void refuse_unused_vars(const Raw& raw, const LoadOptions& options) {
     return exact.count(name) ||
            std::any_of(prefixes.begin(), prefixes.end(), [&](const std::string& p) { return name.rfind(p, 0) == 0; });
   };
-  for (const auto& [name, v] : raw.vars) {
+  for (const auto& [name, v] : declared) {
     if (used(name)) continue;
     std::string hint;
     std::size_t best = 3;
-    for (const auto& [other, w] : raw.vars)
+    for (const auto& [other, w] : declared)
       if (other != name && used(other))
         if (const std::size_t d = edit_distance(name, other); d < best) {
           best = d;
@@ -1393,8 +1445,8 @@ Pipeline load(const std::string& file, const LoadOptions& options) {
   std::vector<std::string> stack;
   read_file(file, file, Location{file, 0}, true, raw, stack);
   if (raw.steps.empty()) fail({file, 0}, "steps", "", "the pipeline declares no steps");
-  refuse_unused_vars(raw, options);
   std::map<std::string, std::map<std::string, std::string>> param_sets;
+  const std::map<std::string, Var> declared = raw.vars;
   apply_overrides(options.overrides, raw, param_sets);
   const Vars vars(raw.vars);
   std::string out_root;
@@ -1404,16 +1456,23 @@ Pipeline load(const std::string& file, const LoadOptions& options) {
     const YAML::Node r = s.node["replicas"];
     return r && r.IsMap();
   });
-  if (!adaptive) return Expander(raw, vars, options, param_sets, base, out_root, nullptr).build();
+  // Checked last, so that an error with a more precise cause is reported first.
+  if (!adaptive) {
+    Pipeline p = Expander(raw, vars, options, param_sets, base, out_root, nullptr).build();
+    refuse_unused_vars(declared, raw, options);
+    return p;
+  }
   // Every replica an adaptive step may get is checked now, so no later round meets bad input
   // (the runner's rounds, which give the counts, come after such a load).
   if (!options.use_counts)
     Expander(raw, vars, options, param_sets, base, out_root, [](const Adaptive& a, const std::string&) { return a.max; }).build();
   const std::map<std::string, int> counts = options.use_counts ? options.replica_counts : recorded_counts(base.replicas_file);
-  return Expander(raw, vars, options, param_sets, base, out_root, [&counts](const Adaptive& a, const std::string& id) {
-           const auto it = counts.find(id);
-           return std::clamp(it == counts.end() ? a.min : it->second, a.min, a.max);
-         }).build();
+  Pipeline p = Expander(raw, vars, options, param_sets, base, out_root, [&counts](const Adaptive& a, const std::string& id) {
+                 const auto it = counts.find(id);
+                 return std::clamp(it == counts.end() ? a.min : it->second, a.min, a.max);
+               }).build();
+  refuse_unused_vars(declared, raw, options);
+  return p;
 }
 
 std::vector<std::size_t> select(const Pipeline& p, const std::string& name) {

@@ -208,6 +208,29 @@ TEST(PipelineLoad, ComputedNamesExpandInnermostFirstAndFollowSet) {
   EXPECT_EQ(small.instances[0].command, "seq 10 10 > out/a.txt");
 }
 
+TEST(PipelineLoad, FileNamedLiterallyInArgsButNotInDepsIsWarned) {
+  // D12: editing g2.yaml would not re-run the step: the loader says so (stderr, via warnings).
+  Scratch s;
+  s.write("g2.yaml", "friction: 0.3\n");
+  const std::string exe = s.write("bin/tomodem-fake", "#!/bin/sh\necho 'tomodem 0.9.0'\n");
+  std::filesystem::permissions(exe, std::filesystem::perms::owner_all);
+  tp::LoadOptions o;
+  o.tool_dir = s.path("bin");
+  const auto warnings = [&](const std::string& step) {
+    return tp::load(s.write("p.yaml", "steps:\n  pack:\n    tool: fake\n" + step + "    outs: [a.txt]\n"), o).warnings;
+  };
+  const auto w = warnings("    args: [g2.yaml, -o, '${outs.0}']\n");
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_NE(w[0].find("p.yaml:4"), std::string::npos) << w[0];
+  EXPECT_NE(w[0].find("step 'pack' names the file g2.yaml"), std::string::npos) << w[0];
+  EXPECT_NE(w[0].find("deps:"), std::string::npos) << w[0];
+  EXPECT_EQ(warnings("    args: [--config=g2.yaml]\n").size(), 1u);
+  // Declared (and used through ${deps...} or written plainly), or not a file: no warning.
+  EXPECT_TRUE(warnings("    deps: {config: g2.yaml}\n    args: ['${deps.config}', -o, '${outs.0}']\n").empty());
+  EXPECT_TRUE(warnings("    deps: [g2.yaml]\n    args: [--config=g2.yaml]\n").empty());
+  EXPECT_TRUE(warnings("    args: [nothing.yaml, '-n', '5', a.txt]\n").empty());
+}
+
 // ---- bad input: each names the file, the line and the offending name ----------------------
 
 TEST(PipelineBadInput, CycleNamesTheStepsInIt) {
@@ -358,6 +381,24 @@ TEST(PipelineBadInput, UnusedVariableIsRefusedWithTheClosestName) {
   EXPECT_EQ(load_error(s, kScales), "");
   // Used only by another variable, it is used too.
   EXPECT_EQ(load_error(s, "vars: {a: '${vars.b}', b: 1}\nsteps:\n  s:\n    cmd: echo ${vars.a} > ${outs.0}\n    outs: [a.txt]\n"), "");
+}
+
+TEST(PipelineBadInput, MisspeltCaseKeyIsReportedAtItsLine) {
+  // D21: was "this step has no matrix key 'density'" at the cmd: line.
+  Scratch s;
+  const std::string m = load_error(s, "steps:\n  a:\n    cases:\n      - {density: 0.5}\n      - {densty: 0.7}\n"
+                                      "    cell: d${matrix.density}\n    cmd: echo ${matrix.density} > ${outs.0}\n"
+                                      "    outs: ['${cell}.txt']\n");
+  EXPECT_NE(m.find("p.yaml:5"), std::string::npos) << m;
+  EXPECT_NE(m.find("case key 'densty'"), std::string::npos) << m;
+  EXPECT_NE(m.find("(density)"), std::string::npos) << m;
+}
+
+TEST(PipelineBadInput, MergeKeysSayTheyAreNotSupported) {
+  Scratch s;
+  const std::string m = load_error(s, "x: &base {cmd: 'true'}\nsteps:\n  a:\n    <<: *base\n    outs: [a.txt]\n");
+  EXPECT_NE(m.find("p.yaml:4"), std::string::npos) << m;
+  EXPECT_NE(m.find("merge keys (<<) are not supported"), std::string::npos) << m;
 }
 
 TEST(PipelineBadInput, DuplicateCellNames) {

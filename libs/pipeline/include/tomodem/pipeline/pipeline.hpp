@@ -83,6 +83,7 @@ struct Pipeline {
   std::vector<Instance> instances;  // in a topological order (upstream first)
   std::vector<Adaptive> adaptive;   // steps with adaptive replicas
   std::vector<ReplicaGroup> groups; // their cells, with the replicas expanded now
+  std::vector<std::string> warnings;  // what loads but is likely a mistake (tomodem-run prints them)
   LoadOptions options;              // as loaded, so the runner can expand it again
 };
 
