@@ -69,7 +69,8 @@ int main(int argc, char** argv) {
     c.contacts = !no_contacts;
     if (common.threads > 0) omp_set_num_threads(common.threads);
     if (!c.image.empty() || !c.input.empty()) tomodem::info("reading " + (c.image.empty() ? c.input : c.image));
-    tomodem::emit_summary(tomodem::network::run_conduct(c), c.json);
-    return tomodem::exit_code::ok;
+    const std::string summary = tomodem::network::run_conduct(c);
+    tomodem::emit_summary(summary, c.json);
+    return tomodem::exit_code_of_summary(summary);  // 4: a solve stopped before its tolerance
   }, tomodem::RankUse::shared);  // rows of the PETSc solves split across the ranks
 }

@@ -80,7 +80,8 @@ int main(int argc, char** argv) {
     ex.quiet = common.quiet;
     ex.rate_check = !no_rate_check;
     tomodem::info("reading " + c.input);
-    tomodem::emit_summary(tomodem::mechanics::run_young(c), c.json);
-    return tomodem::exit_code::ok;
+    const std::string summary = tomodem::mechanics::run_young(c);
+    tomodem::emit_summary(summary, c.json);
+    return tomodem::exit_code_of_summary(summary);  // 4: a solve stopped before its tolerance
   }, tomodem::RankUse::shared);  // rows of the PETSc solves split across the ranks
 }

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <tuple>
 
@@ -225,8 +226,25 @@ struct Reader {
   void need(const std::string& dataset) const {
     if (!f.exists(dataset)) bad(dataset, "", "missing mandatory dataset");
   }
+  // A dataset's own `units` attribute, where it has one, must be the unit the writer uses: a file
+  // whose radii say "mm" was read as metres before (the root @units was the only check).
+  void check_units(const std::string& dataset) const {
+    static const std::map<std::string, std::string> expected = {
+        {"/particles/position", "m"}, {"/particles/radius", "m"},         {"/particles/phase", "1"},
+        {"/particles/velocity", "m/s"}, {"/particles/angular_velocity", "rad/s"}, {"/bonds/i", "1"},
+        {"/bonds/j", "1"},            {"/bonds/radius", "m"},             {"/bonds/rest_length", "m"},
+        {"/bonds/state", "1"},        {"/bonds/broken_at", "s"},          {"/contacts/i", "1"},
+        {"/contacts/j", "1"},         {"/contacts/overlap", "m"},         {"/contacts/normal_force", "N"},
+        {"/contacts/tangential_force", "N"}};
+    const auto it = expected.find(dataset);
+    if (it == expected.end() || !f.has_attr(dataset, "units")) return;
+    const std::string u = f.attr_string(dataset, "units");
+    if (u != it->second)
+      bad(dataset + "@units", u, "expected '" + it->second + "' (tomodem's packings are in SI units): convert the file");
+  }
   void check_shape(const std::string& dataset, const std::vector<std::size_t>& dims, std::size_t n,
                    std::size_t width, const std::string& ref) const {
+    check_units(dataset);
     const bool ok = width == 0 ? dims.size() == 1 : (dims.size() == 2 && dims[1] == width);
     if (!ok) bad(dataset, shape_text(dims), width == 0 ? "expected a 1-D dataset" : "expected shape (N, 3)");
     if (dims[0] != n)
@@ -339,6 +357,7 @@ struct Reader {
     std::vector<std::size_t> dims;
     t.radius = f.read_double("/particles/radius", &dims);
     if (dims.size() != 1) bad("/particles/radius", shape_text(dims), "expected a 1-D dataset");
+    check_units("/particles/radius");
     const std::size_t n = t.radius.size();
     const std::string ref = "/particles/radius";
     t.position = col3("/particles/position", n, ref);

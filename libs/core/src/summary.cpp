@@ -6,6 +6,7 @@
 #include <chrono>
 #include <iostream>
 
+#include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
 #include "tomodem/core/tool.hpp"
 #include "git_hash.hpp"
@@ -75,6 +76,12 @@ std::string Summary::text() {
                       {"command_line", command_line()}, {"host", host_name()},
                       {"utc_time", utc_now()}};
   return j_.dump(2) + "\n";
+}
+
+int exit_code_of_summary(const std::string& text) {
+  const nlohmann::json j = nlohmann::json::parse(text);
+  const auto it = j.find("target_reached");
+  return it != j.end() && it->is_boolean() && !it->get<bool>() ? exit_code::target_not_reached : exit_code::ok;
 }
 
 void emit_summary(const std::string& text, const std::string& json_path) {

@@ -415,6 +415,8 @@ std::string run_young(const YoungConfig& c) {
     warn("nu = " + value_text(nu) + " lies outside [-1, 0.5], the range of a stable isotropic solid" +
          (want_implicit ? std::string() : ": the explicit test was not quasi-static (see --damping-ratio, --transits)"));
   out["bound_exceeded"] = bc.exceeded || iso_exceeded || nu_outside;
+  // An iterative solve stopped by its cap gave numbers, but not what was asked (exit 4).
+  out["target_reached"] = !want_implicit || ir.converged;
   const NeckRange nr = neck_range(p);
   out["neck_correction"] = {{"valid_up_to", nr.valid_up_to}, {"max_neck_ratio", nr.max_ratio}, {"bonds_beyond", nr.bonds_beyond}};
   if (nr.bonds_beyond) warn(neck_range_warning(nr, long(p.bonds.size())));

@@ -228,6 +228,7 @@ std::string run_image_conduct(const ConductConfig& c) {
   io.fields = !c.output.empty();
   std::vector<ImageAxisResult> results;
   json sigma = json::object(), tau = json::object(), err = json::object(), per_axis = json::object();
+  bool reached = true;
   for (int k : axes) {
     io.axis = k;
     info(std::string("solving along ") + kAxis[k]);
@@ -242,8 +243,10 @@ std::string run_image_conduct(const ConductConfig& c) {
            ": sigma_eff = 0, tortuosity = inf (null in the JSON)");
     else if (!r.converged)
       warn(std::string("solver did not reach the tolerance along ") + kAxis[k]);
+    reached = reached && (!r.percolates || r.converged);
     if (!io.fields) results.back() = ImageAxisResult{};
   }
+  out["target_reached"] = reached;  // false: a solve stopped at its iteration cap (exit 4)
   out["porosity"] = results.empty() ? 0.0 : per_axis[kAxis[axes.front()]]["porosity"].get<double>();
   out["sigma_eff"] = sigma;
   out["tortuosity"] = tau;
@@ -378,7 +381,7 @@ void solve_network(const ConductConfig& c, const Network& net, const ConductOpti
        per_axis = json::object();
   double residual = 0;
   int iterations = 0;
-  bool any = false;
+  bool any = false, reached = true;
   auto record = [&](const AxisResult& a, const std::string& name) {
     sigma[name] = a.sigma_eff;
     err[name] = a.sigma_error;
@@ -390,6 +393,7 @@ void solve_network(const ConductConfig& c, const Network& net, const ConductOpti
     any = any || a.percolates;
     if (!a.percolates) warn("no conducting path along " + name + ": sigma_eff = 0 reported");
     else if (!a.solver.converged) warn("solver did not reach the tolerance along " + name);
+    reached = reached && (!a.percolates || a.solver.converged);
     fields.push_back({name, a.potential, a.edge_current});
   };
   if (c.bc == "periodic") {
@@ -408,6 +412,7 @@ void solve_network(const ConductConfig& c, const Network& net, const ConductOpti
   out["iterations"] = iterations;
   out["axes"] = per_axis;
   out["percolates"] = any;
+  out["target_reached"] = reached;  // false: a solve stopped at its iteration cap (exit 4)
 }
 
 // σ_eff against the bounds of a conductor with insulating pores (docs/conduct.md#bounds): the

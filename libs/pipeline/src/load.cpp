@@ -1383,15 +1383,28 @@ void var_uses(const std::string& text, std::set<std::string>& exact, std::set<st
   }
 }
 
-void var_uses(const YAML::Node& n, std::set<std::string>& exact, std::set<std::string>& prefixes) {
+// Each collection once: an anchor is one node however many aliases name it, so a self-alias
+// (`desc: &a [*a]`, a cycle) or an alias bomb is walked once (found by the fuzzer: a stack
+// overflow). A collection is known by where it was parsed (nodes of one file); one made in
+// memory (no mark) is walked to a depth of 64.
+void var_uses(const YAML::Node& n, std::set<std::string>& exact, std::set<std::string>& prefixes,
+              std::set<int>& walked, int depth = 0) {
   if (n.IsScalar()) return var_uses(n.Scalar(), exact, prefixes);
+  if (!n.IsSequence() && !n.IsMap()) return;
+  const int pos = n.Mark().pos;
+  if (pos >= 0 ? !walked.insert(pos).second : depth > 64) return;
   if (n.IsSequence())
-    for (const auto& e : n) var_uses(e, exact, prefixes);
+    for (const auto& e : n) var_uses(e, exact, prefixes, walked, depth + 1);
   if (n.IsMap())
     for (const auto& kv : n) {
-      var_uses(kv.first, exact, prefixes);
-      var_uses(kv.second, exact, prefixes);
+      var_uses(kv.first, exact, prefixes, walked, depth + 1);
+      var_uses(kv.second, exact, prefixes, walked, depth + 1);
     }
+}
+
+void var_uses(const YAML::Node& n, std::set<std::string>& exact, std::set<std::string>& prefixes) {
+  std::set<int> walked;  // per tree: positions are unique within one file
+  var_uses(n, exact, prefixes, walked);
 }
 
 std::size_t edit_distance(const std::string& a, const std::string& b) {
@@ -1412,8 +1425,11 @@ std::size_t edit_distance(const std::string& a, const std::string& b) {
 // A variable that no `${vars.NAME}` uses is almost always a misspelt override of an included
 // one (`partciles: 800` beside an included `particles: 500`), which would otherwise be silently
 // a new variable while the old value is used: refused, naming the closest existing name.
-// `declared`: the variables as the files give them (before --set), for their lines.
-void refuse_unused_vars(const std::map<std::string, Var>& declared, const Raw& raw, const LoadOptions& options) {
+// `declared`: the variables as the files give them (before --set), for their lines. Only the
+// pipeline's own variables are checked: an included file may be shared by several pipelines,
+// each using some of its variables.
+void refuse_unused_vars(const std::string& file, const std::map<std::string, Var>& declared, const Raw& raw,
+                        const LoadOptions& options) {
   std::set<std::string> exact, prefixes;
   for (const auto& [name, v] : raw.vars) var_uses(v.node, exact, prefixes);
   for (const auto& [name, v] : declared) var_uses(v.node, exact, prefixes);
@@ -1425,7 +1441,7 @@ void refuse_unused_vars(const std::map<std::string, Var>& declared, const Raw& r
            std::any_of(prefixes.begin(), prefixes.end(), [&](const std::string& p) { return name.rfind(p, 0) == 0; });
   };
   for (const auto& [name, v] : declared) {
-    if (used(name)) continue;
+    if (used(name) || v.where.file != file) continue;
     std::string hint;
     std::size_t best = 3;
     for (const auto& [other, w] : declared)
@@ -1459,7 +1475,7 @@ Pipeline load(const std::string& file, const LoadOptions& options) {
   // Checked last, so that an error with a more precise cause is reported first.
   if (!adaptive) {
     Pipeline p = Expander(raw, vars, options, param_sets, base, out_root, nullptr).build();
-    refuse_unused_vars(declared, raw, options);
+    refuse_unused_vars(file, declared, raw, options);
     return p;
   }
   // Every replica an adaptive step may get is checked now, so no later round meets bad input
@@ -1471,7 +1487,7 @@ Pipeline load(const std::string& file, const LoadOptions& options) {
                  const auto it = counts.find(id);
                  return std::clamp(it == counts.end() ? a.min : it->second, a.min, a.max);
                }).build();
-  refuse_unused_vars(declared, raw, options);
+  refuse_unused_vars(file, declared, raw, options);
   return p;
 }
 

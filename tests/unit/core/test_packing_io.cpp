@@ -427,6 +427,17 @@ TEST_F(PackingIo, DuplicateIntactBondRefused) {
   expect_input_error([&] { read_packing(path); }, path, "/bonds/i[1]", "two intact bonds");
 }
 
+// A dataset's own unit must be the writer's: radii in "mm" were read as metres before (only the
+// root's unit was checked). A dataset without the attribute (older files) is read as SI.
+TEST_F(PackingIo, DatasetInAnotherUnitRefused) {
+  auto path = corrupted([](File& f) { f.set_attr("/particles/radius", "units", std::string("mm")); });
+  expect_input_error([&] { read_packing(path); }, path, "/particles/radius@units", "mm");
+  path = corrupted([](File& f) { f.set_attr("/bonds/radius", "units", std::string("um")); });
+  expect_input_error([&] { read_packing(path); }, path, "/bonds/radius@units", "um");
+  path = corrupted([](File& f) { f.set_attr("/particles/position", "units", std::string("m")); });
+  EXPECT_NO_THROW(read_packing(path));
+}
+
 TEST_F(PackingIo, NonFiniteMaterialPropertyRefused) {
   auto path = corrupted([](File& f) { f.set_attr("/materials/1", "youngs_modulus_Pa", kNaN); });
   expect_input_error([&] { read_packing(path); }, path, "/materials/1@youngs_modulus_Pa", "nan");

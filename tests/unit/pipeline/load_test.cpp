@@ -381,6 +381,12 @@ TEST(PipelineBadInput, UnusedVariableIsRefusedWithTheClosestName) {
   EXPECT_EQ(load_error(s, kScales), "");
   // Used only by another variable, it is used too.
   EXPECT_EQ(load_error(s, "vars: {a: '${vars.b}', b: 1}\nsteps:\n  s:\n    cmd: echo ${vars.a} > ${outs.0}\n    outs: [a.txt]\n"), "");
+  // An included file may serve several pipelines: its variables this one leaves unused are fine.
+  s.write("library.yaml", "vars:\n  particles: 500\n  unused_here: 1\n");
+  EXPECT_EQ(load_error(s, "include: library.yaml\nsteps:\n  a:\n    cmd: echo ${vars.particles} > ${outs.o}\n"
+                          "    outs: {o: a.txt}\n"), "");
+  // A self-alias (a cycle in the node graph) is walked once (the fuzzer found a stack overflow).
+  EXPECT_EQ(load_error(s, "steps:\n  a:\n    desc: &a [*a]\n    cmd: echo 1 > ${outs.o}\n    outs: {o: a.txt}\n"), "");
 }
 
 TEST(PipelineBadInput, MisspeltCaseKeyIsReportedAtItsLine) {

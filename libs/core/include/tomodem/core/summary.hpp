@@ -46,6 +46,11 @@ class Summary {
 /// "-" or when --json is not given.
 void emit_summary(const std::string& text, const std::string& json_path);
 
+/// The exit code a finished run's summary calls for: exit_code::target_not_reached (4) when it
+/// says "target_reached": false (a target, tolerance or stop the run did not reach; its outputs
+/// are written), else exit_code::ok.
+int exit_code_of_summary(const std::string& text);
+
 /// Wall time since the process started, CPU time of all its threads, peak resident memory.
 double process_wall_time_s();
 double process_cpu_time_s();
