@@ -24,6 +24,7 @@
 #include "tomodem/dem/decomposition.hpp"
 #include "tomodem/dem/law_registry.hpp"
 #include "tomodem/dem/yaml_fields.hpp"
+#include "tomodem/spatial/grid.hpp"
 #include "tomodem/spatial/image.hpp"
 #include "tomodem/spatial/union_volume.hpp"
 
@@ -1211,6 +1212,8 @@ Scene sinter_scene(const Packing& green, const std::string& source, const std::s
     if (!green.cell.periodic[k])
       throw InputError(source, "/cell/periodic", "axis " + std::string(1, char('x' + k)),
                        "sintering runs in a periodic cell (stress-free or constrained axes)");
+  // The scene route's start check (scene.cpp): a strongly overlapping pair never lets time advance.
+  spatial::check_start_overlaps(green.particles.position, green.particles.radius, green.cell, source);
   Particles parts;
   for (std::size_t i = 0; i < n; ++i) {
     const int m = green.particles.phase[i];
