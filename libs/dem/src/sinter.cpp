@@ -245,8 +245,13 @@ void read_start_and_stop(const Sec& root, const std::string& file, SinterSetting
     for (const std::string& ax : root.strings("constrained")) {
       if (ax != "x" && ax != "y" && ax != "z")
         throw InputError(file, root.where("constrained"), ax, "unknown axis; expected x, y or z");
+      if (s.fixed[ax[0] - 'x']) throw InputError(file, root.where("constrained"), ax, "axis given twice");
       s.fixed[ax[0] - 'x'] = true;
     }
+    // Every axis fixed: the cell cannot shrink, so the run would only spend its steps.
+    if (s.fixed[0] && s.fixed[1] && s.fixed[2])
+      throw InputError(file, root.where("constrained"), "[x, y, z]",
+                       "all three axes fixed: the cell cannot shrink and nothing densifies; fix at most two");
   }
 }
 
