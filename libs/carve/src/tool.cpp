@@ -83,7 +83,7 @@ std::string run_carve(const CarveConfig& cfg) {
   check_config(cfg);
   Packing in = read_packing(cfg.packing);
   // Coincident or nearly coincident particles blow up in --relax (scene.cpp's start check).
-  spatial::check_start_overlaps(in.particles.position, in.particles.radius, in.cell, cfg.packing);
+  spatial::check_start_overlaps(in.particles.position, in.particles.radius, in.cell, cfg.packing, &in.bonds);
   const auto pores = load_macropores(cfg);
   Options opt = cfg.options;
   opt.packing_file = cfg.packing;

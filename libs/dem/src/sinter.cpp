@@ -1218,7 +1218,7 @@ Scene sinter_scene(const Packing& green, const std::string& source, const std::s
       throw InputError(source, "/cell/periodic", "axis " + std::string(1, char('x' + k)),
                        "sintering runs in a periodic cell (stress-free or constrained axes)");
   // The scene route's start check (scene.cpp): a strongly overlapping pair never lets time advance.
-  spatial::check_start_overlaps(green.particles.position, green.particles.radius, green.cell, source);
+  spatial::check_start_overlaps(green.particles.position, green.particles.radius, green.cell, source, &green.bonds);
   Particles parts;
   for (std::size_t i = 0; i < n; ++i) {
     const int m = green.particles.phase[i];

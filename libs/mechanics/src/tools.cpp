@@ -160,7 +160,7 @@ std::string run_bond(const BondConfig& c) {
   Packing& p = net.packing;
   if (p.particles.size() < 2) throw InputError(c.input, "/particles/radius", std::to_string(p.particles.size()), "needs at least two particles");
   // Coincident or nearly coincident particles would get a zero-length bond (scene.cpp's start check).
-  spatial::check_start_overlaps(p.particles.position, p.particles.radius, p.cell, c.input);
+  spatial::check_start_overlaps(p.particles.position, p.particles.radius, p.cell, c.input, &p.bonds);
   phase_options(c, p, o);
   if (p.bonds.size()) warn("replacing the " + std::to_string(p.bonds.size()) + " bonds of " + c.input);
   const BondingReport rep = bond_network(net, o);

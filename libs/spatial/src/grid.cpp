@@ -6,6 +6,7 @@
 
 #include <cstdlib>
 #include <cstring>
+#include <set>
 #include <sstream>
 #include "tomodem/core/error.hpp"
 
@@ -255,8 +256,14 @@ std::vector<Pair> contacts_within(const std::vector<Vec3>& x, const std::vector<
 }
 
 void check_start_overlaps(const std::vector<Vec3>& x, const std::vector<double>& r, const Cell& cell,
-                          const std::string& file, const std::string& dataset, double limit, int threads) {
+                          const std::string& file, const BondTable* bonds, const std::string& dataset, double limit,
+                          int threads) {
+  std::set<std::pair<int32_t, int32_t>> necks;
+  if (bonds)
+    for (std::size_t k = 0; k < bonds->size(); ++k)
+      if (bonds->state[k] == BondTable::intact) necks.insert(std::minmax(bonds->i[k], bonds->j[k]));
   for (const Pair& q : pairs_within(x, r, cell, 0, threads)) {
+    if (necks.count(std::minmax(q.i, q.j))) continue;
     const double ri = r[std::size_t(q.i)], rj = r[std::size_t(q.j)];
     const double ratio = (ri + rj - q.distance) / std::min(ri, rj);
     if (ratio > limit) {

@@ -243,3 +243,22 @@ TEST(StartOverlaps, StrongOverlapRefusedNamingThePair) {
   const std::string wrapped = message({{0.2, 1, 1}, {5, 5, 5}, {9.2, 1, 1}});  // 1 apart through x = 0
   EXPECT_NE(wrapped.find("particles 0 and 2 overlap by 1 of the smaller radius"), std::string::npos) << wrapped;
 }
+
+// A pair joined by an intact bond (a sintered neck) may overlap deeply: not refused.
+TEST(StartOverlaps, BondedPairIsSkipped) {
+  Cell cell;
+  cell.h = Mat3::diagonal({10, 10, 10});
+  cell.periodic[0] = cell.periodic[1] = cell.periodic[2] = true;
+  const std::vector<Vec3> x = {{1, 1, 1}, {2, 1, 1}};
+  const std::vector<double> r = {1, 1};
+  BondTable b;
+  b.i = {0};
+  b.j = {1};
+  b.radius = {0.5};
+  b.rest_length = {1};
+  b.state = {BondTable::intact};
+  b.broken_at = {0};
+  EXPECT_NO_THROW(check_start_overlaps(x, r, cell, "in.h5", &b));
+  b.state = {BondTable::broken};
+  EXPECT_THROW(check_start_overlaps(x, r, cell, "in.h5", &b), tomodem::InputError);
+}
