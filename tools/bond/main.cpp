@@ -29,6 +29,21 @@ int main(int argc, char** argv) {
     tomodem::cli::Common common;
     tomodem::cli::add_common(app, "tomodem-bond", common);
     if (const auto code = tomodem::cli::parse(app, argc, argv)) return *code;
+    // An option of another rule would be ignored (the default rule is overlap): refuse it.
+    using tomodem::mechanics::NeckRule;
+    const auto only = [&](const char* option, std::initializer_list<NeckRule> rules, const char* which) {
+      if (app.count(option) == 0) return;
+      for (const NeckRule r : rules)
+        if (c.rule == r) return;
+      throw tomodem::InputError("", option, app.get_option(option)->results().front(),
+                                std::string("applies to ") + which + " only; --rule " +
+                                    tomodem::mechanics::to_string(c.rule) + " does not use it");
+    };
+    only("--target-density", {NeckRule::density, NeckRule::sinter}, "--rule density and --rule sinter");
+    only("--neck-ratio", {NeckRule::ratio}, "--rule ratio");
+    only("--pair-ratio", {NeckRule::ratio}, "--rule ratio");
+    only("--sinter-config", {NeckRule::sinter}, "--rule sinter");
+    only("--min-neck-ratio", {NeckRule::overlap, NeckRule::density}, "--rule overlap and --rule density");
     c.allow_disconnected = !require;
     c.json = common.json;
     c.threads = common.threads;

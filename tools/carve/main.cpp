@@ -92,6 +92,17 @@ int main(int argc, char** argv) {
     if (method == "exact") o.method = carve::FractionMethod::exact;
     else if (method == "sample") o.method = carve::FractionMethod::sample;
     else throw InputError("", "--fraction-method", method, "expected exact or sample");
+    // An option of another rule, method or source would be ignored: refuse it, saying where it belongs.
+    const auto only = [&](const char* option, bool applies, const std::string& where) {
+      if (app.count(option) && !applies)
+        throw InputError("", option, app.get_option(option)->count() ? given(app, option) : "(given)",
+                         "applies to " + where + " only, which is not in use");
+    };
+    only("--fraction", o.rule == carve::Rule::fraction, "--rule fraction");
+    only("--samples", o.method == carve::FractionMethod::sample, "--fraction-method sample");
+    for (const char* opt : {"--label-values", "--any-label", "--dataset", "--spacing"})
+      only(opt, !c.labels.empty(), "--labels");
+    only("--grid", !c.level_set.empty(), "--level-set");
     if (o.mapping.fit && app.count("--scale")) throw InputError("", "--fit", "", "give either --fit or --scale");
     if (!(o.mapping.scale > 0))
       throw InputError("", "--scale", given(app, "--scale"), "must be > 0 (packing length per image length)");

@@ -16,7 +16,32 @@
 using namespace tomodem;
 using json = nlohmann::json;
 
+/// Above this |realised - requested| phase volume fraction, tomodem-pack warns (docs/pack.md).
+constexpr double kPhaseFractionTolerance = 0.05;
+
 namespace {
+/// A sphere not smaller than the periodic cell touches its own image (i = j contacts; bond and
+/// carve then report densities of 3e6): too few particles for the size distribution.
+void refuse_sphere_wider_than_cell(const Packing& pk, const geometry::PackSpec& s) {
+  const Mat3 hinv = pk.cell.h.inverse();
+  for (int a = 0; a < 3; ++a) {
+    if (!pk.cell.periodic[a]) continue;
+    const double w = 1 / std::sqrt(hinv.a[a][0] * hinv.a[a][0] + hinv.a[a][1] * hinv.a[a][1] + hinv.a[a][2] * hinv.a[a][2]);
+    for (std::size_t k = 0; k < pk.particles.size(); ++k) {
+      const double d = 2 * pk.particles.radius[k];
+      if (d < w) continue;
+      const std::size_t m = std::size_t(pk.particles.phase[k]);
+      std::string field = "particles";
+      for (std::size_t p = 0; p < s.phases.size(); ++p)
+        if (m < pk.materials.size() && s.phases[p].name == pk.materials[m].name)
+          field = "phases[" + std::to_string(p) + "].size_distribution";
+      throw InputError(s.source, field, value_text(d),
+                       "a particle of diameter " + value_text(d) + " m is not smaller than the periodic cell's width " +
+                           value_text(w) + " m: it would touch its own image; give more particles or a narrower size distribution");
+    }
+  }
+}
+
 int run(int argc, char** argv) {
   CLI::App app{"tomodem-pack: generate and densify a periodic sphere packing; prints a JSON summary"};
   std::string config, out;
@@ -53,6 +78,10 @@ int run(int argc, char** argv) {
   if (friction >= 0) s.friction = friction;
   if (app.count("--unbalanced-force-ratio")) s.unbalanced_force_ratio = criterion;
   if (no_tess) s.tessellate = false;
+  // One target: the config refuses both as well; the CLI silently dropped the pressure.
+  if (app.count("--target-pressure") && app.count("--target-solid-fraction"))
+    throw InputError("", "--target-pressure", app.get_option("--target-pressure")->results().front(),
+                     "give either --target-pressure or --target-solid-fraction, not both");
   // Command-line values the checks below do not cover by name: finite, and in range.
   if (app.count("--target-pressure")) require_positive("--target-pressure", pressure, "Pa");
   if (app.count("--target-solid-fraction")) require_range("--target-solid-fraction", phi, 0, true, 1, true);
@@ -72,6 +101,7 @@ int run(int argc, char** argv) {
   geometry::PackOutput res = geometry::make_packing(s, [](const std::string& m) { info(m); });
   const auto& r = res.report;
   Packing& pk = res.packing;
+  refuse_sphere_wider_than_cell(pk, s);  // before writing: sibling tools refuse such a file
   pk.provenance.tool = "tomodem-pack";
   pk.provenance.version = version_string();
   pk.provenance.parameters = cfg.text;
@@ -131,6 +161,12 @@ int run(int argc, char** argv) {
   }
   j["psd_max_cdf_deviation"] = dev_psd;
   j["phase_fraction_max_deviation"] = dev_phase;
+  // A realised recipe far from the request is said at run time, not only in the JSON.
+  for (const auto& p : r.phases)
+    if (std::abs(p.realised_fraction - p.requested_fraction) > kPhaseFractionTolerance)
+      warn("phase '" + p.name + "': requested volume fraction " + value_text(p.requested_fraction) + ", realised " +
+           value_text(p.realised_fraction) + " (" + std::to_string(p.count) +
+           " particles): too few particles for this phase; give more particles");
   if (r.tessellated) {
     j["laguerre"] = {{"volume_sum_relative_error", r.laguerre_volume_error},
                      {"local_solid_fraction_mean", r.local_solid_fraction_mean},

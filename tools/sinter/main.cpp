@@ -393,6 +393,21 @@ int run(int argc, char** argv) {
       if (f == out(settings.packing)) throw InputError("", "--snapshot-name", snapshot_name, "names the final packing");
       if (!json_path.empty()) refuse_output_over_input(json_path, "--json", {f});
     }
+    // A sidecar's name ends at the last dot ('s{density}' gives s0.xdmf for s0.75 and s0.76):
+    // two snapshots, or a snapshot and the final packing, must not share a file.
+    std::map<std::string, std::string> taken = {{out(settings.packing), "the final packing"},
+                                                {xdmf_sidecar_of(out(settings.packing)), "the final packing's sidecar"}};
+    for (const auto& t : targets) {
+      const std::string f = out(snapshot_file(snapshot_name, t.text));
+      for (const std::string& name : {f, xdmf_sidecar_of(f)}) {
+        const auto [it, fresh] = taken.emplace(name, "the snapshot at " + t.text);
+        if (!fresh)
+          throw InputError("", "--snapshot-name", snapshot_name,
+                           "the snapshot at " + t.text + " and " + it->second + " would both write " + name +
+                               " (an .xdmf sidecar replaces the text after the last dot: end the name with an "
+                               "extension, e.g. snapshot-{density}.h5)");
+      }
+    }
   }
   const std::size_t n_particles = scene.sim->particles().size();
 #if TOMODEM_HAVE_MPI
@@ -492,7 +507,16 @@ int run(int argc, char** argv) {
       for (const std::string& file : plot_files(out(stem))) plots_out.push_back(file);
     j.output("plots", plots_out);
   }
+  // A stop density the program does not reach is said (exit 4), never a silent exit 0.
+  const bool stop_reached = !(settings.target_density > 0) || rep.stop_reason == "target_density";
+  if (settings.target_density > 0) j["stop_reached"] = stop_reached;
   emit_summary(j.text(), json_path);
+  if (!stop_reached) {
+    warn("the stop relative density " + value_text(settings.target_density) + " was not reached: the run ended at " +
+         value_text(rep.final.density) + " (stop_reason " + rep.stop_reason +
+         "; stop_reached: false; the outputs are written; exit code 4)");
+    return exit_code::target_not_reached;
+  }
   return 0;
 }
 

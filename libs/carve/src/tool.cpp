@@ -9,6 +9,7 @@
 #include "tomodem/core/packing_io.hpp"
 #include "tomodem/core/summary.hpp"
 #include "tomodem/core/tool.hpp"
+#include "tomodem/spatial/grid.hpp"
 
 namespace tomodem::carve {
 
@@ -81,6 +82,8 @@ std::string run_carve(const CarveConfig& cfg) {
   if (cfg.output.empty()) throw InputError("", "--output", "", "no output packing given (-o carved.h5)");
   check_config(cfg);
   Packing in = read_packing(cfg.packing);
+  // Coincident or nearly coincident particles blow up in --relax (scene.cpp's start check).
+  spatial::check_start_overlaps(in.particles.position, in.particles.radius, in.cell, cfg.packing, &in.bonds);
   const auto pores = load_macropores(cfg);
   Options opt = cfg.options;
   opt.packing_file = cfg.packing;

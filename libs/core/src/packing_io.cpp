@@ -406,6 +406,21 @@ struct Reader {
     return c;
   }
 
+  // A sphere not smaller than the cell's width along a periodic axis touches its own image:
+  // the contacts (i = j), the densities (up to 3e6) and the physics are meaningless.
+  void fits_cell(const ParticleTable& t, const Cell& c) const {
+    const Mat3 hinv = c.h.inverse();
+    for (int a = 0; a < 3; ++a) {
+      if (!c.periodic[a]) continue;
+      const double w = 1 / std::sqrt(hinv.a[a][0] * hinv.a[a][0] + hinv.a[a][1] * hinv.a[a][1] + hinv.a[a][2] * hinv.a[a][2]);
+      for (std::size_t k = 0; k < t.radius.size(); ++k)
+        if (!(2 * t.radius[k] < w))
+          bad("/particles/radius[" + std::to_string(k) + "]", num(t.radius[k]),
+              "diameter " + num(2 * t.radius[k]) + " m is not smaller than the periodic cell's width " + num(w) +
+                  " m along axis " + std::string(1, char('x' + a)) + ": the sphere would touch its own image");
+    }
+  }
+
   BondTable bonds(std::size_t n) const {
     BondTable b;
     if (!f.exists("/bonds")) return b;
@@ -554,6 +569,7 @@ Packing read_packing_groups(const h5::File& f) {
   p.materials = r.materials();
   p.particles = r.particles(p.materials.size());
   p.cell = r.cell();
+  r.fits_cell(p.particles, p.cell);
   p.bonds = r.bonds(p.particles.size());
   p.contacts = r.contacts(p.particles.size());
   p.results = r.results();

@@ -24,6 +24,7 @@
 #include "tomodem/dem/decomposition.hpp"
 #include "tomodem/dem/law_registry.hpp"
 #include "tomodem/dem/yaml_fields.hpp"
+#include "tomodem/spatial/grid.hpp"
 #include "tomodem/spatial/image.hpp"
 #include "tomodem/spatial/union_volume.hpp"
 
@@ -244,8 +245,13 @@ void read_start_and_stop(const Sec& root, const std::string& file, SinterSetting
     for (const std::string& ax : root.strings("constrained")) {
       if (ax != "x" && ax != "y" && ax != "z")
         throw InputError(file, root.where("constrained"), ax, "unknown axis; expected x, y or z");
+      if (s.fixed[ax[0] - 'x']) throw InputError(file, root.where("constrained"), ax, "axis given twice");
       s.fixed[ax[0] - 'x'] = true;
     }
+    // Every axis fixed: the cell cannot shrink, so the run would only spend its steps.
+    if (s.fixed[0] && s.fixed[1] && s.fixed[2])
+      throw InputError(file, root.where("constrained"), "[x, y, z]",
+                       "all three axes fixed: the cell cannot shrink and nothing densifies; fix at most two");
   }
 }
 
@@ -1211,6 +1217,8 @@ Scene sinter_scene(const Packing& green, const std::string& source, const std::s
     if (!green.cell.periodic[k])
       throw InputError(source, "/cell/periodic", "axis " + std::string(1, char('x' + k)),
                        "sintering runs in a periodic cell (stress-free or constrained axes)");
+  // The scene route's start check (scene.cpp): a strongly overlapping pair never lets time advance.
+  spatial::check_start_overlaps(green.particles.position, green.particles.radius, green.cell, source, &green.bonds);
   Particles parts;
   for (std::size_t i = 0; i < n; ++i) {
     const int m = green.particles.phase[i];

@@ -499,6 +499,9 @@ void validate(const PackSpec& s) {
   }
   if (std::abs(sum - 1) > 1e-6)
     throw InputError(f, "phases[*].volume_fraction", value_text(sum), "volume fractions must add up to 1");
+  // Pore formers are removed after packing: with no other phase the packing has no particle.
+  if (std::all_of(s.phases.begin(), s.phases.end(), [](const PhaseSpec& ph) { return ph.pore_former; }))
+    throw InputError(f, "phases[*].pore_former", "true", "no solid phase: every phase is a pore former, so the packing would have no particle");
   if (s.n_particles < 1) throw InputError(f, "particles", std::to_string(s.n_particles), "must be >= 1");
   check_particle_memory(s.n_particles, f, "particles", std::to_string(s.n_particles));
   if (s.threads < 1) throw InputError(f, "threads", std::to_string(s.threads), "must be >= 1");

@@ -191,6 +191,14 @@ void SizeDistribution::validate(const std::string& where, const std::string& fie
     if (!(diameter2 > 0)) bad("diameter2", diameter2, "must be > 0 (metres)");
     if (!(fraction2 >= 0 && fraction2 <= 1)) bad("fraction2", fraction2, "must lie in [0, 1]");
   }
+  // Outside an atom .. a boulder the cell volume (~ N d^3) over- or underflows and the packer died
+  // with a bare "cannot create std::vector larger than max_size()" (exit 1).
+  const auto sane = [&](const char* key, double d) {
+    if (!(d >= kMinDiameter && d <= kMaxDiameter))
+      bad(key, d, "must lie in [" + value_text(kMinDiameter) + ", " + value_text(kMaxDiameter) + "] m");
+  };
+  if (kind != PsdKind::tabulated) sane("diameter", diameter);
+  if (kind == PsdKind::bimodal) sane("diameter2", diameter2);
 }
 
 std::string SizeDistribution::describe() const {

@@ -12,6 +12,7 @@
 #include "tomodem/core/tool.hpp"
 #include "tomodem/mechanics/bounds.hpp"
 #include "tomodem/mechanics/isotropic.hpp"
+#include "tomodem/spatial/grid.hpp"
 #include "fields_output.hpp"
 
 namespace tomodem::mechanics {
@@ -158,6 +159,8 @@ std::string run_bond(const BondConfig& c) {
   Network net = read_network(c.input);
   Packing& p = net.packing;
   if (p.particles.size() < 2) throw InputError(c.input, "/particles/radius", std::to_string(p.particles.size()), "needs at least two particles");
+  // Coincident or nearly coincident particles would get a zero-length bond (scene.cpp's start check).
+  spatial::check_start_overlaps(p.particles.position, p.particles.radius, p.cell, c.input, &p.bonds);
   phase_options(c, p, o);
   if (p.bonds.size()) warn("replacing the " + std::to_string(p.bonds.size()) + " bonds of " + c.input);
   const BondingReport rep = bond_network(net, o);

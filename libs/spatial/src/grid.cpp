@@ -6,6 +6,9 @@
 
 #include <cstdlib>
 #include <cstring>
+#include <set>
+#include <sstream>
+#include "tomodem/core/error.hpp"
 
 namespace tomodem::spatial {
 
@@ -250,6 +253,28 @@ std::vector<Pair> contacts_within(const std::vector<Vec3>& x, const std::vector<
   for (const Pair& q : pairs_within(x, r, cell, contact_reach(rmax, tolerance), threads))
     if (in_contact(q.distance, r[std::size_t(q.i)], r[std::size_t(q.j)], tolerance)) out.push_back(q);
   return out;
+}
+
+void check_start_overlaps(const std::vector<Vec3>& x, const std::vector<double>& r, const Cell& cell,
+                          const std::string& file, const BondTable* bonds, const std::string& dataset, double limit,
+                          int threads) {
+  std::set<std::pair<int32_t, int32_t>> necks;
+  if (bonds)
+    for (std::size_t k = 0; k < bonds->size(); ++k)
+      if (bonds->state[k] == BondTable::intact) necks.insert(std::minmax(bonds->i[k], bonds->j[k]));
+  for (const Pair& q : pairs_within(x, r, cell, 0, threads)) {
+    if (necks.count(std::minmax(q.i, q.j))) continue;
+    const double ri = r[std::size_t(q.i)], rj = r[std::size_t(q.j)];
+    const double ratio = (ri + rj - q.distance) / std::min(ri, rj);
+    if (ratio > limit) {
+      std::ostringstream s;
+      s << "particles " << q.i << " and " << q.j << " overlap by " << ratio << " of the smaller radius at start (limit "
+        << limit << ")" << (q.distance == 0 ? ": they are at the same position" : "");
+      std::ostringstream v;
+      v << ratio;
+      throw InputError(file, dataset, v.str(), s.str());
+    }
+  }
 }
 
 }  // namespace tomodem::spatial

@@ -152,6 +152,11 @@ const std::vector<Row> kRows = {
     {"bond", "{packing.h5} -o {text:notadir}/b.h5", 2, {"notadir/b.h5"}},
     {"bond", "{packing.h5} -o {link:packing.h5}", 2, {"-o", "link-packing.h5"}},
     {"bond", "{packing.h5} -o {W}/./packing.h5", 2, {"-o", "packing.h5"}},
+    // Hostile review D5: an option of another rule is refused, not ignored (overlap is the default).
+    {"bond", "{packing.h5} -o {W}/b.h5 --target-density 0.7", 2, {"--target-density", "0.7", "--rule density"}},
+    {"bond", "{packing.h5} -o {W}/b.h5 --rule overlap --neck-ratio 0.3", 2, {"--neck-ratio", "0.3", "--rule ratio"}},
+    {"bond", "{packing.h5} -o {W}/b.h5 --pair-ratio a:a=0.3", 2, {"--pair-ratio", "--rule ratio"}},
+    {"bond", "{packing.h5} -o {W}/b.h5 --rule ratio --sinter-config {sinter.yaml}", 2, {"--sinter-config", "--rule sinter"}},
 
     // ---- tomodem-young: bonded packing -> E, nu
     {"young", "{missing:bonded.h5}", 2, {"bonded.h5"}},
@@ -229,6 +234,12 @@ const std::vector<Row> kRows = {
     {"carve", "{half:packing.h5} --level-set {pores.vdb} -o {W}/c.h5", 2, {"packing.h5"}},
     {"carve", "{dir:packing.h5} --level-set {pores.vdb} -o {W}/c.h5", 2, {"packing.h5", "folder|directory"}},
     {"carve", "{packing.h5} --level-set {missing:pores.vdb} -o {W}/c.h5", 2, {"pores.vdb"}},
+    // Hostile review D5: an option of another rule, method or source is refused, not ignored.
+    {"carve", "{packing.h5} --level-set {pores.vdb} --fraction 0.2 -o {W}/c.h5", 2, {"--fraction", "0.2", "--rule fraction"}},
+    {"carve", "{packing.h5} --level-set {pores.vdb} --rule fraction --samples 3 -o {W}/c.h5", 2, {"--samples", "3", "sample"}},
+    {"carve", "{packing.h5} --level-set {pores.vdb} --label-values 7 -o {W}/c.h5", 2, {"--label-values", "7", "--labels"}},
+    {"carve", "{packing.h5} --level-set {pores.vdb} --spacing 1um -o {W}/c.h5", 2, {"--spacing", "1um", "--labels"}},
+    {"carve", "{packing.h5} --labels {labels.h5} --grid foo -o {W}/c.h5", 2, {"--grid", "foo", "--level-set"}},
     {"carve", "{packing.h5} --level-set {empty:pores.vdb} -o {W}/c.h5", 2, {"pores.vdb"}},
     {"carve", "{packing.h5} --level-set {text:pores.vdb} -o {W}/c.h5", 2, {"pores.vdb"}},
     {"carve", "{packing.h5} --level-set {half:pores.vdb} -o {W}/c.h5", 2, {"pores.vdb"}},

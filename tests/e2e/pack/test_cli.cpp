@@ -153,3 +153,16 @@ TEST(PackCli, SolidFractionTargetNotReachedExitsFourAndSaysSo) {
   EXPECT_EQ(o.code, 0) << o.out;
   EXPECT_NE(o.out.find("\"target_reached\": true"), std::string::npos) << o.out;
 }
+
+// Hostile review D9: a realised phase fraction far from the request (too few particles for the
+// phase) is said at run time, not only in the JSON's phase_fraction_max_deviation.
+TEST(PackCli, PhaseFractionFarFromTheRequestWarns) {
+  const auto cfg = config("few.yaml",
+                          "  - {name: a, volume_fraction: 0.9, material: {density: 1000, youngs_modulus: 1e8}, size_distribution: {diameter: 1e-3}}\n"
+                          "  - {name: b, volume_fraction: 0.1, material: {density: 1000, youngs_modulus: 1e8}, size_distribution: {diameter: 4e-3}}\n",
+                          "target: {solid_fraction: 0.35}\n");
+  const CliRun r = run(cfg + " --particles 30 -q --no-tessellation -o " + ::testing::TempDir() + "few.h5");
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("phase 'b': requested volume fraction 0.1, realised"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("too few particles"), std::string::npos) << r.out;
+}

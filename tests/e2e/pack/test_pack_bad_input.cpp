@@ -81,6 +81,17 @@ TEST(PackBadInput, EveryRowExits2NamingFileFieldAndValueAndWritesNothing) {
       row("volume_fraction_above_one", "{name: a,", "{name: a, volume_fraction: 1.5,", {"phases[0].volume_fraction", "1.5"}),
       row("aggregate_size_zero", "{name: a,", "{name: a, aggregate_size: 0,", {"phases[0].aggregate_size", "0"}),
       row("arrangement_unknown", "seed: 1", "seed: 1\narrangement: hcp", {"arrangement", "hcp"}),
+      // Hostile review D11: absurd diameters exit 2 naming the key, not 1 with a bare std::vector message.
+      row("diameter_1e300", "diameter: 1.0e-3", "diameter: 1e300", {"phases[0].size_distribution.diameter", "1e+300"}),
+      row("diameter_1e-300", "diameter: 1.0e-3", "diameter: 1e-300", {"phases[0].size_distribution.diameter", "1e-300"}),
+      // D9: only pore formers would give a packing with no particle.
+      row("only_pore_formers", "{name: a,", "{name: a, pore_former: true,", {"pore_former", "no solid phase"}),
+      // D3: one sphere in its own periodic cell touches its image; never written.
+      cli("one_particle_wider_than_cell", "c.yaml -o p.h5 --particles 1 --target-solid-fraction 0.55",
+          {"phases[0].size_distribution", "periodic cell"}),
+      // D5: both targets; the config refuses them too.
+      cli("both_targets_cli", "c.yaml -o p.h5 --target-pressure 1e4 --target-solid-fraction 0.6",
+          {"--target-pressure", "--target-solid-fraction"}),
       // Resource requests: refused at once with the memory needed and what the machine has.
       row("particles_1e12", "particles: 50", "particles: 1e12", {"particles", "1e12", "memory", "this machine has"}),
       // Outputs: not over the config, not outside the working folder.

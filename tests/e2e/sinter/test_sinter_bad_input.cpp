@@ -58,6 +58,15 @@ TEST(SinterBadInput, EveryRowExits2NamingFileFieldAndValueAndWritesNothing) {
       row("constrained_text", "conserve_volume: true", "conserve_volume: true\n  constrained: x", {"sintering.constrained", "list"}),
       row("constrained_map_item", "conserve_volume: true", "conserve_volume: true\n  constrained: [x, {a: 1}]",
           {"sintering.constrained[1]", "text"}),
+      // Hostile review D6/D10: a repeated axis, or all three fixed (nothing can densify).
+      row("constrained_twice", "conserve_volume: true", "conserve_volume: true\n  constrained: [x, x]",
+          {"sintering.constrained", "x", "twice"}),
+      row("constrained_all", "conserve_volume: true", "conserve_volume: true\n  constrained: [x, y, z]",
+          {"sintering.constrained", "all three axes"}),
+      // D12: 's{density}' gives both snapshots the sidecar s0.xdmf.
+      {"snapshot_sidecars_collide", {{"scene.yaml", kScene}},
+       "scene.yaml --output-dir out --snapshots-at 0.75,0.76 --snapshot-name s{density}", 2,
+       {"--snapshot-name", "s{density}", "s0.xdmf"}},
       row("conserve_volume_maybe", "conserve_volume: true", "conserve_volume: maybe", {"sintering.conserve_volume", "maybe"}),
       row("plots_maybe", "plots: false", "plots: maybe", {"sintering.output.plots", "maybe"}),
       row("material_list", "{material: alumina,", "{material: [alumina],", {"sintering.phases[0].material", "text"}),

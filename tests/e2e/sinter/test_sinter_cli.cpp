@@ -242,3 +242,51 @@ TEST_F(SinterCli, BondSinterMethodTurnsTheNecksIntoBondsAtTheTargetDensity) {
   }
 }
 #endif
+
+// Hostile review D10: a stop density the program does not reach exits 4 with a warning and
+// "stop_reached": false (it exited 0 in silence); the outputs are still written.
+TEST_F(SinterCli, StopDensityNotReachedExitsFourAndSaysSo) {
+  std::string scene = with("{hold: 5000}", "{hold: 1}");
+  const auto at = scene.find("relative_density: 0.78");
+  scene.replace(at, std::string("relative_density: 0.78").size(), "relative_density: 0.95");
+  const Result r = run(write(scene));
+  ASSERT_EQ(r.code, 4) << r.err;
+  EXPECT_NE(r.err.find("0.95 was not reached"), std::string::npos) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_FALSE(j["stop_reached"].get<bool>());
+  EXPECT_LT(j["relative_density"].get<double>(), 0.95);
+  EXPECT_TRUE(fs::exists(dir / "out" / "sintered.h5"));
+}
+
+// Hostile review D2/D8: a green packing with a strongly overlapping or coincident pair is refused
+// at once (exit 2 naming the pair) by the packing route and tomodem-bond --rule sinter; before,
+// time stayed at 0 forever. `timeout` turns a hang into a failure, not a stuck test.
+TEST_F(SinterCli, StrongOverlapInAGreenPackingIsRefusedNotSintered) {
+  write_green(dir / "green.h5");
+  std::ofstream(dir / "sinter.yaml") << kSettings;
+  tomodem::Packing g = tomodem::read_packing((dir / "green.h5").string());
+  g.particles.position[1] = g.particles.position[0] + tomodem::Vec3{1.0e-6, 0, 0};  // overlap = R
+  tomodem::write_packing((dir / "ovl.h5").string(), g);
+  g.particles.position[1] = g.particles.position[0];  // coincident
+  tomodem::write_packing((dir / "dup.h5").string(), g);
+  auto go = [&](const std::string& tool, const std::string& args) {
+    const std::string cmd = "timeout 60 " + std::string(TOMODEM_BIN_DIR) + "/" + tool + " " + args + " -q --threads 1 > " +
+                            (dir / "stdout.txt").string() + " 2> " + (dir / "stderr.txt").string();
+    const int status = std::system(cmd.c_str());
+    return Result{WEXITSTATUS(status), slurp(dir / "stdout.txt"), slurp(dir / "stderr.txt")};
+  };
+  const std::string settings = " --sinter-config " + (dir / "sinter.yaml").string();
+  for (const std::string in : {"ovl.h5", "dup.h5"}) {
+    const std::string p = (dir / in).string();
+    Result r = go("tomodem-sinter", p + settings + " --snapshots-at 0.62 --no-plot --output-dir " + (dir / "out").string());
+    EXPECT_EQ(r.code, 2) << in << ": " << r.err;
+    EXPECT_NE(r.err.find("particles 0 and 1 overlap by"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(in), std::string::npos) << r.err;
+    r = go("tomodem-bond", p + " -o " + (dir / "b.h5").string() + " --rule sinter --target-density 0.62" + settings);
+    EXPECT_EQ(r.code, 2) << in << ": " << r.err;
+    EXPECT_NE(r.err.find("particles 0 and 1 overlap by"), std::string::npos) << r.err;
+    r = go("tomodem-bond", p + " -o " + (dir / "b.h5").string());  // the default rule: no zero-length bond
+    EXPECT_EQ(r.code, 2) << in << ": " << r.err;
+    EXPECT_FALSE(fs::exists(dir / "b.h5"));
+  }
+}

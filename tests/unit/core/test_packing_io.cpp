@@ -341,6 +341,7 @@ TEST_F(PackingIo, ForeignNumericTypesAreConverted) {
     f.write("/particles/phase", std::vector<int64_t>{1, 0, 1, 0, 1});
     f.write("/particles/radius", std::vector<int32_t>{1, 2, 3, 4, 5});
     f.write("/cell/periodic", std::vector<double>{1, 0, 0});
+    f.write("/cell/h", std::vector<double>{100, 0, 0, 0, 100, 0, 0, 0, 100}, {3, 3});  // radii up to 5 m fit
   });
   const Packing q = read_packing(path);
   EXPECT_EQ(q.particles.phase, (std::vector<int32_t>{1, 0, 1, 0, 1}));
@@ -435,6 +436,22 @@ TEST_F(PackingIo, DatasetInAnotherUnitRefused) {
   path = corrupted([](File& f) { f.set_attr("/bonds/radius", "units", std::string("um")); });
   expect_input_error([&] { read_packing(path); }, path, "/bonds/radius@units", "um");
   path = corrupted([](File& f) { f.set_attr("/particles/position", "units", std::string("m")); });
+  EXPECT_NO_THROW(read_packing(path));
+}
+
+// Hostile review D3/D4: a sphere not smaller than the periodic cell's width touches its own image
+// (i = j contacts, relative densities of 3e6). The width is volume / face area, not |a|: the sheared
+// cell of full_packing is 0.99875e-3 m wide along x while |a| = 1e-3 m.
+TEST_F(PackingIo, SphereWiderThanPeriodicCellRefused) {
+  auto path = corrupted([](File& f) { f.write("/particles/radius", std::vector<double>{1e-6, 1e-6, 4.995e-4, 1e-6, 1e-6}); });
+  expect_input_error([&] { read_packing(path); }, path, "/particles/radius[2]", "0.0004995");
+  path = corrupted([](File& f) { f.write("/particles/radius", std::vector<double>{1e-6, 1e-6, 4.99e-4, 1e-6, 1e-6}); });
+  EXPECT_NO_THROW(read_packing(path));
+  // y is not periodic: a sphere wider than the cell along y alone is allowed.
+  path = corrupted([](File& f) {
+    f.write("/cell/h", std::vector<double>{4e-3, 0, 0, 0, 1e-3, 0, 0, 0, 4e-3}, {3, 3});
+    f.write("/particles/radius", std::vector<double>{1e-6, 1e-6, 1e-3, 1e-6, 1e-6});
+  });
   EXPECT_NO_THROW(read_packing(path));
 }
 

@@ -9,6 +9,7 @@
 #include <set>
 #include <tuple>
 
+#include "tomodem/core/error.hpp"
 #include "tomodem/spatial/grid.hpp"
 
 using namespace tomodem;
@@ -215,4 +216,49 @@ TEST(SpatialImage, WrapIntoCellReturnsTheLatticeVectorsSubtracted) {
     const Vec3 back = x[i] + c.h * as_vector(w[i]);
     EXPECT_NEAR(norm(back - x0[i]), 0.0, 1e-12);
   }
+}
+
+// Hostile review D2/D8: bond, carve and sinter refuse a packing file with a pair overlapping by
+// more than half the smaller radius (coincident particles included), as a scene's start does;
+// the pair is found across a periodic face too. Half a radius or less passes.
+TEST(StartOverlaps, StrongOverlapRefusedNamingThePair) {
+  Cell cell;
+  cell.h = Mat3::diagonal({10, 10, 10});
+  cell.periodic[0] = cell.periodic[1] = cell.periodic[2] = true;
+  const std::vector<double> r = {1, 1, 1};
+  auto message = [&](const std::vector<Vec3>& x) -> std::string {
+    try {
+      check_start_overlaps(x, r, cell, "in.h5");
+    } catch (const tomodem::InputError& e) {
+      EXPECT_EQ(e.file(), "in.h5");
+      EXPECT_EQ(e.field(), "/particles/position");
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_EQ(message({{1, 1, 1}, {2.5, 1, 1}, {5, 5, 5}}), "");  // overlap 0.5 R: allowed
+  const std::string same = message({{1, 1, 1}, {5, 5, 5}, {1, 1, 1}});
+  EXPECT_NE(same.find("particles 0 and 2 overlap by 2"), std::string::npos) << same;
+  EXPECT_NE(same.find("same position"), std::string::npos) << same;
+  const std::string wrapped = message({{0.2, 1, 1}, {5, 5, 5}, {9.2, 1, 1}});  // 1 apart through x = 0
+  EXPECT_NE(wrapped.find("particles 0 and 2 overlap by 1 of the smaller radius"), std::string::npos) << wrapped;
+}
+
+// A pair joined by an intact bond (a sintered neck) may overlap deeply: not refused.
+TEST(StartOverlaps, BondedPairIsSkipped) {
+  Cell cell;
+  cell.h = Mat3::diagonal({10, 10, 10});
+  cell.periodic[0] = cell.periodic[1] = cell.periodic[2] = true;
+  const std::vector<Vec3> x = {{1, 1, 1}, {2, 1, 1}};
+  const std::vector<double> r = {1, 1};
+  BondTable b;
+  b.i = {0};
+  b.j = {1};
+  b.radius = {0.5};
+  b.rest_length = {1};
+  b.state = {BondTable::intact};
+  b.broken_at = {0};
+  EXPECT_NO_THROW(check_start_overlaps(x, r, cell, "in.h5", &b));
+  b.state = {BondTable::broken};
+  EXPECT_THROW(check_start_overlaps(x, r, cell, "in.h5", &b), tomodem::InputError);
 }

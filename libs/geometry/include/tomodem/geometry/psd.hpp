@@ -12,6 +12,9 @@ namespace tomodem::geometry {
 enum class PsdKind { monodisperse, normal, lognormal, bimodal, tabulated };
 enum class PsdBasis { number, volume };
 
+/// The diameters a size distribution may give (m): 0.1 nm to 1 km.
+inline constexpr double kMinDiameter = 1e-10, kMaxDiameter = 1e3;
+
 struct SizeDistribution {
   PsdKind kind = PsdKind::monodisperse;
   PsdBasis basis = PsdBasis::number;  ///< what the CDF counts (tabulated: volume unless said)

@@ -12,6 +12,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "tomodem/core/packing.hpp"
@@ -153,5 +154,14 @@ std::vector<Pair> pairs_within(const std::vector<Vec3>& x, const std::vector<dou
 /// of bond, conduct and carve.
 std::vector<Pair> contacts_within(const std::vector<Vec3>& x, const std::vector<double>& r, const Cell& cell,
                                   double tolerance, int threads = 1);
+
+/// Refuses (InputError of `file`, naming `dataset` and the pair) two particles that overlap by more
+/// than `limit` of the smaller radius: coincident or nearly coincident spheres are a broken
+/// packing (zero-length bonds, a collapsing time step). The same check and limit as a scene's
+/// start (dem scene.cpp), for the tools that read a packing file (bond, carve, sinter). Pairs joined
+/// by an intact bond of `bonds` are skipped: a sintered neck may be that deep by design.
+void check_start_overlaps(const std::vector<Vec3>& x, const std::vector<double>& r, const Cell& cell,
+                          const std::string& file, const BondTable* bonds = nullptr,
+                          const std::string& dataset = "/particles/position", double limit = 0.5, int threads = 1);
 
 }  // namespace tomodem::spatial
