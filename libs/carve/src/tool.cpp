@@ -82,8 +82,10 @@ std::string run_carve(const CarveConfig& cfg) {
   if (cfg.output.empty()) throw InputError("", "--output", "", "no output packing given (-o carved.h5)");
   check_config(cfg);
   Packing in = read_packing(cfg.packing);
-  // Coincident or nearly coincident particles blow up in --relax (scene.cpp's start check).
-  spatial::check_start_overlaps(in.particles.position, in.particles.radius, in.cell, cfg.packing, &in.bonds);
+  // Deep overlaps blow up in --relax (the limit of a DEM scene's start); without it carving is
+  // geometry, and the grain spheres of a segmented scan overlap by up to 0.7 legitimately.
+  if (cfg.options.relax_steps > 0)
+    spatial::check_start_overlaps(in.particles.position, in.particles.radius, in.cell, cfg.packing, &in.bonds);
   const auto pores = load_macropores(cfg);
   Options opt = cfg.options;
   opt.packing_file = cfg.packing;

@@ -159,8 +159,11 @@ std::string run_bond(const BondConfig& c) {
   Network net = read_network(c.input);
   Packing& p = net.packing;
   if (p.particles.size() < 2) throw InputError(c.input, "/particles/radius", std::to_string(p.particles.size()), "needs at least two particles");
-  // Coincident or nearly coincident particles would get a zero-length bond (scene.cpp's start check).
-  spatial::check_start_overlaps(p.particles.position, p.particles.radius, p.cell, c.input, &p.bonds);
+  // Coincident particles, or one inside another, would get a bond of no length (the hostile
+  // review). Deep overlaps alone are legitimate here: the grain spheres of a segmented scan
+  // (tomodem-segment --packing) overlap by up to 0.7 of the smaller radius.
+  spatial::check_start_overlaps(p.particles.position, p.particles.radius, p.cell, c.input, &p.bonds,
+                                "/particles/position", 1.99);
   phase_options(c, p, o);
   if (p.bonds.size()) warn("replacing the " + std::to_string(p.bonds.size()) + " bonds of " + c.input);
   const BondingReport rep = bond_network(net, o);

@@ -12,6 +12,7 @@
 #include <fstream>
 #include <map>
 #include <thread>
+#include <vector>
 
 #include "../../unit/pipeline/scratch.hpp"
 
@@ -20,6 +21,22 @@ namespace fs = std::filesystem;
 
 namespace {
 const std::string kRun = std::string(TOMODEM_BIN_DIR) + "/tomodem-run";
+
+// The runner started in the background in s's folder (stderr dropped when `quiet`): the
+// tests that kill it, or run a second one beside it.
+pid_t start_run(const Scratch& s, const std::vector<std::string>& args, bool quiet = true) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::chdir(s.dir.c_str());
+    if (quiet) ::freopen("/dev/null", "w", stderr);
+    std::vector<char*> argv{const_cast<char*>(kRun.c_str())};
+    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    ::execv(kRun.c_str(), argv.data());
+    ::_exit(127);
+  }
+  return pid;
+}
 
 struct Result {
   int code = -1;
@@ -174,12 +191,7 @@ TEST(RunSafety, KillNineMidStepKeepsTheLastGoodOutput) {
                     "    outs: [a.txt]\n");
   ASSERT_EQ(run_in(s.dir, "p.yaml").code, 0);
   ASSERT_EQ(s.read("a.txt"), "partial\ndone\n");
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    ::chdir(s.dir.c_str());
-    ::execl(kRun.c_str(), kRun.c_str(), "p.yaml", "-q", "--set", "nap=30", "-B", static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
+  const pid_t pid = start_run(s, {"p.yaml", "-q", "--set", "nap=30", "-B"}, false);
   for (int k = 0; k < 100 && s.read("a.txt") != "partial\n"; ++k) std::this_thread::sleep_for(std::chrono::milliseconds(50));
   ::kill(pid, SIGKILL);
   ::waitpid(pid, nullptr, 0);
@@ -327,13 +339,7 @@ TEST(RunSafety, PlainAndShardRunsExcludeEachOther) {
     cmd: cat ${steps.prep.outs.0} > ${outs.0} && echo ${cell} >> runs.txt
     outs: ['c${cell}.txt']
 )");
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    ::chdir(s.dir.c_str());
-    ::freopen("/dev/null", "w", stderr);
-    ::execl(kRun.c_str(), kRun.c_str(), "p.yaml", "-q", "-j", "1", static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
+  const pid_t pid = start_run(s, {"p.yaml", "-q", "-j", "1"});
   std::this_thread::sleep_for(std::chrono::milliseconds(800));
   const auto shard = run_in(s.dir, "p.yaml --shard 0/2 -q");
   EXPECT_NE(shard.code, 0);
@@ -343,13 +349,7 @@ TEST(RunSafety, PlainAndShardRunsExcludeEachOther) {
   EXPECT_TRUE(WIFEXITED(st) && WEXITSTATUS(st) == 0);
   EXPECT_EQ(s.read("runs.txt"), "prep\nd-1\nd-2\n");
   // The other way round: a shard running, then a plain run.
-  const pid_t pid2 = ::fork();
-  if (pid2 == 0) {
-    ::chdir(s.dir.c_str());
-    ::freopen("/dev/null", "w", stderr);
-    ::execl(kRun.c_str(), kRun.c_str(), "p.yaml", "-q", "-B", "--shard", "0/2", static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
+  const pid_t pid2 = start_run(s, {"p.yaml", "-q", "-B", "--shard", "0/2"});
   std::this_thread::sleep_for(std::chrono::milliseconds(800));
   const auto plain = run_in(s.dir, "p.yaml -q");
   EXPECT_NE(plain.code, 0);
@@ -360,13 +360,7 @@ TEST(RunSafety, PlainAndShardRunsExcludeEachOther) {
   // second one skips the cell while the first runs it.
   s.write("r.yaml", "steps:\n  cell:\n    matrix: {d: [1, 2, 3, 4]}\n"
                     "    cmd: sleep 2 && echo ${cell} >> runs2.txt && echo > ${outs.0}\n    outs: ['r${cell}.txt']\n");
-  const pid_t pid3 = ::fork();
-  if (pid3 == 0) {
-    ::chdir(s.dir.c_str());
-    ::freopen("/dev/null", "w", stderr);
-    ::execl(kRun.c_str(), kRun.c_str(), "r.yaml", "-q", "-j", "1", "--shard", "2/2", static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
+  const pid_t pid3 = start_run(s, {"r.yaml", "-q", "-j", "1", "--shard", "2/2"});
   std::this_thread::sleep_for(std::chrono::milliseconds(800));
   const auto other = run_in(s.dir, "r.yaml --shard 3/4");
   EXPECT_NE(other.code, 0);
@@ -422,13 +416,7 @@ TEST(RunSafety, KillNineLeavesNoOrphanThatARerunMixesWith) {
   Scratch s;
   s.write("p.yaml", "steps:\n  a:\n    cmd: sh -c 'for i in 1 2 3 4 5 6 7 8; do echo line $i >> a.txt; sleep 0.3; done;"
                     " echo complete >> a.txt'; echo wrapper-done\n    outs: [a.txt]\n");
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    ::chdir(s.dir.c_str());
-    ::freopen("/dev/null", "w", stderr);
-    ::execl(kRun.c_str(), kRun.c_str(), "p.yaml", "-q", static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
+  const pid_t pid = start_run(s, {"p.yaml", "-q"});
   for (int k = 0; k < 100 && s.read("a.txt").size() < 14; ++k) std::this_thread::sleep_for(std::chrono::milliseconds(50));
   ::kill(pid, SIGKILL);
   ::waitpid(pid, nullptr, 0);
@@ -449,13 +437,7 @@ TEST(RunSafety, ALinkToThePipelineIsTheSamePipelineForTheRunLock) {
                     "    outs: [a.txt]\n");
   fs::create_symlink("p.yaml", s.path("q.yaml"));
   fs::create_hard_link(s.path("p.yaml"), s.path("h.yaml"));
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    ::chdir(s.dir.c_str());
-    ::freopen("/dev/null", "w", stderr);
-    ::execl(kRun.c_str(), kRun.c_str(), "p.yaml", "-q", static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
+  const pid_t pid = start_run(s, {"p.yaml", "-q"});
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
   for (const char* other : {"q.yaml", "h.yaml", "q.yaml --shard 1/1"}) {
     const auto r = run_in(s.dir, std::string(other) + " -q");

@@ -244,7 +244,7 @@ TEST_F(SinterCli, BondSinterMethodTurnsTheNecksIntoBondsAtTheTargetDensity) {
 #endif
 
 // Hostile review D10: a stop density the program does not reach exits 4 with a warning and
-// "stop_reached": false (it exited 0 in silence); the outputs are still written.
+// "target_reached": false (it exited 0 in silence); the outputs are still written.
 TEST_F(SinterCli, StopDensityNotReachedExitsFourAndSaysSo) {
   std::string scene = with("{hold: 5000}", "{hold: 1}");
   const auto at = scene.find("relative_density: 0.78");
@@ -253,7 +253,7 @@ TEST_F(SinterCli, StopDensityNotReachedExitsFourAndSaysSo) {
   ASSERT_EQ(r.code, 4) << r.err;
   EXPECT_NE(r.err.find("0.95 was not reached"), std::string::npos) << r.err;
   const auto j = nlohmann::json::parse(r.out);
-  EXPECT_FALSE(j["stop_reached"].get<bool>());
+  EXPECT_FALSE(j["target_reached"].get<bool>());
   EXPECT_LT(j["relative_density"].get<double>(), 0.95);
   EXPECT_TRUE(fs::exists(dir / "out" / "sintered.h5"));
 }
@@ -285,8 +285,11 @@ TEST_F(SinterCli, StrongOverlapInAGreenPackingIsRefusedNotSintered) {
     r = go("tomodem-bond", p + " -o " + (dir / "b.h5").string() + " --rule sinter --target-density 0.62" + settings);
     EXPECT_EQ(r.code, 2) << in << ": " << r.err;
     EXPECT_NE(r.err.find("particles 0 and 1 overlap by"), std::string::npos) << r.err;
-    r = go("tomodem-bond", p + " -o " + (dir / "b.h5").string());  // the default rule: no zero-length bond
-    EXPECT_EQ(r.code, 2) << in << ": " << r.err;
-    EXPECT_FALSE(fs::exists(dir / "b.h5"));
+    // The default rule: no bond of zero length between coincident spheres; a deep overlap alone
+    // is bonded (a segmented scan's grain spheres overlap by up to 0.7 of the smaller radius).
+    r = go("tomodem-bond", p + " -o " + (dir / "b.h5").string());
+    EXPECT_EQ(r.code, in == "dup.h5" ? 2 : 0) << in << ": " << r.err;
+    EXPECT_EQ(fs::exists(dir / "b.h5"), in != "dup.h5");
+    fs::remove(dir / "b.h5");
   }
 }
