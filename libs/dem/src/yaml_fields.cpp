@@ -1,6 +1,8 @@
 // The one place where YAML values become numbers, flags and text (see yaml_fields.hpp).
 #include "tomodem/dem/yaml_fields.hpp"
 
+#include "tomodem/core/yaml_keys.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <set>
@@ -9,11 +11,20 @@
 namespace tomodem::yaml {
 
 YAML::Node load(const std::string& text, const std::string& file) {
+  YAML::Node doc;
   try {
-    return YAML::Load(text);
+    doc = YAML::Load(text);
   } catch (const YAML::Exception& e) {
     throw InputError(file, "line " + std::to_string(e.mark.line + 1), "", "not valid YAML: " + e.msg);
   }
+  // `particles: 300` then `particles: 500` kept the first in silence (the hostile review).
+  if (const auto r = find_repeated_key(text)) {
+    const std::string field = r->path.empty() ? r->key : r->path + "." + r->key;
+    throw InputError(file, "line " + std::to_string(r->line) + ": " + field, "",
+                     r->first_line ? "key '" + r->key + "' given twice (first at line " + std::to_string(r->first_line) + ")"
+                                   : "YAML merge keys (<<) are not supported: write the keys out");
+  }
+  return doc;
 }
 
 std::string text(const YAML::Node& n) {

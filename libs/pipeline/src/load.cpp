@@ -1,7 +1,6 @@
 // Reading a pipeline file: includes, variables, --set overrides, sweeps, references between
 // steps, and the checks that must fail (exit 2) before anything runs.
 #include <unistd.h>
-#include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -11,6 +10,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <functional>
 #include <optional>
@@ -20,6 +20,7 @@
 
 #include "template.hpp"
 #include "tomodem/core/error.hpp"
+#include "tomodem/core/yaml_keys.hpp"
 #include "tomodem/pipeline/pipeline.hpp"
 
 namespace tomodem::pipeline {
@@ -105,60 +106,6 @@ void flatten_vars(const YAML::Node& n, const std::string& prefix, const std::str
   }
 }
 
-// yaml-cpp keeps the first of two equal keys for `node[key]` and the last when a map is iterated,
-// so `cmd:` given twice would be silently resolved one way or the other. The parser's events see
-// every key (and aliases as single events, so an alias bomb costs nothing here).
-class DuplicateKeys : public YAML::EventHandler {
- public:
-  explicit DuplicateKeys(std::string shown) : shown_(std::move(shown)) {}
-  void OnDocumentStart(const YAML::Mark&) override {}
-  void OnDocumentEnd() override {}
-  void OnNull(const YAML::Mark& m, YAML::anchor_t) override { node(m, nullptr); }
-  void OnAlias(const YAML::Mark& m, YAML::anchor_t) override { node(m, nullptr); }
-  void OnScalar(const YAML::Mark& m, const std::string&, YAML::anchor_t, const std::string& v) override { node(m, &v); }
-  void OnSequenceStart(const YAML::Mark& m, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {
-    node(m, nullptr);
-    open_.push_back(Level{false, true, "", {}});
-  }
-  void OnMapStart(const YAML::Mark& m, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {
-    node(m, nullptr);
-    open_.push_back(Level{true, true, "", {}});
-  }
-  void OnSequenceEnd() override { open_.pop_back(); }
-  void OnMapEnd() override { open_.pop_back(); }
-
- private:
-  struct Level {
-    bool map, key_next;
-    std::string key;              // the key whose value is being read
-    std::map<std::string, int> lines;  // key -> its line
-  };
-  // A node starts: in a map it is a key or a value, in turn.
-  void node(const YAML::Mark& m, const std::string* scalar) {
-    if (open_.empty() || !open_.back().map) return;
-    Level& l = open_.back();
-    if (l.key_next) {
-      l.key = scalar ? *scalar : "";
-      // yaml-cpp reads `<<: *anchor` as a key named "<<", not as a merge.
-      if (scalar && *scalar == "<<")
-        fail({shown_, m.line + 1}, "<<", "",
-             "YAML merge keys (<<) are not supported: write the keys out, or share values through vars: and ${vars.NAME}");
-      if (scalar) {
-        const auto [it, fresh] = l.lines.emplace(*scalar, m.line + 1);
-        if (!fresh) {
-          std::string field;
-          for (const auto& o : open_)
-            if (o.map) field += (field.empty() ? "" : ".") + o.key;
-          fail({shown_, m.line + 1}, field, "", "key '" + *scalar + "' given twice (first at line " + std::to_string(it->second) + ")");
-        }
-      }
-    }
-    l.key_next = !l.key_next;
-  }
-  std::string shown_;
-  std::vector<Level> open_;
-};
-
 void read_file(const fs::path& path, const std::string& shown, const Location& from, bool root, Raw& raw,
                std::vector<std::string>& stack) {
   std::error_code ec;
@@ -170,9 +117,13 @@ void read_file(const fs::path& path, const std::string& shown, const Location& f
   try {
     doc = YAML::LoadFile(path.string());
     std::ifstream in(path);
-    YAML::Parser parser(in);
-    DuplicateKeys dup(shown);
-    while (parser.HandleNextDocument(dup)) {
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (const auto r = find_repeated_key(text)) {
+      const std::string field = r->path.empty() ? r->key : r->path + "." + r->key;
+      if (r->first_line == 0)
+        fail({shown, r->line}, "<<", "",
+             "YAML merge keys (<<) are not supported: write the keys out, or share values through vars: and ${vars.NAME}");
+      fail({shown, r->line}, field, "", "key '" + r->key + "' given twice (first at line " + std::to_string(r->first_line) + ")");
     }
   } catch (const YAML::BadFile&) {
     fail(from, root ? "" : "include", shown, "cannot read the file");

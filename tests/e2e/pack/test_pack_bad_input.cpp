@@ -37,6 +37,9 @@ TEST(PackBadInput, EveryRowExits2NamingFileFieldAndValueAndWritesNothing) {
       // YAML type errors: file:line and the field, never "bad conversion".
       row("particles_text", "particles: 50", "particles: abc", {"particles", "line 1", "abc", "number"}),
       row("particles_list", "particles: 50", "particles: [1, 2]", {"particles", "[1, 2]"}),
+      // A key given twice kept its first value in silence (the hostile review); nested too.
+      row("particles_twice", "seed: 1", "particles: 500", {"line 2: particles", "given twice", "first at line 1"}),
+      row("friction_twice", "friction: 0.1", "friction: 0.1, friction: 0.3", {"contact.friction", "given twice"}),
       row("particles_fraction", "particles: 50", "particles: 2.5", {"particles", "2.5", "whole"}),
       row("particles_zero", "particles: 50", "particles: 0", {"particles", "0"}),
       row("phases_map", "phases:\n  - {name: a,", "phases:\n  {name: a,", {"phases", "list"}),
