@@ -258,6 +258,22 @@ TEST_F(SinterCli, StopDensityNotReachedExitsFourAndSaysSo) {
   EXPECT_TRUE(fs::exists(dir / "out" / "sintered.h5"));
 }
 
+// Hostile review D2: a particle outside the cell wraps into a neighbour (overlap 0.25 R, under
+// the start check's limit) and the time step collapses (1e-44 s): the run looped for ever at
+// t = 0. A window of 200 000 steps that covers less than 1e-9 of the program now ends it with
+// exit 3 and a message that names the likely cause, in seconds (`timeout` guards the test).
+TEST_F(SinterCli, CollapsedTimeStepEndsWithExitThreeNotAHang) {
+  std::ofstream(dir / "sinter.yaml") << kSettings << "  stop: {relative_density: 0.78}\n";
+  const std::string in = std::string(TOMODEM_SOURCE_DIR) + "/tests/e2e/sinter/data/wrapped_into_a_neighbour.h5";
+  const std::string cmd = "timeout 120 " + std::string(TOMODEM_BIN_DIR) + "/tomodem-sinter " + in + " --sinter-config " +
+                          (dir / "sinter.yaml").string() + " --output-dir " + (dir / "out").string() +
+                          " --no-plot -q --threads 1 2> " + (dir / "stderr.txt").string();
+  const int status = std::system(cmd.c_str());
+  EXPECT_EQ(WEXITSTATUS(status), 3) << slurp(dir / "stderr.txt");
+  EXPECT_NE(slurp(dir / "stderr.txt").find("makes no progress"), std::string::npos) << slurp(dir / "stderr.txt");
+  EXPECT_FALSE(fs::exists(dir / "out" / "sintered.h5"));
+}
+
 // Hostile review D2/D8: a green packing with a strongly overlapping or coincident pair is refused
 // at once (exit 2 naming the pair) by the packing route and tomodem-bond --rule sinter; before,
 // time stayed at 0 forever. `timeout` turns a hang into a failure, not a stuck test.
