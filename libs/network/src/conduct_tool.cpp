@@ -383,8 +383,10 @@ void solve_network(const ConductConfig& c, const Network& net, const ConductOpti
   int iterations = 0;
   bool any = false, reached = true;
   auto record = [&](const AxisResult& a, const std::string& name) {
-    sigma[name] = a.sigma_eff;
-    err[name] = a.sigma_error;
+    // Without a spanning path σ is 0 exactly: the periodic solve's round-off (2.4e-14 S/m beside
+    // a warning saying 0, the hostile review) is not reported as a value.
+    sigma[name] = a.percolates ? a.sigma_eff : 0.0;
+    err[name] = a.percolates ? a.sigma_error : 0.0;
     perc[name] = a.percolating_fraction;
     dead[name] = a.dead_end_fraction;
     per_axis[name] = axis_json(a);
