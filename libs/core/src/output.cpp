@@ -214,7 +214,9 @@ void check_outputs(const std::vector<std::string>& inputs, const std::vector<Out
     if (!parent.empty() && !fs::is_directory(parent, ec))
       throw InputError("", o.option, o.path, "the folder " + parent.string() + " does not exist");
     // A folder that exists but cannot take a file (read-only mount, immutable, no permission)
-    // would otherwise be found only at the end, after the work and the other outputs.
+    // would otherwise be found only at the end, after the work and the other outputs. A special
+    // file (/dev/stdout, a FIFO) is written through, not replaced: its folder need not take one.
+    if (fs::exists(o.path, ec) && !fs::is_regular_file(o.path, ec)) continue;
     const fs::path probe = (parent.empty() ? fs::path(".") : parent) / (".tomodem-probe-" + std::to_string(::getpid()));
     const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0600);
     if (fd < 0 && errno != EEXIST)

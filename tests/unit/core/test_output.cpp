@@ -180,6 +180,7 @@ TEST_F(Output, UnwritableFolderIsRefusedBeforeAnyWork) {
   ASSERT_EQ(::mkdir(ro.c_str(), 0755), 0);
   EXPECT_NO_THROW(check_outputs({}, {{"--json", ro + "/s.json"}}));
   EXPECT_TRUE(test::entries(ro).empty());  // the probe is gone
+  ASSERT_EQ(::mkfifo((ro + "/fifo").c_str(), 0600), 0);  // written through, so no probe for it
   const bool immutable = ::geteuid() == 0 && std::system(("chattr +i '" + ro + "' 2>/dev/null").c_str()) == 0;
   if (!immutable && (::geteuid() == 0 || ::chmod(ro.c_str(), 0555) != 0)) GTEST_SKIP() << "cannot make a read-only folder here";
   try {
@@ -189,6 +190,9 @@ TEST_F(Output, UnwritableFolderIsRefusedBeforeAnyWork) {
     EXPECT_EQ(e.field(), "--json");
     EXPECT_NE(std::string(e.what()).find("cannot be written"), std::string::npos) << e.what();
   }
+  // A FIFO (or /dev/stdout) in a folder that takes no file is still an output: it is written
+  // through, not replaced (a user without write access to /dev would be refused otherwise).
+  EXPECT_NO_THROW(check_outputs({}, {{"--json", ro + "/fifo"}}));
   if (immutable) EXPECT_EQ(std::system(("chattr -i '" + ro + "'").c_str()), 0);
   else ::chmod(ro.c_str(), 0755);
 }
