@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 
+#include "tomodem/core/cell_width.hpp"
 #include "tomodem/core/cli.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/output.hpp"
@@ -26,7 +27,7 @@ void refuse_sphere_wider_than_cell(const Packing& pk, const geometry::PackSpec& 
   const Mat3 hinv = pk.cell.h.inverse();
   for (int a = 0; a < 3; ++a) {
     if (!pk.cell.periodic[a]) continue;
-    const double w = 1 / std::sqrt(hinv.a[a][0] * hinv.a[a][0] + hinv.a[a][1] * hinv.a[a][1] + hinv.a[a][2] * hinv.a[a][2]);
+    const double w = cell_width(hinv, a);
     for (std::size_t k = 0; k < pk.particles.size(); ++k) {
       const double d = 2 * pk.particles.radius[k];
       if (d < w) continue;

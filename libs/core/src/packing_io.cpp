@@ -10,6 +10,7 @@
 #include <sstream>
 #include <tuple>
 
+#include "tomodem/core/cell_width.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/h5.hpp"
 #include "tomodem/core/output.hpp"
@@ -412,7 +413,7 @@ struct Reader {
     const Mat3 hinv = c.h.inverse();
     for (int a = 0; a < 3; ++a) {
       if (!c.periodic[a]) continue;
-      const double w = 1 / std::sqrt(hinv.a[a][0] * hinv.a[a][0] + hinv.a[a][1] * hinv.a[a][1] + hinv.a[a][2] * hinv.a[a][2]);
+      const double w = cell_width(hinv, a);
       for (std::size_t k = 0; k < t.radius.size(); ++k)
         if (!(2 * t.radius[k] < w))
           bad("/particles/radius[" + std::to_string(k) + "]", num(t.radius[k]),

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "tomodem/core/cell_width.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/spatial/clusters.hpp"
 
@@ -14,10 +15,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 constexpr double kPi = 3.14159265358979323846;
-
-double thickness(const Mat3& hinv, int k) {
-  return 1.0 / std::sqrt(hinv(k, 0) * hinv(k, 0) + hinv(k, 1) * hinv(k, 1) + hinv(k, 2) * hinv(k, 2));
-}
 
 void fill_fractions(const Network& net, const std::vector<uint8_t>& perc, const std::vector<uint8_t>& backbone,
                     AxisResult& res) {
@@ -65,7 +62,7 @@ AxisResult solve_electrodes(const Network& net, int axis, const ConductOptions& 
   res.axis = axis;
   const std::size_t n = net.n_nodes();
   const Mat3 hinv = net.cell.h.inverse();
-  const double thick = thickness(hinv, axis);
+  const double thick = cell_width(hinv, axis);
   res.area = net.cell.volume() / thick;
   // The solved graph: the network's nodes, then (plates) one terminal node per connection to a plate.
   Graph sub;
@@ -283,7 +280,7 @@ TensorResult solve_periodic(const Network& net, const ConductOptions& opt) {
     res.conservation_error = isum > 0 ? ibad / isum : 0;
     res.sigma_eff = J[k];
     res.sigma_error = std::abs(J[k]) * std::max(res.conservation_error, res.solver.residual);
-    res.length = thickness(net.cell.h.inverse(), k);
+    res.length = cell_width(net.cell.h.inverse(), k);
     res.area = V / res.length;
     // Dead ends: nodes of wrapping clusters whose edges all carry (almost) nothing.
     std::vector<double> node_max(n, 0.0);

@@ -1,5 +1,7 @@
 // tomodem-conduct from the command line: outputs, summary keys, exit codes, no partial output.
 #include <gtest/gtest.h>
+
+#include <functional>
 #include <sys/wait.h>
 
 #include <cmath>
@@ -280,20 +282,24 @@ TEST_F(ConductCli, MissingOrEmptyNetworkExitsTwo) {
   EXPECT_FALSE(fs::exists(path("s.json")));
 }
 
-TEST_F(ConductCli, NoPathIsReportedWithExitZero) {
-  Packing p = network::test::sc_lattice(4, 2, 2, 1.0, 0.1, false);
+// Keeps the bonds of p whose ends (positions) `drop` does not pick: a network cut by a plane.
+static void drop_bonds(Packing& p, const std::function<bool(const Vec3&, const Vec3&)>& drop) {
   BondTable kept;
   for (std::size_t b = 0; b < p.bonds.size(); ++b) {
-    const double xi = p.particles.position[p.bonds.i[b]].x, xj = p.particles.position[p.bonds.j[b]].x;
-    if ((xi - 4) * (xj - 4) < 0) continue;
+    if (drop(p.particles.position[p.bonds.i[b]], p.particles.position[p.bonds.j[b]])) continue;
     kept.i.push_back(p.bonds.i[b]);
     kept.j.push_back(p.bonds.j[b]);
-    kept.radius.push_back(0.1);
-    kept.rest_length.push_back(2.0);
-    kept.state.push_back(0);
-    kept.broken_at.push_back(0.0);
+    kept.radius.push_back(p.bonds.radius[b]);
+    kept.rest_length.push_back(p.bonds.rest_length[b]);
+    kept.state.push_back(p.bonds.state[b]);
+    kept.broken_at.push_back(p.bonds.broken_at[b]);
   }
   p.bonds = kept;
+}
+
+TEST_F(ConductCli, NoPathIsReportedWithExitZero) {
+  Packing p = network::test::sc_lattice(4, 2, 2, 1.0, 0.1, false);
+  drop_bonds(p, [](const Vec3& a, const Vec3& b) { return (a.x - 4) * (b.x - 4) < 0; });  // across x = 4
   write_packing(path("cut.h5"), p);
   const CliResult r = run(path("cut.h5") + " --no-contacts --json " + path("s.json"));
   ASSERT_EQ(r.code, 0) << r.err;
@@ -304,18 +310,8 @@ TEST_F(ConductCli, NoPathIsReportedWithExitZero) {
   // Periodic, cut across x only: x has no path and reports 0 exactly (the solve's round-off,
   // 2.4e-14 S/m, was reported beside a warning saying 0); y and z percolate.
   Packing q = network::test::sc_lattice(4, 4, 4, 1.0, 0.1, true);
-  BondTable cut;
-  for (std::size_t b = 0; b < q.bonds.size(); ++b) {
-    const double xi = q.particles.position[q.bonds.i[b]].x, xj = q.particles.position[q.bonds.j[b]].x;
-    if (std::abs(xi - xj) > 1e-9) continue;  // every bond along x goes: no path wraps in x
-    cut.i.push_back(q.bonds.i[b]);
-    cut.j.push_back(q.bonds.j[b]);
-    cut.radius.push_back(q.bonds.radius[b]);
-    cut.rest_length.push_back(q.bonds.rest_length[b]);
-    cut.state.push_back(0);
-    cut.broken_at.push_back(0.0);
-  }
-  q.bonds = cut;
+  // Every bond along x goes: no path wraps in x.
+  drop_bonds(q, [](const Vec3& a, const Vec3& b) { return std::abs(a.x - b.x) > 1e-9; });
   write_packing(path("cutp.h5"), q);
   const CliResult rp = run(path("cutp.h5") + " --no-contacts --bc periodic --json " + path("p.json"));
   ASSERT_EQ(rp.code, 0) << rp.err;
