@@ -161,5 +161,5 @@ int main(int argc, char** argv) {
       tomodem::write_text_atomic(json_file, tp::summary_json(p, s));
     if (!quiet || s.exit_code()) std::cerr << "tomodem-run: " << tp::summary_text(s);
     return s.exit_code();
-  });
+  }, tomodem::RankUse::one_rank, tomodem::OutputCommit::as_written);  // the lock file records each step as it ends
 }

@@ -1,6 +1,7 @@
 #include "tomodem/core/output.hpp"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -8,6 +9,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <cerrno>
 #include <chrono>
 #include <climits>
@@ -134,13 +136,12 @@ void install_cleanup_handlers() {
   ::sigaction(SIGHUP, &sa, nullptr);
 }
 
-void discard_output(const std::string& final_path) {
-  const std::string tmp = temporary_path(final_path);
-  ::unlink(tmp.c_str());
-  unregister_temporary(tmp);
-}
+namespace {
+// Outputs committed while commits are deferred, in commit order (final paths).
+bool g_deferred = false;
+std::vector<std::string> g_pending;
 
-void commit_output(const std::string& final_path) {
+void rename_onto(const std::string& final_path) {
   const std::string tmp = temporary_path(final_path);
   if (!writes_outputs()) {  // rank 0 writes the file; whatever a writer left under this rank's name goes
     ::unlink(tmp.c_str());
@@ -158,6 +159,49 @@ void commit_output(const std::string& final_path) {
     throw RuntimeFailure("cannot rename " + tmp + " to " + final_path + ": " + std::strerror(e));
   }
   unregister_temporary(tmp);
+}
+}  // namespace
+
+void discard_output(const std::string& final_path) {
+  const std::string tmp = temporary_path(final_path);
+  ::unlink(tmp.c_str());
+  unregister_temporary(tmp);
+  g_pending.erase(std::remove(g_pending.begin(), g_pending.end(), final_path), g_pending.end());
+}
+
+void defer_commits() { g_deferred = true; }
+
+void commit_output(const std::string& final_path, Commit when) {
+  if (g_deferred && when == Commit::with_run && writes_outputs()) {
+    // The temporary must exist now: a missing one is the writer's error, said where it happens.
+    if (::access(temporary_path(final_path).c_str(), F_OK) != 0)
+      throw RuntimeFailure("cannot rename " + temporary_path(final_path) + " to " + final_path + ": " + std::strerror(errno));
+    if (std::find(g_pending.begin(), g_pending.end(), final_path) == g_pending.end()) g_pending.push_back(final_path);
+    return;
+  }
+  g_pending.erase(std::remove(g_pending.begin(), g_pending.end(), final_path), g_pending.end());
+  rename_onto(final_path);
+}
+
+void commit_pending_outputs() {
+  g_deferred = false;
+  std::vector<std::string> pending;
+  pending.swap(g_pending);
+  for (std::size_t i = 0; i < pending.size(); ++i) {
+    try {
+      rename_onto(pending[i]);
+    } catch (...) {
+      for (std::size_t j = i + 1; j < pending.size(); ++j) discard_output(pending[j]);
+      throw;
+    }
+  }
+}
+
+void discard_pending_outputs() {
+  g_deferred = false;
+  std::vector<std::string> pending;
+  pending.swap(g_pending);
+  for (const auto& f : pending) discard_output(f);
 }
 
 void write_text_atomic(const std::string& path, const std::string& text) {
@@ -203,6 +247,29 @@ void refuse_output_over_input(const std::string& output, const std::string& opti
   }
 }
 
+namespace {
+// Temporaries of `output` left by an earlier run killed by SIGKILL (no handler runs): NAME.tmpPID,
+// or NAME.tmpPID.EXT for ITK's formats, whose process is gone. A live process's temporary is left
+// alone: that run is writing the same output now, which check_outputs cannot see.
+void remove_stale_temporaries(const fs::path& output) {
+  const fs::path folder = output.parent_path().empty() ? fs::path(".") : output.parent_path();
+  const std::string prefix = output.filename().string() + ".tmp";
+  std::error_code ec;
+  for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.compare(0, prefix.size(), prefix) != 0 || !it->is_regular_file(ec)) continue;
+    std::size_t digits = prefix.size();
+    while (digits < name.size() && std::isdigit(static_cast<unsigned char>(name[digits]))) ++digits;
+    if (digits == prefix.size() || (digits < name.size() && name[digits] != '.')) continue;
+    const long pid = std::strtol(name.c_str() + prefix.size(), nullptr, 10);
+    if (pid <= 0 || pid == ::getpid() || ::kill(pid_t(pid), 0) == 0 || errno != ESRCH) continue;
+    if (::unlink(it->path().c_str()) == 0)
+      info("removed " + it->path().string() + ", the temporary of a run that was killed (process " +
+           std::to_string(pid) + " is gone)");
+  }
+}
+}  // namespace
+
 void check_outputs(const std::vector<std::string>& inputs, const std::vector<OutputName>& outputs) {
   const auto is_file = [](const std::string& p) { return !p.empty() && p != "-"; };
   for (const OutputName& o : outputs) {
@@ -224,6 +291,7 @@ void check_outputs(const std::vector<std::string>& inputs, const std::vector<Out
                        "the folder " + (parent.empty() ? std::string(".") : parent.string()) +
                            " cannot be written: " + std::strerror(errno));
     if (fd >= 0) ::close(fd), ::unlink(probe.c_str());
+    remove_stale_temporaries(o.path);
   }
   const auto same = [](const std::string& a, const std::string& b) {
     std::error_code ec;

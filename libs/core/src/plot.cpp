@@ -144,14 +144,16 @@ void write_plot(const std::filesystem::path& stem, const PlotSpec& spec) {
   }
   write_text_atomic(dat, data.str());
 
-  // The script names the data file by its final name. The terminal comes from the style; the
-  // output from `output_file` (default stem.png; an .svg name, or output_format='svg', makes SVG).
+  // The script names the data file by its final name (`data_file` may name another). The terminal
+  // comes from the style; the output from `output_file` (default stem.png; an .svg name, or
+  // output_format='svg', makes SVG).
   const std::string name = stem.filename().string();
   std::ostringstream script;
   script << "# " << name << ": made by tomodem (core/plot.hpp). Re-make: gnuplot " << name
          << ".gp, or gnuplot -e \"output_file='" << name << ".svg'\" " << name << ".gp\n"
          << plot_style() << "\n"
          << "if (!exists('output_file')) output_file = " << quoted(name + ".png") << "\n"
+         << "if (!exists('data_file')) data_file = " << quoted(std::filesystem::path(dat).filename().string()) << "\n"
          << "if (!exists('output_format')) output_format = output_file[strlen(output_file)-2:] eq 'svg' ? 'svg' : 'png'\n"
          << "eval('set terminal ' . (output_format eq 'svg' ? plot_terminal_svg : plot_terminal_png))\n"
          << "set output output_file\n";
@@ -164,30 +166,36 @@ void write_plot(const std::filesystem::path& stem, const PlotSpec& spec) {
       if (spans_a_decade(spec, axis == 'y')) script << "set format " << axis << " '10^{%L}'\nset m" << axis << "tics 10\n";
       else script << "set format " << axis << " '%g'\n";
     }
-  const std::string dat_name = std::filesystem::path(dat).filename().string();
   script << "plot ";
   for (std::size_t i = 0; i < spec.series.size(); ++i) {
     const auto& s = spec.series[i];
     const bool bars = has_bars(s);
     const std::string lt = " linetype " + std::to_string(i % 8 + 1);
-    script << (i ? ", \\\n     " : "") << quoted(dat_name) << " index " << i << (bars ? " using 1:2:3:4" : " using 1:2")
+    script << (i ? ", \\\n     " : "") << "data_file index " << i << (bars ? " using 1:2:3:4" : " using 1:2")
            << " with " << gnuplot_style(s, bars) << lt << " title " << quoted(s.title) << " noenhanced";
     // Lines and steps have no bar style of their own: the bars go on top in the same colour.
     const PlotDraw d = s.points_only ? PlotDraw::points : s.draw;
     if (bars && (d == PlotDraw::lines || d == PlotDraw::steps))
-      script << ", \\\n     " << quoted(dat_name) << " index " << i << " using 1:2:3:4 with yerrorbars" << lt
+      script << ", \\\n     " << "data_file index " << i << " using 1:2:3:4 with yerrorbars" << lt
              << " pointsize 0 notitle";
   }
   script << "\n";
   write_text_atomic(gp, script.str());
 
   const std::string dir = stem.has_parent_path() ? stem.parent_path().string() : ".";
+  // Inside a tool's run the data and the script are still under their temporary names (their
+  // renames wait for the run's end, core/output.hpp): gnuplot reads those.
+  const auto as_written = [](const std::string& f) {
+    const std::string tmp = temporary_path(f);
+    return std::filesystem::path(std::filesystem::exists(tmp) ? tmp : f).filename().string();
+  };
+  const std::string dat_file = as_written(dat), gp_file = as_written(gp);
   auto render = [&](const std::string& format, const std::string& out) {
     const std::string tmp = temporary_path(out);
     const std::string cmd = "cd " + shell_quoted(dir) + " && gnuplot -e " +
                             shell_quoted("output_file = " + quoted(std::filesystem::path(tmp).filename().string()) +
-                                         "; output_format = " + quoted(format)) +
-                            " " + shell_quoted(std::filesystem::path(gp).filename().string()) + " 2>&1";
+                                         "; output_format = " + quoted(format) + "; data_file = " + quoted(dat_file)) +
+                            " " + shell_quoted(gp_file) + " 2>&1";
     if (std::system(cmd.c_str()) != 0) {
       std::filesystem::remove(tmp);
       throw RuntimeFailure("plot " + out + ": gnuplot failed (script " + gp + ")");

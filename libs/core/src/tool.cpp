@@ -222,7 +222,7 @@ bool start_ranks(RankUse use) {
 }
 }  // namespace
 
-int run_tool(const std::string& tool_name, const std::function<int()>& body, RankUse ranks) {
+int run_tool(const std::string& tool_name, const std::function<int()>& body, RankUse ranks, OutputCommit commit) {
   if (const auto refused = refuse_copies_on_ranks(tool_name, ranks)) return *refused;
   spin_briefly_unless_told();
   g_tool = tool_name;
@@ -233,10 +233,16 @@ int run_tool(const std::string& tool_name, const std::function<int()>& body, Ran
   const std::string who = on_ranks ? tool_name + " (rank " + std::to_string(launched_rank()) + ")" : tool_name;
   // However the body ends, a temporary it did not commit must not stay behind.
   struct Cleanup {
-    ~Cleanup() { remove_registered_temporaries(); }
+    ~Cleanup() {
+      discard_pending_outputs();
+      remove_registered_temporaries();
+    }
   } cleanup;
+  if (commit == OutputCommit::together) defer_commits();
   try {
-    return body();
+    const int code = body();
+    commit_pending_outputs();
+    return code;
   } catch (const InputError& e) {
     if (speaks) std::cerr << tool_name << ": error: " << e.what() << '\n';
     return exit_code::bad_input;

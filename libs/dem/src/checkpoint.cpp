@@ -132,7 +132,7 @@ void write_checkpoint(const std::string& path, const Simulation& sim, const std:
                                 e.external_work, e.initial_energy});
     f.close();  // a full disk is found here, before the rename
   }
-  commit_output(path);
+  commit_output(path, Commit::now);  // a checkpoint must outlive a run that fails later
 }
 
 namespace {

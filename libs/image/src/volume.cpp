@@ -23,6 +23,12 @@ namespace fs = std::filesystem;
 
 namespace tomodem::image {
 namespace {
+/// A file that ITK wrote under a name of its own (it picks the format by the extension) becomes
+/// the output's registered temporary, renamed with the run's other outputs.
+void commit_written(const std::string& written, const std::string& final_path) {
+  fs::rename(written, temporary_path(final_path));
+  commit_output(final_path);
+}
 
 std::string lower(std::string s) {
   for (auto& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
@@ -484,8 +490,10 @@ void write_volume(const std::string& path, const Volume& v, bool as_uint16) {
       fs::remove_all(tmp);
       throw;
     }
+    // A folder is renamed at once (the old stack goes first, and a folder cannot wait among the
+    // run's file temporaries, which are removed with unlink).
     fs::remove_all(dir);  // checked above: only slices of an earlier stack
-    commit_output(dir);
+    commit_output(dir, Commit::now);
     return;
   }
   if (ends_with(l, ".h5")) {
@@ -538,15 +546,15 @@ void write_volume(const std::string& path, const Volume& v, bool as_uint16) {
       throw;
     }
     const fs::path dir = p.parent_path().empty() ? fs::path(".") : p.parent_path();
-    fs::rename(tmpdir + "/" + stem + ".raw", dir / (stem + ".raw"));
-    fs::rename(tmpdir + "/" + stem + ".mhd", path);
+    commit_written(tmpdir + "/" + stem + ".raw", (dir / (stem + ".raw")).string());
+    commit_written(tmpdir + "/" + stem + ".mhd", path);
     fs::remove_all(tmpdir);
     return;
   }
   const std::string tmp = temporary_path(path) + ext;
   try {
     itkb::write_file(tmp, v, as_uint16);
-    fs::rename(tmp, path);
+    commit_written(tmp, path);
   } catch (...) {
     std::error_code ec;
     fs::remove(tmp, ec);
@@ -573,15 +581,15 @@ void write_meta(const std::string& path, const G& m) {
       throw;
     }
     const fs::path dir = p.parent_path().empty() ? fs::path(".") : p.parent_path();
-    fs::rename(tmpdir + "/" + stem + ".raw", dir / (stem + ".raw"));
-    fs::rename(tmpdir + "/" + stem + ".mhd", path);
+    commit_written(tmpdir + "/" + stem + ".raw", (dir / (stem + ".raw")).string());
+    commit_written(tmpdir + "/" + stem + ".mhd", path);
     fs::remove_all(tmpdir);
     return;
   }
   const std::string tmp = temporary_path(path) + ".mha";
   try {
     itkb::write_file(tmp, m);
-    fs::rename(tmp, path);
+    commit_written(tmp, path);
   } catch (...) {
     std::error_code ec;
     fs::remove(tmp, ec);

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "tomodem/core/packing_io.hpp"
 
@@ -256,6 +257,26 @@ TEST_F(SinterCli, StopDensityNotReachedExitsFourAndSaysSo) {
   EXPECT_FALSE(j["target_reached"].get<bool>());
   EXPECT_LT(j["relative_density"].get<double>(), 0.95);
   EXPECT_TRUE(fs::exists(dir / "out" / "sintered.h5"));
+}
+
+// The outputs of one run appear together (core/output.hpp, run_tool). A disk that fills up after
+// the curve and the neck table, while the packing (54 kB) is written, used to leave the two CSVs
+// renamed over the last run's. The file-size limit (16 kB, SIGXFSZ ignored) fails the packing's
+// writes with EFBIG as a full disk fails them with ENOSPC: exit 1, and the folder as it was.
+TEST_F(SinterCli, AFullDiskLeavesNoneOfTheRunsOutputs) {
+  fs::create_directories(dir / "out");
+  std::ofstream(dir / "out" / "densification.csv") << "the last run's curve\n";
+  const std::string cmd = "bash -c \"trap '' XFSZ; ulimit -f 16; exec " + std::string(TOMODEM_BIN_DIR) + "/tomodem-sinter " +
+                          write(kScene) + " --output-dir " + (dir / "out").string() + " --no-plot -q\" > /dev/null 2> " +
+                          (dir / "stderr.txt").string();
+  const int status = std::system(cmd.c_str());
+  const std::string err = slurp(dir / "stderr.txt");
+  EXPECT_EQ(WEXITSTATUS(status), 1) << err;
+  EXPECT_NE(err.find("sintered.h5: cannot finish writing"), std::string::npos) << err;
+  std::vector<std::string> left;
+  for (const auto& e : fs::directory_iterator(dir / "out")) left.push_back(e.path().filename().string());
+  EXPECT_EQ(left, std::vector<std::string>{"densification.csv"}) << err;
+  EXPECT_EQ(slurp(dir / "out" / "densification.csv"), "the last run's curve\n");
 }
 
 // Hostile review D2: a particle outside the cell wraps into a neighbour (overlap 0.25 R, under

@@ -9,13 +9,17 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <csignal>
 #include <regex>
 #include <thread>
 
 #include "tmpdir.hpp"
 #include "tomodem/core/error.hpp"
+#include "tomodem/core/tool.hpp"
 
 namespace tomodem {
 namespace {
@@ -126,6 +130,70 @@ TEST_F(Output, WriteFailureKeepsTheOldFileAndLeavesNoTemporary) {
   EXPECT_EQ(WEXITSTATUS(st), 10);  // a RuntimeFailure naming the file
   EXPECT_EQ(test::slurp(file("lock.json")), "good\n");
   EXPECT_EQ(test::entries(dir), (std::vector<std::string>{"lock.json"}));
+}
+
+// A tool's outputs appear together when its run ends: a run that fails after writing some of
+// them (here the second of three, as a full disk or a failed solve after the first file would)
+// leaves none, and the files they would have replaced stay as they were.
+TEST_F(Output, ARunThatFailsLeavesNoneOfItsOutputs) {
+  write_text_atomic(file("curve.csv"), "old curve\n");
+  const int code = run_tool("tomodem-test", [&]() -> int {
+    write_text_atomic(file("curve.csv"), "new curve\n");
+    write_text_atomic(file("necks.csv"), "necks\n");
+    EXPECT_EQ(test::slurp(file("curve.csv")), "old curve\n") << "renamed before the run ended";
+    EXPECT_FALSE(std::filesystem::exists(file("necks.csv")));
+    throw RuntimeFailure("the solve failed");
+  });
+  EXPECT_EQ(code, 1);
+  EXPECT_EQ(test::slurp(file("curve.csv")), "old curve\n");
+  EXPECT_EQ(test::entries(dir), (std::vector<std::string>{"curve.csv"}));  // no temporaries either
+}
+
+TEST_F(Output, ARunThatEndsRenamesEveryOutputWhateverItsCode) {
+  for (const int returned : {0, 4}) {  // 4: a run short of its target keeps what it wrote
+    const int code = run_tool("tomodem-test", [&]() -> int {
+      write_text_atomic(file("a.csv"), "a\n");
+      write_text_atomic(file("b.json"), "{}\n");
+      write_text_atomic(file("a.csv"), "a again\n");  // written twice: the last text, renamed once
+      std::ofstream(temporary_path(file("checkpoint.h5"))) << "state\n";
+      commit_output(file("checkpoint.h5"), Commit::now);
+      EXPECT_TRUE(std::filesystem::exists(file("checkpoint.h5")));
+      return returned;
+    });
+    EXPECT_EQ(code, returned);
+    EXPECT_EQ(test::slurp(file("a.csv")), "a again\n");
+    EXPECT_EQ(test::slurp(file("b.json")), "{}\n");
+    EXPECT_EQ(test::entries(dir), (std::vector<std::string>{"a.csv", "b.json", "checkpoint.h5"}));
+    for (const auto& f : test::entries(dir)) std::filesystem::remove(file(f));
+  }
+}
+
+// A checkpoint must survive a run that fails after writing it: Commit::now renames at once.
+TEST_F(Output, ACheckpointCommittedNowOutlivesTheRun) {
+  const int code = run_tool("tomodem-test", [&]() -> int {
+    std::ofstream(temporary_path(file("restart.h5"))) << "state";
+    commit_output(file("restart.h5"), Commit::now);
+    write_text_atomic(file("series.csv"), "t\n");
+    throw NumericalError("the time step collapsed");
+  });
+  EXPECT_EQ(code, 3);
+  EXPECT_EQ(test::entries(dir), (std::vector<std::string>{"restart.h5"}));
+}
+
+// kill -9 runs no handler: the next run with the same output removes the temporaries whose
+// process is gone, and leaves a live process's (that run is writing now) and other names alone.
+TEST_F(Output, TemporariesOfAKilledRunGoWithTheNextRun) {
+  const pid_t dead = ::fork();
+  if (dead == 0) ::_exit(0);
+  ::waitpid(dead, nullptr, 0);
+  const std::string gone = std::to_string(dead), live = std::to_string(::getppid());
+  for (const std::string& f : std::vector<std::string>{"out.h5.tmp" + gone, "out.h5.tmp" + gone + ".nii.gz", "out.h5.tmp" + live,
+                               "out.h5.tmpx", "out.h5.tmp" + gone + "x", "other.h5.tmp" + gone})
+    std::ofstream(file(f)) << "half written";
+  check_outputs({}, {{"-o", file("out.h5")}});
+  std::vector<std::string> kept{"other.h5.tmp" + gone, "out.h5.tmp" + gone + "x", "out.h5.tmp" + live, "out.h5.tmpx"};
+  std::sort(kept.begin(), kept.end());
+  EXPECT_EQ(test::entries(dir), kept);
 }
 
 TEST_F(Output, SigtermRemovesRegisteredTemporaries) {

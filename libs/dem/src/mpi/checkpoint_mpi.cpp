@@ -419,7 +419,7 @@ void write_checkpoint_ranks(const std::string& path, const Simulation& sim, cons
   // Renamed once every rank has closed the file: a run killed before this leaves only the
   // temporary (removed by rank 0's signal handler), never a half checkpoint under the name.
   MPI_Barrier(comm);
-  if (rank == 0) commit_output(path);
+  if (rank == 0) commit_output(path, Commit::now);  // as the serial checkpoint
   MPI_Barrier(comm);
 }
 

@@ -1,7 +1,9 @@
 #pragma once
 // Outputs are written under a temporary name and renamed at the end, so a failed or killed
 // run never leaves a half-written file under the real name. Temporaries are registered: a tool
-// stopped by SIGINT or SIGTERM removes them (run_tool installs the handlers).
+// stopped by SIGINT or SIGTERM removes them (run_tool installs the handlers). Inside a tool's run
+// the renames wait for the run's end (run_tool): a run that fails after writing some of its
+// outputs leaves none of them, and the old files stay as they were.
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -19,8 +21,21 @@ bool writes_outputs();
 /// The temporary name used for `final_path` (same folder, so rename is atomic). Registered for
 /// removal on SIGINT/SIGTERM until commit_output or discard_output.
 std::string temporary_path(const std::string& final_path);
+/// When commit_output renames: with the run (the default) waits for commit_pending_outputs while
+/// commits are deferred (a tool's run, run_tool); now renames at once (a checkpoint, which must
+/// survive the run that writes it).
+enum class Commit { with_run, now };
 /// Renames the temporary file onto `final_path` (RuntimeFailure on error; the temporary is removed).
-void commit_output(const std::string& final_path);
+void commit_output(const std::string& final_path, Commit when = Commit::with_run);
+/// From here on commit_output(…, Commit::with_run) only records the output; run_tool turns this
+/// on for a tool's body.
+void defer_commits();
+/// Renames every recorded output onto its name, in the order they were committed, and stops
+/// deferring. If one fails, the temporaries of the others not yet renamed are removed and
+/// RuntimeFailure names the file.
+void commit_pending_outputs();
+/// Removes the temporaries of every recorded output and stops deferring (a run that failed).
+void discard_pending_outputs();
 /// Removes the temporary of `final_path`, if any (after a failed write).
 void discard_output(const std::string& final_path);
 /// Writes `text` to `path` atomically: every write, the flush to disk and the close are checked;

@@ -34,7 +34,12 @@ int launched_rank();
 /// same on every rank: bad input is found before the ranks part) is printed by rank 0 only, any
 /// other failure by the rank that failed, which then aborts the job with the exit code, so no
 /// rank waits forever in a collective the failed one never reaches.
-int run_tool(const std::string& tool_name, const std::function<int()>& body, RankUse ranks = RankUse::one_rank);
+/// A tool's outputs appear together when `body` returns (whatever code it returns): their renames
+/// wait until then (core/output.hpp), and a body that throws leaves none of them. A tool that
+/// keeps records as it goes (tomodem-run: its lock file after each step) asks for as_written.
+enum class OutputCommit { together, as_written };
+int run_tool(const std::string& tool_name, const std::function<int()>& body, RankUse ranks = RankUse::one_rank,
+             OutputCommit commit = OutputCommit::together);
 
 /// Messages on stderr; info is silenced by set_quiet(true).
 void set_quiet(bool quiet);
