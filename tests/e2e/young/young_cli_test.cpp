@@ -56,6 +56,21 @@ TEST_F(YoungCli, BondThenYoungImplicitGivesKnOver2R) {
   EXPECT_TRUE(y.contains("E_error") && y.contains("wall_time_s"));
 }
 
+// One contact set for bond, conduct and carve (docs/architecture.md#contacts): by default a pair is
+// in contact up to a gap of 1e-3 R̄ in all three. bond's default was 0, so a network it bonded
+// lacked the near-touching pairs that conduct counted. Here every pair of the lattice is 5e-4 R̄
+// apart: bonded by default, not at a tolerance of 0.
+TEST_F(YoungCli, DefaultGapToleranceIsConductsAndCarves) {
+  const Packing p = mechanics::test::lattice("simple_cubic", 6, 1.00025e-3, 0.5e-3, mechanics::test::ceramic(1e9, 0.25));
+  write_packing(path("gapped.h5"), p);
+  auto [code, err] = run("tomodem-bond", path("gapped.h5") + " -o " + path("bonded.h5") + " --rule ratio --json " + path("bond.json"));
+  ASSERT_EQ(code, 0) << err;
+  EXPECT_EQ(json("bond.json")["n_bonds"], 3 * 216);
+  std::tie(code, err) = run("tomodem-bond", path("gapped.h5") + " -o " + path("bonded.h5") +
+                                                " --rule ratio --gap-tolerance 0 --json " + path("bond.json"));
+  EXPECT_EQ(code, 2) << err;  // no pair in contact: refused, as BondWithoutPairsExits2AndLeavesNoOutput
+}
+
 // Necks wider than the face cap (docs/bond.md#dense-networks): SC lattice, a/R = 0.9, ν = 0.45.
 // Isolated: g_n held at a/R = 0.5, k_n = 2E* a (1 + 4·0.25), E* = E/(2(1 − ν²)): 1.128e6 N/m.
 // The pair's Laguerre face is the cube face (2R)², so the cap E (2R)²/(2R) = 1e6 N/m is lower and

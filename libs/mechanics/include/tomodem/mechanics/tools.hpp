@@ -17,7 +17,7 @@ struct BondConfig {
   NeckRule rule = NeckRule::overlap;
   std::string sinter_config;                ///< rule sinter: sintering settings (docs/sintering.md)
   int threads = 0;                          ///< rule sinter: threads of the run (0: OpenMP's default)
-  double gap_tolerance = 0, neck_ratio = 0.1, min_neck_ratio = 0.01, target_density = 0;
+  double gap_tolerance = 1e-3, neck_ratio = 0.1, min_neck_ratio = 0.01, target_density = 0;
   std::vector<std::string> exclude;         ///< "A:B" phase pairs (names or indices) without bonds
   std::vector<std::string> pair_ratio;      ///< "A:B=0.2" per-pair neck ratios (rule ratio)
   bool allow_disconnected = true;           ///< false: exit 2 when no cluster spans the cell
