@@ -22,6 +22,10 @@ namespace {
 
 constexpr int64_t kFormat = 1;  // bump on any incompatible layout change; readers refuse newer files
 
+// The attributes of a /materials/<k> group, as Writer::materials writes them.
+const char* const kMaterialAttributes[] = {"name", "youngs_modulus_Pa", "poisson_ratio", "density_kg_per_m3",
+                                           "surface_energy_J_per_m2", "conductivity_S_per_m"};
+
 std::string num(double v) {
   std::ostringstream s;
   s.precision(17);
@@ -227,6 +231,18 @@ struct Reader {
   void need(const std::string& dataset) const {
     if (!f.exists(dataset)) bad(dataset, "", "missing mandatory dataset");
   }
+  // An attribute's value as a message shows it: a number, a text, or "" when it is neither.
+  std::string attr_text(const std::string& object, const std::string& name) const {
+    try {
+      return num(f.attr_double(object, name));
+    } catch (const InputError&) {
+    }
+    try {
+      return f.attr_string(object, name);
+    } catch (const InputError&) {
+    }
+    return "";
+  }
   // A dataset's own `units` attribute, where it has one, must be the unit the writer uses: a file
   // whose radii say "mm" was read as metres before (the root @units was the only check).
   void check_units(const std::string& dataset) const {
@@ -340,6 +356,12 @@ struct Reader {
         if (!std::isfinite(v)) bad(p + "@" + a, num(v), "material properties must be finite (0 when unknown)");
         return v;
       };
+      // An attribute the reader does not know (a misspelt property) would be ignored: refused.
+      for (const auto& a : f.attr_names(p))
+        if (std::find(std::begin(kMaterialAttributes), std::end(kMaterialAttributes), a) == std::end(kMaterialAttributes))
+          bad(p + "@" + a, attr_text(p, a),
+              "unknown material attribute (expected name, youngs_modulus_Pa, poisson_ratio, density_kg_per_m3, "
+              "surface_energy_J_per_m2, conductivity_S_per_m)");
       Material& m = ms[k];
       if (!f.has_attr(p, "name")) bad(p + "@name", "", "missing material attribute");
       m.name = f.attr_string(p, "name");

@@ -462,6 +462,23 @@ TEST_F(PackingIo, NonFiniteMaterialPropertyRefused) {
   expect_input_error([&] { read_packing(path); }, path, "/materials/0@conductivity_S_per_m", "-inf");
 }
 
+// A misspelt material property (youngs_modulu) was read without complaint, and the tools then
+// used the correctly spelt one beside it, or refused it as missing without a word on the typo.
+TEST_F(PackingIo, UnknownMaterialAttributeRefused) {
+  auto path = corrupted([](File& f) { f.set_attr("/materials/1", "youngs_modulu", 3e9); });
+  expect_input_error([&] { read_packing(path); }, path, "/materials/1@youngs_modulu", "3000000000");
+  try {
+    read_packing(path);
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown material attribute"), std::string::npos) << e.what();
+  }
+  path = corrupted([](File& f) { f.set_attr("/materials/0", "colour", std::string("white")); });
+  expect_input_error([&] { read_packing(path); }, path, "/materials/0@colour", "white");
+  // Every attribute the writer writes reads back (FullRoundTripIsBitExact reads them all).
+  path = corrupted([](File&) {});
+  EXPECT_NO_THROW(read_packing(path));
+}
+
 TEST_F(PackingIo, BadContactValuesRefused) {
   auto path = corrupted([](File& f) { f.write("/contacts/overlap", std::vector<double>{kNaN, 0}); });
   expect_input_error([&] { read_packing(path); }, path, "/contacts/overlap[0]", "nan");
