@@ -317,10 +317,21 @@ struct Reader {
             "cell vector " + std::to_string(k) + " has zero length: the cell has no volume (the columns of "
             "/cell/h are the three cell vectors, in m)");
     }
+    // An orthogonal cell's vectors point along +x, +y, +z: a negative length (two of them keep
+    // det > 0) puts the upper corner below the origin.
+    if (h(0, 1) == 0 && h(0, 2) == 0 && h(1, 0) == 0 && h(1, 2) == 0 && h(2, 0) == 0 && h(2, 1) == 0)
+      for (int k = 0; k < 3; ++k)
+        if (h(k, k) < 0)
+          bad("/cell/h", "h[" + std::to_string(k) + "][" + std::to_string(k) + "] = " + num(h(k, k)),
+              "cell vector " + std::to_string(k) + " of an orthogonal cell has a negative length (the columns of "
+              "/cell/h are the three cell vectors, in m, from the lower corner /cell/origin)");
     const double det = h.det();
     if (!(std::fabs(det) > 1e-12 * len[0] * len[1] * len[2]))
       bad("/cell/h", "det = " + num(det),
           "the cell vectors are coplanar (singular matrix): the cell has no volume");
+    if (det < 0)
+      bad("/cell/h", "det = " + num(det),
+          "the cell vectors are left-handed (det < 0): give them in right-handed order (det > 0)");
   }
 
   void header() const {

@@ -510,9 +510,27 @@ TEST_F(PackingIo, DegenerateCellRefused) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("coplanar"), std::string::npos) << e.what();
   }
-  // A sheared but regular cell still reads, and so does a left-handed one.
-  path = corrupted([](File& f) { f.write("/cell/h", std::vector<double>{-1e-3, 0, 0, 0, 1e-3, 0, 0, 0, 1e-3}, {3, 3}); });
+  // A sheared but regular cell still reads (full_packing's).
+  path = corrupted([](File&) {});
   EXPECT_NO_THROW(read_packing(path));
+}
+
+// A left-handed cell (det < 0), or an orthogonal one with a negative length (two of them keep
+// det > 0), was read: its upper corner lies below the origin, and a length such as conduct's
+// electrode distance h(k, k) came out negative. Refused, naming /cell/h and the value.
+TEST_F(PackingIo, LeftHandedCellOrNegativeLengthRefused) {
+  auto path = corrupted([](File& f) { f.write("/cell/h", std::vector<double>{-1e-3, 0, 0, 0, 1e-3, 0, 0, 0, 1e-3}, {3, 3}); });
+  expect_input_error([&] { read_packing(path); }, path, "/cell/h", "h[0][0] = -0.001");
+  path = corrupted([](File& f) { f.write("/cell/h", std::vector<double>{1e-3, 0, 0, 0, -2e-3, 0, 0, 0, -3e-3}, {3, 3}); });
+  expect_input_error([&] { read_packing(path); }, path, "/cell/h", "h[1][1] = -0.002");
+  // Sheared, with the first two vectors swapped: det < 0.
+  path = corrupted([](File& f) { f.write("/cell/h", std::vector<double>{1e-4, 1e-3, 0, 2e-3, 0, 0, 0, 0, 3e-3}, {3, 3}); });
+  expect_input_error([&] { read_packing(path); }, path, "/cell/h", "det = -6");
+  try {
+    read_packing(path);
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("left-handed"), std::string::npos) << e.what();
+  }
 }
 
 // A full disk (here: a file-size limit, EFBIG) while HDF5 writes its metadata at close must fail
