@@ -184,16 +184,15 @@ int run(int argc, char** argv) {
   for (const char* k : {"time_step_s", "run_time_s", "densify_time_s"}) j.unit(k, "s");
   j.output("packing", out);
   j.output("xdmf", xdmf_sidecar_of(out));
-  emit_summary(j.text(), json_path);
-  if (!reached) {
+  const std::string summary = j.text();
+  emit_summary(summary, json_path);
+  if (!reached)
     warn((pressure_target ? "the target pressure " + value_text(s.target_pressure) + " Pa was not reached: the run ended at " +
                                 value_text(r.pressure) + " Pa" + (r.equilibrium ? "" : ", not in equilibrium")
                           : "the target solid fraction " + value_text(s.target_solid_fraction) +
                                 " was not reached: the run ended at " + value_text(r.solid_fraction_with_pore_formers)) +
          " (target_reached: false; the packing is written; exit code 4)");
-    return exit_code::target_not_reached;
-  }
-  return 0;
+  return exit_code_of_summary(summary);  // 4: target_reached false, as every tool decides it
 }
 }  // namespace
 
