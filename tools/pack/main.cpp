@@ -46,7 +46,8 @@ void refuse_sphere_wider_than_cell(const Packing& pk, const geometry::PackSpec& 
 int run(int argc, char** argv) {
   CLI::App app{"tomodem-pack: generate and densify a periodic sphere packing; prints a JSON summary"};
   std::string config, out;
-  long particles = 0, seed = -1;
+  long particles = 0;
+  uint64_t seed = 0;
   double pressure = 0, phi = 0, friction = -1, criterion = 0;
   bool no_tess = false;
   cli::Common common;
@@ -55,7 +56,7 @@ int run(int argc, char** argv) {
   cli::add_json(app, common.json);
   cli::add_threads(app, common.threads, "default 0, all cores; a threads: key in the config is used when --threads is not given");
   app.add_option("--particles", particles, "override the particle count")->check(CLI::PositiveNumber);
-  app.add_option("--seed", seed, "override the random seed")->check(CLI::NonNegativeNumber);
+  cli::add_seed(app, "--seed", seed, "override the random seed");
   app.add_option("--target-pressure", pressure, "override the target: pressure, Pa")->check(CLI::PositiveNumber);
   app.add_option("--target-solid-fraction", phi, "override the target: solid fraction");
   app.add_option("--friction", friction, "override the Coulomb friction coefficient")->check(CLI::NonNegativeNumber);
@@ -73,7 +74,7 @@ int run(int argc, char** argv) {
   // every core (the config reader's default, as for every tool: docs/cli.md).
   if (app.count("--threads")) s.threads = common.threads > 0 ? common.threads : all_threads();
   if (particles > 0) s.n_particles = std::size_t(particles);
-  if (seed >= 0) s.seed = uint64_t(seed);
+  if (app.count("--seed")) s.seed = seed;
   if (pressure > 0) s.target = geometry::Target::pressure, s.target_pressure = pressure;
   if (app.count("--target-solid-fraction")) s.target = geometry::Target::solid_fraction, s.target_solid_fraction = phi;
   if (friction >= 0) s.friction = friction;
@@ -183,16 +184,15 @@ int run(int argc, char** argv) {
   for (const char* k : {"time_step_s", "run_time_s", "densify_time_s"}) j.unit(k, "s");
   j.output("packing", out);
   j.output("xdmf", xdmf_sidecar_of(out));
-  emit_summary(j.text(), json_path);
-  if (!reached) {
+  const std::string summary = j.text();
+  emit_summary(summary, json_path);
+  if (!reached)
     warn((pressure_target ? "the target pressure " + value_text(s.target_pressure) + " Pa was not reached: the run ended at " +
                                 value_text(r.pressure) + " Pa" + (r.equilibrium ? "" : ", not in equilibrium")
                           : "the target solid fraction " + value_text(s.target_solid_fraction) +
                                 " was not reached: the run ended at " + value_text(r.solid_fraction_with_pore_formers)) +
          " (target_reached: false; the packing is written; exit code 4)");
-    return exit_code::target_not_reached;
-  }
-  return 0;
+  return exit_code_of_summary(summary);  // 4: target_reached false, as every tool decides it
 }
 }  // namespace
 

@@ -28,7 +28,7 @@ int main(int argc, char** argv) {
     app.add_option("--blur", o.blur, "Gaussian blur sigma (voxels)")->capture_default_str();
     app.add_option("--rings", o.rings, "ring artefact amplitude (fraction of the contrast)")->capture_default_str();
     app.add_option("--cupping", o.cupping, "beam-hardening cupping (fraction of the contrast)")->capture_default_str();
-    app.add_option("--seed", o.seed, "random seed")->capture_default_str()->check(non_negative);
+    tomodem::cli::add_seed(app, "--seed", o.seed, "random seed (default 1)");
     auto* macropores = app.add_option("--macropores", o.n_macropores,
                                       "pores kind: number of macropores (default: up to 6, as many as fit)");
     app.add_option("--fine-porosity", o.fine_porosity, "pores kind: fine pore volume fraction")->capture_default_str();

@@ -510,14 +510,13 @@ int run(int argc, char** argv) {
   // A stop density the program does not reach is said (exit 4), never a silent exit 0.
   const bool stop_reached = !(settings.target_density > 0) || rep.stop_reason == "target_density";
   if (settings.target_density > 0) j["target_reached"] = stop_reached;
-  emit_summary(j.text(), json_path);
-  if (!stop_reached) {
+  const std::string summary = j.text();
+  emit_summary(summary, json_path);
+  if (!stop_reached)
     warn("the stop relative density " + value_text(settings.target_density) + " was not reached: the run ended at " +
          value_text(rep.final.density) + " (stop_reason " + rep.stop_reason +
          "; target_reached: false; the outputs are written; exit code 4)");
-    return exit_code::target_not_reached;
-  }
-  return 0;
+  return exit_code_of_summary(summary);  // 4: target_reached false, as every tool decides it
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // tomodem-carve driver: inputs, carve, outputs and the JSON summary (docs/carve.md).
 #include <nlohmann/json.hpp>
 
+#include <cctype>
 #include <filesystem>
 
 #include "tomodem/carve/tool.hpp"
@@ -75,6 +76,13 @@ void check_config(const CarveConfig& cfg) {
                             {"-o (its .xdmf sidecar)", xdmf_sidecar_of(cfg.output)},
                             {"--json", cfg.json},
                             {"--picture", cfg.picture}});
+  // The picture is PNG (image::png_from_bgr): another name (mid.jpg) would hold PNG bytes.
+  if (!cfg.picture.empty()) {
+    std::string ext = std::filesystem::path(cfg.picture).extension().string();
+    for (auto& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    if (ext != ".png")
+      throw InputError("", "--picture", cfg.picture, "the picture is written as PNG: name it .png");
+  }
 }
 
 std::string run_carve(const CarveConfig& cfg) {

@@ -22,6 +22,10 @@ namespace {
 
 constexpr int64_t kFormat = 1;  // bump on any incompatible layout change; readers refuse newer files
 
+// The attributes of a /materials/<k> group, as Writer::materials writes them.
+const char* const kMaterialAttributes[] = {"name", "youngs_modulus_Pa", "poisson_ratio", "density_kg_per_m3",
+                                           "surface_energy_J_per_m2", "conductivity_S_per_m"};
+
 std::string num(double v) {
   std::ostringstream s;
   s.precision(17);
@@ -227,6 +231,18 @@ struct Reader {
   void need(const std::string& dataset) const {
     if (!f.exists(dataset)) bad(dataset, "", "missing mandatory dataset");
   }
+  // An attribute's value as a message shows it: a number, a text, or "" when it is neither.
+  std::string attr_text(const std::string& object, const std::string& name) const {
+    try {
+      return num(f.attr_double(object, name));
+    } catch (const InputError&) {
+    }
+    try {
+      return f.attr_string(object, name);
+    } catch (const InputError&) {
+    }
+    return "";
+  }
   // A dataset's own `units` attribute, where it has one, must be the unit the writer uses: a file
   // whose radii say "mm" was read as metres before (the root @units was the only check).
   void check_units(const std::string& dataset) const {
@@ -301,10 +317,21 @@ struct Reader {
             "cell vector " + std::to_string(k) + " has zero length: the cell has no volume (the columns of "
             "/cell/h are the three cell vectors, in m)");
     }
+    // An orthogonal cell's vectors point along +x, +y, +z: a negative length (two of them keep
+    // det > 0) puts the upper corner below the origin.
+    if (h(0, 1) == 0 && h(0, 2) == 0 && h(1, 0) == 0 && h(1, 2) == 0 && h(2, 0) == 0 && h(2, 1) == 0)
+      for (int k = 0; k < 3; ++k)
+        if (h(k, k) < 0)
+          bad("/cell/h", "h[" + std::to_string(k) + "][" + std::to_string(k) + "] = " + num(h(k, k)),
+              "cell vector " + std::to_string(k) + " of an orthogonal cell has a negative length (the columns of "
+              "/cell/h are the three cell vectors, in m, from the lower corner /cell/origin)");
     const double det = h.det();
     if (!(std::fabs(det) > 1e-12 * len[0] * len[1] * len[2]))
       bad("/cell/h", "det = " + num(det),
           "the cell vectors are coplanar (singular matrix): the cell has no volume");
+    if (det < 0)
+      bad("/cell/h", "det = " + num(det),
+          "the cell vectors are left-handed (det < 0): give them in right-handed order (det > 0)");
   }
 
   void header() const {
@@ -340,6 +367,12 @@ struct Reader {
         if (!std::isfinite(v)) bad(p + "@" + a, num(v), "material properties must be finite (0 when unknown)");
         return v;
       };
+      // An attribute the reader does not know (a misspelt property) would be ignored: refused.
+      for (const auto& a : f.attr_names(p))
+        if (std::find(std::begin(kMaterialAttributes), std::end(kMaterialAttributes), a) == std::end(kMaterialAttributes))
+          bad(p + "@" + a, attr_text(p, a),
+              "unknown material attribute (expected name, youngs_modulus_Pa, poisson_ratio, density_kg_per_m3, "
+              "surface_energy_J_per_m2, conductivity_S_per_m)");
       Material& m = ms[k];
       if (!f.has_attr(p, "name")) bad(p + "@name", "", "missing material attribute");
       m.name = f.attr_string(p, "name");

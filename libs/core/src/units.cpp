@@ -2,6 +2,7 @@
 
 #include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 
 #include "tomodem/core/error.hpp"
@@ -35,6 +36,28 @@ double parse_length(const std::string& option, const std::string& text) {
   else throw InputError("", option, text, "unknown length unit '" + unit + "' (expected m, mm, um, µm or nm; a bare number is metres)");
   if (!std::isfinite(x)) throw InputError("", option, text, "must be a finite length");
   return x * f;
+}
+
+uint64_t parse_seed(const std::string& file, const std::string& field, const std::string& text) {
+  const std::string range = "a random seed is a whole number in [0, 18446744073709551615] (2^64 - 1)";
+  std::size_t k = text.size() > 1 && text[0] == '+' ? 1 : 0;
+  if (k < text.size() && text.find_first_not_of("0123456789", k) == std::string::npos) {
+    uint64_t v = 0;
+    for (; k < text.size(); ++k) {
+      const auto d = static_cast<uint64_t>(text[k] - '0');
+      if (v > (UINT64_MAX - d) / 10) throw InputError(file, field, text, range + ": too large (not clamped)");
+      v = 10 * v + d;
+    }
+    return v;
+  }
+  // "1e3" or "1000.0": whole numbers too, where a double holds them exactly (up to 2^53).
+  constexpr double kExact = 9007199254740992.0;  // 2^53
+  char* end = nullptr;
+  const double d = std::strtod(text.c_str(), &end);
+  if (text.empty() || *end != '\0' || !(d >= 0) || d != std::floor(d) || !(d < kExact))
+    throw InputError(file, field, text,
+                     range + (text.empty() || *end != '\0' || d < kExact ? "" : "; from 2^53 on, write it in digits"));
+  return static_cast<uint64_t>(d);
 }
 
 }  // namespace tomodem

@@ -1,6 +1,7 @@
 // The one place where YAML values become numbers, flags and text (see yaml_fields.hpp).
 #include "tomodem/dem/yaml_fields.hpp"
 
+#include "tomodem/core/units.hpp"
 #include "tomodem/core/yaml_keys.hpp"
 
 #include <algorithm>
@@ -160,6 +161,14 @@ long Section::integer(const std::string& key, long fallback, long min, long max)
     throw error(key, text(key),
                 "must be a whole number in [" + std::to_string(min) + ", " + (max >= LONG_MAX / 2 ? "10^18" : std::to_string(max)) + "]");
   return long(v);
+}
+
+uint64_t Section::seed(const std::string& key, uint64_t fallback) const {
+  if (!has(key)) return fallback;
+  const YAML::Node n = raw(key);
+  if (!n.IsScalar())
+    throw InputError(file_, field(key) + line_of(n), yaml::text(n), std::string("must be a number (found ") + kind_of(n) + ")");
+  return parse_seed(file_, field(key) + line_of(n), n.Scalar());
 }
 
 std::string Section::string(const std::string& key, const std::string& fallback) const {

@@ -46,7 +46,7 @@ void read_config(PackConfig& cfg, const YAML::Node& root, const std::string& pat
   check_particle_memory(s.n_particles, path, r.where("particles"), r.text("particles"));
   s.arrangement = *parse_arrangement(r.choice("arrangement", to_string(s.arrangement), name_list(kArrangementNames)));
   s.initial_solid_fraction = r.in_range("initial_solid_fraction", s.initial_solid_fraction, 0, 0.4, true, true);
-  s.seed = uint64_t(r.integer("seed", 1, 0));
+  s.seed = r.seed("seed", 1);
   // Not written: every core, the CLI's default (docs/cli.md); a count the config writes is kept.
   s.threads = r.has("threads") ? int(r.integer("threads", 1, 1, 4096)) : all_threads();
   const YAML::Node phases =

@@ -176,8 +176,17 @@ ExplicitResult run_once(const Packing& p, const std::vector<Image>& image, const
   if (o.protocol == LoadProtocol::rate) {
     // Segment 0 builds up the viscous stress and the servo response; slopes from segment 1 on.
     cc.velocity_gradient(ax, ax) = res.strain_rate;
+    // E needs segment 0 and two measured points: a cap below that measures nothing, so it is
+    // refused before the run; a cap reached later ends the run short (max_steps_reached).
+    if (3 * seg_steps > o.max_steps)
+      throw InputError("", "--max-steps", std::to_string(o.max_steps),
+                       "the rate protocol needs at least " + std::to_string(3 * seg_steps) + " steps (3 segments of " +
+                           std::to_string(seg_steps) + ") before it can measure E: give a larger --max-steps");
     for (int s = 0; s <= o.points; ++s) {
-      if (res.steps + seg_steps > o.max_steps) throw RuntimeFailure("explicit test: --max-steps reached");
+      if (res.steps + seg_steps > o.max_steps) {
+        res.max_steps_reached = true;
+        break;
+      }
       sim.run(seg_steps);
       res.steps += seg_steps;
       const dem::Measurements m = sim.measure();
@@ -190,14 +199,20 @@ ExplicitResult run_once(const Packing& p, const std::vector<Image>& image, const
     // Increments: load for one segment, then hold the cell (the servo keeps working) until the
     // unbalanced-force ratio falls below relax_ratio.
     const long chunk = std::max(1L, long(res.transit_time / res.time_step));
+    if (seg_steps > o.max_steps)  // not one increment: no E (as the rate protocol's check above)
+      throw InputError("", "--max-steps", std::to_string(o.max_steps),
+                       "the increments protocol needs at least " + std::to_string(seg_steps) +
+                           " steps (one increment) before it can measure E: give a larger --max-steps");
     auto relax = [&]() {
       cc.velocity_gradient(ax, ax) = 0;
       for (;;) {
         const dem::Measurements m = sim.measure();
         if (m.unbalanced_force_ratio < o.relax_ratio || res.steps + chunk > o.max_steps) {
-          if (m.unbalanced_force_ratio >= o.relax_ratio)
+          if (m.unbalanced_force_ratio >= o.relax_ratio) {
             warn("explicit test: relaxation stopped at --max-steps with unbalanced-force ratio " +
                  std::to_string(m.unbalanced_force_ratio));
+            res.max_steps_reached = true;
+          }
           return m;
         }
         sim.run(chunk);
@@ -208,7 +223,11 @@ ExplicitResult run_once(const Packing& p, const std::vector<Image>& image, const
       const dem::Measurements m = relax();
       record(m);
     }
-    for (int s = 0; s < o.points; ++s) {
+    for (int s = 0; s < o.points && !res.max_steps_reached; ++s) {
+      if (res.steps + seg_steps > o.max_steps) {
+        res.max_steps_reached = true;
+        break;
+      }
       cc.velocity_gradient(ax, ax) = res.strain_rate;
       sim.run(seg_steps);
       res.steps += seg_steps;
@@ -219,6 +238,16 @@ ExplicitResult run_once(const Packing& p, const std::vector<Image>& image, const
            std::to_string(m.unbalanced_force_ratio));
     }
   }
+  const std::size_t measured = res.strain.size() - from;
+  if (measured < 2)
+    throw RuntimeFailure("explicit test: --max-steps " + std::to_string(o.max_steps) + " reached after " +
+                         std::to_string(res.steps) + " steps with " + std::to_string(measured) +
+                         " measured point(s): no E can be measured (it needs 2); give a larger --max-steps");
+  if (res.max_steps_reached)
+    warn("explicit test: --max-steps " + std::to_string(o.max_steps) + " reached after " + std::to_string(res.steps) +
+         " steps, at axial strain " + value_text(res.strain.back()) + " of the " + value_text(o.strain) + " asked (" +
+         std::to_string(res.strain.size()) + " of " + std::to_string(o.points + 1) +
+         " points): E and nu are from the points measured (target_reached: false; exit code 4)");
   res.broken_bonds = long(sim.bond_events().size());
   res.lateral_stress = lateral_stress;
   moduli_from_points(res, lateral_stress, lateral_split, from, o.loading);
@@ -256,6 +285,7 @@ ExplicitResult run_explicit(const Packing& p, const std::vector<Image>& image, c
     res.nu_error_rate = 2 * std::abs(h.nu_iso - res.nu_iso);
     res.E_error += res.E_error_rate;
     res.nu_error += res.nu_error_rate;
+    res.max_steps_reached = res.max_steps_reached || h.max_steps_reached;
     res.steps += h.steps;
     res.wall_time_s += h.wall_time_s;
   }

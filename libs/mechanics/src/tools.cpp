@@ -298,6 +298,8 @@ json explicit_json(const ExplicitResult& er, const ExplicitOptions& eo) {
           {"transit_time_s", er.transit_time},
           {"time_step_s", er.time_step},
           {"steps", er.steps},
+          {"max_steps", eo.max_steps},
+          {"max_steps_reached", er.max_steps_reached},
           {"inertial_number", er.inertial_number},
           {"unbalanced_force_ratio", er.unbalanced_force_ratio},
           {"lateral_stress_ratio", er.lateral_stress_ratio},
@@ -421,8 +423,9 @@ std::string run_young(const YoungConfig& c) {
     warn("nu = " + value_text(nu) + " lies outside [-1, 0.5], the range of a stable isotropic solid" +
          (want_implicit ? std::string() : ": the explicit test was not quasi-static (see --damping-ratio, --transits)"));
   out["bound_exceeded"] = bc.exceeded || iso_exceeded || nu_outside;
-  // An iterative solve stopped by its cap gave numbers, but not what was asked (exit 4).
-  out["target_reached"] = !want_implicit || ir.converged;
+  // An iterative solve stopped by its cap, or an explicit test by --max-steps, gave numbers, but
+  // not what was asked (exit 4).
+  out["target_reached"] = (!want_implicit || ir.converged) && (!want_explicit || !er.max_steps_reached);
   const NeckRange nr = neck_range(p);
   out["neck_correction"] = {{"valid_up_to", nr.valid_up_to}, {"max_neck_ratio", nr.max_ratio}, {"bonds_beyond", nr.bonds_beyond}};
   if (nr.bonds_beyond) warn(neck_range_warning(nr, long(p.bonds.size())));

@@ -4,6 +4,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <climits>
 #include <cmath>
 #include <cstdio>
@@ -46,8 +47,11 @@ std::string scalar(const YAML::Node& n, const std::string& file, const std::stri
 
 long long integer(const std::string& text, const Location& where, const std::string& field, long long lo) {
   char* end = nullptr;
+  errno = 0;
   long long v = std::strtoll(text.c_str(), &end, 10);
   bool whole = !text.empty() && *end == '\0';
+  if (whole && errno == ERANGE)  // strtoll clamps to +-(2^63 - 1): a seed 2^64 was run as 2^63 - 1
+    fail(where, field, text, "out of range: an integer in [-2^63, 2^63 - 1] (not clamped)");
   if (!text.empty() && !whole) {  // "1e9" is an integer written as a float; "1.5" is not one
     const double d = std::strtod(text.c_str(), &end);
     whole = *end == '\0' && std::isfinite(d) && d == std::floor(d) && std::fabs(d) < 9e18;

@@ -142,6 +142,9 @@ const std::vector<Case> kCases = {
     {"output_is_level_set", "carve", G + V + " -o {D}/pores.vdb", 2, {"-o", "pores.vdb"}},
     {"json_is_level_set", "carve", G + V + O + " --json {D}/pores.vdb", 2, {"--json", "pores.vdb"}},
     {"picture_is_output", "carve", G + V + O + " --picture {D}/c.h5", 2, {"--picture", "c.h5", "same file"}},
+    // PNG bytes were written under any name (mid.jpg): refused before the work.
+    {"picture_named_jpg", "carve", G + V + O + " --picture {D}/mid.jpg", 2, {"--picture", "mid.jpg", "PNG"}},
+    {"picture_without_extension", "carve", G + V + O + " --picture {D}/mid", 2, {"--picture", "mid", ".png"}},
     {"json_is_output_sidecar", "carve", G + V + O + " --json {D}/c.xdmf", 2, {"--json", "c.xdmf", "same file"}},
     {"output_is_folder", "carve", G + V + " -o {D}", 2, {"-o", "folder"}},
     {"output_folder_missing", "carve", G + V + " -o {D}/nowhere/c.h5", 2, {"-o", "nowhere", "does not exist"}},

@@ -154,6 +154,16 @@ TEST(PackCli, SolidFractionTargetNotReachedExitsFourAndSaysSo) {
   EXPECT_NE(o.out.find("\"target_reached\": true"), std::string::npos) << o.out;
 }
 
+// Every seed in [0, 2^64 - 1] is taken as written: the largest one was refused in a config
+// (its reader went through a double and stopped at 10^18) and clamped to 2^63 - 1 on the command line.
+TEST(PackCli, TheLargestSeedIsTaken) {
+  const auto cfg = config("seed.yaml", kOne, "seed: 18446744073709551615\ntarget: {solid_fraction: 0.35}\n");
+  CliRun r = run(cfg + " --particles 20 -q --no-tessellation -o " + ::testing::TempDir() + "seed.h5");
+  EXPECT_EQ(r.code, 0) << r.out;
+  r = run(cfg + " --particles 20 -q --no-tessellation --seed 18446744073709551615 -o " + ::testing::TempDir() + "seed.h5");
+  EXPECT_EQ(r.code, 0) << r.out;
+}
+
 // Hostile review D9: a realised phase fraction far from the request (too few particles for the
 // phase) is said at run time, not only in the JSON's phase_fraction_max_deviation.
 TEST(PackCli, PhaseFractionFarFromTheRequestWarns) {

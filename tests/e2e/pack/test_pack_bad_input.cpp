@@ -79,6 +79,9 @@ TEST(PackBadInput, EveryRowExits2NamingFileFieldAndValueAndWritesNothing) {
       row("strain_rate_negative", "max_steps: 1000", "max_steps: 1000, strain_rate: -1", {"protocol.strain_rate", "-1"}),
       row("method_fast", "method: quasistatic", "method: fast", {"protocol.method", "fast", "quasistatic"}),
       row("seed_negative", "seed: 1", "seed: -1", {"seed", "-1"}),
+      // Seeds beyond 2^64 - 1 were clamped (the command line's to 2^63 - 1) and run: refused.
+      row("seed_above_2_64", "seed: 1", "seed: 18446744073709551616", {"seed", "line 2", "18446744073709551616", "2^64 - 1"}),
+      row("seed_fraction", "seed: 1", "seed: 1.5", {"seed", "1.5", "whole number"}),
       row("threads_zero", "threads: 1", "threads: 0", {"threads", "0"}),
       row("initial_fraction_high", "seed: 1", "seed: 1\ninitial_solid_fraction: 0.5", {"initial_solid_fraction", "0.5"}),
       row("volume_fraction_above_one", "{name: a,", "{name: a, volume_fraction: 1.5,", {"phases[0].volume_fraction", "1.5"}),
@@ -122,6 +125,8 @@ TEST(PackBadInput, EveryRowExits2NamingFileFieldAndValueAndWritesNothing) {
       cli("particles_cli_huge", "c.yaml -o p.h5 --particles 1000000000000", {"--particles", "memory"}),
       cli("threads_cli_negative", "c.yaml -o p.h5 --threads -1", {"--threads", "-1"}),
       cli("seed_cli_negative", "c.yaml -o p.h5 --seed -4", {"--seed", "-4"}),
+      cli("seed_cli_above_2_64", "c.yaml -o p.h5 --seed 18446744073709551616", {"--seed", "18446744073709551616", "2^64 - 1"}),
+      cli("seed_cli_far_above", "c.yaml -o p.h5 --seed 99999999999999999999", {"--seed", "99999999999999999999", "not clamped"}),
   };
   EXPECT_GE(bad_input::run_all("tomodem-pack", cases), 50);
 }

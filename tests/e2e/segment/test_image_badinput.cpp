@@ -284,6 +284,9 @@ const std::vector<Row> kRows = {
     {"PhantomSizeNegative", "phantom", "-o {W}/g.mha --size -4", {}, 2, {"--size", "-4"}},
     {"PhantomSizeTooSmall", "phantom", "-o {W}/g.mha --size 8", {}, 2, {"--size", "8"}},
     {"PhantomSeedNegative", "phantom", "-o {W}/g.mha --size 16 --seed -1", {}, 2, {"--seed", "-1"}},
+    // Clamped to 2^64 - 1 and run before: refused.
+    {"PhantomSeedAbove2To64", "phantom", "-o {W}/g.mha --size 16 --seed 18446744073709551616", {}, 2,
+     {"--seed", "18446744073709551616", "2^64 - 1"}},
     {"PhantomVoxelEchoedAsWritten", "phantom", "-o {W}/g.mha --size 16 --voxel -1e-5", {}, 2, {"--voxel", "'-1e-5'"}},
     {"PhantomVoxelInf", "phantom", "-o {W}/g.mha --size 16 --voxel inf", {}, 2, {"--voxel", "inf"}},
     {"PhantomSnrNegative", "phantom", "-o {W}/g.mha --size 16 --snr -1", {}, 2, {"--snr", "-1"}},

@@ -173,6 +173,41 @@ TEST_F(YoungCli, BothMethodsReportAgreement) {
   EXPECT_FALSE(fs::exists(path("t.json")));
 }
 
+// An explicit test stopped by --max-steps ended with exit 1 and no output ("--max-steps reached").
+// Like a solve at its iteration cap it now gives E from the points measured and says so:
+// explicit.max_steps_reached and target_reached, a warning, exit 4. A cap too small for any E
+// (fewer than three rate segments) is refused before the run: exit 2 naming --max-steps.
+TEST_F(YoungCli, ExplicitTestStoppedByMaxStepsIsReportedShort) {
+  ASSERT_EQ(run("tomodem-bond", lattice(1e9, 0.25, 4) + " -o " + path("b.h5") + " --rule ratio --gap-tolerance 1e-6").first,
+            0);
+  const std::string args = path("b.h5") + " --method explicit --transits 20 --points 6 --no-rate-check --threads 1";
+  auto [code, err] = run("tomodem-young", args + " --json " + path("full.json"));
+  ASSERT_EQ(code, 0) << err;
+  const auto full = json("full.json");
+  EXPECT_FALSE(full["explicit"].value("max_steps_reached", true));
+  EXPECT_TRUE(full["target_reached"].get<bool>());
+  const long segment = full["explicit"]["steps"].get<long>() / 7;  // segment 0 and 6 points
+  ASSERT_GT(segment, 0);
+  std::tie(code, err) = run("tomodem-young", args + " --max-steps " + std::to_string(4 * segment) + " --json " +
+                                                 path("short.json") + " --curve " + path("short.csv"));
+  ASSERT_EQ(code, 4) << err;  // the README's code for a run that ends short of what was asked
+  const auto y = json("short.json");
+  EXPECT_TRUE(y["explicit"]["max_steps_reached"].get<bool>());
+  EXPECT_FALSE(y["target_reached"].get<bool>());
+  EXPECT_EQ(y["explicit"]["curve"]["strain"].size(), 4u);
+  EXPECT_LE(y["explicit"]["steps"].get<long>(), 4 * segment);
+  EXPECT_NEAR(y["E"].get<double>() / full["E"].get<double>(), 1.0, 0.05);
+  EXPECT_NE(err.find("--max-steps " + std::to_string(4 * segment) + " reached"), std::string::npos) << err;
+  EXPECT_TRUE(fs::exists(path("short.csv")));
+  // Two segments measure no slope: refused before the run, nothing written.
+  std::tie(code, err) = run("tomodem-young", args + " --max-steps " + std::to_string(2 * segment) + " --json " +
+                                                 path("none.json"));
+  EXPECT_EQ(code, 2) << err;
+  EXPECT_NE(err.find("--max-steps"), std::string::npos) << err;
+  EXPECT_NE(err.find("before it can measure E"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(path("none.json")));
+}
+
 // A solve stopped by its iteration cap gives numbers, but says so: the summary's converged and
 // target_reached are false, E_error carries the residual (far above the tolerance), a warning
 // names the cause, and the exit code is 4.

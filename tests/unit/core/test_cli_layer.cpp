@@ -1,5 +1,5 @@
 // The shared command-line layer (docs/cli.md): the length parser, the summary builder's common
-// keys, where a summary goes, and the duration text of progress lines.
+// keys, where a summary goes, the duration text of progress lines, and random seeds.
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -33,6 +33,28 @@ TEST(Lengths, UnknownUnitsAndNonNumbersNameTheOption) {
     } catch (const tomodem::InputError& e) {
       EXPECT_EQ(e.field(), "--grip") << bad;
       EXPECT_EQ(e.value(), bad);
+    }
+  }
+}
+
+// Seeds are read from their text over the whole of [0, 2^64 - 1]: never through a double (2^53 + 1
+// was read as 2^53), never clamped (2^64 became 2^63 - 1 or 2^64 - 1) or wrapped (-1).
+TEST(Seeds, WholeRangeExactlyAndNothingElse) {
+  EXPECT_EQ(tomodem::parse_seed("", "--seed", "0"), 0u);
+  EXPECT_EQ(tomodem::parse_seed("", "--seed", "+7"), 7u);
+  EXPECT_EQ(tomodem::parse_seed("", "--seed", "1e3"), 1000u);
+  EXPECT_EQ(tomodem::parse_seed("", "--seed", "9007199254740993"), 9007199254740993u);
+  EXPECT_EQ(tomodem::parse_seed("", "--seed", "18446744073709551615"), 18446744073709551615u);
+  for (const char* bad : {"18446744073709551616", "99999999999999999999", "-1", "-4", "1.5", "abc", "", "1e20",
+                          "9007199254740993.0", "nan", "inf", "0x"}) {
+    try {
+      tomodem::parse_seed("c.yaml", "seed (line 2)", bad);
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const tomodem::InputError& e) {
+      EXPECT_EQ(e.file(), "c.yaml") << bad;
+      EXPECT_EQ(e.field(), "seed (line 2)") << bad;
+      EXPECT_EQ(e.value(), bad);
+      EXPECT_NE(e.why().find("2^64 - 1"), std::string::npos) << e.what();
     }
   }
 }

@@ -462,6 +462,23 @@ TEST_F(PackingIo, NonFiniteMaterialPropertyRefused) {
   expect_input_error([&] { read_packing(path); }, path, "/materials/0@conductivity_S_per_m", "-inf");
 }
 
+// A misspelt material property (youngs_modulu) was read without complaint, and the tools then
+// used the correctly spelt one beside it, or refused it as missing without a word on the typo.
+TEST_F(PackingIo, UnknownMaterialAttributeRefused) {
+  auto path = corrupted([](File& f) { f.set_attr("/materials/1", "youngs_modulu", 3e9); });
+  expect_input_error([&] { read_packing(path); }, path, "/materials/1@youngs_modulu", "3000000000");
+  try {
+    read_packing(path);
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown material attribute"), std::string::npos) << e.what();
+  }
+  path = corrupted([](File& f) { f.set_attr("/materials/0", "colour", std::string("white")); });
+  expect_input_error([&] { read_packing(path); }, path, "/materials/0@colour", "white");
+  // Every attribute the writer writes reads back (FullRoundTripIsBitExact reads them all).
+  path = corrupted([](File&) {});
+  EXPECT_NO_THROW(read_packing(path));
+}
+
 TEST_F(PackingIo, BadContactValuesRefused) {
   auto path = corrupted([](File& f) { f.write("/contacts/overlap", std::vector<double>{kNaN, 0}); });
   expect_input_error([&] { read_packing(path); }, path, "/contacts/overlap[0]", "nan");
@@ -493,9 +510,27 @@ TEST_F(PackingIo, DegenerateCellRefused) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("coplanar"), std::string::npos) << e.what();
   }
-  // A sheared but regular cell still reads, and so does a left-handed one.
-  path = corrupted([](File& f) { f.write("/cell/h", std::vector<double>{-1e-3, 0, 0, 0, 1e-3, 0, 0, 0, 1e-3}, {3, 3}); });
+  // A sheared but regular cell still reads (full_packing's).
+  path = corrupted([](File&) {});
   EXPECT_NO_THROW(read_packing(path));
+}
+
+// A left-handed cell (det < 0), or an orthogonal one with a negative length (two of them keep
+// det > 0), was read: its upper corner lies below the origin, and a length such as conduct's
+// electrode distance h(k, k) came out negative. Refused, naming /cell/h and the value.
+TEST_F(PackingIo, LeftHandedCellOrNegativeLengthRefused) {
+  auto path = corrupted([](File& f) { f.write("/cell/h", std::vector<double>{-1e-3, 0, 0, 0, 1e-3, 0, 0, 0, 1e-3}, {3, 3}); });
+  expect_input_error([&] { read_packing(path); }, path, "/cell/h", "h[0][0] = -0.001");
+  path = corrupted([](File& f) { f.write("/cell/h", std::vector<double>{1e-3, 0, 0, 0, -2e-3, 0, 0, 0, -3e-3}, {3, 3}); });
+  expect_input_error([&] { read_packing(path); }, path, "/cell/h", "h[1][1] = -0.002");
+  // Sheared, with the first two vectors swapped: det < 0.
+  path = corrupted([](File& f) { f.write("/cell/h", std::vector<double>{1e-4, 1e-3, 0, 2e-3, 0, 0, 0, 0, 3e-3}, {3, 3}); });
+  expect_input_error([&] { read_packing(path); }, path, "/cell/h", "det = -6");
+  try {
+    read_packing(path);
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("left-handed"), std::string::npos) << e.what();
+  }
 }
 
 // A full disk (here: a file-size limit, EFBIG) while HDF5 writes its metadata at close must fail

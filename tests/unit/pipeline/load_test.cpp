@@ -101,6 +101,19 @@ TEST(PipelineLoad, ReplicasGetConsecutiveSeedsFromTheBase) {
   EXPECT_EQ(by_id(p, "young[d0.7-r2]").matrix.at("replica"), "2");
 }
 
+// A seed (any integer field) beyond 2^63 - 1 was clamped to it by strtoll and run: refused.
+TEST(PipelineBadInput, SeedBeyondTheIntegerRangeIsRefusedNotClamped) {
+  Scratch s;
+  const auto m = load_error(s, "steps:\n  a:\n    seed: 99999999999999999999\n    cmd: echo ${seed} > ${outs.0}\n"
+                               "    outs: [a.txt]\n");
+  EXPECT_NE(m.find("p.yaml:3"), std::string::npos) << m;
+  EXPECT_NE(m.find("seed"), std::string::npos) << m;
+  EXPECT_NE(m.find("99999999999999999999"), std::string::npos) << m;
+  EXPECT_NE(m.find("not clamped"), std::string::npos) << m;
+  EXPECT_EQ(load_error(s, "steps:\n  a:\n    seed: 9223372036854775807\n    cmd: echo ${seed} > ${outs.0}\n"
+                          "    outs: [a.txt]\n"), "");
+}
+
 TEST(PipelineLoad, GatherReferenceListsEveryCell) {
   Scratch s;
   s.write("in.txt", "x");

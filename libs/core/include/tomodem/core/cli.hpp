@@ -88,6 +88,15 @@ inline CLI::Option* add_length(CLI::App& app, const std::string& names, double& 
       help + " (length: m, mm, um, nm; bare number: m)");
 }
 
+/// A random seed (parse_seed): a whole number in [0, 2^64 − 1]; a negative or larger one is an
+/// InputError naming the option (exit 2), never wrapped or clamped. `seed` keeps its default when not given.
+inline CLI::Option* add_seed(CLI::App& app, const std::string& names, uint64_t& seed, const std::string& help) {
+  const std::string option = long_name(names);
+  return app.add_option_function<std::string>(
+      names, [&seed, option](const std::string& text) { seed = parse_seed("", option, text); },
+      help + " (a whole number in [0, 2^64 - 1])");
+}
+
 /// Several lengths, comma separated (--offset 1mm,0,-2um); `count` of them.
 inline CLI::Option* add_lengths(CLI::App& app, const std::string& names, std::vector<double>& metres, int count,
                                 const std::string& help) {

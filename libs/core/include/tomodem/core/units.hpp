@@ -1,6 +1,7 @@
 #pragma once
 // Lengths on the command line (docs/cli.md "Lengths"): one parser for every tool, so "60.7um"
-// means the same in tomodem-segment, -carve, -fracture and -phantom.
+// means the same in tomodem-segment, -carve, -fracture and -phantom. Random seeds, likewise.
+#include <cstdint>
 #include <string>
 
 namespace tomodem {
@@ -13,5 +14,10 @@ double parse_length(const std::string& option, const std::string& text);
 /// The unit suffix of `text` after its number ("um" for "60.7um", "" for "1e-3"); `number`
 /// receives the value. False when there is no number at the start.
 bool split_number_unit(const std::string& text, double& number, std::string& unit);
+
+/// A random seed as the user wrote it (`field` in `file`, "" for the command line): a whole
+/// number in [0, 2^64 − 1], in digits ("+7" too) or, below 2^53, any form that reads as one ("1e3").
+/// Anything else (negative, fractional, larger: never clamped or wrapped) is an InputError.
+uint64_t parse_seed(const std::string& file, const std::string& field, const std::string& text);
 
 }  // namespace tomodem

@@ -54,6 +54,8 @@ class Section {
   double in_range(const std::string& key, double fallback, double lo, double hi, bool lo_open, bool hi_open) const;
   /// A whole number in [min, max] ("1e3" is accepted, "2.5" and "abc" are not).
   long integer(const std::string& key, long fallback, long min = 0, long max = LONG_MAX / 2) const;
+  /// A random seed: a whole number in [0, 2^64 − 1], read from the text (parse_seed), not through a double.
+  uint64_t seed(const std::string& key, uint64_t fallback) const;
   std::string string(const std::string& key, const std::string& fallback) const;  ///< a text value
   /// One of `choices` (the message lists them).
   std::string choice(const std::string& key, const std::string& fallback, const std::vector<std::string>& choices) const;

@@ -194,6 +194,9 @@ struct ExplicitResult {
   double inertial_number = 0, unbalanced_force_ratio = 0;
   double lateral_stress_ratio = 0;   ///< |σ_lateral| / |σ_axial| at the end (stress loading)
   long steps = 0, broken_bonds = 0;
+  /// The run stopped at --max-steps before its last point (or an increment unrelaxed): E and ν are
+  /// from the points measured, and the summary's target_reached is false (exit 4).
+  bool max_steps_reached = false;
   double wall_time_s = 0;
   std::vector<double> strain, stress, lateral_strain;  ///< measured points (axial ε, σ in Pa, lateral ε)
   std::vector<double> lateral_stress;                  ///< mean lateral normal stress at the points (Pa)
