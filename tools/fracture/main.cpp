@@ -105,7 +105,8 @@ int main(int argc, char** argv) {
     if (common.threads > 0) omp_set_num_threads(common.threads);
     ex.threads = common.threads > 0 ? common.threads : tomodem::all_threads();
     tomodem::info("reading " + c.input);
-    tomodem::emit_summary(tomodem::mechanics::run_fracture(c), c.json);
-    return tomodem::exit_code::ok;
+    const std::string summary = tomodem::mechanics::run_fracture(c);
+    tomodem::emit_summary(summary, c.json);
+    return tomodem::exit_code_of_summary(summary);  // 4: an explicit test stopped by --max-steps
   }, tomodem::RankUse::shared);  // rows of the PETSc solves split across the ranks
 }

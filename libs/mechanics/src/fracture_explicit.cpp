@@ -115,13 +115,14 @@ void record_events(const dem::Simulation& sim, const std::vector<int32_t>& sampl
     if (it != r.curve.end()) e.force = it->force;
   }
 }
-}  // namespace
 
-FractureResult run_explicit_fracture(const FractureSample& s, const std::vector<dem::BondLaw>& laws,
-                                     const FailureOptions& f, const ExplicitFractureOptions& o) {
-  const auto t0 = std::chrono::steady_clock::now();
-  FractureResult r;
-  r.method = FractureMethod::explicit_test;
+/// The engine with the sample's particles (removed ones left out: `index` maps sample particle ->
+/// engine particle), its bonds (`sample_bond`: engine bond -> sample bond), the grips prescribed
+/// and the time step set; r.time_step is set.
+dem::Simulation build_simulation(const FractureSample& s, const std::vector<dem::BondLaw>& laws, const FailureOptions& f,
+                                 const ExplicitFractureOptions& o, std::vector<int32_t>& index,
+                                 std::vector<int32_t>& sample_bond, std::vector<std::size_t>& top,
+                                 std::vector<std::size_t>& bottom, FractureResult& r) {
   const Packing& p = s.packing;
   const std::size_t n = p.particles.size();
   if (!(o.transits > 0) && !(o.strain_rate > 0))
@@ -130,7 +131,7 @@ FractureResult run_explicit_fracture(const FractureSample& s, const std::vector<
     if (!(mat.density > 0)) throw InputError("", "/materials@density_kg_per_m3", std::to_string(mat.density), "must be > 0 for the explicit test");
 
   // Particles of the sample (removed ones stay out), bonds that hold or are pre-cracked.
-  std::vector<int32_t> index(n, -1);
+  index.assign(n, -1);
   dem::Particles parts;
   for (std::size_t i = 0; i < n; ++i) {
     if (s.role[i] == ParticleRole::removed) continue;
@@ -149,16 +150,50 @@ FractureResult run_explicit_fracture(const FractureSample& s, const std::vector<
   cell.periodic[0] = cell.periodic[2] = false;
   cell.periodic[1] = true;
   dem::Simulation sim(std::move(parts), cell, model, settings);
-  std::vector<int32_t> sample_bond;  // simulation bond -> sample bond
   dem::BondSet bonds = engine_bonds(s, index, sample_bond);
   std::vector<dem::BondLaw> l = laws;
   for (auto& law : l) law.damping_ratio = o.damping_ratio;
   sim.set_bonds(std::move(bonds), l, f.criterion);
   if (o.local_damping > 0) sim.body_forces().local_damping = o.local_damping;
-  std::vector<std::size_t> top, bottom;
   grip_particles(s, index, sim, top, bottom);
   sim.set_time_step(o.timestep_fraction * sim.critical_time_step());
   r.time_step = sim.time_step();
+  return sim;
+}
+
+/// Steps between two records of the load (a transit over records_per_transit).
+long record_steps(const FractureResult& r, const ExplicitFractureOptions& o) {
+  return std::max(1L, long(r.transit_time / std::max(1, o.records_per_transit) / r.time_step));
+}
+}  // namespace
+
+long explicit_fracture_record_steps(const FractureSample& s, const std::vector<dem::BondLaw>& laws,
+                                    const FailureOptions& f, const ExplicitFractureOptions& o) {
+  FractureResult r;
+  std::vector<int32_t> index, sample_bond;
+  std::vector<std::size_t> top, bottom;
+  const dem::Simulation sim = build_simulation(s, laws, f, o, index, sample_bond, top, bottom, r);
+  transit_and_reference_strain(s, laws, f, sim, r);
+  return record_steps(r, o);
+}
+
+void check_explicit_fracture_cap(long steps_per_record, const ExplicitFractureOptions& o) {
+  if (o.max_steps < 2 * steps_per_record)
+    throw InputError("", "--max-steps", std::to_string(o.max_steps),
+                     "the explicit test records the load every " + std::to_string(steps_per_record) + " steps (1/" +
+                         std::to_string(std::max(1, o.records_per_transit)) +
+                         " of a transit): a cap under two records (" + std::to_string(2 * steps_per_record) +
+                         " steps) measures no change of the load, hence no peak for K_IC: give a larger --max-steps");
+}
+
+FractureResult run_explicit_fracture(const FractureSample& s, const std::vector<dem::BondLaw>& laws,
+                                     const FailureOptions& f, const ExplicitFractureOptions& o) {
+  const auto t0 = std::chrono::steady_clock::now();
+  FractureResult r;
+  r.method = FractureMethod::explicit_test;
+  std::vector<int32_t> index, sample_bond;  // sample particle -> engine particle; engine bond -> sample bond
+  std::vector<std::size_t> top, bottom;
+  dem::Simulation sim = build_simulation(s, laws, f, o, index, sample_bond, top, bottom, r);
 
   transit_and_reference_strain(s, laws, f, sim, r);
   r.strain_rate = o.strain_rate > 0 ? o.strain_rate : r.reference_strain / (o.transits * r.transit_time);
@@ -167,7 +202,8 @@ FractureResult run_explicit_fracture(const FractureSample& s, const std::vector<
   auto opening_at = [&](double t) {
     return t < t_ramp ? v_max * t * t / (2 * t_ramp) : v_max * (t - 0.5 * t_ramp);
   };
-  const long chunk = std::max(1L, long(r.transit_time / std::max(1, o.records_per_transit) / r.time_step));
+  const long chunk = record_steps(r, o);
+  check_explicit_fracture_cap(chunk, o);  // before the run: a cap under two records measures nothing
   const double opening_cap = 50 * r.reference_strain * s.H;
 
   std::vector<Energy> budget;
@@ -210,12 +246,23 @@ FractureResult run_explicit_fracture(const FractureSample& s, const std::vector<
     }
     if (r.steps + chunk > o.max_steps) {
       r.stop_reason = "--max-steps reached";
+      r.max_steps_reached = true;
       break;
     }
     if (opening > opening_cap) {
       r.stop_reason = "opening cap (50 x the reference strain) reached";
       break;
     }
+  }
+  if (r.max_steps_reached) {
+    const double load = r.curve.back().force, opening = r.curve.back().displacement;
+    warn("explicit fracture test: --max-steps " + std::to_string(o.max_steps) + " reached after " +
+         std::to_string(r.steps) + " steps, at grip opening " + value_text(opening) + " m (" +
+         value_text(opening / (r.reference_strain * s.H)) + " x the reference strain) with the load at " +
+         value_text(peak > 0 ? load / peak : 0.0) + " of the largest reached and " +
+         std::to_string(sim.bond_events().size()) + " bonds broken: the load did not fall below " +
+         value_text(o.stop_fraction) + " of the peak, so K_IC is from the largest load reached (a lower bound "
+         "if the peak was not passed) (target_reached: false; exit code 4)");
   }
   record_events(sim, sample_bond, opening_at, r);
   r.transits_to_peak = t_peak / r.transit_time;

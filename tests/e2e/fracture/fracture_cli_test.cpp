@@ -12,6 +12,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <tuple>
 
 #include "../../validation/fracture/samples.hpp"
 #include "../common/tool_test.hpp"
@@ -86,6 +87,47 @@ TEST_F(FractureCli, SlaAndExplicitWriteCurveMapAndSummary) {
   for (int c : per) ends += c;
   EXPECT_EQ(broken, j["broken_bonds"].get<long>());
   EXPECT_EQ(ends, 2 * broken);
+}
+
+// An explicit test stopped by --max-steps recorded only stop_reason "--max-steps reached" and exited
+// 0, its K_IC reported as if the load had fallen past the peak. Like young's explicit test at
+// --max-steps it now says so: explicit.max_steps_reached true, target_reached false, a warning
+// naming the opening and load reached, exit 4, the outputs written. A cap under two records of the
+// load is refused before any run (the SLA's too, with --method both): exit 2 naming --max-steps.
+TEST_F(FractureCli, ExplicitTestStoppedByMaxStepsIsReportedShort) {
+  const std::string in = network(mechanics::test::slab(12, 3, 18, 11));
+  const std::string args = in + " --method explicit --a-over-w 0.2 --stop-fraction 0.5 --no-elastic --no-energy --threads 1";
+  auto [code, err] = run(args + " --json " + path("full.json"));
+  ASSERT_EQ(code, 0) << err;
+  const auto full = json("full.json");
+  EXPECT_FALSE(full["explicit"]["max_steps_reached"].get<bool>());
+  EXPECT_TRUE(full["target_reached"].get<bool>());
+  const long steps = full["explicit"]["steps"].get<long>();
+  ASSERT_GT(steps, 8);
+  // Half the steps: the load has not yet fallen below half its peak (the full run stops at the
+  // first record where it has).
+  const std::string cap = std::to_string(steps / 2);
+  std::tie(code, err) = run(args + " --max-steps " + cap + " --json " + path("short.json") + " --curve " + path("short.csv"));
+  ASSERT_EQ(code, 4) << err;  // the README's code for a run that ends short of what was asked
+  const auto j = json("short.json");
+  EXPECT_TRUE(j["explicit"]["max_steps_reached"].get<bool>());
+  EXPECT_FALSE(j["target_reached"].get<bool>());
+  EXPECT_EQ(j["explicit"]["stop_reason"], "--max-steps reached");
+  EXPECT_LE(j["explicit"]["steps"].get<long>(), steps / 2);
+  EXPECT_GT(j["K_IC"].get<double>(), 0);
+  EXPECT_NE(err.find("--max-steps " + cap + " reached"), std::string::npos) << err;
+  EXPECT_NE(err.find("target_reached: false"), std::string::npos) << err;
+  EXPECT_TRUE(fs::exists(path("short.csv")));
+  // One step: not two records of the load; refused before the run (with both, before the SLA).
+  for (const char* method : {"explicit", "both"}) {
+    std::tie(code, err) = run(in + " --method " + method + " --a-over-w 0.2 --no-elastic --max-steps 1 --json " + path("out.json") +
+                                 " --curve " + path("curve.csv") + " --map " + path("map.h5"));  // no -q: the SLA would say it starts
+    EXPECT_EQ(code, 2) << method << ": " << err;
+    EXPECT_NE(err.find("--max-steps"), std::string::npos) << err;
+    EXPECT_NE(err.find("two records"), std::string::npos) << err;
+    EXPECT_EQ(err.find("sequentially linear"), std::string::npos) << err;  // the SLA did not start
+    expect_no_output();
+  }
 }
 
 TEST_F(FractureCli, CrackLongerThanSampleExits2WithoutOutput) {

@@ -148,6 +148,9 @@ struct FractureResult {
   double work_of_fracture = 0;       ///< J/m²: dissipated / ligament area (projected), when cut through
   bool cut_through = false;
   std::string stop_reason;
+  /// Explicit: the test stopped at --max-steps before the load fell below the stop fraction of
+  /// the peak: K_IC is from the largest load reached, and the summary's target_reached is false (exit 4).
+  bool max_steps_reached = false;
   double wall_time_s = 0;
   // SLA
   long solves = 0, factorizations = 0, fragments_removed = 0, closed_broken_bonds = 0;
@@ -218,6 +221,13 @@ struct ExplicitFractureOptions {
 };
 FractureResult run_explicit_fracture(const FractureSample& s, const std::vector<dem::BondLaw>& laws,
                                      const FailureOptions& f, const ExplicitFractureOptions& o);
+/// Steps between two records of the explicit test's load on this sample (the engine is set up,
+/// nothing is run), for checking --max-steps before any run.
+long explicit_fracture_record_steps(const FractureSample& s, const std::vector<dem::BondLaw>& laws,
+                                    const FailureOptions& f, const ExplicitFractureOptions& o);
+/// InputError naming --max-steps (exit 2) when the cap is under two records of the load: such a
+/// test measures nothing. run_explicit_fracture checks it too.
+void check_explicit_fracture_cap(long steps_per_record, const ExplicitFractureOptions& o);
 
 /// K_IC, its error estimate, the crack area and the peak from a finished curve (shared by both methods).
 void finish_result(const FractureSample& s, FractureResult& r, double dynamic_error);
