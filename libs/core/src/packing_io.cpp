@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <tuple>
 
@@ -50,6 +51,60 @@ std::vector<double> flatten(const std::vector<Vec3>& v) {
 void check_name(const std::string& file, const std::string& where, const std::string& name) {
   if (name.empty() || name == "." || name.find('/') != std::string::npos)
     throw RuntimeFailure(file + ": cannot write " + where + ": invalid name '" + name + "' (empty, '.' or has '/')");
+}
+
+// ---------------------------------------------------------------- checks of the cell
+// One set of cell checks for the reader (InputError) and the writer (RuntimeFailure): the writer
+// cannot write a cell the reader refuses.
+
+/// Why a cell is refused: the field, the value as the message shows it, the reason.
+struct CellProblem {
+  std::string field, value, why;
+};
+
+// The cell vectors (columns of h) must span a volume: a zero vector or three coplanar vectors
+// make every per-volume quantity (stress, E, sigma, densities) 0, infinite or NaN.
+std::optional<CellProblem> cell_matrix_problem(const Mat3& h) {
+  double len[3];
+  for (int k = 0; k < 3; ++k) {
+    const Vec3 v = h.col(k);
+    len[k] = std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
+    if (!(len[k] > 0))
+      return CellProblem{"/cell/h", "column " + std::to_string(k) + " = (" + num(v.x) + ", " + num(v.y) + ", " + num(v.z) + ")",
+                         "cell vector " + std::to_string(k) + " has zero length: the cell has no volume (the columns of "
+                         "/cell/h are the three cell vectors, in m)"};
+  }
+  // An orthogonal cell's vectors point along +x, +y, +z: a negative length (two of them keep
+  // det > 0) puts the upper corner below the origin.
+  if (h(0, 1) == 0 && h(0, 2) == 0 && h(1, 0) == 0 && h(1, 2) == 0 && h(2, 0) == 0 && h(2, 1) == 0)
+    for (int k = 0; k < 3; ++k)
+      if (h(k, k) < 0)
+        return CellProblem{"/cell/h", "h[" + std::to_string(k) + "][" + std::to_string(k) + "] = " + num(h(k, k)),
+                           "cell vector " + std::to_string(k) + " of an orthogonal cell has a negative length (the columns of "
+                           "/cell/h are the three cell vectors, in m, from the lower corner /cell/origin)"};
+  const double det = h.det();
+  if (!(std::fabs(det) > 1e-12 * len[0] * len[1] * len[2]))
+    return CellProblem{"/cell/h", "det = " + num(det), "the cell vectors are coplanar (singular matrix): the cell has no volume"};
+  if (det < 0)
+    return CellProblem{"/cell/h", "det = " + num(det),
+                       "the cell vectors are left-handed (det < 0): give them in right-handed order (det > 0)"};
+  return std::nullopt;
+}
+
+// A sphere not smaller than the cell's width along a periodic axis touches its own image:
+// the contacts (i = j), the densities (up to 3e6) and the physics are meaningless.
+std::optional<CellProblem> cell_fit_problem(const ParticleTable& t, const Cell& c) {
+  const Mat3 hinv = c.h.inverse();
+  for (int a = 0; a < 3; ++a) {
+    if (!c.periodic[a]) continue;
+    const double w = cell_width(hinv, a);
+    for (std::size_t k = 0; k < t.radius.size(); ++k)
+      if (!(2 * t.radius[k] < w))
+        return CellProblem{"/particles/radius[" + std::to_string(k) + "]", num(t.radius[k]),
+                           "diameter " + num(2 * t.radius[k]) + " m is not smaller than the periodic cell's width " + num(w) +
+                               " m along axis " + std::string(1, char('x' + a)) + ": the sphere would touch its own image"};
+  }
+  return std::nullopt;
 }
 
 // ---------------------------------------------------------------- writing
@@ -119,12 +174,17 @@ struct Writer {
       if (!std::isfinite(c.origin[k])) refuse("/cell/origin", num(c.origin[k]), "must be finite");
     for (int k = 0; k < 9; ++k)
       if (!std::isfinite((&c.h.a[0][0])[k])) refuse("/cell/h", num((&c.h.a[0][0])[k]), "must be finite");
+    if (const auto e = cell_matrix_problem(c.h)) refuse(e->field, e->value, e->why);  // the reader's checks
     f.write("/cell/origin", std::vector<double>{c.origin.x, c.origin.y, c.origin.z}, {}, "m");
     f.set_attr("/cell/origin", "units", "m");
     std::vector<double> h(&c.h.a[0][0], &c.h.a[0][0] + 9);  // row-major, columns are the cell vectors
     f.write("/cell/h", h, {3, 3}, "m");
     f.set_attr("/cell/h", "units", "m");
     put_int("/cell/periodic", std::vector<uint8_t>{c.periodic[0], c.periodic[1], c.periodic[2]}, "1");
+  }
+
+  void fits_cell(const ParticleTable& t, const Cell& c) const {
+    if (const auto e = cell_fit_problem(t, c)) refuse(e->field, e->value, e->why);
   }
 
   void materials(const std::vector<Material>& ms) {
@@ -305,33 +365,8 @@ struct Reader {
             "particle index outside [0, " + std::to_string(n) + ")");
   }
 
-  // The cell vectors (columns of h) must span a volume: a zero vector or three coplanar vectors
-  // make every per-volume quantity (stress, E, sigma, densities) 0, infinite or NaN.
   void check_cell_matrix(const Mat3& h) const {
-    double len[3];
-    for (int k = 0; k < 3; ++k) {
-      const Vec3 v = h.col(k);
-      len[k] = std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
-      if (!(len[k] > 0))
-        bad("/cell/h", "column " + std::to_string(k) + " = (" + num(v.x) + ", " + num(v.y) + ", " + num(v.z) + ")",
-            "cell vector " + std::to_string(k) + " has zero length: the cell has no volume (the columns of "
-            "/cell/h are the three cell vectors, in m)");
-    }
-    // An orthogonal cell's vectors point along +x, +y, +z: a negative length (two of them keep
-    // det > 0) puts the upper corner below the origin.
-    if (h(0, 1) == 0 && h(0, 2) == 0 && h(1, 0) == 0 && h(1, 2) == 0 && h(2, 0) == 0 && h(2, 1) == 0)
-      for (int k = 0; k < 3; ++k)
-        if (h(k, k) < 0)
-          bad("/cell/h", "h[" + std::to_string(k) + "][" + std::to_string(k) + "] = " + num(h(k, k)),
-              "cell vector " + std::to_string(k) + " of an orthogonal cell has a negative length (the columns of "
-              "/cell/h are the three cell vectors, in m, from the lower corner /cell/origin)");
-    const double det = h.det();
-    if (!(std::fabs(det) > 1e-12 * len[0] * len[1] * len[2]))
-      bad("/cell/h", "det = " + num(det),
-          "the cell vectors are coplanar (singular matrix): the cell has no volume");
-    if (det < 0)
-      bad("/cell/h", "det = " + num(det),
-          "the cell vectors are left-handed (det < 0): give them in right-handed order (det > 0)");
+    if (const auto e = cell_matrix_problem(h)) bad(e->field, e->value, e->why);
   }
 
   void header() const {
@@ -440,19 +475,8 @@ struct Reader {
     return c;
   }
 
-  // A sphere not smaller than the cell's width along a periodic axis touches its own image:
-  // the contacts (i = j), the densities (up to 3e6) and the physics are meaningless.
   void fits_cell(const ParticleTable& t, const Cell& c) const {
-    const Mat3 hinv = c.h.inverse();
-    for (int a = 0; a < 3; ++a) {
-      if (!c.periodic[a]) continue;
-      const double w = cell_width(hinv, a);
-      for (std::size_t k = 0; k < t.radius.size(); ++k)
-        if (!(2 * t.radius[k] < w))
-          bad("/particles/radius[" + std::to_string(k) + "]", num(t.radius[k]),
-              "diameter " + num(2 * t.radius[k]) + " m is not smaller than the periodic cell's width " + num(w) +
-                  " m along axis " + std::string(1, char('x' + a)) + ": the sphere would touch its own image");
-    }
+    if (const auto e = cell_fit_problem(t, c)) bad(e->field, e->value, e->why);
   }
 
   BondTable bonds(std::size_t n) const {
@@ -589,6 +613,7 @@ void write_packing_groups(h5::File& f, const Packing& p) {
   w.materials(p.materials);
   w.particles(p.particles, p.materials.size());
   w.cell(p.cell);
+  w.fits_cell(p.particles, p.cell);
   const std::size_t n = p.particles.size();
   w.bonds(p.bonds, n);
   w.contacts(p.contacts, n);

@@ -398,6 +398,38 @@ TEST_F(PackingIo, WriterRefusesBadTables) {
   refuses([](Packing& p) { p.results.series["thermo"]["time_s"].push_back(1); });
 }
 
+// The writer refused only a non-finite cell: a zero-volume, coplanar or left-handed cell, or a
+// sphere not smaller than the periodic cell, was written, and the reader then refused the file
+// (docs/data-model.md: the writer runs the reader's checks). The writer now runs the reader's cell
+// checks, the same functions, and refuses naming the field; nothing is written.
+TEST_F(PackingIo, WriterRefusesACellTheReaderRefuses) {
+  auto refuses = [&](const std::function<void(Packing&)>& spoil, const std::string& field, const std::string& why) {
+    Packing p = full_packing();
+    spoil(p);
+    try {
+      write_packing(file("w.h5"), p);
+      ADD_FAILURE() << "written: " << why;
+    } catch (const RuntimeFailure& e) {
+      EXPECT_NE(std::string(e.what()).find("'" + field + "'"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(test::file_exists(file("w.h5")));
+  };
+  auto set_h = [](std::vector<double> h) {
+    return [h](Packing& p) {
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) p.cell.h(r, c) = h[std::size_t(3 * r + c)];
+    };
+  };
+  refuses(set_h({0, 0, 0, 0, 0, 0, 0, 0, 0}), "/cell/h", "zero length");
+  refuses(set_h({1e-3, 0, 1e-3, 0, 1e-3, 1e-3, 0, 0, 0}), "/cell/h", "coplanar");  // columns (1,0,0), (0,1,0), (1,1,0)
+  refuses(set_h({1e-4, 1e-3, 0, 2e-3, 0, 0, 0, 0, 3e-3}), "/cell/h", "left-handed");
+  refuses(set_h({1e-3, 0, 0, 0, -2e-3, 0, 0, 0, -3e-3}), "/cell/h", "negative length");
+  refuses([](Packing& p) { p.particles.radius[2] = 4.995e-4; }, "/particles/radius[2]", "its own image");
+  // What the reader reads, the writer writes (the full packing's sheared cell).
+  EXPECT_NO_THROW(write_packing(file("w.h5"), full_packing()));
+}
+
 // Issue 16: bond and contact tables whose values would feed NaN or nonsense into the mechanics
 // and network tools are refused at read time, naming the dataset and the first bad row.
 TEST_F(PackingIo, BadBondValuesNameTheFirstBadRow) {
