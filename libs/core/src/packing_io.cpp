@@ -385,6 +385,26 @@ struct Reader {
     std::vector<Material> ms;
     if (!f.exists("/materials")) return ms;
     const auto names = f.children("/materials");
+    // The group's own attributes: @count, where given, is the number of material groups; another
+    // (a misspelt count, a property put on the group instead of /materials/<k>) is refused.
+    for (const auto& a : f.attr_names("/materials"))
+      if (a != "count")
+        bad("/materials@" + a, attr_text("/materials", a),
+            "unknown attribute of /materials (expected only count, the number of material groups; the "
+            "properties belong on /materials/0, /materials/1, ...)");
+    if (f.has_attr("/materials", "count")) {
+      const std::string given = attr_text("/materials", "count");
+      int64_t count = -1;
+      try {
+        count = f.attr_int("/materials", "count");
+      } catch (const InputError&) {
+        bad("/materials@count", given, "must be a whole number: the number of material groups");
+      }
+      if (count != static_cast<int64_t>(names.size()))
+        bad("/materials@count", given,
+            "the file has " + std::to_string(names.size()) + " material group" + (names.size() == 1 ? "" : "s") +
+                " under /materials: @count must be their number");
+    }
     ms.resize(names.size());
     std::vector<bool> seen(names.size(), false);
     for (const auto& g : names) {

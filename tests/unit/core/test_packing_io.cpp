@@ -511,6 +511,30 @@ TEST_F(PackingIo, UnknownMaterialAttributeRefused) {
   EXPECT_NO_THROW(read_packing(path));
 }
 
+// /materials@count was never compared with the material groups (a file saying 3 with 2 groups
+// read as 2), and an attribute on the /materials group itself (a misspelt count, a property put
+// on the group) was ignored. Both are refused, naming the attribute and its value.
+TEST_F(PackingIo, MaterialsCountAndGroupAttributesChecked) {
+  auto path = corrupted([](File& f) { f.set_attr_int("/materials", "count", 3); });  // two groups
+  expect_input_error([&] { read_packing(path); }, path, "/materials@count", "3");
+  try {
+    read_packing(path);
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("2 material groups"), std::string::npos) << e.what();
+  }
+  path = corrupted([](File& f) { f.set_attr("/materials", "count", std::string("two")); });
+  expect_input_error([&] { read_packing(path); }, path, "/materials@count", "two");
+  path = corrupted([](File& f) { f.set_attr("/materials", "youngs_modulus_Pa", 3e9); });
+  expect_input_error([&] { read_packing(path); }, path, "/materials@youngs_modulus_Pa", "3000000000");
+  path = corrupted([](File& f) { f.set_attr_int("/materials", "cuont", 2); });
+  expect_input_error([&] { read_packing(path); }, path, "/materials@cuont", "2");
+  // As written (count = 2, as an integer or a float holding one) the file reads.
+  path = corrupted([](File&) {});
+  EXPECT_NO_THROW(read_packing(path));
+  path = corrupted([](File& f) { f.set_attr("/materials", "count", 2.0); });
+  EXPECT_NO_THROW(read_packing(path));
+}
+
 TEST_F(PackingIo, BadContactValuesRefused) {
   auto path = corrupted([](File& f) { f.write("/contacts/overlap", std::vector<double>{kNaN, 0}); });
   expect_input_error([&] { read_packing(path); }, path, "/contacts/overlap[0]", "nan");
