@@ -52,7 +52,9 @@ class Section {
   double required_positive(const std::string& key, const std::string& what) const;
   /// In [lo, hi], with either end open when asked: "must lie in (lo, hi]".
   double in_range(const std::string& key, double fallback, double lo, double hi, bool lo_open, bool hi_open) const;
-  /// A whole number in [min, max] ("1e3" is accepted, "2.5" and "abc" are not).
+  /// A whole number in [min, max]: digits (a sign allowed) read exactly from the text, never
+  /// through a double; below 2^53 also any form that reads as one ("1e3"; "2.5" and "abc" are not).
+  /// Out of range (never clamped): "must be a whole number in [min, max]", the real bounds.
   long integer(const std::string& key, long fallback, long min = 0, long max = LONG_MAX / 2) const;
   /// A random seed: a whole number in [0, 2^64 − 1], read from the text (parse_seed), not through a double.
   uint64_t seed(const std::string& key, uint64_t fallback) const;
