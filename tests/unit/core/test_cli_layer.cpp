@@ -5,8 +5,12 @@
 
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
+#include <string>
+#include <vector>
 
+#include "tomodem/core/cli.hpp"
 #include "tomodem/core/error.hpp"
 #include "tomodem/core/progress.hpp"
 #include "tomodem/core/summary.hpp"
@@ -113,4 +117,69 @@ TEST(Progress, DurationsReadAsMinutesAndHours) {
   EXPECT_EQ(tomodem::duration_text(190), "3 min 10 s");
   EXPECT_EQ(tomodem::duration_text(3725), "1 h 02 min");
   EXPECT_EQ(tomodem::duration_text(-1), "?");
+}
+
+// CLI11 read integer options with strtoll/strtoull in base 0: `--size 010` was octal 8, `0x10` hex
+// 16, 2^63 clamped to 2^63 - 1 and -1 wrapped to 2^64 - 1 in an unsigned option, all with exit 0.
+// cli::parse now reads every integer option in decimal and refuses, naming the option and the
+// value (exit 2), a number its type cannot hold, a negative unsigned one and other forms.
+namespace {
+struct IntegerOptions {
+  int size = -1;
+  long steps = -1;
+  uint64_t count = 0;
+  std::vector<int> list;
+  std::string err;
+  std::optional<int> parse(std::vector<std::string> words) {
+    CLI::App app{"t", "t"};
+    app.add_option("--size", size);
+    app.add_option("--steps", steps);
+    app.add_option("--count", count);
+    app.add_option("--list", list)->delimiter(',');
+    words.insert(words.begin(), "t");
+    std::vector<char*> argv;
+    for (std::string& w : words) argv.push_back(w.data());
+    testing::internal::CaptureStderr();
+    const std::optional<int> code = tomodem::cli::parse(app, int(argv.size()), argv.data());
+    err = testing::internal::GetCapturedStderr();
+    return code;
+  }
+};
+}  // namespace
+
+TEST(IntegerOptions, AreReadInDecimal) {
+  IntegerOptions o;
+  ASSERT_FALSE(o.parse({"--size", "010", "--steps", "-007", "--count", "0009", "--list", "010,020"})) << o.err;
+  EXPECT_EQ(o.size, 10);
+  EXPECT_EQ(o.steps, -7);
+  EXPECT_EQ(o.count, 9u);
+  EXPECT_EQ(o.list, (std::vector<int>{10, 20}));
+  ASSERT_FALSE(o.parse({"--size", "0", "--steps", "+12", "--count", "00"})) << o.err;
+  EXPECT_EQ(o.size, 0);
+  EXPECT_EQ(o.steps, 12);
+  EXPECT_EQ(o.count, 0u);
+  ASSERT_FALSE(o.parse({"--steps", "9223372036854775807", "--count", "18446744073709551615"})) << o.err;
+  EXPECT_EQ(o.steps, 9223372036854775807L);
+  EXPECT_EQ(o.count, 18446744073709551615ULL);
+}
+
+TEST(IntegerOptions, OverflowNegativeUnsignedAndOtherFormsAreRefused) {
+  const std::vector<std::vector<std::string>> refused = {
+      {"--steps", "9223372036854775808"},   // was clamped to 2^63 - 1
+      {"--steps", "-99999999999999999999"}, // clamped to -2^63
+      {"--count", "18446744073709551616"},  // clamped to 2^64 - 1
+      {"--count", "-1"},                    // wrapped to 2^64 - 1
+      {"--size", "0x10"},                   // hex 16
+      {"--size", "1e3"},
+      {"--size", "2.5"},
+      {"--size", "99999999999"},            // beyond int: CLI11's own check, still naming the option
+      {"--list", "1,0x10"}};
+  for (const auto& args : refused) {
+    IntegerOptions o;
+    const std::optional<int> code = o.parse(args);
+    ASSERT_TRUE(code) << args[0] << " " << args[1] << " was accepted";
+    EXPECT_EQ(*code, tomodem::exit_code::bad_input) << args[1];
+    EXPECT_NE(o.err.find(args[0]), std::string::npos) << o.err;
+    EXPECT_NE(o.err.find(args[1].substr(args[1].find(',') + 1)), std::string::npos) << o.err;
+  }
 }

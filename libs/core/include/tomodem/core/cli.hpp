@@ -142,6 +142,50 @@ inline void refuse_unused_scope(const CLI::App& app, const std::string& scope, c
   }
 }
 
+/// Integer options are read in decimal and never clamped or wrapped (docs/cli.md "whole numbers").
+/// CLI11 2.1 reads them with strtoll/strtoull in base 0: `--size 010` was octal 8, `0x10` hex 16,
+/// 2^64 clamped to 2^63 - 1 and -1 wrapped to 2^64 - 1 in an unsigned option. This transform, put
+/// first on every option whose type is INT or UINT (parse() does it for every tool), rewrites
+/// decimal digits (a sign allowed; leading zeros dropped: `010` is 10) and refuses, naming the
+/// option and the value (exit 2), a number outside the 64-bit range (the option's own type then
+/// checks its narrower range), a negative one for an unsigned option, and a number in another base
+/// (`0x10`, `0b1`). Other text (`2.5`, `1e3`, a word) is left to the option's checks and CLI11.
+inline std::string decimal_integer(std::string& text, bool is_unsigned) {
+  const bool negative = !text.empty() && text[0] == '-';
+  const std::size_t k = !text.empty() && (text[0] == '+' || text[0] == '-') ? 1 : 0;
+  if (k >= text.size() || text[k] < '0' || text[k] > '9') return "";  // not a number: the option decides
+  if (text.find_first_not_of("0123456789", k) != std::string::npos) {
+    // 0x10 (and 0b1 where the C library reads it) would be taken in another base: refused. Other
+    // forms (2.5, 1e3) are left to the option's own check, then to CLI11, which refuses them.
+    if (text[k] == '0' && k + 1 < text.size() && std::string("xXbB").find(text[k + 1]) != std::string::npos)
+      return "'" + text + "' is not a whole number in decimal digits";
+    return "";
+  }
+  std::string digits = text.substr(text.find_first_not_of('0', k) == std::string::npos ? text.size() - 1
+                                                                                      : text.find_first_not_of('0', k));
+  const std::string range = is_unsigned ? "[0, 18446744073709551615]" : "[-9223372036854775808, 9223372036854775807]";
+  if (is_unsigned && negative && digits != "0")
+    return "'" + text + "' is negative: expected a whole number in " + range + " (never wrapped)";
+  const std::string limit = is_unsigned ? "18446744073709551615" : negative ? "9223372036854775808" : "9223372036854775807";
+  if (digits.size() > limit.size() || (digits.size() == limit.size() && digits > limit))
+    return "'" + text + "' is out of range: expected a whole number in " + range + " (never clamped)";
+  text = (negative && digits != "0" ? "-" : "") + digits;
+  return "";
+}
+
+/// Puts decimal_integer first on every INT or UINT option of `app` and its subcommands.
+inline void read_integers_as_decimal(CLI::App& app) {
+  for (CLI::Option* o : app.get_options()) {
+    if (o->get_type_size() == 0) continue;  // flags
+    const std::string t = o->get_type_name();
+    const bool is_signed = t == "INT" || t.rfind("INT:", 0) == 0;
+    const bool is_unsigned = t == "UINT" || t.rfind("UINT:", 0) == 0;
+    if (!is_signed && !is_unsigned) continue;
+    o->transform(CLI::Validator([is_unsigned](std::string& text) { return decimal_integer(text, is_unsigned); }, "", ""));
+  }
+  for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) read_integers_as_decimal(*sub);
+}
+
 /// Parses the command line: the exit code to stop with (0 after --help or --version, 2 for bad
 /// usage, after CLI11's message), or nothing when the tool should go on.
 /// `TOOL --help-man` prints the manual page and `TOOL --help-completion` the bash completion,
@@ -154,6 +198,7 @@ inline std::optional<int> parse(CLI::App& app, int argc, char** argv) {
     std::cout << (std::string(argv[1]) == "--help-man" ? man_page(app, tool, version_string()) : bash_completion(app, tool));
     return exit_code::ok;
   }
+  read_integers_as_decimal(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {  // --help; on several ranks rank 0 alone prints (output.hpp)
