@@ -174,8 +174,11 @@ void defer_commits() { g_deferred = true; }
 void commit_output(const std::string& final_path, Commit when) {
   if (g_deferred && when == Commit::with_run && writes_outputs()) {
     // The temporary must exist now: a missing one is the writer's error, said where it happens.
-    if (::access(temporary_path(final_path).c_str(), F_OK) != 0)
-      throw RuntimeFailure("cannot rename " + temporary_path(final_path) + " to " + final_path + ": " + std::strerror(errno));
+    const std::string tmp = temporary_path(final_path);
+    if (::access(tmp.c_str(), F_OK) != 0) {
+      const int e = errno;
+      throw RuntimeFailure("cannot rename " + tmp + " to " + final_path + ": " + std::strerror(e));
+    }
     if (std::find(g_pending.begin(), g_pending.end(), final_path) == g_pending.end()) g_pending.push_back(final_path);
     return;
   }
