@@ -38,17 +38,25 @@ double parse_length(const std::string& option, const std::string& text) {
   return x * f;
 }
 
+std::optional<DecimalDigits> read_decimal_digits(const std::string& text) {
+  DecimalDigits d;
+  d.negative = !text.empty() && text[0] == '-';
+  std::size_t k = text.size() > 1 && (text[0] == '+' || text[0] == '-') ? 1 : 0;
+  if (k >= text.size() || text.find_first_not_of("0123456789", k) != std::string::npos) return std::nullopt;
+  for (; k < text.size() && !d.too_large; ++k) {
+    const auto digit = static_cast<uint64_t>(text[k] - '0');
+    if (d.magnitude > (UINT64_MAX - digit) / 10) d.too_large = true;
+    else d.magnitude = 10 * d.magnitude + digit;
+  }
+  return d;
+}
+
 uint64_t parse_seed(const std::string& file, const std::string& field, const std::string& text) {
   const std::string range = "a random seed is a whole number in [0, 18446744073709551615] (2^64 - 1)";
-  std::size_t k = text.size() > 1 && text[0] == '+' ? 1 : 0;
-  if (k < text.size() && text.find_first_not_of("0123456789", k) == std::string::npos) {
-    uint64_t v = 0;
-    for (; k < text.size(); ++k) {
-      const auto d = static_cast<uint64_t>(text[k] - '0');
-      if (v > (UINT64_MAX - d) / 10) throw InputError(file, field, text, range + ": too large (not clamped)");
-      v = 10 * v + d;
-    }
-    return v;
+  if (const auto d = read_decimal_digits(text)) {
+    if (d->too_large) throw InputError(file, field, text, range + ": too large (not clamped)");
+    if (d->negative && d->magnitude != 0) throw InputError(file, field, text, range);
+    return d->magnitude;
   }
   // "1e3" or "1000.0": whole numbers too, where a double holds them exactly (up to 2^53).
   constexpr double kExact = 9007199254740992.0;  // 2^53

@@ -158,25 +158,15 @@ long Section::integer(const std::string& key, long fallback, long min, long max)
   if (!has(key)) return fallback;
   const std::string range = "must be a whole number in [" + std::to_string(min) + ", " + std::to_string(max) + "]";
   const YAML::Node n = raw(key);
-  if (n.IsScalar()) {
-    // Digits (a sign allowed) are read from the text exactly, as parse_seed reads seeds: a double
-    // in between rounded whole numbers above 2^53 (9007199254740993 read as ...992).
-    const std::string& t = n.Scalar();
-    const bool negative = !t.empty() && t[0] == '-';
-    std::size_t k = t.size() > 1 && (t[0] == '+' || t[0] == '-') ? 1 : 0;
-    if (k < t.size() && t.find_first_not_of("0123456789", k) == std::string::npos) {
-      const unsigned long long limit = negative ? 0ULL - static_cast<unsigned long long>(LONG_MIN)
-                                                : static_cast<unsigned long long>(LONG_MAX);
-      unsigned long long m = 0;
-      for (; k < t.size(); ++k) {
-        const auto d = static_cast<unsigned long long>(t[k] - '0');
-        if (m > (limit - d) / 10) throw error(key, t, range + " (too large: not clamped)");
-        m = 10 * m + d;
-      }
-      const long v = negative ? static_cast<long>(0ULL - m) : static_cast<long>(m);
-      if (v < min || v > max) throw error(key, t, range);
-      return v;
-    }
+  // Digits (a sign allowed) are read from the text exactly: a double in between rounded whole
+  // numbers above 2^53 (9007199254740993 read as ...992).
+  if (const auto d = n.IsScalar() ? read_decimal_digits(n.Scalar()) : std::nullopt) {
+    const unsigned long long limit =
+        d->negative ? 0ULL - static_cast<unsigned long long>(LONG_MIN) : static_cast<unsigned long long>(LONG_MAX);
+    if (d->too_large || d->magnitude > limit) throw error(key, n.Scalar(), range + " (too large: not clamped)");
+    const long v = d->negative ? static_cast<long>(0ULL - d->magnitude) : static_cast<long>(d->magnitude);
+    if (v < min || v > max) throw error(key, n.Scalar(), range);
+    return v;
   }
   // "1e3" or "1000.0": whole numbers too, where a double holds them exactly (below 2^53).
   constexpr double kExact = 9007199254740992.0;  // 2^53

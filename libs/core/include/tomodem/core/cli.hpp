@@ -151,25 +151,22 @@ inline void refuse_unused_scope(const CLI::App& app, const std::string& scope, c
 /// checks its narrower range), a negative one for an unsigned option, and a number in another base
 /// (`0x10`, `0b1`). Other text (`2.5`, `1e3`, a word) is left to the option's checks and CLI11.
 inline std::string decimal_integer(std::string& text, bool is_unsigned) {
-  const bool negative = !text.empty() && text[0] == '-';
-  const std::size_t k = !text.empty() && (text[0] == '+' || text[0] == '-') ? 1 : 0;
-  if (k >= text.size() || text[k] < '0' || text[k] > '9') return "";  // not a number: the option decides
-  if (text.find_first_not_of("0123456789", k) != std::string::npos) {
+  const auto d = read_decimal_digits(text);
+  if (!d) {
     // 0x10 (and 0b1 where the C library reads it) would be taken in another base: refused. Other
-    // forms (2.5, 1e3) are left to the option's own check, then to CLI11, which refuses them.
-    if (text[k] == '0' && k + 1 < text.size() && std::string("xXbB").find(text[k + 1]) != std::string::npos)
+    // forms (2.5, 1e3, a word) are left to the option's own check, then to CLI11, which refuses them.
+    const std::size_t k = !text.empty() && (text[0] == '+' || text[0] == '-') ? 1 : 0;
+    if (k + 1 < text.size() && text[k] == '0' && std::string("xXbB").find(text[k + 1]) != std::string::npos)
       return "'" + text + "' is not a whole number in decimal digits";
     return "";
   }
-  std::string digits = text.substr(text.find_first_not_of('0', k) == std::string::npos ? text.size() - 1
-                                                                                      : text.find_first_not_of('0', k));
   const std::string range = is_unsigned ? "[0, 18446744073709551615]" : "[-9223372036854775808, 9223372036854775807]";
-  if (is_unsigned && negative && digits != "0")
+  if (is_unsigned && d->negative && d->magnitude != 0)
     return "'" + text + "' is negative: expected a whole number in " + range + " (never wrapped)";
-  const std::string limit = is_unsigned ? "18446744073709551615" : negative ? "9223372036854775808" : "9223372036854775807";
-  if (digits.size() > limit.size() || (digits.size() == limit.size() && digits > limit))
+  const uint64_t limit = is_unsigned ? UINT64_MAX : d->negative ? uint64_t(1) << 63 : uint64_t(INT64_MAX);
+  if (d->too_large || d->magnitude > limit)
     return "'" + text + "' is out of range: expected a whole number in " + range + " (never clamped)";
-  text = (negative && digits != "0" ? "-" : "") + digits;
+  text = (d->negative && d->magnitude != 0 ? "-" : "") + std::to_string(d->magnitude);
   return "";
 }
 
